@@ -1,0 +1,35 @@
+# Two commands: `make demo` and `make test`. Both install missing Debian packages first.
+BUILD_DIR ?= build
+JOBS ?= $(shell nproc)
+CMAKE_FLAGS ?=
+DATA_ROOT ?= $(abspath ../shared/data)
+export CAIRN_DATA_ROOT ?= $(DATA_ROOT)
+
+.PHONY: all deps configure build test demo clean fuzz
+
+all: build
+
+deps:
+	@./scripts/install_deps.sh
+
+configure: deps
+	@cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) > $(BUILD_DIR).configure.log 2>&1 \
+	  || (cat $(BUILD_DIR).configure.log; exit 1)
+
+build: configure
+	@cmake --build $(BUILD_DIR) -j $(JOBS)
+
+test: build
+	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) --timeout 600
+
+demo: build
+	@./scripts/demo.sh $(BUILD_DIR)/src/cairn/cli/cairn
+
+# libFuzzer targets with clang (not part of `make test`; the corpora run in `make test`).
+fuzz: deps
+	@cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCAIRN_BUILD_FUZZERS=ON \
+	  -DCAIRN_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
+	@cmake --build build-fuzz -j $(JOBS) --target fuzz_g2o fuzz_toro fuzz_trajectory
+
+clean:
+	rm -rf $(BUILD_DIR) build-fuzz $(BUILD_DIR).configure.log

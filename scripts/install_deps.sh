@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Installs the Debian packages cairn needs, and only those that are missing.
+# Idempotent: when everything is present it prints nothing and exits 0.
+# Needs root (or passwordless sudo) only when something is missing.
+set -euo pipefail
+
+# One package per line, with the reason it is here.
+PACKAGES=(
+  build-essential      # g++ and make
+  cmake                # the build system (>= 3.22)
+  ninja-build          # fast, parallel builds
+  ccache               # rebuilds in seconds while iterating
+  pkg-config
+  libeigen3-dev        # dense linear algebra, the Lie groups in core
+  libsuitesparse-dev   # CHOLMOD sparse Cholesky for the back end
+  libtbb-dev           # parallel loops (linearisation, matching)
+  libcli11-dev         # the `cairn` command line
+  nlohmann-json3-dev   # JSON reports and manifests
+  libgtest-dev         # unit tests
+  libgmock-dev
+  libbenchmark-dev     # bench/
+  libceres-dev         # only for side-by-side comparisons in bench/
+  libcairo2-dev        # PNG/SVG plots and maps
+  zlib1g-dev           # reading .gz logs
+  libbz2-dev           # reading .bz2 logs
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+[[ ${#missing[@]} -eq 0 ]] && exit 0
+
+echo "install_deps: missing Debian packages: ${missing[*]}"
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then
+  if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+    SUDO="sudo -n"
+  else
+    echo "install_deps: error: these packages must be installed as root:" >&2
+    echo "  apt-get install ${missing[*]}" >&2
+    exit 1
+  fi
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install_deps: installed ${#missing[@]} package(s)"

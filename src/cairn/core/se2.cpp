@@ -1,0 +1,131 @@
+#include "cairn/core/se2.hpp"
+
+#include <cmath>
+
+namespace cairn::core {
+namespace {
+
+// Below this |theta| the closed forms lose digits to cancellation; use Taylor series instead.
+constexpr double kSmallAngle = 1e-4;
+
+// V(theta) of the exponential map: t = V rho. Returns (a, b) with V = [[a, -b], [b, a]],
+// a = sin(theta)/theta, b = (1 - cos(theta))/theta.
+void v_coefficients(double theta, double& a, double& b) {
+  if (std::abs(theta) < kSmallAngle) {
+    const double t2 = theta * theta;
+    a = 1.0 - t2 / 6.0;
+    b = theta / 2.0 - theta * t2 / 24.0;
+  } else {
+    a = std::sin(theta) / theta;
+    b = (1.0 - std::cos(theta)) / theta;
+  }
+}
+
+}  // namespace
+
+SE2 SE2::from_matrix(const Matrix3& T) {
+  return SE2(SO2::from_matrix(T.topLeftCorner<2, 2>()), T.topRightCorner<2, 1>());
+}
+
+SE2 SE2::exp(const Tangent& xi) {
+  double a = 0.0;
+  double b = 0.0;
+  v_coefficients(xi.z(), a, b);
+  const Vector2 t(a * xi.x() - b * xi.y(), b * xi.x() + a * xi.y());
+  return SE2(SO2(xi.z()), t);
+}
+
+SE2::Tangent SE2::log() const {
+  const double theta = R_.angle();
+  double a = 0.0;
+  double b = 0.0;
+  v_coefficients(theta, a, b);
+  // V^-1 = 1/(a^2 + b^2) [[a, b], [-b, a]]; a^2 + b^2 > 0 for |theta| <= pi.
+  const double inv = 1.0 / (a * a + b * b);
+  return {inv * (a * t_.x() + b * t_.y()), inv * (-b * t_.x() + a * t_.y()), theta};
+}
+
+SE2 SE2::inverse() const {
+  const SO2 R_inv = R_.inverse();
+  return SE2(R_inv, -(R_inv * t_));
+}
+
+Matrix3 SE2::matrix() const {
+  Matrix3 T = Matrix3::Identity();
+  T.topLeftCorner<2, 2>() = R_.matrix();
+  T.topRightCorner<2, 1>() = t_;
+  return T;
+}
+
+Matrix3 SE2::Adj() const {
+  // Sola eq. 159 with translation-first ordering: [[R, -[1]x t], [0, 1]], [1]x t = (-t_y, t_x).
+  Matrix3 A = Matrix3::Identity();
+  A.topLeftCorner<2, 2>() = R_.matrix();
+  A(0, 2) = t_.y();
+  A(1, 2) = -t_.x();
+  return A;
+}
+
+Matrix3 SE2::hat(const Tangent& xi) {
+  Matrix3 X = Matrix3::Zero();
+  X.topLeftCorner<2, 2>() = SO2::hat(xi.z());
+  X(0, 2) = xi.x();
+  X(1, 2) = xi.y();
+  return X;
+}
+
+SE2::Tangent SE2::vee(const Matrix3& Xi) { return {Xi(0, 2), Xi(1, 2), Xi(1, 0)}; }
+
+Matrix3 SE2::left_jacobian(const Tangent& xi) {
+  // Sola eq. 164. With a = s/theta, b = (1-c)/theta the third column is
+  //   ( (theta rho1 + rho2 - rho2 c - rho1 s) / theta^2,
+  //     (-rho1 + theta rho2 + rho1 c - rho2 s) / theta^2 )
+  // = ( rho1 (1 - a)/theta + rho2 b/theta,  -rho1 b/theta + rho2 (1 - a)/theta ).
+  const double theta = xi.z();
+  double a = 0.0;
+  double b = 0.0;
+  v_coefficients(theta, a, b);
+  double p = 0.0;  // (1 - a) / theta = (theta - sin theta) / theta^2
+  double q = 0.0;  // b / theta = (1 - cos theta) / theta^2
+  if (std::abs(theta) < kSmallAngle) {
+    const double t2 = theta * theta;
+    p = theta / 6.0 - theta * t2 / 120.0;
+    q = 0.5 - t2 / 24.0;
+  } else {
+    p = (1.0 - a) / theta;
+    q = b / theta;
+  }
+  Matrix3 J = Matrix3::Identity();
+  J(0, 0) = a;
+  J(0, 1) = -b;
+  J(1, 0) = b;
+  J(1, 1) = a;
+  J(0, 2) = p * xi.x() + q * xi.y();
+  J(1, 2) = -q * xi.x() + p * xi.y();
+  return J;
+}
+
+Matrix3 SE2::right_jacobian(const Tangent& xi) { return left_jacobian(-xi); }
+
+namespace {
+// Inverse of [[A, c], [0, 1]] with A = [[a, -b], [b, a]].
+Matrix3 invert_upper_block(const Matrix3& J) {
+  const double a = J(0, 0);
+  const double b = J(1, 0);
+  const double inv = 1.0 / (a * a + b * b);
+  Matrix2 A_inv;
+  A_inv << a * inv, b * inv, -b * inv, a * inv;
+  Matrix3 K = Matrix3::Identity();
+  K.topLeftCorner<2, 2>() = A_inv;
+  K.topRightCorner<2, 1>() = -A_inv * J.topRightCorner<2, 1>();
+  return K;
+}
+}  // namespace
+
+Matrix3 SE2::left_jacobian_inverse(const Tangent& xi) { return invert_upper_block(left_jacobian(xi)); }
+
+Matrix3 SE2::right_jacobian_inverse(const Tangent& xi) {
+  return invert_upper_block(right_jacobian(xi));
+}
+
+}  // namespace cairn::core

@@ -1,0 +1,55 @@
+#pragma once
+/// \file
+/// SO(2): planar rotations.
+///
+/// Stored as the angle theta in (-pi, pi] with its cosine and sine cached (like g2o's
+/// Rotation2D), so a pose read from a file and written back keeps its angle bit for bit.
+/// Lie algebra so(2) = R; exp(theta) is the rotation by theta; Adj = 1; all Jacobians = 1.
+
+#include "cairn/core/types.hpp"
+
+namespace cairn::core {
+
+/// Wraps an angle into (-pi, pi]. Idempotent: an angle already in range is returned unchanged.
+double wrap_angle(double angle_rad);
+
+class SO2 {
+ public:
+  static constexpr int kDoF = 1;
+  using Tangent = double;
+
+  /// Identity.
+  SO2() = default;
+  /// Rotation by `angle_rad` (any real value; wrapped into (-pi, pi]).
+  explicit SO2(double angle_rad);
+
+  /// Nearest rotation to a 2x2 matrix (polar projection via atan2 of its columns' average).
+  static SO2 from_matrix(const Matrix2& M);
+
+  static SO2 exp(double theta) { return SO2(theta); }
+  /// log in (-pi, pi].
+  double log() const { return theta_; }
+
+  SO2 inverse() const;
+  SO2 operator*(const SO2& other) const;
+  Vector2 operator*(const Vector2& p) const { return {c_ * p.x() - s_ * p.y(), s_ * p.x() + c_ * p.y()}; }
+
+  double angle() const { return theta_; }
+  double cos() const { return c_; }
+  double sin() const { return s_; }
+  Matrix2 matrix() const;
+
+  /// Adjoint of SO(2) is the scalar 1.
+  static double Adj() { return 1.0; }
+  /// hat(theta) = [[0, -theta], [theta, 0]].
+  static Matrix2 hat(double theta);
+  /// Inverse of hat; reads the (1,0) entry.
+  static double vee(const Matrix2& Omega);
+
+ private:
+  double theta_ = 0.0;
+  double c_ = 1.0;
+  double s_ = 0.0;
+};
+
+}  // namespace cairn::core

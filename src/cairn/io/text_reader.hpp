@@ -1,0 +1,59 @@
+#pragma once
+/// \file
+/// Line-oriented reading of text formats with the checks every parser needs: the file opens,
+/// is text (no NUL or control bytes, not gzip), no line is absurdly long, and every number is a
+/// finite number. Every failure throws ParseError naming file, line and what was expected.
+
+#include <cstddef>
+#include <cstdint>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace cairn::io {
+
+/// Longest line any cairn text format accepts (bytes). Real files stay far below: a g2o
+/// EDGE_SE3:QUAT line with 30 numbers at full precision is under 1 KiB.
+inline constexpr std::size_t kMaxLineBytes = 1 << 20;
+
+class TextReader {
+ public:
+  /// Opens `path`; throws ParseError(path, 0, ...) when it cannot be opened or is compressed.
+  explicit TextReader(std::string path);
+
+  /// Advances to the next line; false at the end of the file. The line has its '\n' and any
+  /// trailing '\r' removed. Throws on binary bytes or an over-long line.
+  bool next_line();
+  std::string_view line() const { return line_; }
+  /// 1-based number of the current line.
+  std::size_t line_number() const { return line_number_; }
+  const std::string& path() const { return path_; }
+
+  /// Throws ParseError at the current line.
+  [[noreturn]] void fail(const std::string& detail) const;
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  std::string line_;
+  std::size_t line_number_ = 0;
+};
+
+/// Splits on spaces and tabs; empty tokens are dropped.
+std::vector<std::string_view> split_whitespace(std::string_view line);
+/// Splits on `separator`, trimming spaces and tabs around each field; keeps empty fields.
+std::vector<std::string_view> split_fields(std::string_view line, char separator);
+/// True for a line that is empty or only blanks, or whose first non-blank character is '#'.
+bool is_blank_or_comment(std::string_view line);
+
+/// Parses a finite double; on failure throws at the reader's line:
+/// "expected a finite number for <what>, found '<token>'".
+double parse_double(const TextReader& reader, std::string_view token, std::string_view what);
+/// Parses a non-negative integer id; throws "expected a non-negative integer for <what>, ...".
+std::int64_t parse_id(const TextReader& reader, std::string_view token, std::string_view what);
+
+/// Shortens a token for an error message (long binary garbage stays readable).
+std::string quote_token(std::string_view token);
+
+}  // namespace cairn::io
