@@ -1,1 +1,53 @@
-int main() { return 0; }
+// The `cairn` command: one binary, one subcommand per job. Library code never prints; this file
+// and the commands are where results and errors meet the terminal.
+
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+#include <map>
+
+#include "cairn/cli/commands.hpp"
+#include "cairn/io/parse_error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "cairn: SLAM that tells you how good its answer is.\n"
+      "Pose graphs (g2o, TORO) and trajectories (TUM, KITTI, EuRoC) in, maps and reports out."};
+  app.set_version_flag("--version", "cairn 0.1.0");
+  app.require_subcommand(1);
+  app.fallthrough(false);
+
+  std::map<CLI::App*, cairn::cli::Runner> runners;
+  auto add = [&](cairn::cli::Runner (*registrar)(CLI::App&), const char* name, const char* help) {
+    CLI::App* command = app.add_subcommand(name, help);
+    runners[command] = registrar(*command);
+  };
+  add(cairn::cli::register_info, "info", "Describe a pose graph or trajectory file");
+  add(cairn::cli::register_convert, "convert", "Convert between graph formats or between trajectory formats");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  }
+
+  try {
+    for (const auto& [command, run] : runners) {
+      if (command->parsed()) return run();
+    }
+  } catch (const cairn::io::ParseError& e) {
+    std::cerr << "cairn: error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "cairn: error: " << e.what() << '\n';
+    return 1;
+  }
+  return 1;
+}

@@ -1,0 +1,87 @@
+// `cairn convert IN OUT`: between pose-graph formats, or between trajectory formats.
+
+#include <iostream>
+
+#include "cairn/cli/commands.hpp"
+#include "cairn/cli/trajectory_files.hpp"
+#include "cairn/io/parse_error.hpp"
+
+namespace cairn::cli {
+namespace {
+
+struct ConvertFlags {
+  std::string input;
+  std::string output;
+  std::string from;
+  std::string to;
+  std::string times;
+  std::string out_times;
+  GraphReadFlags graph;
+};
+
+int convert(const ConvertFlags& flags) {
+  const io::FileFormat from = resolve_format(flags.input, flags.from, "--from");
+  io::FileFormat to{};
+  if (!flags.to.empty()) {
+    to = resolve_format(flags.output, flags.to, "--to");
+  } else if (auto by_extension = io::format_from_extension(flags.output)) {
+    to = *by_extension;
+  } else {
+    throw io::ParseError(flags.output, 0,
+                         "cannot tell the output format from the name: expected .g2o, .graph, .tum, "
+                         ".kitti or .csv, or name it with --to");
+  }
+  if (io::kind_of(from) != io::kind_of(to)) {
+    throw io::ParseError(flags.output, 0,
+                         std::string("cannot convert ") +
+                             (io::kind_of(from) == io::FileKind::kPoseGraph ? "a pose graph" : "a trajectory") +
+                             " (" + std::string(io::to_string(from)) + ") into " +
+                             (io::kind_of(to) == io::FileKind::kPoseGraph ? "a pose-graph format" : "a trajectory format") +
+                             " (" + std::string(io::to_string(to)) + ")");
+  }
+  if (io::kind_of(from) == io::FileKind::kPoseGraph) {
+    io::GraphReadOptions options = flags.graph.options();
+    options.format = from == io::FileFormat::kG2o ? io::GraphFormat::kG2o : io::GraphFormat::kToro;
+    const io::GraphFile file = io::read_graph(flags.input, options);
+    for (const auto& w : file.report.warnings) warn(w);
+    const auto warnings = io::write_graph(flags.output, file.graph,
+                                          to == io::FileFormat::kG2o ? io::GraphFormat::kG2o : io::GraphFormat::kToro);
+    for (const auto& w : warnings) warn(w);
+    const std::size_t edges = std::visit([](const auto& g) { return g.edges.size(); }, file.graph);
+    const std::size_t vertices = std::visit([](const auto& g) { return g.vertices.size(); }, file.graph);
+    std::cout << "wrote " << flags.output << " (" << io::to_string(to) << ", " << io::dimension(file.graph)
+              << "D, " << vertices << " vertices, " << edges << " edges)\n";
+    return 0;
+  }
+  io::TrajectoryReadReport report;
+  const io::Trajectory trajectory = read_trajectory(flags.input, from, flags.times, &report);
+  for (const auto& w : report.warnings) warn(w);
+  if (to != io::FileFormat::kKitti && !trajectory.has_stamps()) {
+    throw io::ParseError(flags.input, 0,
+                         "the trajectory has no timestamps but " + std::string(io::to_string(to)) +
+                             " needs them: pass the KITTI times file with --times");
+  }
+  write_trajectory(flags.output, trajectory, to, flags.out_times);
+  std::cout << "wrote " << flags.output << " (" << io::to_string(to) << ", " << trajectory.poses.size()
+            << " poses)";
+  if (!flags.out_times.empty()) std::cout << " and " << flags.out_times;
+  std::cout << '\n';
+  return 0;
+}
+
+}  // namespace
+
+Runner register_convert(CLI::App& app) {
+  auto flags = std::make_shared<ConvertFlags>();
+  app.add_option("IN", flags->input, "Input pose graph or trajectory")->required();
+  app.add_option("OUT", flags->output, "Output file; its format follows its extension unless --to is given")
+      ->required();
+  app.add_option("--from", flags->from, "Input format: g2o, toro, tum, kitti, euroc (default: detected)");
+  app.add_option("--to", flags->to, "Output format: g2o, toro, tum, kitti, euroc (default: by extension)");
+  app.add_option("--times", flags->times, "KITTI input: times file (one time in seconds per pose)");
+  app.add_option("--out-times", flags->out_times, "KITTI output: also write the times to this file");
+  flags->graph.add_to(app);
+  return [flags]() { return convert(*flags); };
+}
+
+}  // namespace cairn::cli

@@ -1,0 +1,35 @@
+#pragma once
+/// \file
+/// The subcommands of the one `cairn` binary. Each registers its options on the app and returns
+/// the function that runs it (exit status: 0 success, 1 bad input or failure; usage errors are
+/// reported by CLI11 with status 2).
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "cairn/io/graph_io.hpp"
+
+namespace cairn::cli {
+
+using Runner = std::function<int()>;
+
+Runner register_info(CLI::App& app);
+Runner register_convert(CLI::App& app);
+
+/// Flags shared by every command that reads a pose graph.
+struct GraphReadFlags {
+  bool strict = false;
+  std::string info_policy = "project";
+  std::string toro_info_order = "auto";
+
+  void add_to(CLI::App& command);
+  /// Throws io::ParseError on an invalid combination (there is none yet; kept for symmetry).
+  io::GraphReadOptions options() const;
+};
+
+/// Prints "cairn: warning: <text>" to stderr.
+void warn(const std::string& text);
+
+}  // namespace cairn::cli

@@ -1,0 +1,29 @@
+#pragma once
+/// \file
+/// Which of cairn's file formats a path holds: by explicit name, by extension, and for the
+/// ambiguous ".txt" by looking at the first record.
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace cairn::io {
+
+enum class FileFormat { kG2o, kToro, kTum, kKitti, kEuroc };
+
+enum class FileKind { kPoseGraph, kTrajectory };
+
+std::string_view to_string(FileFormat format);
+/// "g2o", "toro", "tum", "kitti", "euroc"; nullopt otherwise.
+std::optional<FileFormat> file_format_from_name(std::string_view name);
+FileKind kind_of(FileFormat format);
+
+/// By extension: .g2o -> g2o; .graph, .toro -> TORO; .tum -> TUM; .kitti -> KITTI;
+/// .csv -> EuRoC. Otherwise (".txt" and others) nullopt.
+std::optional<FileFormat> format_from_extension(const std::string& path);
+
+/// format_from_extension, and if that does not tell and the file exists, its first record:
+/// a g2o or TORO tag, 8 numbers (TUM), 12 numbers (KITTI), or comma-separated fields (EuRoC).
+std::optional<FileFormat> detect_file_format(const std::string& path);
+
+}  // namespace cairn::io
