@@ -11,6 +11,7 @@ PACKAGES=(
   ninja-build          # fast, parallel builds
   ccache               # rebuilds in seconds while iterating
   pkg-config
+  python3              # scripts/demo.sh formats its table with it
   libeigen3-dev        # dense linear algebra, the Lie groups in core
   libsuitesparse-dev   # CHOLMOD sparse Cholesky for the back end
   libtbb-dev           # parallel loops (linearisation, matching)

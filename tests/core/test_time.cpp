@@ -33,5 +33,11 @@ TEST(Timestamp, RejectsGarbage) {
   EXPECT_EQ(Timestamp::parse_nanoseconds("1403715524907143168")->nanoseconds(), 1403715524907143168LL);
 }
 
+TEST(Timestamp, PrintsTheExtremesWithoutOverflow) {
+  EXPECT_EQ(Timestamp::from_nanoseconds(INT64_MIN).to_seconds_string(), "-9223372036.854775808");
+  EXPECT_EQ(Timestamp::from_nanoseconds(INT64_MAX).to_seconds_string(), "9223372036.854775807");
+  EXPECT_EQ(Timestamp::from_nanoseconds(-1).to_seconds_string(), "-0.000000001");
+}
+
 }  // namespace
 }  // namespace cairn::core

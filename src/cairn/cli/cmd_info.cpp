@@ -151,9 +151,9 @@ int info_trajectory(const InfoFlags& flags, io::FileFormat format) {
   double max_gap_s = 0.0;
   if (trajectory.has_stamps()) {
     const auto& stamps = trajectory.stamps;
-    duration_s = (stamps.back().nanoseconds() - stamps.front().nanoseconds()) * 1e-9;
+    duration_s = static_cast<double>(stamps.back().nanoseconds() - stamps.front().nanoseconds()) * 1e-9;
     for (std::size_t i = 1; i < stamps.size(); ++i) {
-      max_gap_s = std::max(max_gap_s, (stamps[i].nanoseconds() - stamps[i - 1].nanoseconds()) * 1e-9);
+      max_gap_s = std::max(max_gap_s, static_cast<double>(stamps[i].nanoseconds() - stamps[i - 1].nanoseconds()) * 1e-9);
     }
     j["first_timestamp_s"] = stamps.front().to_seconds_string();
     j["last_timestamp_s"] = stamps.back().to_seconds_string();
@@ -174,7 +174,7 @@ int info_trajectory(const InfoFlags& flags, io::FileFormat format) {
       o << std::setprecision(3);
       o << "time              " << trajectory.stamps.front().to_seconds_string() << " .. "
         << trajectory.stamps.back().to_seconds_string() << " s  (" << duration_s << " s";
-      if (duration_s > 0.0) o << ", " << (trajectory.poses.size() - 1) / duration_s << " Hz mean";
+      if (duration_s > 0.0) o << ", " << static_cast<double>(trajectory.poses.size() - 1) / duration_s << " Hz mean";
       o << ", largest gap " << max_gap_s << " s)\n";
     } else {
       o << "time              none (KITTI poses without a times file; pass --times)\n";

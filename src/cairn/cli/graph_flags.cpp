@@ -6,7 +6,7 @@ namespace cairn::cli {
 
 void GraphReadFlags::add_to(CLI::App& command) {
   command.add_flag("--strict", strict,
-                   "Refuse the file on any information matrix that is not positive definite and on "
+                   "Refuse the file on any indefinite information matrix and on "
                    "any unknown record type");
   command.add_option("--info-policy", info_policy,
                      "What to do with information matrices that are not positive definite: project "

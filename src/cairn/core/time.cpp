@@ -62,11 +62,12 @@ std::optional<Timestamp> Timestamp::parse_nanoseconds(std::string_view text) {
 }
 
 std::string Timestamp::to_seconds_string() const {
-  const std::int64_t abs_ns = ns_ < 0 ? -ns_ : ns_;
+  // Unsigned magnitude: -INT64_MIN does not fit in int64.
+  const std::uint64_t abs_ns = ns_ < 0 ? 0 - static_cast<std::uint64_t>(ns_) : static_cast<std::uint64_t>(ns_);
   char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%s%lld.%09lld", ns_ < 0 ? "-" : "",
-                static_cast<long long>(abs_ns / 1'000'000'000),
-                static_cast<long long>(abs_ns % 1'000'000'000));
+  std::snprintf(buffer, sizeof buffer, "%s%llu.%09llu", ns_ < 0 ? "-" : "",
+                static_cast<unsigned long long>(abs_ns / 1'000'000'000),
+                static_cast<unsigned long long>(abs_ns % 1'000'000'000));
   return buffer;
 }
 

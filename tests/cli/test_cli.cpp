@@ -1,0 +1,184 @@
+// The `cairn` binary end to end: exit codes, messages naming file and line, JSON facts, and
+// conversions that read back the same.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "test_data.hpp"
+
+namespace {
+
+struct Result {
+  int status = -1;  // exit code, or -1 when killed by a signal
+  std::string out;
+  std::string err;
+};
+
+std::filesystem::path scratch() {
+  const auto dir = std::filesystem::temp_directory_path() / ("cairn_cli_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::string slurp(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+Result run(const std::string& args) {
+  const auto err_path = scratch() / "stderr.txt";
+  const std::string command = std::string(CAIRN_BINARY) + " " + args + " 2>" + err_path.string();
+  Result result;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) result.out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.err = slurp(err_path);
+  return result;
+}
+
+std::string write_file(const std::string& name, const std::string& content) {
+  const auto path = scratch() / name;
+  std::ofstream(path, std::ios::binary) << content;
+  return path.string();
+}
+
+std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+TEST(Cli, HelpEverywhere) {
+  const Result top = run("--help");
+  EXPECT_EQ(top.status, 0);
+  EXPECT_NE(top.out.find("info"), std::string::npos);
+  EXPECT_NE(top.out.find("convert"), std::string::npos);
+  for (const char* command : {"info", "convert"}) {
+    const Result sub = run(std::string(command) + " --help");
+    EXPECT_EQ(sub.status, 0) << command;
+    EXPECT_NE(sub.out.find("--strict"), std::string::npos) << command << sub.out;
+  }
+}
+
+TEST(Cli, UsageErrorsExitWithTwo) {
+  EXPECT_EQ(run("").status, 2);
+  EXPECT_EQ(run("info").status, 2);
+  EXPECT_EQ(run("frobnicate x").status, 2);
+  EXPECT_EQ(run("info x.g2o --info-policy maybe").status, 2);
+}
+
+TEST(Cli, BadInputNamesFileAndLineAndExitsWithOne) {
+  const std::string truncated = write_file("truncated.g2o", "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0\n");
+  const Result r = run("info " + truncated);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find(truncated + ":3: EDGE_SE2 expects 11 values after the tag"), std::string::npos) << r.err;
+
+  const Result missing = run("info /nonexistent/graph.g2o");
+  EXPECT_EQ(missing.status, 1);
+  EXPECT_NE(missing.err.find("/nonexistent/graph.g2o: cannot open file"), std::string::npos) << missing.err;
+
+  std::string garbage(4096, '\0');
+  for (std::size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<char>((i * 7919u) % 256u);
+  const Result binary = run("info " + write_file("garbage.g2o", garbage));
+  EXPECT_EQ(binary.status, 1);
+  EXPECT_NE(binary.err.find("binary data"), std::string::npos) << binary.err;
+
+  const Result empty = run("info " + write_file("empty.g2o", ""));
+  EXPECT_EQ(empty.status, 1);
+  EXPECT_NE(empty.err.find("empty file"), std::string::npos) << empty.err;
+
+  const Result huge = run("info " + write_file("huge.g2o", std::string(3 << 20, '1')));
+  EXPECT_EQ(huge.status, 1);
+  EXPECT_NE(huge.err.find("longer than"), std::string::npos) << huge.err;
+
+  const Result unknown_format = run("info " + write_file("what.txt", "1 2 3\n"));
+  EXPECT_EQ(unknown_format.status, 1);
+  EXPECT_NE(unknown_format.err.find("cannot tell the format"), std::string::npos) << unknown_format.err;
+}
+
+TEST(Cli, InfoReportsCountsAsJson) {
+  CAIRN_REQUIRE_DATA("posegraph/se-sync/intel.g2o");
+  const Result r = run("info " + quoted(cairn::test::data_path("posegraph/se-sync/intel.g2o")) + " --json -");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["dimension"], 2);
+  EXPECT_EQ(j["poses"], 1728);
+  EXPECT_EQ(j["edges"], 2512);
+  EXPECT_EQ(j["connected_components"], 1);
+  EXPECT_EQ(j["has_initial_guess"], true);
+  EXPECT_EQ(j["records"]["EDGE_SE2"], 2512);
+
+  const Result csail = run("info " + quoted(cairn::test::data_path("posegraph/se-sync/CSAIL.g2o")));
+  ASSERT_EQ(csail.status, 0) << csail.err;
+  EXPECT_NE(csail.out.find("initial guess     no"), std::string::npos) << csail.out;
+}
+
+TEST(Cli, InfoAndStrictModeOnCubicle) {
+  CAIRN_REQUIRE_DATA("posegraph/se-sync/cubicle.g2o");
+  const std::string cubicle = quoted(cairn::test::data_path("posegraph/se-sync/cubicle.g2o"));
+  const Result r = run("info " + cubicle + " --json -");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["information_indefinite"], 5021);
+  EXPECT_EQ(j["first_indefinite_line"], 5753);
+  EXPECT_EQ(j["information_policy"], "project");
+  const Result text = run("info " + cubicle);
+  EXPECT_NE(text.err.find("5021 of 16869 information matrices are indefinite (first at line 5753)"),
+            std::string::npos)
+      << text.err;
+  const Result strict = run("info --strict " + cubicle);
+  EXPECT_EQ(strict.status, 1);
+  EXPECT_NE(strict.err.find("cubicle.g2o:5753: information matrix is indefinite"), std::string::npos) << strict.err;
+}
+
+TEST(Cli, ConvertToroToG2oKeepsTheGraph) {
+  CAIRN_REQUIRE_DATA("posegraph/toro/w100.graph");
+  const auto out = scratch() / "w100.g2o";
+  const Result c = run("convert " + quoted(cairn::test::data_path("posegraph/toro/w100.graph")) + " " + quoted(out));
+  ASSERT_EQ(c.status, 0) << c.err;
+  EXPECT_NE(c.out.find("wrote"), std::string::npos);
+  EXPECT_NE(c.err.find("skipped 40 unknown EQUIV record(s)"), std::string::npos) << c.err;
+  const Result info = run("info " + quoted(out) + " --json -");
+  ASSERT_EQ(info.status, 0) << info.err;
+  const auto j = nlohmann::json::parse(info.out);
+  EXPECT_EQ(j["vertices"], 100);
+  EXPECT_EQ(j["edges"], 300);
+  EXPECT_EQ(j["format"], "g2o");
+}
+
+TEST(Cli, ConvertTrajectoryKittiToTumAndBack) {
+  CAIRN_REQUIRE_DATA("trajectories/trajectories-evo-testdata/KITTI_00_gt.txt");
+  const auto dir = cairn::test::data_path("trajectories/trajectories-evo-testdata");
+  const auto tum = scratch() / "kitti00.tum";
+  const Result c = run("convert " + quoted(dir / "KITTI_00_gt.txt") + " " + quoted(tum) + " --from kitti --times " +
+                       quoted(dir / "KITTI_00_gt_times.txt"));
+  ASSERT_EQ(c.status, 0) << c.err;
+  const Result info = run("info " + quoted(tum) + " --json -");
+  ASSERT_EQ(info.status, 0) << info.err;
+  const auto j = nlohmann::json::parse(info.out);
+  EXPECT_EQ(j["poses"], 4541);
+  EXPECT_EQ(j["has_timestamps"], true);
+  // Without times a KITTI trajectory cannot become TUM: the command says what to pass.
+  const Result no_times = run("convert " + quoted(dir / "KITTI_00_gt.txt") + " " + quoted(scratch() / "x.tum"));
+  EXPECT_EQ(no_times.status, 1);
+  EXPECT_NE(no_times.err.find("--times"), std::string::npos) << no_times.err;
+  EXPECT_FALSE(std::filesystem::exists(scratch() / "x.tum"));
+}
+
+TEST(Cli, ConvertRefusesGraphToTrajectory) {
+  const std::string graph = write_file("g.g2o", "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n");
+  const Result r = run("convert " + graph + " " + (scratch() / "out.tum").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("cannot convert a pose graph"), std::string::npos) << r.err;
+}
+
+}  // namespace
