@@ -17,6 +17,8 @@
 
 #include "cairn/core/assert.hpp"
 #include "cairn/io/parse_error.hpp"
+#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/number_format.hpp"
 #include "cairn/io/text_reader.hpp"
 
 namespace cairn::io {
@@ -222,13 +224,6 @@ std::vector<Timestamp> read_kitti_times(const std::string& times_path, const std
 // ---------------------------------------------------------------------------------------------
 // Writing
 
-void append_shortest(std::string& out, double value) {
-  // Shortest text that parses back to the same double (std::to_chars without precision).
-  char buffer[32];
-  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
-  CAIRN_ASSERT(ec == std::errc(), "32 bytes hold any double in shortest form");
-  out.append(buffer, end);
-}
 
 // What the readers would reject cannot be written: the file could not be read back.
 void check_writable(const Trajectory& trajectory, const std::string& name, bool needs_stamps,
@@ -269,7 +264,7 @@ void emit_tum(std::ostream& out, const Trajectory& trajectory) {
     for (const double v : {T.translation().x(), T.translation().y(), T.translation().z(), q.x(),
                            q.y(), q.z(), q.w()}) {
       line += ' ';
-      append_shortest(line, v);
+      append_number(line, v);
     }
     line += '\n';
     out << line;
@@ -284,7 +279,7 @@ void emit_kitti(std::ostream& out, const Trajectory& trajectory) {
     for (int row = 0; row < 3; ++row) {
       for (int col = 0; col < 4; ++col) {
         if (row + col > 0) line += ' ';
-        append_shortest(line, M(row, col));
+        append_number(line, M(row, col));
       }
     }
     line += '\n';
@@ -307,53 +302,12 @@ void emit_euroc(std::ostream& out, const Trajectory& trajectory) {
     for (const double v : {T.translation().x(), T.translation().y(), T.translation().z(), q.w(),
                            q.x(), q.y(), q.z()}) {
       line += ',';
-      append_shortest(line, v);
+      append_number(line, v);
     }
     line += '\n';
     out << line;
   }
 }
-
-// A file written next to its destination and renamed over it on commit(); removed if never
-// committed, including when writing throws.
-class AtomicFile {
- public:
-  explicit AtomicFile(std::string path)
-      : path_(std::move(path)), temp_path_(path_ + ".tmp." + std::to_string(::getpid())) {}
-  AtomicFile(const AtomicFile&) = delete;
-  AtomicFile& operator=(const AtomicFile&) = delete;
-  ~AtomicFile() {
-    if (!committed_) {
-      std::error_code ignored;
-      std::filesystem::remove(temp_path_, ignored);
-    }
-  }
-
-  template <class Emit>
-  void write(Emit&& emit) {
-    std::ofstream out(temp_path_, std::ios::binary | std::ios::trunc);
-    if (!out) fail("cannot create " + temp_path_ + ": " + std::strerror(errno));
-    emit(out);
-    out.close();
-    if (!out) fail("error writing " + temp_path_ + ": " + std::strerror(errno));
-  }
-
-  void commit() {
-    std::error_code ec;
-    std::filesystem::rename(temp_path_, path_, ec);
-    if (ec) fail("cannot rename " + temp_path_ + ": " + ec.message());
-    committed_ = true;
-  }
-
- private:
-  [[noreturn]] void fail(const std::string& why) const {
-    throw ParseError(path_, 0, "cannot write: " + why);
-  }
-
-  std::string path_;
-  std::string temp_path_;
-  bool committed_ = false;
-};
 
 }  // namespace
 
