@@ -457,6 +457,19 @@ void append_quaternion(std::string& out, const core::SO3& R) {
   append_numbers(out, {q.x(), q.y(), q.z(), q.w()});
 }
 
+// g2o's FIX line; TORO cannot say that a pose is fixed, so the writer warns instead.
+void write_fixed(std::ostream& out, const std::vector<std::int64_t>& fixed, GraphFormat format,
+                 std::vector<std::string>& warnings) {
+  if (fixed.empty()) return;
+  if (format == GraphFormat::kToro) {
+    warnings.push_back("TORO has no FIX record: " + std::to_string(fixed.size()) + " fixed pose(s) not written");
+    return;
+  }
+  std::string line = "FIX";
+  for (const auto id : fixed) line += " " + std::to_string(id);
+  out << line << '\n';
+}
+
 std::vector<std::string> write_2d(std::ostream& out, const PoseGraph2D& graph, GraphFormat format) {
   const bool g2o = format == GraphFormat::kG2o;
   std::vector<std::string> warnings;
@@ -481,16 +494,7 @@ std::vector<std::string> write_2d(std::ostream& out, const PoseGraph2D& graph, G
     }
     out << line << '\n';
   }
-  if (!graph.fixed.empty()) {
-    if (g2o) {
-      line = "FIX";
-      for (const auto id : graph.fixed) line += " " + std::to_string(id);
-      out << line << '\n';
-    } else {
-      warnings.push_back("TORO has no FIX record: " + std::to_string(graph.fixed.size()) +
-                         " fixed pose(s) not written");
-    }
-  }
+  write_fixed(out, graph.fixed, format, warnings);
   return warnings;
 }
 
@@ -527,16 +531,7 @@ std::vector<std::string> write_3d(std::ostream& out, const PoseGraph3D& graph, G
     append_upper_triangle<6>(line, e.information);
     out << line << '\n';
   }
-  if (!graph.fixed.empty()) {
-    if (g2o) {
-      line = "FIX";
-      for (const auto id : graph.fixed) line += " " + std::to_string(id);
-      out << line << '\n';
-    } else {
-      warnings.push_back("TORO has no FIX record: " + std::to_string(graph.fixed.size()) +
-                         " fixed pose(s) not written");
-    }
-  }
+  write_fixed(out, graph.fixed, format, warnings);
   return warnings;
 }
 

@@ -330,7 +330,21 @@ std::optional<TrajectoryFormat> trajectory_format_from_name(std::string_view nam
   return std::nullopt;
 }
 
-Trajectory read_tum(const std::string& path, TrajectoryReadReport* report) {
+namespace {
+
+// One line of a stamped format (TUM, EuRoC).
+struct StampedRow {
+  Timestamp stamp;
+  std::string_view stamp_text;
+  Vector3 t;
+  Quaternion q;
+};
+
+// The loop TUM and EuRoC share: skip comments, parse a row, keep stamps increasing (dropping
+// repeats), check quaternion norms, report.
+template <class ParseRow>
+Trajectory read_stamped(const std::string& path, TrajectoryReadReport* report, const char* layout,
+                        ParseRow&& parse_row) {
   TrajectoryReadReport local;
   TrajectoryReadReport& out = report_or(report, local);
   TextReader reader(path);
@@ -343,26 +357,37 @@ Trajectory read_tum(const std::string& path, TrajectoryReadReport* report) {
       ++out.comment_lines;
       continue;
     }
-    const auto tokens = split_whitespace(line);
-    if (tokens.size() != 8) {
-      reader.fail("TUM line expects 8 numbers, found " + std::to_string(tokens.size()) + ": " +
-                  kTumLayout);
-    }
-    const Timestamp stamp = parse_seconds(reader, tokens[0]);
-    const Vector3 t = parse_vector3(reader, tokens[1], tokens[2], tokens[3]);
-    const double qx = parse_double(reader, tokens[4], "qx");
-    const double qy = parse_double(reader, tokens[5], "qy");
-    const double qz = parse_double(reader, tokens[6], "qz");
-    const double qw = parse_double(reader, tokens[7], "qw");
-    if (!order.check(reader, stamp, tokens[0])) continue;
-    trajectory.stamps.push_back(stamp);
-    trajectory.poses.emplace_back(norms.checked(reader, Quaternion(qw, qx, qy, qz)), t);
+    const StampedRow row = parse_row(reader, line);
+    if (!order.check(reader, row.stamp, row.stamp_text)) continue;
+    trajectory.stamps.push_back(row.stamp);
+    trajectory.poses.emplace_back(norms.checked(reader, row.q), row.t);
   }
-  if (trajectory.poses.empty()) fail_no_poses(path, kTumLayout);
+  if (trajectory.poses.empty()) fail_no_poses(path, layout);
   out.poses = trajectory.size();
   order.report(path, out);
   norms.report(path, out);
   return trajectory;
+}
+
+}  // namespace
+
+Trajectory read_tum(const std::string& path, TrajectoryReadReport* report) {
+  return read_stamped(path, report, kTumLayout, [](const TextReader& reader, std::string_view line) {
+    const auto tokens = split_whitespace(line);
+    if (tokens.size() != 8) {
+      reader.fail("TUM line expects 8 numbers, found " + std::to_string(tokens.size()) + ": " + kTumLayout);
+    }
+    StampedRow row;
+    row.stamp = parse_seconds(reader, tokens[0]);
+    row.stamp_text = tokens[0];
+    row.t = parse_vector3(reader, tokens[1], tokens[2], tokens[3]);
+    const double qx = parse_double(reader, tokens[4], "qx");
+    const double qy = parse_double(reader, tokens[5], "qy");
+    const double qz = parse_double(reader, tokens[6], "qz");
+    const double qw = parse_double(reader, tokens[7], "qw");
+    row.q = Quaternion(qw, qx, qy, qz);
+    return row;
+  });
 }
 
 Trajectory read_kitti(const std::string& path, const std::string& times_path,
@@ -409,18 +434,7 @@ Trajectory read_kitti(const std::string& path, const std::string& times_path,
 }
 
 Trajectory read_euroc(const std::string& path, TrajectoryReadReport* report) {
-  TrajectoryReadReport local;
-  TrajectoryReadReport& out = report_or(report, local);
-  TextReader reader(path);
-  Trajectory trajectory;
-  IncreasingStamps order(/*drop_repeats=*/true);
-  QuaternionNorms norms;
-  while (reader.next_line()) {
-    const std::string_view line = reader.line();
-    if (is_blank_or_comment(line)) {
-      ++out.comment_lines;
-      continue;
-    }
+  return read_stamped(path, report, kEurocLayout, [](const TextReader& reader, std::string_view line) {
     // Columns past the 8th (velocity, IMU biases in ground-truth files) are not parsed: they
     // are not kept, so a bad value there cannot affect the result.
     const auto fields = split_fields(line, ',');
@@ -429,23 +443,18 @@ Trajectory read_euroc(const std::string& path, TrajectoryReadReport* report) {
                   std::to_string(fields.size()) + ": " + kEurocLayout);
     }
     const auto stamp = Timestamp::parse_nanoseconds(fields[0]);
-    if (!stamp) {
-      reader.fail("expected an integer timestamp in nanoseconds, found " + quote_token(fields[0]));
-    }
-    const Vector3 t = parse_vector3(reader, fields[1], fields[2], fields[3]);
+    if (!stamp) reader.fail("expected an integer timestamp in nanoseconds, found " + quote_token(fields[0]));
+    StampedRow row;
+    row.stamp = *stamp;
+    row.stamp_text = fields[0];
+    row.t = parse_vector3(reader, fields[1], fields[2], fields[3]);
     const double qw = parse_double(reader, fields[4], "qw");
     const double qx = parse_double(reader, fields[5], "qx");
     const double qy = parse_double(reader, fields[6], "qy");
     const double qz = parse_double(reader, fields[7], "qz");
-    if (!order.check(reader, *stamp, fields[0])) continue;
-    trajectory.stamps.push_back(*stamp);
-    trajectory.poses.emplace_back(norms.checked(reader, Quaternion(qw, qx, qy, qz)), t);
-  }
-  if (trajectory.poses.empty()) fail_no_poses(path, kEurocLayout);
-  out.poses = trajectory.size();
-  order.report(path, out);
-  norms.report(path, out);
-  return trajectory;
+    row.q = Quaternion(qw, qx, qy, qz);
+    return row;
+  });
 }
 
 void write_tum(std::ostream& out, const Trajectory& trajectory) {
