@@ -30,7 +30,12 @@ Matrix3 barfoot_q(const Vector3& rho, const Vector3& phi) {
     const double s = std::sin(a);
     const double c = std::cos(a);
     c1 = (a - s) / (a2 * a);
-    c2 = (a2 + 2.0 * c - 2.0) / (2.0 * a2 * a2);
+    // a^2 + 2 cos a - 2 = a^2 - 4 sin^2(a/2) = (a - 2 sin(a/2)) (a + 2 sin(a/2)). Written with
+    // cos a, the rounding of 2 cos a (~2e-16) swamps the a^4/12 it should resolve: c2 had ~2e-3
+    // relative error just above the switch (a = 1e-3), i.e. ~1e-10 |rho| in Q. The factored form
+    // cancels only at the scale of a and keeps c2 to ~2e-9 there.
+    const double two_sin_half = 2.0 * std::sin(0.5 * a);
+    c2 = (a - two_sin_half) * (a + two_sin_half) / (2.0 * a2 * a2);
     c3 = (2.0 * a - 3.0 * s + a * c) / (2.0 * a2 * a2 * a);
   }
   const Matrix3 FP = F * P;

@@ -46,6 +46,13 @@ class SO2 {
   /// Inverse of hat; reads the (1,0) entry.
   static double vee(const Matrix2& Omega);
 
+  /// SO(2) is commutative, so exp(theta + d) = exp(d) exp(theta) = exp(theta) exp(d) exactly:
+  /// every Jacobian is 1. Given for a uniform interface with the other groups.
+  static double left_jacobian(double /*theta*/) { return 1.0; }
+  static double left_jacobian_inverse(double /*theta*/) { return 1.0; }
+  static double right_jacobian(double /*theta*/) { return 1.0; }
+  static double right_jacobian_inverse(double /*theta*/) { return 1.0; }
+
  private:
   double theta_ = 0.0;
   double c_ = 1.0;

@@ -106,7 +106,10 @@ Matrix3 SO3::left_jacobian(const Tangent& phi) {
     c1 = 0.5 - a2 / 24.0;
     c2 = 1.0 / 6.0 - a2 / 120.0;
   } else {
-    c1 = (1.0 - std::cos(a)) / a2;
+    // 1 - cos a = 2 sin^2(a/2), which does not cancel: (1 - cos a) loses ~8 digits near the
+    // switch, and SE3::exp multiplies c1 by |phi| |rho|.
+    const double s = std::sin(0.5 * a);
+    c1 = 2.0 * s * s / a2;
     c2 = (a - std::sin(a)) / (a2 * a);
   }
   return Matrix3::Identity() + c1 * P + c2 * P * P;
