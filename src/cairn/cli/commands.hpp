@@ -17,6 +17,7 @@ using Runner = std::function<int()>;
 
 Runner register_info(CLI::App& app);
 Runner register_convert(CLI::App& app);
+Runner register_optimize(CLI::App& app);
 
 /// Flags shared by every command that reads a pose graph.
 struct GraphReadFlags {

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   };
   add(cairn::cli::register_info, "info", "Describe a pose graph or trajectory file");
   add(cairn::cli::register_convert, "convert", "Convert between graph formats or between trajectory formats");
+  add(cairn::cli::register_optimize, "optimize", "Optimise a pose graph (LM / GN / dog-leg, chordal initialisation)");
 
   try {
     app.parse(argc, argv);

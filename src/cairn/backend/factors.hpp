@@ -1,0 +1,50 @@
+#pragma once
+/// \file
+/// Residuals of a relative-pose edge and their analytic Jacobians, whitened by the edge's
+/// weights. Poses are perturbed on the right: T <- T * exp(delta), delta translation first.
+///
+/// GeodesicFactor (the g2o/GTSAM/Ceres cost):
+///   r = S log(Z^-1 T_i^-1 T_j),  S^T S = information
+///   dr/d(delta_j) = S Jr^-1(e),  dr/d(delta_i) = -S Jr^-1(e) Adj(T_j^-1 T_i),  e = log(...)
+/// (perturbing T_i gives E exp(-Adj(T_j^-1 T_i) delta_i); see docs/math/pose_graph.md).
+///
+/// ChordalFactor (SE-Sync's objective, Rosen et al. IJRR 2019, Problem 1, eq. 12):
+///   r = ( sqrt(kappa) vec(R_j - R_i R~_ij) ,  sqrt(tau) (t_j - t_i - R_i t~_ij) )
+/// so that sum ||r||^2 is exactly SE-Sync's f. With R <- R exp([phi]x), t <- t + R rho:
+///   d vec(R_j)/d phi_j,k = vec(R_j G_k),  d vec(-R_i R~)/d phi_i,k = -vec(R_i G_k R~),
+///   d(t_j - t_i - R_i t~)/d(rho_j, phi_j) = (R_j, 0),  .../d(rho_i, phi_i) = (-R_i, R_i [t~]x),
+/// G_k the generators of so(d).
+
+#include "cairn/backend/problem.hpp"
+
+namespace cairn::backend {
+
+template <class Group>
+struct GeodesicFactor {
+  static constexpr int kDoF = Group::kDoF;
+  static constexpr int kResidualDim = Group::kDoF;
+  using Residual = Eigen::Matrix<double, kResidualDim, 1>;
+  using Jacobian = Eigen::Matrix<double, kResidualDim, kDoF>;
+
+  /// Whitened residual; Jacobians optional (nullptr to skip).
+  static Residual evaluate(const Group& T_world_i, const Group& T_world_j, const PoseEdge<Group>& edge,
+                           Jacobian* J_r_i, Jacobian* J_r_j);
+};
+
+template <class Group>
+struct ChordalFactor {
+  static constexpr int kDoF = Group::kDoF;
+  static constexpr int d = Group::kDoF == 3 ? 2 : 3;
+  static constexpr int kResidualDim = d * d + d;
+  using Residual = Eigen::Matrix<double, kResidualDim, 1>;
+  using Jacobian = Eigen::Matrix<double, kResidualDim, kDoF>;
+
+  static Residual evaluate(const Group& T_world_i, const Group& T_world_j, const PoseEdge<Group>& edge,
+                           Jacobian* J_r_i, Jacobian* J_r_j);
+};
+
+/// Unwhitened geodesic error log(Z^-1 T_i^-1 T_j).
+template <class Group>
+typename Group::Tangent between_error(const Group& T_world_i, const Group& T_world_j, const Group& T_i_j);
+
+}  // namespace cairn::backend

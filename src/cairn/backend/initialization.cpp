@@ -1,0 +1,216 @@
+#include "cairn/backend/initialization.hpp"
+
+#include <Eigen/SVD>
+#include <chrono>
+#include <deque>
+
+#include "cairn/backend/sparse_cholesky.hpp"
+#include "cairn/core/assert.hpp"
+
+namespace cairn::backend {
+
+std::string_view to_string(Initialization initialization) {
+  switch (initialization) {
+    case Initialization::kFile: return "file";
+    case Initialization::kOdometry: return "odometry";
+    case Initialization::kChordal: return "chordal";
+  }
+  return "?";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+template <class Group>
+constexpr int kD = Group::kDoF == 3 ? 2 : 3;
+
+template <class Group>
+Eigen::Matrix<double, kD<Group>, kD<Group>> rotation_of(const Group& T) {
+  if constexpr (Group::kDoF == 3) {
+    return T.so2().matrix();
+  } else {
+    return T.rotation_matrix();
+  }
+}
+
+template <class Group>
+Group make_pose(const Eigen::Matrix<double, kD<Group>, kD<Group>>& R, const Eigen::Matrix<double, kD<Group>, 1>& t) {
+  if constexpr (Group::kDoF == 3) {
+    return Group(core::SO2::from_matrix(R), t);
+  } else {
+    return Group(core::SO3::from_matrix(R), t);
+  }
+}
+
+// Solves the block-Laplacian-like system sum over edges of w ||x_j - A_ij x_i - c_ij||^2 with
+// x fixed at fixed poses, x in R^{d x m} per pose (m right-hand sides solved together).
+// For rotations: A_ij = R~^T, c = 0, m = d (row k of R is column k of x). For translations:
+// A_ij = I, c_ij = R_i t~, m = 1.
+template <int d>
+Eigen::MatrixXd solve_linear(int poses, const std::vector<char>& fixed, const std::vector<Eigen::MatrixXd>& known,
+                             const std::vector<std::pair<int, int>>& edges,
+                             const std::vector<Eigen::Matrix<double, d, d>>& A, const std::vector<Eigen::MatrixXd>& c,
+                             const std::vector<double>& w, int m) {
+  std::vector<int> variable(static_cast<std::size_t>(poses), -1);
+  int n = 0;
+  for (int p = 0; p < poses; ++p) {
+    if (!fixed[static_cast<std::size_t>(p)]) variable[static_cast<std::size_t>(p)] = n++;
+  }
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& [i, j] : edges) {
+    const int a = variable[static_cast<std::size_t>(i)];
+    const int b = variable[static_cast<std::size_t>(j)];
+    if (a >= 0 && b >= 0) pairs.emplace_back(a, b);
+  }
+  BlockPattern pattern(n, d, pairs);
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n * d, m);
+  using MatrixD = Eigen::Matrix<double, d, d, Eigen::RowMajor>;
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const auto [i, j] = edges[e];
+    const int vi = variable[static_cast<std::size_t>(i)];
+    const int vj = variable[static_cast<std::size_t>(j)];
+    // residual r = x_j - A x_i - c ; J_i = -A, J_j = I.
+    const Eigen::Matrix<double, d, d>& Ae = A[e];
+    if (vi >= 0) {
+      const MatrixD Hii = w[e] * Ae.transpose() * Ae;
+      pattern.add_diagonal(vi, Hii.data());
+    }
+    if (vj >= 0) {
+      const MatrixD Hjj = w[e] * Eigen::Matrix<double, d, d>::Identity();
+      pattern.add_diagonal(vj, Hjj.data());
+    }
+    if (vi >= 0 && vj >= 0) {
+      // H_ij = J_i^T J_j = -w A^T.
+      if (vi < vj) {
+        const MatrixD Hij = -w[e] * Ae.transpose();
+        pattern.add_off_diagonal(vi, vj, Hij.data());
+      } else {
+        const MatrixD Hji = -w[e] * Ae;
+        pattern.add_off_diagonal(vj, vi, Hji.data());
+      }
+    }
+    // Right-hand side -J^T r0 with r0 the residual at x_free = 0 (known poses inserted).
+    Eigen::MatrixXd r0 = -c[e];
+    if (vj < 0) r0 += known[static_cast<std::size_t>(j)];
+    if (vi < 0) r0 -= Ae * known[static_cast<std::size_t>(i)];
+    if (vi >= 0) rhs.block(vi * d, 0, d, m) += w[e] * Ae.transpose() * r0;
+    if (vj >= 0) rhs.block(vj * d, 0, d, m) -= w[e] * r0;
+  }
+  SparseCholesky cholesky;
+  cholesky.analyze(pattern.matrix());
+  const FactorizationStatus status = cholesky.factorize(pattern.matrix());
+  CAIRN_ASSERT(status == FactorizationStatus::kSuccess,
+               "chordal initialisation: singular system (make_problem guarantees connectivity)");
+  const Eigen::MatrixXd x = cholesky.solve(rhs);
+  Eigen::MatrixXd result(poses * d, m);
+  for (int p = 0; p < poses; ++p) {
+    const int v = variable[static_cast<std::size_t>(p)];
+    result.block(p * d, 0, d, m) = v >= 0 ? Eigen::MatrixXd(x.block(v * d, 0, d, m)) : known[static_cast<std::size_t>(p)];
+  }
+  return result;
+}
+
+}  // namespace
+
+template <class Group>
+InitializationSummary initialize_odometry(PoseGraphProblem<Group>& problem) {
+  const auto start = Clock::now();
+  InitializationSummary summary;
+  const std::size_t n = static_cast<std::size_t>(problem.size());
+  std::vector<std::vector<std::size_t>> incident(n);
+  for (std::size_t e = 0; e < problem.edges.size(); ++e) {
+    incident[static_cast<std::size_t>(problem.edges[e].i)].push_back(e);
+    incident[static_cast<std::size_t>(problem.edges[e].j)].push_back(e);
+  }
+  std::vector<char> reached(n, 0);
+  std::deque<int> queue;
+  for (std::size_t p = 0; p < n; ++p) {
+    if (problem.fixed[p]) {
+      reached[p] = 1;
+      queue.push_back(static_cast<int>(p));
+    }
+  }
+  while (!queue.empty()) {
+    const int p = queue.front();
+    queue.pop_front();
+    ++summary.poses_reached;
+    for (const std::size_t e : incident[static_cast<std::size_t>(p)]) {
+      const auto& edge = problem.edges[e];
+      const int q = edge.i == p ? edge.j : edge.i;
+      if (reached[static_cast<std::size_t>(q)]) continue;
+      reached[static_cast<std::size_t>(q)] = 1;
+      const Group& T_world_p = problem.T_world_pose[static_cast<std::size_t>(p)];
+      problem.T_world_pose[static_cast<std::size_t>(q)] =
+          edge.i == p ? T_world_p * edge.T_i_j : T_world_p * edge.T_i_j.inverse();
+      queue.push_back(q);
+    }
+  }
+  summary.total_s = std::chrono::duration<double>(Clock::now() - start).count();
+  return summary;
+}
+
+template <class Group>
+InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
+  constexpr int d = kD<Group>;
+  using MatrixD = Eigen::Matrix<double, d, d>;
+  using VectorD = Eigen::Matrix<double, d, 1>;
+  const auto start = Clock::now();
+  InitializationSummary summary;
+  const int n = problem.size();
+  std::vector<std::pair<int, int>> edges;
+  std::vector<MatrixD> A;
+  std::vector<Eigen::MatrixXd> c;
+  std::vector<double> kappa;
+  std::vector<double> tau;
+  for (const auto& edge : problem.edges) {
+    edges.emplace_back(edge.i, edge.j);
+    // Row k of R_j equals row k of R_i times R~: as columns, x_j = R~^T x_i with x = R^T.
+    A.push_back(rotation_of(edge.T_i_j).transpose());
+    c.push_back(Eigen::MatrixXd::Zero(d, d));
+    kappa.push_back(edge.kappa);
+    tau.push_back(edge.tau);
+  }
+  // (1) Rotations: unknown X_i = R_i^T (d x d), all d columns at once.
+  std::vector<Eigen::MatrixXd> known_R(static_cast<std::size_t>(n), Eigen::MatrixXd::Zero(d, d));
+  for (int p = 0; p < n; ++p) {
+    if (problem.fixed[static_cast<std::size_t>(p)]) {
+      known_R[static_cast<std::size_t>(p)] = rotation_of(problem.T_world_pose[static_cast<std::size_t>(p)]).transpose();
+    }
+  }
+  const Eigen::MatrixXd X = solve_linear<d>(n, problem.fixed, known_R, edges, A, c, kappa, d);
+  std::vector<MatrixD> R(static_cast<std::size_t>(n));
+  for (int p = 0; p < n; ++p) {
+    const MatrixD M = X.block(p * d, 0, d, d).transpose();
+    // Projection onto SO(d): U diag(1, .., det(U V^T)) V^T.
+    Eigen::JacobiSVD<MatrixD> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    MatrixD S = MatrixD::Identity();
+    S(d - 1, d - 1) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+    R[static_cast<std::size_t>(p)] = svd.matrixU() * S * svd.matrixV().transpose();
+  }
+  // (2) Translations with the rotations fixed.
+  std::vector<MatrixD> identity(edges.size(), MatrixD::Identity());
+  std::vector<Eigen::MatrixXd> offsets;
+  for (const auto& edge : problem.edges) {
+    offsets.push_back(R[static_cast<std::size_t>(edge.i)] * VectorD(edge.T_i_j.translation()));
+  }
+  std::vector<Eigen::MatrixXd> known_t(static_cast<std::size_t>(n), Eigen::MatrixXd::Zero(d, 1));
+  for (int p = 0; p < n; ++p) {
+    if (problem.fixed[static_cast<std::size_t>(p)]) known_t[static_cast<std::size_t>(p)] = problem.T_world_pose[static_cast<std::size_t>(p)].translation();
+  }
+  const Eigen::MatrixXd t = solve_linear<d>(n, problem.fixed, known_t, edges, identity, offsets, tau, 1);
+  for (int p = 0; p < n; ++p) {
+    if (problem.fixed[static_cast<std::size_t>(p)]) continue;
+    problem.T_world_pose[static_cast<std::size_t>(p)] = make_pose<Group>(R[static_cast<std::size_t>(p)], VectorD(t.block(p * d, 0, d, 1)));
+  }
+  summary.poses_reached = n;
+  summary.total_s = std::chrono::duration<double>(Clock::now() - start).count();
+  return summary;
+}
+
+template InitializationSummary initialize_odometry(Problem2D&);
+template InitializationSummary initialize_odometry(Problem3D&);
+template InitializationSummary initialize_chordal(Problem2D&);
+template InitializationSummary initialize_chordal(Problem3D&);
+
+}  // namespace cairn::backend

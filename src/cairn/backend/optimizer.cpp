@@ -1,0 +1,468 @@
+#include "cairn/backend/optimizer.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "cairn/backend/factors.hpp"
+#include "cairn/backend/sparse_cholesky.hpp"
+#include "cairn/core/assert.hpp"
+
+namespace cairn::backend {
+
+std::string_view to_string(Algorithm algorithm) {
+  switch (algorithm) {
+    case Algorithm::kLevenbergMarquardt: return "lm";
+    case Algorithm::kGaussNewton: return "gn";
+    case Algorithm::kDogleg: return "dogleg";
+  }
+  return "?";
+}
+
+std::string_view to_string(Objective objective) {
+  return objective == Objective::kGeodesic ? "geodesic" : "chordal";
+}
+
+std::string_view to_string(TerminationType termination) {
+  switch (termination) {
+    case TerminationType::kConvergence: return "convergence";
+    case TerminationType::kNoConvergence: return "no_convergence";
+    case TerminationType::kFailure: return "failure";
+  }
+  return "?";
+}
+
+bool OptimizerOptions::is_valid(std::string* error) const {
+  std::string problems;
+  auto check = [&](bool ok, const char* what) {
+    if (!ok) problems += std::string(problems.empty() ? "" : "; ") + what;
+  };
+  check(max_iterations >= 1, "max_iterations must be >= 1");
+  check(function_tolerance >= 0.0, "function_tolerance must be >= 0");
+  check(gradient_tolerance >= 0.0, "gradient_tolerance must be >= 0");
+  check(parameter_tolerance >= 0.0, "parameter_tolerance must be >= 0");
+  check(initial_trust_region_radius > 0.0, "initial_trust_region_radius must be > 0");
+  check(kernel_scale > 0.0, "kernel_scale must be > 0");
+  check(threads >= 0, "threads must be >= 0");
+  if (error != nullptr) *error = problems;
+  return problems.empty();
+}
+
+std::string OptimizerSummary::brief_report() const {
+  char buffer[256];
+  std::snprintf(buffer, sizeof buffer, "cost %.10g -> %.10g in %d iterations (%d accepted), %.3f s: %s (%s)",
+                initial_cost, final_cost, iterations, successful_iterations, total_s,
+                std::string(to_string(termination)).c_str(), message.c_str());
+  return buffer;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+template <class Group, class Factor>
+class Engine {
+ public:
+  static constexpr int D = Group::kDoF;
+  using BlockVector = Eigen::Matrix<double, D, 1>;
+
+  Engine(PoseGraphProblem<Group>& problem, const OptimizerOptions& options)
+      : problem_(problem), options_(options), arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {
+    variable_.assign(static_cast<std::size_t>(problem.size()), -1);
+    for (int p = 0; p < problem.size(); ++p) {
+      if (!problem.fixed[static_cast<std::size_t>(p)]) variable_[static_cast<std::size_t>(p)] = free_poses_++;
+    }
+    std::vector<std::pair<int, int>> pairs;
+    for (const auto& e : problem.edges) {
+      const int a = variable_[static_cast<std::size_t>(e.i)];
+      const int b = variable_[static_cast<std::size_t>(e.j)];
+      if (a >= 0 && b >= 0) pairs.emplace_back(a, b);
+    }
+    pattern_ = std::make_unique<BlockPattern>(free_poses_, D, pairs);
+    blocks_.resize(problem.edges.size());
+    gradient_ = Eigen::VectorXd::Zero(free_poses_ * D);
+  }
+
+  int free_poses() const { return free_poses_; }
+  BlockPattern& pattern() { return *pattern_; }
+  const Eigen::VectorXd& gradient() const { return gradient_; }
+
+  double weight_of(std::size_t e) const {
+    return options_.edge_weights.empty() ? 1.0 : options_.edge_weights[e];
+  }
+
+  double cost(const std::vector<Group>& poses) {
+    return arena_.execute([&] {
+      return tbb::parallel_reduce(
+          tbb::blocked_range<std::size_t>(0, problem_.edges.size(), 256), 0.0,
+          [&](const tbb::blocked_range<std::size_t>& range, double sum) {
+            for (std::size_t e = range.begin(); e != range.end(); ++e) {
+              const auto& edge = problem_.edges[e];
+              const auto r = Factor::evaluate(poses[static_cast<std::size_t>(edge.i)], poses[static_cast<std::size_t>(edge.j)],
+                                              edge, nullptr, nullptr);
+              sum += weight_of(e) * evaluate_kernel(options_.kernel, options_.kernel_scale, r.squaredNorm()).rho;
+            }
+            return sum;
+          },
+          [](double a, double b) { return a + b; });
+    });
+  }
+
+  /// Fills the pattern's values with J^T J and gradient_ with J^T r at the current poses.
+  void linearize() {
+    const auto& poses = problem_.T_world_pose;
+    arena_.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, problem_.edges.size(), 128),
+                        [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t e = range.begin(); e != range.end(); ++e) linearize_edge(e, poses);
+                        });
+    });
+    pattern_->set_zero();
+    gradient_.setZero();
+    for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
+      const auto& edge = problem_.edges[e];
+      const auto& b = blocks_[e];
+      const int vi = variable_[static_cast<std::size_t>(edge.i)];
+      const int vj = variable_[static_cast<std::size_t>(edge.j)];
+      if (vi >= 0) {
+        pattern_->add_diagonal(vi, b.Hii.data());
+        gradient_.template segment<D>(vi * D) += b.gi;
+      }
+      if (vj >= 0) {
+        pattern_->add_diagonal(vj, b.Hjj.data());
+        gradient_.template segment<D>(vj * D) += b.gj;
+      }
+      if (vi >= 0 && vj >= 0) {
+        if (vi < vj) {
+          pattern_->add_off_diagonal(vi, vj, b.Hij.data());
+        } else {
+          const Eigen::Matrix<double, D, D, Eigen::RowMajor> Hji = b.Hij.transpose();
+          pattern_->add_off_diagonal(vj, vi, Hji.data());
+        }
+      }
+    }
+  }
+
+  std::vector<Group> apply(const Eigen::VectorXd& step) const {
+    std::vector<Group> poses = problem_.T_world_pose;
+    for (int p = 0; p < problem_.size(); ++p) {
+      const int v = variable_[static_cast<std::size_t>(p)];
+      if (v < 0) continue;
+      const typename Group::Tangent delta = step.template segment<D>(v * D);
+      poses[static_cast<std::size_t>(p)] = poses[static_cast<std::size_t>(p)] * Group::exp(delta);
+    }
+    return poses;
+  }
+
+  double translation_norm() const {
+    double sum = 0.0;
+    for (const auto& T : problem_.T_world_pose) sum += T.translation().squaredNorm();
+    return std::sqrt(sum);
+  }
+
+ private:
+  struct EdgeBlocks {
+    // Row-major storage so BlockPattern can read blocks as M[a * B + k].
+    Eigen::Matrix<double, D, D, Eigen::RowMajor> Hii, Hjj, Hij;
+    BlockVector gi, gj;
+  };
+
+  void linearize_edge(std::size_t e, const std::vector<Group>& poses) {
+    const auto& edge = problem_.edges[e];
+    typename Factor::Jacobian Ji;
+    typename Factor::Jacobian Jj;
+    typename Factor::Residual r = Factor::evaluate(poses[static_cast<std::size_t>(edge.i)],
+                                                   poses[static_cast<std::size_t>(edge.j)], edge, &Ji, &Jj);
+    // IRLS: scale by sqrt(w rho'(s)) (robust_kernel.hpp).
+    const double scale = std::sqrt(weight_of(e) * evaluate_kernel(options_.kernel, options_.kernel_scale, r.squaredNorm()).weight);
+    if (scale != 1.0) {
+      r *= scale;
+      Ji *= scale;
+      Jj *= scale;
+    }
+    auto& b = blocks_[e];
+    b.Hii.noalias() = Ji.transpose() * Ji;
+    b.Hjj.noalias() = Jj.transpose() * Jj;
+    b.Hij.noalias() = Ji.transpose() * Jj;
+    b.gi.noalias() = Ji.transpose() * r;
+    b.gj.noalias() = Jj.transpose() * r;
+  }
+
+  PoseGraphProblem<Group>& problem_;
+  const OptimizerOptions& options_;
+  tbb::task_arena arena_;
+  std::vector<int> variable_;
+  int free_poses_ = 0;
+  std::unique_ptr<BlockPattern> pattern_;
+  std::vector<EdgeBlocks> blocks_;
+  Eigen::VectorXd gradient_;
+};
+
+template <class Group, class Factor>
+OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& options) {
+  const auto start = Clock::now();
+  OptimizerSummary summary;
+  std::string invalid;
+  CAIRN_ASSERT(options.is_valid(&invalid), invalid.c_str());
+  CAIRN_ASSERT(options.edge_weights.empty() || options.edge_weights.size() == problem.edges.size(),
+               "edge_weights must be empty or hold one weight per edge");
+  Engine<Group, Factor> engine(problem, options);
+  summary.free_poses = engine.free_poses();
+  summary.edges = static_cast<int>(problem.edges.size());
+  double cost = engine.cost(problem.T_world_pose);
+  summary.initial_cost = cost;
+  summary.final_cost = cost;
+  if (engine.free_poses() == 0) {
+    summary.termination = TerminationType::kConvergence;
+    summary.message = "no free poses";
+    summary.total_s = seconds_since(start);
+    return summary;
+  }
+
+  auto analyze_start = Clock::now();
+  SparseCholesky cholesky;
+  cholesky.analyze(engine.pattern().matrix());
+  summary.analyze_s = seconds_since(analyze_start);
+
+  const bool lm = options.algorithm == Algorithm::kLevenbergMarquardt;
+  const bool dogleg = options.algorithm == Algorithm::kDogleg;
+  double lambda = 1.0 / options.initial_trust_region_radius;
+  double nu = 2.0;
+  double radius = options.initial_trust_region_radius;
+  bool need_linearization = true;
+  std::vector<double> diagonal;  // undamped diag(J^T J)
+  Eigen::VectorXd gn_step;       // dog-leg: cached Gauss-Newton step at the current poses
+  bool gn_step_valid = false;
+  summary.termination = TerminationType::kNoConvergence;
+  summary.message = "maximum number of iterations reached";
+
+  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    const auto iteration_start = Clock::now();
+    IterationSummary it;
+    it.iteration = iteration;
+    if (need_linearization) {
+      const auto t0 = Clock::now();
+      engine.linearize();
+      it.linearize_s = seconds_since(t0);
+      const auto& A = engine.pattern().matrix();
+      diagonal.resize(static_cast<std::size_t>(A.size));
+      for (int k = 0; k < A.size; ++k) diagonal[static_cast<std::size_t>(k)] = A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))];
+      need_linearization = false;
+      gn_step_valid = false;
+    }
+    const Eigen::VectorXd& g = engine.gradient();
+    it.gradient_max_norm = g.cwiseAbs().maxCoeff();
+    if (it.gradient_max_norm < options.gradient_tolerance) {
+      summary.termination = TerminationType::kConvergence;
+      summary.message = "gradient tolerance reached (max |J^T r| = " + std::to_string(it.gradient_max_norm) + ")";
+      break;
+    }
+
+    // Solve for the step.
+    Eigen::VectorXd step;
+    auto& A = engine.pattern().matrix();
+    bool solved = true;
+    if (!dogleg || !gn_step_valid) {
+      std::vector<double> saved;
+      if (lm) {
+        saved = diagonal;
+        for (int k = 0; k < A.size; ++k) {
+          const double d = std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
+          A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] += lambda * d;
+        }
+      }
+      const auto t1 = Clock::now();
+      const FactorizationStatus status = cholesky.factorize(A);
+      it.factorize_s = seconds_since(t1);
+      if (lm) {
+        for (int k = 0; k < A.size; ++k) A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] = saved[static_cast<std::size_t>(k)];
+      }
+      if (status != FactorizationStatus::kSuccess) {
+        solved = false;
+      } else {
+        const auto t2 = Clock::now();
+        step = cholesky.solve(Eigen::VectorXd(-g));
+        it.solve_s = seconds_since(t2);
+        if (!step.allFinite()) solved = false;
+      }
+      if (dogleg && solved) {
+        gn_step = step;
+        gn_step_valid = true;
+      }
+    }
+    if (!solved) {
+      if (lm) {
+        lambda *= nu;
+        nu *= 2.0;
+        it.lambda = lambda;
+        it.cost = cost;
+        it.iteration_s = seconds_since(iteration_start);
+        summary.iteration_log.push_back(it);
+        if (options.progress) options.progress(it);
+        summary.iterations = iteration;
+        continue;
+      }
+      summary.termination = TerminationType::kFailure;
+      summary.message = "the normal equations are not positive definite (is every pose constrained?)";
+      summary.iterations = iteration;
+      break;
+    }
+    double predicted = 0.0;
+    if (dogleg) {
+      // Powell's dog-leg (Nocedal & Wright, Numerical Optimization, 2nd ed., sec. 4.1).
+      const Eigen::VectorXd Hg = symmetric_multiply(A, g);
+      const double alpha = g.squaredNorm() / g.dot(Hg);
+      const Eigen::VectorXd cauchy = -alpha * g;
+      if (gn_step.norm() <= radius) {
+        step = gn_step;
+      } else if (cauchy.norm() >= radius) {
+        step = -(radius / g.norm()) * g;
+      } else {
+        const Eigen::VectorXd d = gn_step - cauchy;
+        const double a = d.squaredNorm();
+        const double b = 2.0 * cauchy.dot(d);
+        const double c = cauchy.squaredNorm() - radius * radius;
+        const double beta = (-b + std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a);
+        step = cauchy + beta * d;
+      }
+      const Eigen::VectorXd Hs = symmetric_multiply(A, step);
+      predicted = -2.0 * g.dot(step) - step.dot(Hs);
+      it.lambda = radius;
+    } else {
+      // (H + lambda D) step = -g  =>  step^T H step = -g^T step - lambda step^T D step, so the
+      // decrease of ||r + J step||^2 is -g^T step + lambda step^T D step (D = 0 for GN).
+      double damping = 0.0;
+      if (lm) {
+        for (int k = 0; k < A.size; ++k) {
+          const double d = std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
+          damping += d * step[k] * step[k];
+        }
+      }
+      predicted = -g.dot(step) + lambda * damping;
+      it.lambda = lm ? lambda : 0.0;
+    }
+    it.step_norm = step.norm();
+    if (it.step_norm < options.parameter_tolerance * (engine.translation_norm() + options.parameter_tolerance)) {
+      summary.termination = TerminationType::kConvergence;
+      summary.message = "parameter tolerance reached (step norm " + std::to_string(it.step_norm) + ")";
+      it.cost = cost;
+      summary.iteration_log.push_back(it);
+      summary.iterations = iteration;
+      break;
+    }
+    std::vector<Group> candidate = engine.apply(step);
+    const double new_cost = engine.cost(candidate);
+    it.cost_change = cost - new_cost;
+    it.relative_decrease = predicted > 0.0 ? it.cost_change / predicted : -1.0;
+    const bool accept = std::isfinite(new_cost) && (options.algorithm == Algorithm::kGaussNewton
+                                                        ? new_cost <= cost
+                                                        : it.relative_decrease > 1e-3);
+    if (accept) {
+      const double old_cost = cost;
+      problem.T_world_pose = std::move(candidate);
+      cost = new_cost;
+      need_linearization = true;
+      ++summary.successful_iterations;
+      it.step_accepted = true;
+      if (lm) {
+        // Nielsen's update (Madsen, Nielsen & Tingleff 2004, eq. 3.16), as Ceres' LM strategy.
+        const double t = 2.0 * it.relative_decrease - 1.0;
+        lambda *= std::max(1.0 / 3.0, 1.0 - t * t * t);
+        nu = 2.0;
+      } else if (dogleg) {
+        if (it.relative_decrease > 0.75) radius = std::max(radius, 3.0 * it.step_norm);
+        if (it.relative_decrease < 0.25) radius *= 0.25;
+      }
+      it.cost = cost;
+      it.iteration_s = seconds_since(iteration_start);
+      summary.iteration_log.push_back(it);
+      if (options.progress) options.progress(it);
+      summary.iterations = iteration;
+      if (std::abs(old_cost - new_cost) <= options.function_tolerance * old_cost) {
+        summary.termination = TerminationType::kConvergence;
+        summary.message = "function tolerance reached";
+        break;
+      }
+    } else {
+      if (options.algorithm == Algorithm::kGaussNewton) {
+        summary.termination = TerminationType::kConvergence;
+        summary.message = "Gauss-Newton step did not decrease the cost";
+        it.cost = cost;
+        summary.iteration_log.push_back(it);
+        summary.iterations = iteration;
+        break;
+      }
+      if (lm) {
+        lambda *= nu;
+        nu *= 2.0;
+      } else {
+        radius *= 0.25;
+      }
+      it.cost = cost;
+      it.iteration_s = seconds_since(iteration_start);
+      summary.iteration_log.push_back(it);
+      if (options.progress) options.progress(it);
+      summary.iterations = iteration;
+      if (lm && lambda > 1e32) {
+        summary.termination = TerminationType::kConvergence;
+        summary.message = "no further decrease possible (damping reached 1e32)";
+        break;
+      }
+      if (dogleg && radius < 1e-32) {
+        summary.termination = TerminationType::kConvergence;
+        summary.message = "no further decrease possible (trust region collapsed)";
+        break;
+      }
+    }
+  }
+  summary.final_cost = cost;
+  summary.factor_nonzeros = cholesky.factor_nonzeros();
+  for (const auto& it : summary.iteration_log) {
+    summary.linearize_s += it.linearize_s;
+    summary.factorize_s += it.factorize_s;
+    summary.solve_s += it.solve_s;
+  }
+  summary.total_s = seconds_since(start);
+  return summary;
+}
+
+}  // namespace
+
+template <class Group>
+OptimizerSummary optimize(PoseGraphProblem<Group>& problem, const OptimizerOptions& options) {
+  if (options.objective == Objective::kChordal) return run<Group, ChordalFactor<Group>>(problem, options);
+  return run<Group, GeodesicFactor<Group>>(problem, options);
+}
+
+template <class Group>
+double evaluate_cost(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options) {
+  double sum = 0.0;
+  for (std::size_t e = 0; e < problem.edges.size(); ++e) {
+    const auto& edge = problem.edges[e];
+    const auto& Ti = problem.T_world_pose[static_cast<std::size_t>(edge.i)];
+    const auto& Tj = problem.T_world_pose[static_cast<std::size_t>(edge.j)];
+    const double s = options.objective == Objective::kChordal
+                         ? ChordalFactor<Group>::evaluate(Ti, Tj, edge, nullptr, nullptr).squaredNorm()
+                         : GeodesicFactor<Group>::evaluate(Ti, Tj, edge, nullptr, nullptr).squaredNorm();
+    const double w = options.edge_weights.empty() ? 1.0 : options.edge_weights[e];
+    sum += w * evaluate_kernel(options.kernel, options.kernel_scale, s).rho;
+  }
+  return sum;
+}
+
+template OptimizerSummary optimize(Problem2D&, const OptimizerOptions&);
+template OptimizerSummary optimize(Problem3D&, const OptimizerOptions&);
+template double evaluate_cost(const Problem2D&, const OptimizerOptions&);
+template double evaluate_cost(const Problem3D&, const OptimizerOptions&);
+
+}  // namespace cairn::backend

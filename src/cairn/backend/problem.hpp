@@ -1,0 +1,70 @@
+#pragma once
+/// \file
+/// The optimisation problem built from a pose graph file: poses by index, edges with their
+/// whitening (square-root information) and SE-Sync's isotropic weights, the gauge (fixed poses).
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cairn/core/se2.hpp"
+#include "cairn/core/se3.hpp"
+#include "cairn/io/pose_graph.hpp"
+
+namespace cairn::backend {
+
+enum class EdgeKind {
+  kOdometry,     ///< between consecutive ids
+  kLoopClosure,  ///< any other edge
+};
+
+template <class Group>
+struct PoseEdge {
+  static constexpr int kDoF = Group::kDoF;
+  using Matrix = Eigen::Matrix<double, kDoF, kDoF>;
+  int i = 0;  ///< index of pose `from`
+  int j = 0;  ///< index of pose `to`
+  Group T_i_j;
+  Matrix information = Matrix::Identity();
+  /// S with S^T S = information, so ||S r||^2 = r^T information r (eigen-decomposition square
+  /// root; works for the singular positive semi-definite matrices the reader may produce).
+  Matrix sqrt_information = Matrix::Identity();
+  /// SE-Sync's isotropic weights (Rosen et al. 2019, see ../shared/data/README.md): rotation
+  /// kappa and translation tau, from the diagonal blocks of the information matrix only.
+  double kappa = 1.0;
+  double tau = 1.0;
+  EdgeKind kind = EdgeKind::kOdometry;
+  std::size_t line = 0;  ///< line in the file (0 if none)
+};
+
+template <class Group>
+struct PoseGraphProblem {
+  static constexpr int kDoF = Group::kDoF;
+  std::vector<std::int64_t> ids;   ///< index -> id in the file
+  std::vector<Group> T_world_pose; ///< current estimate, by index
+  std::vector<char> fixed;         ///< 1 = held constant (gauge)
+  std::vector<PoseEdge<Group>> edges;
+  bool has_initial_guess = false;  ///< T_world_pose came from the file's VERTEX lines
+
+  int size() const { return static_cast<int>(ids.size()); }
+  int index_of(std::int64_t id) const;
+};
+
+using Problem2D = PoseGraphProblem<core::SE2>;
+using Problem3D = PoseGraphProblem<core::SE3>;
+
+/// Builds the problem. Poses are the file's vertices (in file order) or, without vertices, the
+/// ids the edges name (sorted; identity as placeholder guess). FIX poses are held; without any,
+/// the first pose is held (gauge). Throws io::ParseError naming `path` when a connected component
+/// has no fixed pose (the problem would have no unique solution) or when SE-Sync weights cannot
+/// be formed (a singular diagonal block).
+template <class Group>
+PoseGraphProblem<Group> make_problem(const io::PoseGraphT<Group>& graph, const std::string& path);
+
+/// The optimised poses written back into a graph (vertices for every pose, in index order;
+/// edges and fixed ids unchanged).
+template <class Group>
+io::PoseGraphT<Group> to_graph(const PoseGraphProblem<Group>& problem, const io::PoseGraphT<Group>& original);
+
+}  // namespace cairn::backend

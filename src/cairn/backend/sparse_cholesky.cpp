@@ -1,0 +1,171 @@
+#include "cairn/backend/sparse_cholesky.hpp"
+
+#include <cholmod.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "cairn/core/assert.hpp"
+
+namespace cairn::backend {
+
+BlockPattern::BlockPattern(int blocks, int block_size, const std::vector<std::pair<int, int>>& pairs)
+    : blocks_(blocks), block_size_(block_size), column_block_rows_(static_cast<std::size_t>(blocks)) {
+  for (const auto& [a, b] : pairs) {
+    CAIRN_ASSERT(a != b && a >= 0 && b >= 0 && a < blocks && b < blocks, "block pair out of range");
+    column_block_rows_[static_cast<std::size_t>(std::max(a, b))].push_back(std::min(a, b));
+  }
+  for (auto& rows : column_block_rows_) {
+    std::sort(rows.begin(), rows.end());
+    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+  }
+  const int B = block_size;
+  csc_.size = blocks * B;
+  csc_.column_start.assign(static_cast<std::size_t>(csc_.size) + 1, 0);
+  for (int c = 0; c < blocks; ++c) {
+    const int off = static_cast<int>(column_block_rows_[static_cast<std::size_t>(c)].size()) * B;
+    for (int k = 0; k < B; ++k) {
+      const int col = c * B + k;
+      csc_.column_start[static_cast<std::size_t>(col) + 1] = csc_.column_start[static_cast<std::size_t>(col)] + off + k + 1;
+    }
+  }
+  csc_.row.resize(static_cast<std::size_t>(csc_.column_start.back()));
+  csc_.value.assign(csc_.row.size(), 0.0);
+  for (int c = 0; c < blocks; ++c) {
+    for (int k = 0; k < B; ++k) {
+      int pos = csc_.column_start[static_cast<std::size_t>(c * B + k)];
+      for (const int r : column_block_rows_[static_cast<std::size_t>(c)]) {
+        for (int a = 0; a < B; ++a) csc_.row[static_cast<std::size_t>(pos++)] = r * B + a;
+      }
+      for (int a = 0; a <= k; ++a) csc_.row[static_cast<std::size_t>(pos++)] = c * B + a;
+    }
+  }
+}
+
+int BlockPattern::rank_of(int r, int c) const {
+  const auto& rows = column_block_rows_[static_cast<std::size_t>(c)];
+  const auto it = std::lower_bound(rows.begin(), rows.end(), r);
+  CAIRN_ASSERT(it != rows.end() && *it == r, "block not in pattern");
+  return static_cast<int>(it - rows.begin());
+}
+
+void BlockPattern::add_off_diagonal(int r, int c, const double* M) {
+  const int B = block_size_;
+  const int base = rank_of(r, c) * B;
+  for (int k = 0; k < B; ++k) {
+    double* column = csc_.value.data() + csc_.column_start[static_cast<std::size_t>(c * B + k)] + base;
+    for (int a = 0; a < B; ++a) column[a] += M[a * B + k];
+  }
+}
+
+void BlockPattern::add_diagonal(int c, const double* M) {
+  const int B = block_size_;
+  const int base = static_cast<int>(column_block_rows_[static_cast<std::size_t>(c)].size()) * B;
+  for (int k = 0; k < B; ++k) {
+    double* column = csc_.value.data() + csc_.column_start[static_cast<std::size_t>(c * B + k)] + base;
+    for (int a = 0; a <= k; ++a) column[a] += M[a * B + k];
+  }
+}
+
+void BlockPattern::set_zero() { std::fill(csc_.value.begin(), csc_.value.end(), 0.0); }
+
+Eigen::VectorXd symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x) {
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(A.size);
+  for (int c = 0; c < A.size; ++c) {
+    for (int p = A.column_start[static_cast<std::size_t>(c)]; p < A.column_start[static_cast<std::size_t>(c) + 1]; ++p) {
+      const int r = A.row[static_cast<std::size_t>(p)];
+      const double v = A.value[static_cast<std::size_t>(p)];
+      y[r] += v * x[c];
+      if (r != c) y[c] += v * x[r];
+    }
+  }
+  return y;
+}
+
+struct SparseCholesky::Impl {
+  cholmod_common common{};
+  cholmod_factor* factor = nullptr;
+  int size = 0;
+
+  Impl() {
+    cholmod_start(&common);
+    common.print = 0;  // library code never prints; failures come back as status
+    common.supernodal = CHOLMOD_AUTO;
+  }
+  ~Impl() {
+    if (factor != nullptr) cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+
+  // A view of our arrays as a cholmod_sparse (no copy).
+  static cholmod_sparse view(const UpperCsc& A) {
+    cholmod_sparse S{};
+    S.nrow = static_cast<std::size_t>(A.size);
+    S.ncol = static_cast<std::size_t>(A.size);
+    S.nzmax = A.value.size();
+    S.p = const_cast<int*>(A.column_start.data());
+    S.i = const_cast<int*>(A.row.data());
+    S.x = const_cast<double*>(A.value.data());
+    S.stype = 1;
+    S.itype = CHOLMOD_INT;
+    S.xtype = CHOLMOD_REAL;
+    S.dtype = CHOLMOD_DOUBLE;
+    S.sorted = 1;
+    S.packed = 1;
+    return S;
+  }
+};
+
+SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
+SparseCholesky::~SparseCholesky() = default;
+
+void SparseCholesky::analyze(const UpperCsc& A) {
+  if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
+  cholmod_sparse S = Impl::view(A);
+  impl_->factor = cholmod_analyze(&S, &impl_->common);
+  impl_->size = A.size;
+  CAIRN_ASSERT(impl_->factor != nullptr, "CHOLMOD analysis failed (out of memory?)");
+}
+
+FactorizationStatus SparseCholesky::factorize(const UpperCsc& A) {
+  CAIRN_ASSERT(impl_->factor != nullptr && A.size == impl_->size, "factorize() before analyze()");
+  cholmod_sparse S = Impl::view(A);
+  const int ok = cholmod_factorize(&S, impl_->factor, &impl_->common);
+  if (impl_->common.status == CHOLMOD_NOT_POSDEF || impl_->factor->minor < impl_->factor->n) {
+    return FactorizationStatus::kNotPositiveDefinite;
+  }
+  if (ok == 0 || impl_->common.status != CHOLMOD_OK) return FactorizationStatus::kFailure;
+  return FactorizationStatus::kSuccess;
+}
+
+Eigen::MatrixXd SparseCholesky::solve(const Eigen::MatrixXd& B) {
+  cholmod_dense* rhs = cholmod_allocate_dense(static_cast<std::size_t>(B.rows()), static_cast<std::size_t>(B.cols()),
+                                              static_cast<std::size_t>(B.rows()), CHOLMOD_REAL, &impl_->common);
+  std::memcpy(rhs->x, B.data(), sizeof(double) * static_cast<std::size_t>(B.size()));
+  cholmod_dense* x = cholmod_solve(CHOLMOD_A, impl_->factor, rhs, &impl_->common);
+  CAIRN_ASSERT(x != nullptr, "CHOLMOD solve failed");
+  Eigen::MatrixXd X(B.rows(), B.cols());
+  std::memcpy(X.data(), x->x, sizeof(double) * static_cast<std::size_t>(X.size()));
+  cholmod_free_dense(&x, &impl_->common);
+  cholmod_free_dense(&rhs, &impl_->common);
+  return X;
+}
+
+Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) {
+  const Eigen::MatrixXd B = b;
+  return solve(B).col(0);
+}
+
+Eigen::MatrixXd SparseCholesky::inverse_columns(const std::vector<int>& columns) {
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(impl_->size, static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t k = 0; k < columns.size(); ++k) E(columns[k], static_cast<Eigen::Index>(k)) = 1.0;
+  return solve(E);
+}
+
+std::size_t SparseCholesky::factor_nonzeros() const {
+  return impl_->factor == nullptr ? 0 : static_cast<std::size_t>(impl_->common.lnz);
+}
+
+std::size_t SparseCholesky::peak_memory_bytes() const { return impl_->common.memory_usage; }
+
+}  // namespace cairn::backend

@@ -1,0 +1,85 @@
+#pragma once
+/// \file
+/// Sparse Cholesky of a symmetric block-sparse matrix through SuiteSparse CHOLMOD: the symbolic
+/// analysis (fill-reducing ordering, supernodes) runs once per sparsity pattern, the numeric
+/// factorisation once per solver iteration, as in Ceres' SPARSE_NORMAL_CHOLESKY
+/// (internal/ceres/suitesparse.cc) and g2o's LinearSolverCholmod.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace cairn::backend {
+
+/// Upper triangle of a symmetric matrix in compressed-column form (CHOLMOD's stype = 1).
+struct UpperCsc {
+  int size = 0;
+  std::vector<int> column_start;  ///< size + 1 entries
+  std::vector<int> row;           ///< row of each stored value, sorted within a column
+  std::vector<double> value;
+};
+
+/// Pattern of the normal equations H of a graph with `blocks` block variables of size
+/// `block_size` and block couplings `pairs` (i, j), i != j, in any order (duplicates allowed).
+/// `block_offset(c, r)` gives the position in `value` of scalar entry (r*B + 0, c*B + k) minus
+/// column_start[c*B + k], for r <= c, so a block can be scattered without searching.
+class BlockPattern {
+ public:
+  BlockPattern(int blocks, int block_size, const std::vector<std::pair<int, int>>& pairs);
+
+  const UpperCsc& matrix() const { return csc_; }
+  UpperCsc& matrix() { return csc_; }
+  int block_size() const { return block_size_; }
+  int blocks() const { return blocks_; }
+
+  /// Adds the B x B block `M` at block (r, c), r < c (only the strictly upper block).
+  void add_off_diagonal(int r, int c, const double* M_row_major_r_by_c);
+  /// Adds the upper triangle of the symmetric B x B block `M` at (c, c).
+  void add_diagonal(int c, const double* M_row_major);
+  void set_zero();
+  /// Index into value of the diagonal entry of scalar column k.
+  int diagonal_index(int scalar_column) const { return csc_.column_start[scalar_column + 1] - 1; }
+
+ private:
+  int blocks_;
+  int block_size_;
+  UpperCsc csc_;
+  /// For block column c: the off-diagonal block rows (sorted) and, via lookup, their rank.
+  std::vector<std::vector<int>> column_block_rows_;
+  int rank_of(int r, int c) const;
+};
+
+enum class FactorizationStatus { kSuccess, kNotPositiveDefinite, kFailure };
+
+/// y = A x for a symmetric matrix stored as its upper triangle.
+Eigen::VectorXd symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x);
+
+class SparseCholesky {
+ public:
+  SparseCholesky();
+  ~SparseCholesky();
+  SparseCholesky(const SparseCholesky&) = delete;
+  SparseCholesky& operator=(const SparseCholesky&) = delete;
+
+  /// Symbolic analysis of the pattern of `A` (values ignored). Call again when the pattern changes.
+  void analyze(const UpperCsc& A);
+  /// Numeric factorisation of A (same pattern as analyzed).
+  FactorizationStatus factorize(const UpperCsc& A);
+  /// Solves A x = b with the last successful factorisation.
+  Eigen::VectorXd solve(const Eigen::VectorXd& b);
+  /// Solves for several right-hand sides at once (columns of B).
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& B);
+  /// Columns `columns` of A^-1 (for marginal covariances), via solves with unit vectors.
+  Eigen::MatrixXd inverse_columns(const std::vector<int>& columns);
+  /// Non-zeros of the factor L (fill-in), after factorize.
+  std::size_t factor_nonzeros() const;
+  /// Peak memory CHOLMOD reported, bytes.
+  std::size_t peak_memory_bytes() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cairn::backend

@@ -1,0 +1,177 @@
+// The optimiser on synthetic graphs with a known answer, and on SE-Sync's benchmark graphs
+// against the certified global optima measured with SE-Sync and printed in
+// ../shared/data/README.md ("Optima measured with SE-Sync on this data").
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "cairn/backend/initialization.hpp"
+#include "cairn/backend/optimizer.hpp"
+#include "cairn/io/graph_io.hpp"
+#include "cairn/io/parse_error.hpp"
+#include "test_data.hpp"
+
+namespace cairn::backend {
+namespace {
+
+// A robot drives `laps` times around a square; odometry between consecutive poses, loop
+// closures between laps. Measurements are exact, so the optimum has zero cost.
+template <class Group>
+io::PoseGraphT<Group> square_world(int laps, std::vector<Group>& truth) {
+  io::PoseGraphT<Group> graph;
+  const int per_lap = 12;
+  for (int k = 0; k < laps * per_lap; ++k) {
+    const double angle = 2.0 * M_PI * k / per_lap;
+    typename Group::Tangent xi = Group::Tangent::Zero();
+    if constexpr (Group::kDoF == 3) {
+      truth.push_back(Group(5.0 * std::cos(angle), 5.0 * std::sin(angle), angle + M_PI / 2));
+    } else {
+      xi << 5.0 * std::cos(angle), 5.0 * std::sin(angle), 0.3 * std::sin(angle), 0.1, 0.05 * k, angle;
+      truth.push_back(Group(core::SO3::exp(xi.template tail<3>()), xi.template head<3>()));
+    }
+  }
+  auto add = [&](int i, int j) {
+    io::GraphEdge<Group> e;
+    e.from = i;
+    e.to = j;
+    e.T_from_to = truth[static_cast<std::size_t>(i)].inverse() * truth[static_cast<std::size_t>(j)];
+    graph.edges.push_back(e);
+  };
+  for (int k = 0; k + 1 < static_cast<int>(truth.size()); ++k) add(k, k + 1);
+  for (int k = per_lap; k < static_cast<int>(truth.size()); ++k) add(k - per_lap, k);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  for (int k = 0; k < static_cast<int>(truth.size()); ++k) {
+    typename Group::Tangent d;
+    for (int c = 0; c < Group::kDoF; ++c) d[c] = k == 0 ? 0.0 : noise(rng);
+    graph.vertices.push_back({k, truth[static_cast<std::size_t>(k)] * Group::exp(d)});
+  }
+  return graph;
+}
+
+template <class Group>
+void expect_recovers_truth(Algorithm algorithm, Objective objective) {
+  std::vector<Group> truth;
+  const auto graph = square_world<Group>(3, truth);
+  auto problem = make_problem(graph, "square");
+  OptimizerOptions options;
+  options.algorithm = algorithm;
+  options.objective = objective;
+  const OptimizerSummary summary = optimize(problem, options);
+  EXPECT_TRUE(summary.is_solution_usable()) << summary.brief_report();
+  EXPECT_GT(summary.initial_cost, 1.0);
+  EXPECT_LT(summary.final_cost, 1e-16) << summary.brief_report();
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    EXPECT_LT((truth[k].inverse() * problem.T_world_pose[k]).log().norm(), 1e-6) << "pose " << k;
+  }
+}
+
+TEST(Optimizer, LevenbergMarquardtRecoversTheTruth2D) { expect_recovers_truth<core::SE2>(Algorithm::kLevenbergMarquardt, Objective::kGeodesic); }
+TEST(Optimizer, LevenbergMarquardtRecoversTheTruth3D) { expect_recovers_truth<core::SE3>(Algorithm::kLevenbergMarquardt, Objective::kGeodesic); }
+TEST(Optimizer, GaussNewtonRecoversTheTruth3D) { expect_recovers_truth<core::SE3>(Algorithm::kGaussNewton, Objective::kGeodesic); }
+TEST(Optimizer, DoglegRecoversTheTruth2D) { expect_recovers_truth<core::SE2>(Algorithm::kDogleg, Objective::kGeodesic); }
+TEST(Optimizer, DoglegRecoversTheTruth3D) { expect_recovers_truth<core::SE3>(Algorithm::kDogleg, Objective::kGeodesic); }
+TEST(Optimizer, ChordalObjectiveRecoversTheTruth3D) { expect_recovers_truth<core::SE3>(Algorithm::kLevenbergMarquardt, Objective::kChordal); }
+
+TEST(Initialization, ChordalAndOdometryRecoverExactGraphs) {
+  std::vector<core::SE3> truth;
+  auto graph = square_world<core::SE3>(2, truth);
+  for (const bool chordal : {true, false}) {
+    auto problem = make_problem(graph, "square");
+    for (std::size_t k = 1; k < truth.size(); ++k) problem.T_world_pose[k] = core::SE3();
+    if (chordal) {
+      initialize_chordal(problem);
+    } else {
+      EXPECT_EQ(initialize_odometry(problem).poses_reached, static_cast<int>(truth.size()));
+    }
+    for (std::size_t k = 0; k < truth.size(); ++k) {
+      EXPECT_LT((truth[k].inverse() * problem.T_world_pose[k]).log().norm(), 1e-9) << (chordal ? "chordal " : "odometry ") << k;
+    }
+  }
+}
+
+TEST(Problem, RejectsAGraphWithAnUnanchoredComponent) {
+  io::PoseGraph2D graph;
+  for (int k = 0; k < 4; ++k) graph.vertices.push_back({k, core::SE2()});
+  io::GraphEdge<core::SE2> e;
+  e.from = 0;
+  e.to = 1;
+  graph.edges.push_back(e);
+  e.from = 2;
+  e.to = 3;
+  graph.edges.push_back(e);
+  try {
+    make_problem(graph, "two.g2o");
+    FAIL() << "expected ParseError";
+  } catch (const io::ParseError& error) {
+    EXPECT_NE(std::string(error.what()).find("2 connected components"), std::string::npos) << error.what();
+  }
+  graph.fixed = {0, 2};  // anchoring both components makes it well posed
+  EXPECT_NO_THROW(make_problem(graph, "two.g2o"));
+}
+
+TEST(OptimizerOptions, ReportsEveryProblem) {
+  OptimizerOptions options;
+  options.max_iterations = 0;
+  options.kernel_scale = -1.0;
+  std::string error;
+  EXPECT_FALSE(options.is_valid(&error));
+  EXPECT_NE(error.find("max_iterations"), std::string::npos);
+  EXPECT_NE(error.find("kernel_scale"), std::string::npos);
+}
+
+// SE-Sync's certified optima (../shared/data/README.md, "Optima measured with SE-Sync on this
+// data"; about 8 significant digits are meaningful).
+struct Optimum {
+  const char* file;
+  double f_star;
+};
+
+class SeSyncOptima : public ::testing::TestWithParam<Optimum> {};
+
+TEST_P(SeSyncOptima, ChordalObjectiveFromChordalStartReachesTheCertifiedOptimum) {
+  const Optimum& optimum = GetParam();
+  const std::string relative = std::string("posegraph/se-sync/") + optimum.file;
+  CAIRN_REQUIRE_DATA(relative);
+  io::GraphReadOptions read;
+  read.information_policy = io::InformationPolicy::kKeep;  // SE-Sync uses the raw diagonal blocks
+  const io::GraphFile file = io::read_graph(test::data_path(relative).string(), read);
+  OptimizerOptions options;
+  options.objective = Objective::kChordal;
+  options.max_iterations = 300;
+  double f = 0.0;
+  std::visit(
+      [&](const auto& graph) {
+        auto problem = make_problem(graph, relative);
+        initialize_chordal(problem);
+        const OptimizerSummary summary = optimize(problem, options);
+        EXPECT_TRUE(summary.is_solution_usable()) << summary.brief_report();
+        f = summary.final_cost;
+      },
+      file.graph);
+  RecordProperty("f", std::to_string(f));
+  // Four significant digits, as the published table prints them, and in fact much closer.
+  EXPECT_NEAR(f, optimum.f_star, 2e-5 * optimum.f_star) << optimum.file;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    SeSync, SeSyncOptima,
+    ::testing::Values(Optimum{"tinyGrid3D.g2o", 18.519386832583514}, Optimum{"smallGrid3D.g2o", 1025.3980207410884},
+                      Optimum{"sphere2500.g2o", 1687.005671042642}, Optimum{"torus3D.g2o", 24227.041529068931},
+                      Optimum{"cubicle.g2o", 717.13403923218959}, Optimum{"sphere_bignoise_vertex3.g2o", 2961756.505474133},
+                      Optimum{"CSAIL.g2o", 31.703715883737345}, Optimum{"MIT.g2o", 61.154115524460529},
+                      Optimum{"intel.g2o", 52.348227285553435}, Optimum{"manhattan.g2o", 6431.3913872099165},
+                      Optimum{"city10000.g2o", 638.62461965124362}, Optimum{"kitti_00.g2o", 125.69351454148867},
+                      Optimum{"kitti_02.g2o", 108.35113897942772}, Optimum{"kitti_05.g2o", 276.51437504386098}),
+    [](const ::testing::TestParamInfo<Optimum>& param_info) {
+      std::string name = param_info.param.file;
+      name = name.substr(0, name.find('.'));
+      for (char& c : name) {
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      }
+      return name;
+    });
+
+}  // namespace
+}  // namespace cairn::backend
