@@ -6,7 +6,9 @@
 
 #include <random>
 
+#include "cairn/backend/gnc.hpp"
 #include "cairn/backend/initialization.hpp"
+#include "cairn/backend/outliers.hpp"
 #include "cairn/backend/optimizer.hpp"
 #include "cairn/io/graph_io.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -36,6 +38,11 @@ io::PoseGraphT<Group> square_world(int laps, std::vector<Group>& truth) {
     e.from = i;
     e.to = j;
     e.T_from_to = truth[static_cast<std::size_t>(i)].inverse() * truth[static_cast<std::size_t>(j)];
+    // sigma 5 cm in translation, 0.01 rad in rotation (translation first).
+    e.information.setIdentity();
+    constexpr int d = Group::kDoF == 3 ? 2 : 3;
+    e.information.diagonal().template head<d>().setConstant(400.0);
+    e.information.diagonal().template tail<Group::kDoF - d>().setConstant(1e4);
     graph.edges.push_back(e);
   };
   for (int k = 0; k + 1 < static_cast<int>(truth.size()); ++k) add(k, k + 1);
@@ -172,6 +179,54 @@ INSTANTIATE_TEST_SUITE_P(
       }
       return name;
     });
+
+}  // namespace
+}  // namespace cairn::backend
+
+namespace cairn::backend {
+namespace {
+
+// Square world with exact measurements plus as many random false loop closures as true ones:
+// GNC must reject exactly the false ones and land on the truth; least squares must not.
+TEST(Gnc, RejectsEveryFalseLoopClosureAndKeepsTheTrueOnes) {
+  for (const bool three_d : {false, true}) {
+    auto run = [&](auto tag) {
+      using Group = decltype(tag);
+      std::vector<Group> truth;
+      auto graph = square_world<Group>(4, truth);
+      std::size_t true_loops = 0;
+      for (const auto& e : graph.edges) true_loops += (e.to - e.from != 1);
+      const std::size_t original_edges = graph.edges.size();
+      add_false_loop_closures(graph, OutlierOptions{static_cast<int>(true_loops), 7, 10.0});
+
+      auto least_squares = make_problem(graph, "square+outliers");
+      initialize_odometry(least_squares);
+      optimize(least_squares, OptimizerOptions{});
+      double ls_error = 0.0;
+      for (std::size_t k = 0; k < truth.size(); ++k) {
+        ls_error = std::max(ls_error, (truth[k].translation() - least_squares.T_world_pose[k].translation()).norm());
+      }
+      EXPECT_GT(ls_error, 1.0) << "least squares should be bent by the false loop closures";
+
+      auto problem = make_problem(graph, "square+outliers");
+      initialize_odometry(problem);
+      const GncSummary summary = optimize_gnc(problem, GncOptions{});
+      std::size_t false_rejected = 0;
+      std::size_t true_rejected = 0;
+      for (const std::size_t e : summary.rejected_edges) (e >= original_edges ? false_rejected : true_rejected)++;
+      EXPECT_EQ(false_rejected, true_loops) << summary.message;
+      EXPECT_EQ(true_rejected, 0u);
+      for (std::size_t k = 0; k < truth.size(); ++k) {
+        EXPECT_LT((truth[k].translation() - problem.T_world_pose[k].translation()).norm(), 1e-6) << k;
+      }
+    };
+    if (three_d) {
+      run(core::SE3());
+    } else {
+      run(core::SE2());
+    }
+  }
+}
 
 }  // namespace
 }  // namespace cairn::backend

@@ -131,21 +131,31 @@ InitializationSummary initialize_odometry(PoseGraphProblem<Group>& problem) {
       queue.push_back(static_cast<int>(p));
     }
   }
-  while (!queue.empty()) {
-    const int p = queue.front();
-    queue.pop_front();
-    ++summary.poses_reached;
-    for (const std::size_t e : incident[static_cast<std::size_t>(p)]) {
-      const auto& edge = problem.edges[e];
-      const int q = edge.i == p ? edge.j : edge.i;
-      if (reached[static_cast<std::size_t>(q)]) continue;
-      reached[static_cast<std::size_t>(q)] = 1;
-      const Group& T_world_p = problem.T_world_pose[static_cast<std::size_t>(p)];
-      problem.T_world_pose[static_cast<std::size_t>(q)] =
-          edge.i == p ? T_world_p * edge.T_i_j : T_world_p * edge.T_i_j.inverse();
-      queue.push_back(q);
+  // Two passes: first along odometry edges only, so a wrong loop closure cannot enter the tree
+  // while the odometry chain reaches a pose; then along any edge for poses still unreached.
+  for (const bool odometry_only : {true, false}) {
+    if (!odometry_only) {
+      for (std::size_t p = 0; p < n; ++p) {
+        if (reached[p]) queue.push_back(static_cast<int>(p));
+      }
+    }
+    while (!queue.empty()) {
+      const int p = queue.front();
+      queue.pop_front();
+      for (const std::size_t e : incident[static_cast<std::size_t>(p)]) {
+        const auto& edge = problem.edges[e];
+        if (odometry_only && edge.kind != EdgeKind::kOdometry) continue;
+        const int q = edge.i == p ? edge.j : edge.i;
+        if (reached[static_cast<std::size_t>(q)]) continue;
+        reached[static_cast<std::size_t>(q)] = 1;
+        const Group& T_world_p = problem.T_world_pose[static_cast<std::size_t>(p)];
+        problem.T_world_pose[static_cast<std::size_t>(q)] =
+            edge.i == p ? T_world_p * edge.T_i_j : T_world_p * edge.T_i_j.inverse();
+        queue.push_back(q);
+      }
     }
   }
+  for (std::size_t p = 0; p < n; ++p) summary.poses_reached += reached[p];
   summary.total_s = std::chrono::duration<double>(Clock::now() - start).count();
   return summary;
 }

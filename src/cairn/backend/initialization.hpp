@@ -11,7 +11,8 @@ namespace cairn::backend {
 
 enum class Initialization {
   kFile,      ///< keep the file's VERTEX poses
-  kOdometry,  ///< compose measurements along a breadth-first spanning tree from the fixed poses
+  kOdometry,  ///< compose measurements along a breadth-first spanning tree from the fixed poses,
+              ///< odometry edges first
   kChordal,   ///< chordal relaxation: rotations, then translations (Carlone et al., ICRA 2015)
 };
 std::string_view to_string(Initialization initialization);

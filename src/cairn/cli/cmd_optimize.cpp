@@ -5,7 +5,9 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "cairn/backend/gnc.hpp"
 #include "cairn/backend/initialization.hpp"
+#include "cairn/backend/outliers.hpp"
 #include "cairn/backend/optimizer.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/io/atomic_write.hpp"
@@ -24,6 +26,7 @@ struct OptimizeFlags {
   std::string objective = "geodesic";
   std::string robust = "none";
   double robust_scale = 1.0;
+  double gnc_threshold = 0.0;
   int threads = 0;
   int max_iterations = 100;
   std::string report;
@@ -69,7 +72,9 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
   backend::PoseGraphProblem<Group> problem = backend::make_problem(graph, flags.input);
 
   backend::Initialization init = backend::Initialization::kFile;
-  if (flags.init == "auto") {
+  if (flags.init == "auto" && flags.robust == "gnc") {
+    init = backend::Initialization::kOdometry;  // no loop closure, right or wrong, bends the start
+  } else if (flags.init == "auto") {
     init = problem.has_initial_guess ? backend::Initialization::kFile : backend::Initialization::kChordal;
   } else if (flags.init == "odometry") {
     init = backend::Initialization::kOdometry;
@@ -110,7 +115,25 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     };
   }
   const double initial_cost = backend::evaluate_cost(problem, options);
-  const backend::OptimizerSummary summary = backend::optimize(problem, options);
+  backend::OptimizerSummary summary;
+  backend::GncSummary gnc;
+  const bool use_gnc = flags.robust == "gnc";
+  if (use_gnc) {
+    backend::GncOptions gnc_options;
+    gnc_options.inner = options;
+    gnc_options.inner.progress = nullptr;
+    gnc_options.inlier_threshold_chi2 = flags.gnc_threshold;
+    gnc = backend::optimize_gnc(problem, gnc_options);
+    summary = gnc.final_solve;
+    std::size_t loop_closures = 0;
+    for (const auto& e : problem.edges) loop_closures += e.kind == backend::EdgeKind::kLoopClosure;
+    std::printf("GNC: %d outer iterations, %d inner iterations, %.3f s: %s; rejected %zu of %zu loop closures "
+                "(threshold chi2 %.3f)\n",
+                gnc.outer_iterations, gnc.inner_iterations, gnc.total_s, gnc.message.c_str(), gnc.rejected_edges.size(),
+                loop_closures, gnc.threshold_chi2);
+  } else {
+    summary = backend::optimize(problem, options);
+  }
 
   const auto optimized = backend::to_graph(problem, graph);
   const auto warnings = io::write_graph(flags.output, io::PoseGraph(optimized), out_format);
@@ -146,6 +169,20 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     j["final_chi2_geodesic"] = final_geodesic;
     j["final_f_chordal"] = final_chordal;
     j["read_warnings"] = file.report.warnings;
+    if (use_gnc) {
+      nlohmann::json rejected = nlohmann::json::array();
+      for (const std::size_t e : gnc.rejected_edges) {
+        const auto& edge = problem.edges[e];
+        rejected.push_back({{"from", problem.ids[static_cast<std::size_t>(edge.i)]},
+                            {"to", problem.ids[static_cast<std::size_t>(edge.j)]},
+                            {"line", edge.line},
+                            {"edge_index", e}});
+      }
+      j["gnc"] = {{"outer_iterations", gnc.outer_iterations}, {"inner_iterations", gnc.inner_iterations},
+                  {"threshold_chi2", gnc.threshold_chi2},     {"final_mu", gnc.final_mu},
+                  {"message", gnc.message},                   {"time_s", gnc.total_s},
+                  {"rejected", rejected}};
+    }
     io::write_file_atomically(flags.report, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
   }
   return summary.is_solution_usable() ? 0 : 1;
@@ -172,15 +209,57 @@ int optimize_command(const OptimizeFlags& flags) {
   return run_optimize(flags, file, std::get<io::PoseGraph3D>(file.graph), graph_format);
 }
 
+struct CorruptFlags {
+  std::string input;
+  std::string output;
+  int outliers = 0;
+  std::uint64_t seed = 1;
+  double extent_m = 10.0;
+  GraphReadFlags graph;
+};
+
+int corrupt_command(const CorruptFlags& flags) {
+  const io::GraphFile file = io::read_graph(flags.input, flags.graph.options());
+  for (const auto& w : file.report.warnings) warn(w);
+  backend::OutlierOptions options;
+  options.count = flags.outliers;
+  options.seed = flags.seed;
+  options.translation_extent_m = flags.extent_m;
+  io::PoseGraph graph = file.graph;
+  std::visit([&](auto& g) { backend::add_false_loop_closures(g, options); }, graph);
+  const auto out_format = io::format_from_extension(flags.output) == io::FileFormat::kToro ? io::GraphFormat::kToro
+                                                                                              : io::GraphFormat::kG2o;
+  for (const auto& w : io::write_graph(flags.output, graph, out_format)) warn(w);
+  std::printf("wrote %s: %d false loop closures appended (seed %llu)\n", flags.output.c_str(), flags.outliers,
+              static_cast<unsigned long long>(flags.seed));
+  return 0;
+}
+
 }  // namespace
+
+Runner register_corrupt(CLI::App& app) {
+  auto flags = std::make_shared<CorruptFlags>();
+  app.add_option("IN", flags->input, "Pose graph (.g2o, .graph)")->required();
+  app.add_option("-o,--output", flags->output, "Corrupted graph")->required();
+  app.add_option("--outliers", flags->outliers, "Number of false loop closures to append")
+      ->required()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--seed", flags->seed, "Random seed")->capture_default_str();
+  app.add_option("--extent", flags->extent_m, "False translations uniform in [-extent, extent] m per axis")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  flags->graph.add_to(app);
+  return [flags]() { return corrupt_command(*flags); };
+}
 
 Runner register_optimize(CLI::App& app) {
   auto flags = std::make_shared<OptimizeFlags>();
   app.add_option("IN", flags->input, "Pose graph (.g2o, .graph)")->required();
   app.add_option("-o,--output", flags->output, "Optimised graph (.g2o or .graph)")->required();
   app.add_option("--format", flags->format, "Input format: g2o or toro (default: detected)");
-  app.add_option("--init", flags->init, "Initial guess: file (VERTEX lines), odometry (spanning tree), chordal "
-                                        "(relaxation); auto = file if present, else chordal")
+  app.add_option("--init", flags->init, "Initial guess: file (VERTEX lines), odometry (spanning tree, odometry edges "
+                                        "first), chordal (relaxation); auto = odometry with --robust gnc, else file "
+                                        "if present, else chordal")
       ->check(CLI::IsMember({"auto", "file", "odometry", "chordal"}))
       ->capture_default_str();
   app.add_option("--solver", flags->solver, "lm (Levenberg-Marquardt), gn (Gauss-Newton), dogleg (Powell)")
@@ -190,11 +269,18 @@ Runner register_optimize(CLI::App& app) {
                  "geodesic (chi2 of log-map residuals, as g2o/GTSAM/Ceres) or chordal (SE-Sync's f)")
       ->check(CLI::IsMember({"geodesic", "chordal"}))
       ->capture_default_str();
-  app.add_option("--robust", flags->robust, "Robust kernel on every edge: none, huber, cauchy, geman-mcclure")
-      ->check(CLI::IsMember({"none", "huber", "cauchy", "geman-mcclure"}))
+  app.add_option("--robust", flags->robust,
+                 "Robust cost: none; huber, cauchy, geman-mcclure (kernel on every edge); gnc (graduated "
+                 "non-convexity with truncated least squares on loop closures, odometry trusted; rejected "
+                 "edges are listed in the report)")
+      ->check(CLI::IsMember({"none", "huber", "cauchy", "geman-mcclure", "gnc"}))
       ->capture_default_str();
   app.add_option("--robust-scale", flags->robust_scale, "Kernel scale in standard deviations")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--gnc-threshold", flags->gnc_threshold,
+                 "GNC inlier threshold on the whitened squared residual (0 = chi-square 0.99 quantile)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--threads", flags->threads, "Threads for linearisation (0 = all cores)")
       ->check(CLI::NonNegativeNumber)

@@ -18,6 +18,8 @@ using Runner = std::function<int()>;
 Runner register_info(CLI::App& app);
 Runner register_convert(CLI::App& app);
 Runner register_optimize(CLI::App& app);
+Runner register_simulate(CLI::App& app);
+Runner register_corrupt(CLI::App& app);
 
 /// Flags shared by every command that reads a pose graph.
 struct GraphReadFlags {

@@ -1,0 +1,28 @@
+#pragma once
+/// \file
+/// Random false loop closures, as in the robust back-end experiments of Suenderhauf & Protzel
+/// ("Switchable constraints for robust pose graph SLAM", IROS 2012; the Vertigo package's
+/// "random" outliers): an edge between two random non-consecutive poses with a random relative
+/// pose and the information matrix of a randomly chosen existing edge, so it looks as confident
+/// as a real measurement.
+
+#include <cstdint>
+
+#include "cairn/io/pose_graph.hpp"
+
+namespace cairn::backend {
+
+struct OutlierOptions {
+  /// Number of false loop closures to add (appended after the file's edges). >= 0.
+  int count = 0;
+  std::uint64_t seed = 1;
+  /// Translations drawn uniformly in [-extent, extent] per axis, metres. > 0.
+  double translation_extent_m = 10.0;
+};
+
+/// Adds false loop closures; rotations are uniform on SO(2) / SO(3) (Shoemake 1992 for SO(3)).
+/// Deterministic for a given seed (own uniform generator, no std distributions).
+template <class Group>
+void add_false_loop_closures(io::PoseGraphT<Group>& graph, const OutlierOptions& options);
+
+}  // namespace cairn::backend
