@@ -1,0 +1,248 @@
+// cairn's pose-graph back end against Ceres (Debian's libceres-dev 2.1) on the same graphs, from
+// the same chordal initial guess, with the same stopping rule, in one run on one machine.
+//
+// Each solver runs in its own forked process so its peak resident memory (ru_maxrss) is its own.
+// Ceres gets the standard formulation of its examples (ceres-solver examples/slam/pose_graph_2d
+// and pose_graph_3d: residual R_a^T (p_b - p_a) - p_ab and the angle difference (2D) or twice the
+// vector part of the quaternion error (3D), whitened by the square-root information, automatic
+// derivatives, EigenQuaternionManifold), SPARSE_NORMAL_CHOLESKY over SuiteSparse, one thread.
+// cairn: Levenberg-Marquardt on the log-map residual, CHOLMOD, one thread, chordal
+// initialisation included in its time. Both stop on Ceres' default tolerances (function 1e-6,
+// gradient 1e-10, parameter 1e-8, 50 iterations). The final chi2 of both results is evaluated
+// with the same function (cairn's geodesic cost).
+//
+// Usage: bench_pose_graph_vs_ceres GRAPH.g2o [GRAPH.g2o ...]
+
+#include <ceres/ceres.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "cairn/backend/initialization.hpp"
+#include "cairn/backend/optimizer.hpp"
+#include "cairn/io/graph_io.hpp"
+#include "cairn/io/parse_error.hpp"
+
+namespace {
+
+using namespace cairn;
+using Clock = std::chrono::steady_clock;
+
+struct RunResult {
+  double seconds = 0.0;
+  int iterations = 0;
+  double chi2 = 0.0;
+  double factor_share = 0.0;  // cairn: share of time spent in numeric factorisation
+  long peak_kb = 0;
+};
+
+backend::OptimizerOptions cairn_options() {
+  backend::OptimizerOptions options;
+  options.function_tolerance = 1e-6;
+  options.gradient_tolerance = 1e-10;
+  options.parameter_tolerance = 1e-8;
+  options.max_iterations = 50;
+  options.threads = 1;
+  return options;
+}
+
+// --- Ceres formulation (after ceres-solver examples/slam) --------------------------------------
+struct Error2D {
+  Error2D(const core::SE2& measured, const Eigen::Matrix3d& sqrt_information)
+      : p_(measured.translation()), theta_(measured.angle()), sqrt_information_(sqrt_information) {}
+  template <typename T>
+  bool operator()(const T* a, const T* b, T* residual) const {
+    using std::cos;
+    using std::sin;
+    const T c = cos(a[2]);
+    const T s = sin(a[2]);
+    const T dx = b[0] - a[0];
+    const T dy = b[1] - a[1];
+    Eigen::Matrix<T, 3, 1> r;
+    r[0] = c * dx + s * dy - T(p_.x());
+    r[1] = -s * dx + c * dy - T(p_.y());
+    T angle = b[2] - a[2] - T(theta_);
+    // Wrap to (-pi, pi] as the example's NormalizeAngle does.
+    const T two_pi(2.0 * M_PI);
+    angle = angle - two_pi * ceres::floor((angle + T(M_PI)) / two_pi);
+    r[2] = angle;
+    Eigen::Map<Eigen::Matrix<T, 3, 1>> out(residual);
+    out = sqrt_information_.cast<T>() * r;
+    return true;
+  }
+  Eigen::Vector2d p_;
+  double theta_;
+  Eigen::Matrix3d sqrt_information_;
+};
+
+struct Error3D {
+  Error3D(const core::SE3& measured, const Eigen::Matrix<double, 6, 6>& sqrt_information)
+      : p_(measured.translation()), q_(measured.unit_quaternion()), sqrt_information_(sqrt_information) {}
+  template <typename T>
+  bool operator()(const T* pa, const T* qa, const T* pb, const T* qb, T* residual) const {
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_a(pa), p_b(pb);
+    const Eigen::Map<const Eigen::Quaternion<T>> q_a(qa), q_b(qb);
+    const Eigen::Quaternion<T> q_a_inverse = q_a.conjugate();
+    const Eigen::Quaternion<T> q_ab = q_a_inverse * q_b;
+    const Eigen::Matrix<T, 3, 1> p_ab = q_a_inverse * (p_b - p_a);
+    const Eigen::Quaternion<T> delta = q_.cast<T>() * q_ab.conjugate();
+    Eigen::Matrix<T, 6, 1> r;
+    r.template head<3>() = p_ab - p_.cast<T>();
+    r.template tail<3>() = T(2.0) * delta.vec();
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
+    out = sqrt_information_.cast<T>() * r;
+    return true;
+  }
+  Eigen::Vector3d p_;
+  Eigen::Quaterniond q_;
+  Eigen::Matrix<double, 6, 6> sqrt_information_;
+};
+
+ceres::Solver::Options ceres_options() {
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  options.num_threads = 1;
+  options.max_num_iterations = 50;
+  options.function_tolerance = 1e-6;
+  options.gradient_tolerance = 1e-10;
+  options.parameter_tolerance = 1e-8;
+  return options;
+}
+
+RunResult run_ceres(backend::Problem2D problem) {
+  std::vector<std::array<double, 3>> x(problem.T_world_pose.size());
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const auto& T = problem.T_world_pose[k];
+    x[k] = {T.x(), T.y(), T.angle()};
+  }
+  const auto start = Clock::now();
+  ceres::Problem ceres_problem;
+  for (const auto& e : problem.edges) {
+    ceres_problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Error2D, 3, 3, 3>(new Error2D(e.T_i_j, e.sqrt_information)),
+                                   nullptr, x[static_cast<std::size_t>(e.i)].data(), x[static_cast<std::size_t>(e.j)].data());
+  }
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (problem.fixed[k]) ceres_problem.SetParameterBlockConstant(x[k].data());
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(ceres_options(), &ceres_problem, &summary);
+  RunResult result;
+  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  result.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  for (std::size_t k = 0; k < x.size(); ++k) problem.T_world_pose[k] = core::SE2(x[k][0], x[k][1], x[k][2]);
+  result.chi2 = backend::evaluate_cost(problem, cairn_options());
+  return result;
+}
+
+RunResult run_ceres(backend::Problem3D problem) {
+  std::vector<Eigen::Vector3d> p(problem.T_world_pose.size());
+  std::vector<Eigen::Quaterniond> q(problem.T_world_pose.size());
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    p[k] = problem.T_world_pose[k].translation();
+    q[k] = problem.T_world_pose[k].unit_quaternion();
+  }
+  const auto start = Clock::now();
+  ceres::Problem ceres_problem;
+  ceres::Manifold* quaternion_manifold = new ceres::EigenQuaternionManifold;
+  for (const auto& e : problem.edges) {
+    const auto i = static_cast<std::size_t>(e.i);
+    const auto j = static_cast<std::size_t>(e.j);
+    ceres_problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<Error3D, 6, 3, 4, 3, 4>(new Error3D(e.T_i_j, e.sqrt_information)), nullptr,
+        p[i].data(), q[i].coeffs().data(), p[j].data(), q[j].coeffs().data());
+    ceres_problem.SetManifold(q[i].coeffs().data(), quaternion_manifold);
+    ceres_problem.SetManifold(q[j].coeffs().data(), quaternion_manifold);
+  }
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    if (problem.fixed[k]) {
+      ceres_problem.SetParameterBlockConstant(p[k].data());
+      ceres_problem.SetParameterBlockConstant(q[k].coeffs().data());
+    }
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(ceres_options(), &ceres_problem, &summary);
+  RunResult result;
+  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  result.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  for (std::size_t k = 0; k < p.size(); ++k) problem.T_world_pose[k] = core::SE3(q[k], p[k]);
+  result.chi2 = backend::evaluate_cost(problem, cairn_options());
+  return result;
+}
+
+template <class Problem>
+RunResult run_cairn(Problem problem, double init_seconds) {
+  const auto start = Clock::now();
+  const backend::OptimizerSummary summary = backend::optimize(problem, cairn_options());
+  RunResult result;
+  result.seconds = std::chrono::duration<double>(Clock::now() - start).count() + init_seconds;
+  result.iterations = summary.iterations;
+  result.chi2 = summary.final_cost;
+  result.factor_share = summary.factorize_s / result.seconds;
+  return result;
+}
+
+// Runs `work` in a child process; returns its result and peak RSS.
+template <class Work>
+RunResult in_child(Work work) {
+  int fds[2];
+  if (pipe(fds) != 0) std::abort();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    const RunResult r = work();
+    if (write(fds[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) _exit(1);
+    _exit(0);
+  }
+  close(fds[1]);
+  RunResult r;
+  if (read(fds[0], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) r.seconds = -1.0;
+  close(fds[0]);
+  int status = 0;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  r.peak_kb = usage.ru_maxrss;
+  return r;
+}
+
+template <class Graph>
+void compare(const std::string& name, const Graph& graph) {
+  auto problem = backend::make_problem(graph, name);
+  const auto init_start = Clock::now();
+  backend::initialize_chordal(problem);
+  const double init_seconds = std::chrono::duration<double>(Clock::now() - init_start).count();
+  const double initial_chi2 = backend::evaluate_cost(problem, cairn_options());
+  const RunResult c = in_child([&] { return run_cairn(problem, init_seconds); });
+  const RunResult r = in_child([&] { return run_ceres(problem); });
+  std::printf("| %-28s | %6zu | %12.6g | %8.3f | %3d | %12.6g | %6.1f | %4.0f%% | %8.3f | %3d | %12.6g | %6.1f | %5.1fx |\n",
+              name.c_str(), problem.ids.size(), initial_chi2, c.seconds, c.iterations, c.chi2, c.peak_kb / 1024.0,
+              100.0 * c.factor_share, r.seconds, r.iterations, r.chi2, r.peak_kb / 1024.0, r.seconds / c.seconds);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: %s GRAPH.g2o [GRAPH.g2o ...]\n", argv[0]);
+    return 2;
+  }
+  std::printf("| graph | poses | chi2 at chordal start | cairn s (incl. init) | it | cairn chi2 | cairn MiB | factorisation share | Ceres s | it | Ceres chi2 | Ceres MiB | Ceres/cairn time |\n");
+  std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (int k = 1; k < argc; ++k) {
+    try {
+      const io::GraphFile file = io::read_graph(argv[k]);
+      const std::string name = std::filesystem::path(argv[k]).filename().string();
+      std::visit([&](const auto& graph) { compare(name, graph); }, file.graph);
+    } catch (const io::ParseError& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      return 1;
+    }
+  }
+  return 0;
+}
