@@ -6,6 +6,8 @@
 
 #include <random>
 
+#include "cairn/backend/covariance.hpp"
+#include "cairn/backend/factors.hpp"
 #include "cairn/backend/gnc.hpp"
 #include "cairn/backend/initialization.hpp"
 #include "cairn/backend/outliers.hpp"
@@ -225,6 +227,52 @@ TEST(Gnc, RejectsEveryFalseLoopClosureAndKeepsTheTrueOnes) {
     } else {
       run(core::SE2());
     }
+  }
+}
+
+}  // namespace
+}  // namespace cairn::backend
+
+namespace cairn::backend {
+namespace {
+
+// Marginal covariances from the sparse factorisation equal the blocks of the dense inverse of
+// J^T J built here independently from numeric Jacobians.
+TEST(Covariance, MatchesTheDenseInverseOfTheNormalMatrix) {
+  std::vector<core::SE2> truth;
+  auto graph = square_world<core::SE2>(2, truth);
+  auto problem = make_problem(graph, "square");
+  optimize(problem, OptimizerOptions{});
+  const int n = problem.size() - 1;  // pose 0 fixed
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (const auto& e : problem.edges) {
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 3 * n);
+    for (int side = 0; side < 2; ++side) {
+      const int p = side == 0 ? e.i : e.j;
+      if (p == 0) continue;
+      for (int k = 0; k < 3; ++k) {
+        core::SE2::Tangent d = core::SE2::Tangent::Zero();
+        d[k] = 1e-6;
+        auto plus = problem.T_world_pose;
+        auto minus = problem.T_world_pose;
+        plus[static_cast<std::size_t>(p)] = plus[static_cast<std::size_t>(p)] * core::SE2::exp(d);
+        minus[static_cast<std::size_t>(p)] = minus[static_cast<std::size_t>(p)] * core::SE2::exp(-d);
+        J.col(3 * (p - 1) + k) =
+            (GeodesicFactor<core::SE2>::evaluate(plus[static_cast<std::size_t>(e.i)], plus[static_cast<std::size_t>(e.j)], e, nullptr, nullptr) -
+             GeodesicFactor<core::SE2>::evaluate(minus[static_cast<std::size_t>(e.i)], minus[static_cast<std::size_t>(e.j)], e, nullptr, nullptr)) /
+            2e-6;
+      }
+    }
+    H += J.transpose() * J;
+  }
+  const Eigen::MatrixXd dense = H.inverse();
+  const auto marginals = marginal_covariances(problem, {0, 5, n});
+  ASSERT_TRUE(marginals.has_value());
+  EXPECT_EQ(marginals->covariance[0], Eigen::Matrix3d::Zero());
+  for (const int p : {5, n}) {
+    const Eigen::Matrix3d expected = dense.block(3 * (p - 1), 3 * (p - 1), 3, 3);
+    const Eigen::Matrix3d got = marginals->covariance[p == 5 ? 1 : 2];
+    EXPECT_LT((got - expected).cwiseAbs().maxCoeff(), 1e-6 * expected.cwiseAbs().maxCoeff()) << got << "\n" << expected;
   }
 }
 

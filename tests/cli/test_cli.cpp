@@ -181,4 +181,71 @@ TEST(Cli, ConvertRefusesGraphToTrajectory) {
   EXPECT_NE(r.err.find("cannot convert a pose graph"), std::string::npos) << r.err;
 }
 
+TEST(Cli, OptimizeReachesTheCertifiedOptimumAndWritesItsReport) {
+  CAIRN_REQUIRE_DATA("posegraph/se-sync/intel.g2o");
+  const auto out = scratch() / "intel_opt.g2o";
+  const auto report = scratch() / "intel_report.json";
+  const Result r = run("optimize " + quoted(cairn::test::data_path("posegraph/se-sync/intel.g2o")) + " -o " + quoted(out) +
+                       " --objective chordal --init chordal --covariance 0,100 --report " + quoted(report));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("iter"), std::string::npos) << "progress per iteration expected on stderr";
+  std::ifstream in(report);
+  const auto j = nlohmann::json::parse(in);
+  // SE-Sync's certified optimum for intel.g2o: 52.348227285553435 (../shared/data/README.md).
+  EXPECT_NEAR(j["final_f_chordal"].get<double>(), 52.348227285553435, 1e-5);
+  EXPECT_EQ(j["summary"]["termination"], "convergence");
+  EXPECT_EQ(j["marginal_covariances"]["poses"].size(), 2u);
+  const Result info = run("info " + quoted(out) + " --json -");
+  ASSERT_EQ(info.status, 0) << info.err;
+  EXPECT_EQ(nlohmann::json::parse(info.out)["vertices"], 1728);
+}
+
+TEST(Cli, OptimizeRefusesAnUnanchoredComponent) {
+  const std::string graph = write_file("two.g2o", "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_SE2 2 0 0 0\n"
+                                                  "VERTEX_SE2 3 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n"
+                                                  "EDGE_SE2 2 3 1 0 0 1 0 0 1 0 1\n");
+  const Result r = run("optimize " + graph + " -o " + (scratch() / "two_out.g2o").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("2 connected components"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(scratch() / "two_out.g2o"));
+}
+
+// The report names each rejected edge by ids and file line, and those lines are the edges named.
+// (How many false edges GNC rejects on this graph is a measurement, in docs/backend.md, not an
+// assertion: on input_INTEL_g2o with 20 false loop closures it rejected 19 and 4 true ones.)
+TEST(Cli, CorruptThenGncReportsRejectedEdgesByIdAndLine) {
+  CAIRN_REQUIRE_DATA("posegraph/other/input_INTEL_g2o.g2o");
+  const auto bad = scratch() / "intel_bad.g2o";
+  const Result c = run("corrupt " + quoted(cairn::test::data_path("posegraph/other/input_INTEL_g2o.g2o")) +
+                       " --outliers 20 --seed 3 -o " + quoted(bad));
+  ASSERT_EQ(c.status, 0) << c.err;
+  const auto report = scratch() / "gnc.json";
+  const Result r = run("optimize " + quoted(bad) + " -o " + quoted(scratch() / "gnc.g2o") + " --robust gnc -q --report " +
+                       quoted(report));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("GNC:"), std::string::npos) << r.out;
+  std::vector<std::string> lines;
+  {
+    std::ifstream in(bad);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+  }
+  std::ifstream in(report);
+  const auto j = nlohmann::json::parse(in);
+  ASSERT_FALSE(j["gnc"]["rejected"].empty());
+  for (const auto& e : j["gnc"]["rejected"]) {
+    const std::size_t line = e["line"].get<std::size_t>();
+    ASSERT_GE(line, 1u);
+    ASSERT_LE(line, lines.size());
+    std::istringstream tokens(lines[line - 1]);
+    std::string tag;
+    std::int64_t from = -1;
+    std::int64_t to = -1;
+    tokens >> tag >> from >> to;
+    EXPECT_EQ(tag, "EDGE_SE2");
+    EXPECT_EQ(from, e["from"].get<std::int64_t>());
+    EXPECT_EQ(to, e["to"].get<std::int64_t>());
+    EXPECT_NE(to - from, 1) << "odometry edges are trusted, never rejected";
+  }
+}
+
 }  // namespace

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "cairn/backend/covariance.hpp"
 #include "cairn/backend/gnc.hpp"
 #include "cairn/backend/initialization.hpp"
 #include "cairn/backend/outliers.hpp"
@@ -27,6 +28,7 @@ struct OptimizeFlags {
   std::string robust = "none";
   double robust_scale = 1.0;
   double gnc_threshold = 0.0;
+  std::vector<std::int64_t> covariance_ids;
   int threads = 0;
   int max_iterations = 100;
   std::string report;
@@ -169,6 +171,30 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     j["final_chi2_geodesic"] = final_geodesic;
     j["final_f_chordal"] = final_chordal;
     j["read_warnings"] = file.report.warnings;
+    if (!flags.covariance_ids.empty()) {
+      std::vector<int> poses;
+      for (const auto id : flags.covariance_ids) {
+        const int p = problem.index_of(id);
+        if (p < 0) throw io::ParseError(flags.input, 0, "--covariance: pose " + std::to_string(id) + " is not in the graph");
+        poses.push_back(p);
+      }
+      const auto marginals = backend::marginal_covariances(problem, poses);
+      if (!marginals) {
+        warn("marginal covariances unavailable: J^T J is not positive definite at the solution");
+      } else {
+        nlohmann::json covariances = nlohmann::json::array();
+        for (std::size_t k = 0; k < poses.size(); ++k) {
+          const auto& C = marginals->covariance[k];
+          std::vector<double> row_major;
+          for (int r = 0; r < C.rows(); ++r) {
+            for (int c = 0; c < C.cols(); ++c) row_major.push_back(C(r, c));
+          }
+          covariances.push_back({{"id", flags.covariance_ids[k]}, {"covariance_row_major", row_major}});
+        }
+        j["marginal_covariances"] = {{"tangent", "right perturbation T exp(delta), translation first"},
+                                     {"poses", covariances}};
+      }
+    }
     if (use_gnc) {
       nlohmann::json rejected = nlohmann::json::array();
       for (const std::size_t e : gnc.rejected_edges) {
@@ -289,6 +315,9 @@ Runner register_optimize(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--report", flags->report, "Write a JSON report (summary, per-iteration log, timings)");
+  app.add_option("--covariance", flags->covariance_ids,
+                 "Pose ids whose marginal covariance goes into the report (comma separated)")
+      ->delimiter(',');
   app.add_flag("-q,--quiet", flags->quiet, "No per-iteration progress");
   flags->graph.add_to(app);
   return [flags]() { return optimize_command(*flags); };
