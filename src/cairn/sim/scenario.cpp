@@ -1,0 +1,617 @@
+#include "cairn/sim/scenario.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "cairn/core/assert.hpp"
+#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/graph_io.hpp"
+#include "cairn/io/number_format.hpp"
+#include "cairn/io/trajectory.hpp"
+#include "cairn/sim/carmen_log.hpp"
+#include "cairn/sim/landmark_files.hpp"
+#include "cairn/sim/random.hpp"
+#include "cairn/sim/ray_cast.hpp"
+#include "cairn/sim/render.hpp"
+#include "cairn/sim/street_run.hpp"
+#include "cairn/sim/world_file.hpp"
+
+namespace cairn::sim {
+namespace {
+
+/// Sub-stream numbers for Random::derive_seed: one per consumer of randomness.
+enum Stream : std::uint64_t { kOdometryStream = 1, kLidarStream = 2, kLandmarkStream = 3, kGraphStream = 4, kRelationsStream = 5 };
+
+/// `period / sample` as a whole number of samples, or 0 when it is not one (to 1e-6).
+std::int64_t whole_steps(double period_s, double sample_s) {
+  const double ratio = period_s / sample_s;
+  const double rounded = std::round(ratio);
+  if (rounded < 1.0 || std::abs(ratio - rounded) > 1e-6 * rounded) return 0;
+  return static_cast<std::int64_t>(rounded);
+}
+
+core::SE3 to_se3(const core::SE2& T) {
+  return core::SE3(Quaternion(Eigen::AngleAxisd(T.angle(), Vector3::UnitZ())), Vector3(T.x(), T.y(), 0.0));
+}
+
+void write_tum_file(const std::string& path, const std::vector<core::Timestamp>& stamps,
+                    const std::vector<core::SE2>& poses) {
+  io::Trajectory trajectory;
+  trajectory.stamps = stamps;
+  for (const auto& T : poses) trajectory.poses.push_back(to_se3(T));
+  io::write_tum(path, trajectory);
+}
+
+}  // namespace
+
+bool Scenario::is_valid(std::string* why) const {
+  std::vector<std::string> problems;
+  std::string text;
+  if (!trajectory.is_valid(&text)) problems.push_back("trajectory: " + text);
+  if (!odometry.is_valid(&text)) problems.push_back("odometry: " + text);
+  if (!lidar.is_valid(&text)) problems.push_back("lidar: " + text);
+  if (!landmarks.is_valid(&text)) problems.push_back("landmarks: " + text);
+  if (!graph.is_valid(&text)) problems.push_back("graph: " + text);
+  if (!relations.is_valid(&text)) problems.push_back("relations: " + text);
+  if (trajectory.sample_period_s > 0.0) {
+    if (whole_steps(lidar.period_s, trajectory.sample_period_s) == 0) {
+      problems.push_back("lidar.period_s must be a whole multiple of trajectory.sample_period_s");
+    }
+    if (whole_steps(odometry_period_s, trajectory.sample_period_s) == 0) {
+      problems.push_back("odometry_period_s must be a whole multiple of trajectory.sample_period_s");
+    }
+    if (whole_steps(landmarks.period_s, trajectory.sample_period_s) == 0) {
+      problems.push_back("landmarks.period_s must be a whole multiple of trajectory.sample_period_s");
+    }
+  }
+  if (!(image_pixels_per_m > 0.0 && image_pixels_per_m <= 200.0)) problems.push_back("image_pixels_per_m must be in (0, 200]");
+  // `value` must be finite and > `low`; the message names the field and what was found.
+  auto above = [&](double value, double low, const std::string& field) {
+    if (!(value > low) || !std::isfinite(value)) {
+      std::string found;
+      io::append_number(found, value);
+      std::string bound;
+      io::append_number(bound, low);
+      problems.push_back(field + " must be > " + bound + " (found " + found + ")");
+    }
+  };
+  switch (world) {
+    case WorldKind::kOffice:
+      if (office.rooms_per_row < 2 || office.rooms_per_row > 20) problems.push_back("office.rooms_per_row must be in [2, 20]");
+      above(office.room_depth_m, 2.0, "office.room_depth_m");
+      above(office.corridor_width_m, 1.0, "office.corridor_width_m");
+      above(office.block_depth_m, 2.0, "office.block_depth_m");
+      above(office.door_width_m, 0.5, "office.door_width_m");
+      if (office.people < 0 || office.people > 8) problems.push_back("office.people must be in [0, 8]");
+      if (office.rooms_per_row >= 2) {
+        above(office.width_m / office.rooms_per_row, std::max(3.0, office.door_width_m + 1.0), "office.width_m / rooms_per_row");
+        above((office.width_m - 2 * office.corridor_width_m) / 3.0, office.door_width_m + 3.0,
+              "(office.width_m - 2 corridor_width_m) / 3");
+      }
+      break;
+    case WorldKind::kCorridor:
+      above(corridor.width_m, 1.0, "corridor.width_m");
+      above(corridor.length_m, 4.0 * corridor.width_m + 4.0, "corridor.length_m");
+      above(corridor.block_depth_m, 1.0, "corridor.block_depth_m");
+      above(corridor.door_width_m, 0.0, "corridor.door_width_m");
+      above(corridor.door_pitch_m, corridor.door_width_m + 0.1, "corridor.door_pitch_m");
+      above(corridor.door_recess_m, 0.0, "corridor.door_recess_m");
+      break;
+    case WorldKind::kOpenHall:
+      above(open_hall.route_width_m, 0.0, "open_hall.route_width_m");
+      above(open_hall.route_depth_m, 0.0, "open_hall.route_depth_m");
+      above(open_hall.width_m, open_hall.route_width_m + 2.0, "open_hall.width_m");
+      above(open_hall.depth_m, open_hall.route_depth_m + 2.0, "open_hall.depth_m");
+      above(open_hall.pillar_radius_m, 0.0, "open_hall.pillar_radius_m");
+      if (open_hall.pillars < 0 || open_hall.pillars > 8) problems.push_back("open_hall.pillars must be in [0, 8]");
+      break;
+    case WorldKind::kBuildingLoop:
+      above(building.building_width_m, 10.0, "building.building_width_m");
+      above(building.building_depth_m, 10.0, "building.building_depth_m");
+      above(building.street_offset_m, 1.0, "building.street_offset_m");
+      if (!(building.trees_per_m >= 0.0 && building.trees_per_m <= 2.0)) problems.push_back("building.trees_per_m must be in [0, 2]");
+      break;
+    case WorldKind::kLandmarkField:
+      above(landmark_field.route_width_m, 0.0, "landmark_field.route_width_m");
+      above(landmark_field.route_depth_m, 0.0, "landmark_field.route_depth_m");
+      if (landmark_field.landmarks < 0 || landmark_field.landmarks > 100000) {
+        problems.push_back("landmark_field.landmarks must be in [0, 100000]");
+      }
+      if (!(landmark_field.min_distance_from_route_m >= 0.3 &&
+            landmark_field.max_distance_from_route_m > landmark_field.min_distance_from_route_m + 0.1)) {
+        problems.push_back("landmark_field: need 0.3 <= min_distance_from_route_m < max_distance_from_route_m - 0.1");
+      }
+      if (!(landmark_field.post_radius_m >= 0.0 && landmark_field.post_radius_m < landmark_field.min_distance_from_route_m - 0.2)) {
+        problems.push_back("landmark_field.post_radius_m must be in [0, min_distance_from_route_m - 0.2)");
+      }
+      break;
+    case WorldKind::kStreet3D:
+      above(street.loop_width_m, 2.0 * street.street_half_width_m + 4.0, "street.loop_width_m");
+      above(street.loop_depth_m, 2.0 * street.street_half_width_m + 4.0, "street.loop_depth_m");
+      above(street.street_half_width_m, 4.0, "street.street_half_width_m");
+      above(street.min_building_height_m, 0.0, "street.min_building_height_m");
+      above(street.max_building_height_m, street.min_building_height_m, "street.max_building_height_m");
+      above(street.pole_spacing_m, 2.0, "street.pole_spacing_m");
+      above(street.tree_spacing_m, 2.0, "street.tree_spacing_m");
+      if (street.parked_cars < 0 || street.parked_cars > 1000) problems.push_back("street.parked_cars must be in [0, 1000]");
+      if (!lidar3d.is_valid(&text)) problems.push_back("lidar3d: " + text);
+      if (!camera.is_valid(&text)) problems.push_back("camera: " + text);
+      if (trajectory.sample_period_s > 0.0) {
+        if (whole_steps(lidar3d.period_s, trajectory.sample_period_s) == 0) {
+          problems.push_back("lidar3d.period_s must be a whole multiple of trajectory.sample_period_s");
+        }
+        if (whole_steps(camera.period_s, trajectory.sample_period_s) == 0) {
+          problems.push_back("camera.period_s must be a whole multiple of trajectory.sample_period_s");
+        }
+      }
+      break;
+  }
+  // A run of more than 20 km is almost surely a typo in a size, and would fill the memory.
+  if (problems.empty()) {
+    const WorldWithRoute built = build_world(*this);
+    double lap_m = 0.0;
+    for (std::size_t i = 0; i < built.route.size(); ++i) lap_m += (built.route[(i + 1) % built.route.size()] - built.route[i]).norm();
+    if (lap_m * trajectory.laps > 20000.0) {
+      problems.push_back("the route is " + std::to_string(static_cast<long>(lap_m * trajectory.laps)) +
+                         " m long (laps x lap length): at most 20000 m");
+    }
+  }
+  if (why != nullptr) {
+    why->clear();
+    for (const auto& p : problems) *why += (why->empty() ? "" : "; ") + p;
+  }
+  return problems.empty();
+}
+
+TrajectoryOptions Scenario::effective_trajectory() const {
+  TrajectoryOptions options = trajectory;
+  if (fast_turns) {
+    options.max_arc_turn_rad = 0.3;
+    options.spin_yaw_rate_rad_s = 2.5;
+    options.spin_yaw_acceleration_rad_s2 = 8.0;
+  }
+  return options;
+}
+
+std::vector<std::string> scenario_names() {
+  return {"office", "office-people", "corridor-aliasing", "open-hall", "loop-building", "landmarks", "street-3d"};
+}
+
+std::optional<Scenario> make_scenario(std::string_view name) {
+  Scenario s;
+  s.name = std::string(name);
+  if (name == "office") {
+    s.world = WorldKind::kOffice;
+    s.description = "Office floor: rooms on both sides of a ring corridor around a block of three rooms; "
+                    "each lap drives the ring (visiting two rooms) and a second loop through the block";
+  } else if (name == "office-people") {
+    s.world = WorldKind::kOffice;
+    s.office.people = 8;
+    s.description = "The office with eight people walking back and forth in the corridors and two rooms: "
+                    "moving objects that must not leave ghost trails in a map";
+  } else if (name == "corridor-aliasing") {
+    s.world = WorldKind::kCorridor;
+    s.description = "Two 50 m corridors joined into a ring, identical recessed doors every 4 m on both "
+                    "sides: perceptual aliasing (only the ends differ)";
+  } else if (name == "open-hall") {
+    s.world = WorldKind::kOpenHall;
+    s.lidar.max_range_m = 10.0;
+    s.description = "A 50 m x 40 m hall with four pillars, LiDAR range 10 m: scan matching is degenerate "
+                    "most of the time";
+  } else if (name == "loop-building") {
+    s.world = WorldKind::kBuildingLoop;
+    s.trajectory.laps = 1;
+    s.trajectory.max_speed_mps = 1.5;
+    s.description = "One loop around a 40 m x 25 m building (recessed entrances, columns, trees, parked "
+                    "cars), closed only at the end: drift, then one loop closure";
+  } else if (name == "landmarks") {
+    s.world = WorldKind::kLandmarkField;
+    s.simulate_landmarks = true;
+    s.description = "A rectangular loop through a field of 60 posts with known identities, seen by a "
+                    "range-bearing sensor (and as small circles by the LiDAR)";
+  } else if (name == "street-3d") {
+    s.world = WorldKind::kStreet3D;
+    s.trajectory.laps = 1;
+    s.trajectory.max_speed_mps = 4.0;
+    s.trajectory.max_acceleration_mps2 = 1.0;
+    s.trajectory.corner_radius_m = 6.0;
+    s.image_pixels_per_m = 8.0;
+    s.description = "A loop of streets around a city block: facades, lamp poles, trees and parked cars; a "
+                    "spinning 16-ring LiDAR with per-point times (motion distortion) and a pinhole camera "
+                    "seeing the lamps";
+  } else {
+    return std::nullopt;
+  }
+  return s;
+}
+
+std::string Parameter::text() const {
+  return std::visit(
+      [](auto* field) -> std::string {
+        using T = std::remove_pointer_t<decltype(field)>;
+        if constexpr (std::is_same_v<T, bool>) {
+          return *field ? "true" : "false";
+        } else if constexpr (std::is_same_v<T, double>) {
+          std::string out;
+          io::append_number(out, *field);
+          return out;
+        } else {
+          return std::to_string(*field);
+        }
+      },
+      value);
+}
+
+bool Parameter::set(std::string_view input, std::string* why) {
+  return std::visit(
+      [&](auto* field) -> bool {
+        using T = std::remove_pointer_t<decltype(field)>;
+        if constexpr (std::is_same_v<T, bool>) {
+          if (input == "true" || input == "1" || input == "on") *field = true;
+          else if (input == "false" || input == "0" || input == "off") *field = false;
+          else {
+            if (why) *why = name + " expects true or false, found '" + std::string(input) + "'";
+            return false;
+          }
+          return true;
+        } else {
+          T parsed{};
+          const auto result = std::from_chars(input.data(), input.data() + input.size(), parsed);
+          if (result.ec != std::errc() || result.ptr != input.data() + input.size()) {
+            if (why) {
+              *why = name + " expects " + (std::is_same_v<T, double> ? "a number" : "an integer") + ", found '" +
+                     std::string(input) + "'";
+            }
+            return false;
+          }
+          if constexpr (std::is_same_v<T, double>) {
+            if (!std::isfinite(parsed)) {
+              if (why) *why = name + " must be finite, found '" + std::string(input) + "'";
+              return false;
+            }
+          }
+          *field = parsed;
+          return true;
+        }
+      },
+      value);
+}
+
+std::vector<Parameter> parameters(Scenario& s) {
+  std::vector<Parameter> out;
+  auto add = [&](const char* name, const char* unit, const char* description, auto* field) {
+    out.push_back(Parameter{name, unit, description, field});
+  };
+  switch (s.world) {
+    case WorldKind::kOffice:
+      add("office.rooms_per_row", "", "rooms in the bottom row and in the top row", &s.office.rooms_per_row);
+      add("office.width_m", "m", "width of the floor", &s.office.width_m);
+      add("office.room_depth_m", "m", "depth of each room row", &s.office.room_depth_m);
+      add("office.corridor_width_m", "m", "width of the ring corridor", &s.office.corridor_width_m);
+      add("office.block_depth_m", "m", "depth of the central block of three rooms", &s.office.block_depth_m);
+      add("office.door_width_m", "m", "door opening", &s.office.door_width_m);
+      add("office.people", "", "people walking back and forth (0-8)", &s.office.people);
+      break;
+    case WorldKind::kCorridor:
+      add("corridor.length_m", "m", "length of each long corridor", &s.corridor.length_m);
+      add("corridor.width_m", "m", "corridor width", &s.corridor.width_m);
+      add("corridor.block_depth_m", "m", "depth of the block between the corridors", &s.corridor.block_depth_m);
+      add("corridor.door_pitch_m", "m", "distance between neighbouring doors", &s.corridor.door_pitch_m);
+      add("corridor.door_width_m", "m", "door opening", &s.corridor.door_width_m);
+      add("corridor.door_recess_m", "m", "depth of the recess behind each door", &s.corridor.door_recess_m);
+      break;
+    case WorldKind::kOpenHall:
+      add("open_hall.width_m", "m", "hall width", &s.open_hall.width_m);
+      add("open_hall.depth_m", "m", "hall depth", &s.open_hall.depth_m);
+      add("open_hall.pillars", "", "number of pillars (0-8)", &s.open_hall.pillars);
+      add("open_hall.pillar_radius_m", "m", "pillar radius", &s.open_hall.pillar_radius_m);
+      add("open_hall.route_width_m", "m", "width of the rectangular route", &s.open_hall.route_width_m);
+      add("open_hall.route_depth_m", "m", "depth of the rectangular route", &s.open_hall.route_depth_m);
+      break;
+    case WorldKind::kBuildingLoop:
+      add("building.building_width_m", "m", "building footprint width", &s.building.building_width_m);
+      add("building.building_depth_m", "m", "building footprint depth", &s.building.building_depth_m);
+      add("building.street_offset_m", "m", "distance from facade to route", &s.building.street_offset_m);
+      add("building.trees_per_m", "1/m", "trees per metre of route", &s.building.trees_per_m);
+      add("building.world_seed", "", "seed of the tree placement", &s.building.world_seed);
+      break;
+    case WorldKind::kLandmarkField:
+      add("landmark_field.route_width_m", "m", "width of the rectangular route", &s.landmark_field.route_width_m);
+      add("landmark_field.route_depth_m", "m", "depth of the rectangular route", &s.landmark_field.route_depth_m);
+      add("landmark_field.landmarks", "", "number of landmarks", &s.landmark_field.landmarks);
+      add("landmark_field.max_distance_from_route_m", "m", "landmarks lie at most this far from the route",
+          &s.landmark_field.max_distance_from_route_m);
+      add("landmark_field.min_distance_from_route_m", "m", "and at least this far",
+          &s.landmark_field.min_distance_from_route_m);
+      add("landmark_field.post_radius_m", "m", "radius of the post at each landmark (LiDAR-visible; 0 = none)",
+          &s.landmark_field.post_radius_m);
+      add("landmark_field.world_seed", "", "seed of the landmark placement", &s.landmark_field.world_seed);
+      break;
+    case WorldKind::kStreet3D:
+      add("street.loop_width_m", "m", "width of the loop of street centre lines", &s.street.loop_width_m);
+      add("street.loop_depth_m", "m", "depth of the loop of street centre lines", &s.street.loop_depth_m);
+      add("street.street_half_width_m", "m", "centre line to facades", &s.street.street_half_width_m);
+      add("street.min_building_height_m", "m", "lowest building", &s.street.min_building_height_m);
+      add("street.max_building_height_m", "m", "highest building", &s.street.max_building_height_m);
+      add("street.pole_spacing_m", "m", "distance between lamp poles", &s.street.pole_spacing_m);
+      add("street.tree_spacing_m", "m", "distance between trees", &s.street.tree_spacing_m);
+      add("street.parked_cars", "", "parked cars along the outer kerb", &s.street.parked_cars);
+      add("street.world_seed", "", "seed of building sizes and car places", &s.street.world_seed);
+      break;
+  }
+  TrajectoryOptions& t = s.trajectory;
+  add("trajectory.laps", "", "times the route is driven", &t.laps);
+  add("trajectory.max_speed_mps", "m/s", "top forward speed", &t.max_speed_mps);
+  add("trajectory.max_acceleration_mps2", "m/s^2", "largest |dv/dt|", &t.max_acceleration_mps2);
+  add("trajectory.max_yaw_rate_rad_s", "rad/s", "largest yaw rate on arcs", &t.max_yaw_rate_rad_s);
+  add("trajectory.corner_radius_m", "m", "radius of corner arcs", &t.corner_radius_m);
+  add("trajectory.max_arc_turn_rad", "rad", "sharper corners become turns on the spot", &t.max_arc_turn_rad);
+  add("trajectory.spin_yaw_rate_rad_s", "rad/s", "yaw rate of turns on the spot", &t.spin_yaw_rate_rad_s);
+  add("trajectory.spin_yaw_acceleration_rad_s2", "rad/s^2", "yaw acceleration of turns on the spot",
+      &t.spin_yaw_acceleration_rad_s2);
+  add("trajectory.sample_period_s", "s", "ground-truth sample period", &t.sample_period_s);
+  add("trajectory.start_time_s", "s", "time stamp of the first sample", &t.start_time_s);
+  add("trajectory.fast_turns", "", "every corner > 0.3 rad becomes a 2.5 rad/s spin", &s.fast_turns);
+  OdometryNoise& o = s.odometry;
+  add("odometry.period_s", "s", "time between ODOM records", &s.odometry_period_s);
+  add("odometry.forward_sigma_m_per_sqrt_m", "m/sqrt(m)", "forward noise per sqrt(metre)", &o.forward_sigma_m_per_sqrt_m);
+  add("odometry.lateral_sigma_m_per_sqrt_m", "m/sqrt(m)", "lateral noise per sqrt(metre)", &o.lateral_sigma_m_per_sqrt_m);
+  add("odometry.yaw_sigma_rad_per_sqrt_rad", "rad/sqrt(rad)", "yaw noise per sqrt(radian turned)",
+      &o.yaw_sigma_rad_per_sqrt_rad);
+  add("odometry.yaw_sigma_rad_per_sqrt_m", "rad/sqrt(m)", "yaw noise per sqrt(metre travelled)", &o.yaw_sigma_rad_per_sqrt_m);
+  add("odometry.scale_error", "", "relative wheel-radius error", &o.scale_error);
+  add("odometry.yaw_scale_error", "", "relative error of turned angles", &o.yaw_scale_error);
+  add("odometry.yaw_bias_rad_per_m", "rad/m", "yaw drift per metre", &o.yaw_bias_rad_per_m);
+  add("odometry.slip_rate_per_s", "1/s", "slip events per second", &o.slip_rate_per_s);
+  add("odometry.slip_duration_s", "s", "duration of a slip", &o.slip_duration_s);
+  add("odometry.slip_max_excess", "", "largest over-reported translation fraction during a slip", &o.slip_max_excess);
+  if (s.world == WorldKind::kStreet3D) {
+    Lidar3DOptions& l3 = s.lidar3d;
+    add("lidar3d.rings", "", "number of rings", &l3.rings);
+    add("lidar3d.elevation_min_rad", "rad", "elevation of the lowest ring", &l3.elevation_min_rad);
+    add("lidar3d.elevation_max_rad", "rad", "elevation of the highest ring", &l3.elevation_max_rad);
+    add("lidar3d.columns", "", "firings per revolution", &l3.columns);
+    add("lidar3d.period_s", "s", "time of one revolution (= between clouds)", &l3.period_s);
+    add("lidar3d.max_range_m", "m", "max range", &l3.max_range_m);
+    add("lidar3d.range_sigma_m", "m", "Gaussian range noise", &l3.range_sigma_m);
+    add("lidar3d.dropout_probability", "", "probability a ray returns no point", &l3.dropout_probability);
+    add("lidar3d.mount_height_m", "m", "sensor height above the body origin", &l3.mount_height_m);
+    CameraOptions& c = s.camera;
+    add("camera.fx", "px", "focal length x", &c.fx);
+    add("camera.fy", "px", "focal length y", &c.fy);
+    add("camera.cx", "px", "principal point x", &c.cx);
+    add("camera.cy", "px", "principal point y", &c.cy);
+    add("camera.width", "px", "image width", &c.width);
+    add("camera.height", "px", "image height", &c.height);
+    add("camera.pixel_sigma", "px", "Gaussian pixel noise", &c.pixel_sigma);
+    add("camera.max_range_m", "m", "farthest landmark seen", &c.max_range_m);
+    add("camera.mount_height_m", "m", "camera height above the body origin", &c.mount_height_m);
+    add("camera.period_s", "s", "time between images", &c.period_s);
+  } else {
+    LidarOptions& l = s.lidar;
+    add("lidar.beams", "", "number of beams", &l.beams);
+    add("lidar.angle_min_rad", "rad", "angle of the first beam", &l.angle_min_rad);
+    add("lidar.angle_increment_rad", "rad", "angle between beams", &l.angle_increment_rad);
+    add("lidar.max_range_m", "m", "max range (no return reads this)", &l.max_range_m);
+    add("lidar.range_sigma_m", "m", "Gaussian range noise", &l.range_sigma_m);
+    add("lidar.dropout_probability", "", "probability a beam reads max range", &l.dropout_probability);
+    add("lidar.range_decimals", "", "decimals readings are rounded to (-1: none)", &l.range_decimals);
+    add("lidar.forward_offset_m", "m", "laser position ahead of the body origin", &l.forward_offset_m);
+    add("lidar.period_s", "s", "time between scans", &l.period_s);
+    add("landmarks.enabled", "", "run the range-bearing landmark sensor", &s.simulate_landmarks);
+    RangeBearingOptions& r = s.landmarks;
+    add("landmarks.max_range_m", "m", "farthest landmark seen", &r.max_range_m);
+    add("landmarks.field_of_view_rad", "rad", "full field of view", &r.field_of_view_rad);
+    add("landmarks.range_sigma_m", "m", "range noise", &r.range_sigma_m);
+    add("landmarks.bearing_sigma_rad", "rad", "bearing noise", &r.bearing_sigma_rad);
+    add("landmarks.detection_probability", "", "probability a visible landmark is reported", &r.detection_probability);
+    add("landmarks.occlusion", "", "walls and circles hide landmarks", &r.occlusion);
+    add("landmarks.period_s", "s", "time between observations", &r.period_s);
+    GraphOptions& g = s.graph;
+    add("graph.node_spacing_m", "m", "new node after this much travel", &g.node_spacing_m);
+    add("graph.node_spacing_rad", "rad", "or this much turning", &g.node_spacing_rad);
+    add("graph.odometry_sigma_xy_m", "m", "odometry edge noise (x, y)", &g.odometry_sigma_xy_m);
+    add("graph.odometry_sigma_theta_rad", "rad", "odometry edge noise (theta)", &g.odometry_sigma_theta_rad);
+    add("graph.loop_sigma_xy_m", "m", "loop edge noise (x, y)", &g.loop_sigma_xy_m);
+    add("graph.loop_sigma_theta_rad", "rad", "loop edge noise (theta)", &g.loop_sigma_theta_rad);
+    add("graph.loop_radius_m", "m", "loop closures between nodes at most this far apart", &g.loop_radius_m);
+    add("graph.loop_max_heading_difference_rad", "rad", "and this different in heading", &g.loop_max_heading_difference_rad);
+    add("graph.loop_min_separation_s", "s", "and this far apart in time", &g.loop_min_separation_s);
+    add("graph.loop_every_n_nodes", "", "loop search at every n-th node", &g.loop_every_n_nodes);
+    add("graph.false_loops", "", "number of false loop closures added", &g.false_loops);
+    add("graph.false_loop_min_distance_m", "m", "false loops join nodes at least this far apart", &g.false_loop_min_distance_m);
+    RelationsOptions& rel = s.relations;
+    add("relations.short_interval_s", "s", "time between the scans of a short relation", &rel.short_interval_s);
+    add("relations.long_count", "", "largest number of long relations", &rel.long_count);
+    add("relations.long_min_separation_s", "s", "long relations join scans at least this far apart in time",
+        &rel.long_min_separation_s);
+    add("relations.long_max_distance_m", "m", "and at most this far apart in space", &rel.long_max_distance_m);
+    add("relations.long_max_heading_difference_rad", "rad", "and this different in heading",
+        &rel.long_max_heading_difference_rad);
+    add("relations.long_candidate_spacing_s", "s", "scans considered for long relations are this far apart",
+        &rel.long_candidate_spacing_s);
+  }
+  add("image.pixels_per_m", "px/m", "scale of world.png", &s.image_pixels_per_m);
+  return out;
+}
+
+WorldWithRoute build_world(const Scenario& scenario) {
+  switch (scenario.world) {
+    case WorldKind::kOffice: return office_world(scenario.office);
+    case WorldKind::kCorridor: return corridor_world(scenario.corridor);
+    case WorldKind::kOpenHall: return open_hall_world(scenario.open_hall);
+    case WorldKind::kBuildingLoop: return building_loop_world(scenario.building);
+    case WorldKind::kLandmarkField: return landmark_field_world(scenario.landmark_field);
+    case WorldKind::kStreet3D: {
+      const StreetWorld street = street_world(scenario.street);
+      return {footprint(street.world), street.route};
+    }
+  }
+  CAIRN_ASSERT(false, "build_world: unknown world kind");
+  return {};
+}
+
+SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
+  CAIRN_ASSERT(scenario.is_valid(nullptr), "simulate: invalid scenario (check is_valid first)");
+  SimulationResult result;
+  result.world = build_world(scenario);
+  const World& world = result.world.world;
+  const TrajectoryOptions trajectory = scenario.effective_trajectory();
+  result.truth = generate_trajectory(result.world.route, trajectory);
+  result.odometry = simulate_odometry(result.truth, scenario.odometry, Random::derive_seed(seed, kOdometryStream));
+
+  const auto odometry_step = static_cast<std::size_t>(whole_steps(scenario.odometry_period_s, trajectory.sample_period_s));
+  const auto scan_step = static_cast<std::size_t>(whole_steps(scenario.lidar.period_s, trajectory.sample_period_s));
+  const auto landmark_step = static_cast<std::size_t>(whole_steps(scenario.landmarks.period_s, trajectory.sample_period_s));
+  for (std::size_t k = 0; k < result.truth.size(); k += odometry_step) result.odometry_samples.push_back(k);
+  for (std::size_t k = 0; k < result.truth.size(); k += scan_step) result.scan_samples.push_back(k);
+
+  if (scenario.world == WorldKind::kStreet3D) {
+    result.scan_samples.clear();
+    const auto cloud_step = static_cast<std::size_t>(whole_steps(scenario.lidar3d.period_s, trajectory.sample_period_s));
+    for (std::size_t k = 0; k < result.truth.size(); k += cloud_step) result.scan_samples.push_back(k);
+    simulate_street_sensors(scenario, Random::derive_seed(seed, kLidarStream), Random::derive_seed(seed, kLandmarkStream),
+                            result);
+  } else {
+    Random lidar_random(Random::derive_seed(seed, kLidarStream));
+    const core::SE2 T_body_laser = scenario.lidar.T_body_laser();
+    std::size_t max_range_readings = 0;
+    std::size_t readings = 0;
+    for (std::size_t k : result.scan_samples) {
+      const core::SE2 T_world_laser = result.truth[k].T_world_body * T_body_laser;
+      const double time_s = result.truth[k].stamp.seconds();
+      result.scans.push_back(
+          add_scan_noise(ideal_scan(world, T_world_laser, scenario.lidar, time_s), scenario.lidar, lidar_random));
+      for (double r : result.scans.back()) max_range_readings += r == scenario.lidar.max_range_m ? 1 : 0;
+      readings += result.scans.back().size();
+    }
+    result.max_range_fraction = readings > 0 ? static_cast<double>(max_range_readings) / static_cast<double>(readings) : 0.0;
+
+    if (scenario.simulate_landmarks) {
+      Random landmark_random(Random::derive_seed(seed, kLandmarkStream));
+      for (std::size_t k = 0; k < result.truth.size(); k += landmark_step) {
+        const auto seen = observe_landmarks(world, result.truth[k].T_world_body, result.truth[k].stamp, scenario.landmarks,
+                                            landmark_random);
+        result.landmark_observations.insert(result.landmark_observations.end(), seen.begin(), seen.end());
+      }
+    }
+
+    result.graph = build_graph(result.truth, result.scan_samples, scenario.graph, Random::derive_seed(seed, kGraphStream));
+    result.relations =
+        make_relations(result.truth, result.scan_samples, scenario.relations, Random::derive_seed(seed, kRelationsStream));
+  }
+
+  result.duration_s = static_cast<double>(result.truth.back().stamp.nanoseconds() - result.truth.front().stamp.nanoseconds()) * 1e-9;
+  result.path_length_m = path_length(result.truth);
+  const core::SE2 final_error = result.truth.back().T_world_body.inverse() * result.odometry.poses.back();
+  result.dead_reckoning_final_error_m = final_error.translation().norm();
+  result.dead_reckoning_final_error_rad = std::abs(final_error.angle());
+  for (std::size_t k = 0; k < result.truth.size(); ++k) {
+    result.dead_reckoning_max_error_m =
+        std::max(result.dead_reckoning_max_error_m,
+                 (result.truth[k].T_world_body.translation() - result.odometry.poses[k].translation()).norm());
+  }
+  result.min_clearance_m = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < result.truth.size(); k += 10) {
+    result.min_clearance_m = std::min(result.min_clearance_m, world.clearance(result.truth[k].T_world_body.translation()));
+  }
+  return result;
+}
+
+std::vector<std::string> write_outputs(const SimulationResult& result, const Scenario& scenario, std::uint64_t seed,
+                                       const std::string& directory) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> files;
+  auto path_of = [&](const std::string& name) {
+    files.push_back(name);
+    return (fs::path(directory) / name).string();
+  };
+  if (scenario.world == WorldKind::kStreet3D) {
+    files = write_street_outputs(result, scenario, directory);
+    std::vector<Vector2> truth_points;
+    std::vector<Vector2> odometry_points;
+    for (std::size_t k = 0; k < result.truth.size(); k += 5) {
+      truth_points.push_back(result.truth[k].T_world_body.translation());
+      odometry_points.push_back(result.odometry.poses[k].translation());
+    }
+    RenderOptions render;
+    render.pixels_per_m = scenario.image_pixels_per_m;
+    render.title = scenario.name + ", seed " + std::to_string(seed) + " (top view: footprints of buildings, cars, poles, trees)";
+    render_png(path_of("world.png"), result.world.world, truth_points, odometry_points, render);
+    return files;
+  }
+
+  CarmenLog log;
+  log.comments.push_back("written by cairn simulate: scenario " + scenario.name + ", seed " + std::to_string(seed) +
+                         "; FLASER poses are odometry, ground truth is in ground_truth.tum");
+  log.lidar = scenario.lidar;
+  for (std::size_t i = 0; i < result.odometry_samples.size(); ++i) {
+    // tv and rv: the odometry's own motion since the previous record over the time between them
+    // (0 at the first record), so they agree with the poses written beside them.
+    const std::size_t k = result.odometry_samples[i];
+    double speed = 0.0;
+    double yaw_rate = 0.0;
+    if (i > 0) {
+      const std::size_t j = result.odometry_samples[i - 1];
+      const double dt = static_cast<double>(result.truth[k].stamp.nanoseconds() - result.truth[j].stamp.nanoseconds()) * 1e-9;
+      const core::SE2 motion = result.odometry.poses[j].inverse() * result.odometry.poses[k];
+      speed = motion.x() / dt;
+      yaw_rate = motion.angle() / dt;
+    }
+    log.odometry.push_back({result.truth[k].stamp, result.odometry.poses[k], speed, yaw_rate});
+  }
+  const core::SE2 T_body_laser = scenario.lidar.T_body_laser();
+  for (std::size_t i = 0; i < result.scan_samples.size(); ++i) {
+    const std::size_t k = result.scan_samples[i];
+    log.scans.push_back({result.truth[k].stamp, result.scans[i], result.odometry.poses[k] * T_body_laser,
+                         result.odometry.poses[k]});
+  }
+  write_carmen(path_of("log.clf"), log);
+  write_relations(path_of("log.relations"), result.relations);
+
+  std::vector<core::Timestamp> scan_stamps;
+  std::vector<core::SE2> scan_truth;
+  std::vector<core::SE2> scan_odometry;
+  for (std::size_t k : result.scan_samples) {
+    scan_stamps.push_back(result.truth[k].stamp);
+    scan_truth.push_back(result.truth[k].T_world_body);
+    scan_odometry.push_back(result.odometry.poses[k]);
+  }
+  write_tum_file(path_of("ground_truth.tum"), scan_stamps, scan_truth);
+  write_tum_file(path_of("odometry.tum"), scan_stamps, scan_odometry);
+
+  io::write_graph(path_of("graph.g2o"), io::PoseGraph(result.graph.graph), io::GraphFormat::kG2o);
+  std::vector<core::Timestamp> node_stamps;
+  for (std::size_t scan : result.graph.node_scans) node_stamps.push_back(result.truth[result.scan_samples[scan]].stamp);
+  write_tum_file(path_of("graph_nodes.tum"), node_stamps, result.graph.truth);
+  io::write_file_atomically(path_of("loop_closures.csv"), [&](std::ostream& out) {
+    out << "from,to,kind\n";
+    for (const auto& loop : result.graph.loops) out << loop.from << ',' << loop.to << ',' << (loop.is_false ? "false" : "true") << '\n';
+  });
+
+  write_world_file(path_of("world.txt"), result.world.world);
+  if (scenario.simulate_landmarks) {
+    write_landmark_map(path_of("landmarks.csv"), result.world.world.landmarks);
+    write_landmark_observations(path_of("landmark_observations.csv"), result.landmark_observations);
+  }
+
+  std::vector<Vector2> truth_points;
+  std::vector<Vector2> odometry_points;
+  for (std::size_t k = 0; k < result.truth.size(); k += 5) {
+    truth_points.push_back(result.truth[k].T_world_body.translation());
+    odometry_points.push_back(result.odometry.poses[k].translation());
+  }
+  RenderOptions render;
+  render.pixels_per_m = scenario.image_pixels_per_m;
+  std::ostringstream title;
+  title << scenario.name << ", seed " << seed << ": " << static_cast<int>(std::round(result.path_length_m)) << " m in "
+        << static_cast<int>(std::round(result.duration_s)) << " s";
+  render.title = title.str();
+  render_png(path_of("world.png"), result.world.world, truth_points, odometry_points, render);
+  return files;
+}
+
+}  // namespace cairn::sim

@@ -1,0 +1,152 @@
+#pragma once
+/// \file
+/// Named scenarios: a world, a trajectory through it, the sensors and the derived files, with
+/// every setting exposed as a named parameter (so `cairn simulate --list` shows them, `--set`
+/// changes them and manifest.json records them). A scenario plus a seed fixes every output
+/// byte: all randomness flows from the seed through Random::derive_seed, one stream per sensor.
+///
+/// | scenario          | world (world_builders.hpp)  | laps | notes                                     |
+/// |-------------------|-----------------------------|------|-------------------------------------------|
+/// | office            | office_world                | 2    | two loops per lap, room visits            |
+/// | office-people     | office_world, 8 people      | 2    | moving objects (ghost trails)             |
+/// | corridor-aliasing | corridor_world              | 2    | identical doors every 4 m                 |
+/// | open-hall         | open_hall_world             | 2    | LiDAR max range 10 m: mostly nothing seen |
+/// | loop-building     | building_loop_world         | 1    | one long loop closed at the end           |
+/// | landmarks         | landmark_field_world        | 2    | range-bearing landmarks with identities   |
+/// | street-3d         | street_world (3D)           | 1    | spinning 3D LiDAR, pinhole camera         |
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "cairn/sim/camera.hpp"
+#include "cairn/sim/landmark_sensor.hpp"
+#include "cairn/sim/lidar_3d.hpp"
+#include "cairn/sim/lidar.hpp"
+#include "cairn/sim/odometry.hpp"
+#include "cairn/sim/relations.hpp"
+#include "cairn/sim/simulated_graph.hpp"
+#include "cairn/sim/street_world.hpp"
+#include "cairn/sim/trajectory.hpp"
+#include "cairn/sim/world_builders.hpp"
+
+namespace cairn::sim {
+
+/// kStreet3D is the one 3D world: it runs the 3D LiDAR and the camera instead of the 2D LiDAR,
+/// the landmark sensor, the pose graph and the relations.
+enum class WorldKind { kOffice, kCorridor, kOpenHall, kBuildingLoop, kLandmarkField, kStreet3D };
+
+struct Scenario {
+  std::string name;
+  std::string description;
+  WorldKind world = WorldKind::kOffice;
+  /// Only the options of `world` are used (and listed).
+  OfficeOptions office;
+  CorridorOptions corridor;
+  OpenHallOptions open_hall;
+  BuildingLoopOptions building;
+  LandmarkFieldOptions landmark_field;
+  StreetOptions street;
+  /// 3D sensors (street-3d only).
+  Lidar3DOptions lidar3d;
+  CameraOptions camera;
+
+  TrajectoryOptions trajectory;
+  /// When true, every corner sharper than 0.3 rad becomes a spin at 2.5 rad/s (8 rad/s^2):
+  /// overrides trajectory.max_arc_turn_rad, spin_yaw_rate_rad_s and spin_yaw_acceleration_rad_s2.
+  bool fast_turns = false;
+  OdometryNoise odometry;
+  /// Time between ODOM records, seconds: a multiple of trajectory.sample_period_s.
+  double odometry_period_s = 0.05;
+  LidarOptions lidar;
+  /// Whether the range-bearing landmark sensor runs (and its files are written).
+  bool simulate_landmarks = false;
+  RangeBearingOptions landmarks;
+  GraphOptions graph;
+  RelationsOptions relations;
+  /// Picture scale, pixels per metre.
+  double image_pixels_per_m = 20.0;
+
+  /// Every option group's checks plus: sensor periods are whole multiples of the sample period.
+  bool is_valid(std::string* why) const;
+  /// The trajectory options after `fast_turns` is applied.
+  TrajectoryOptions effective_trajectory() const;
+};
+
+/// The scenario names, in the order `--list` shows them.
+std::vector<std::string> scenario_names();
+/// The named scenario with its defaults; nullopt for an unknown name.
+std::optional<Scenario> make_scenario(std::string_view name);
+
+/// One setting of a scenario, bound to its field.
+struct Parameter {
+  /// "group.field", e.g. "lidar.range_sigma_m".
+  std::string name;
+  std::string unit;
+  std::string description;
+  std::variant<double*, int*, bool*, std::uint64_t*> value;
+
+  /// The value as text: shortest round-trip decimal for doubles, "true"/"false" for flags.
+  std::string text() const;
+  /// Parses `text` into the field; false (with a reason in `why`) when it does not parse.
+  bool set(std::string_view text, std::string* why);
+};
+
+/// The parameters of `scenario` (its world's options and every sensor's), bound to its fields.
+std::vector<Parameter> parameters(Scenario& scenario);
+
+/// Everything one run produced, in memory.
+struct SimulationResult {
+  WorldWithRoute world;
+  /// Ground truth at every trajectory sample.
+  std::vector<TrajectorySample> truth;
+  /// Dead reckoning at every sample.
+  OdometryTrack odometry;
+  /// Sample indices of ODOM records and of scans.
+  std::vector<std::size_t> odometry_samples;
+  std::vector<std::size_t> scan_samples;
+  /// Noisy ranges per scan (scan k taken at truth[scan_samples[k]]).
+  std::vector<std::vector<double>> scans;
+  std::vector<LandmarkObservation> landmark_observations;
+  SimulatedGraph graph;
+  std::vector<Relation> relations;
+  /// street-3d: the 3D world, one point cloud per revolution (starting at scan_samples[k]),
+  /// camera observations.
+  World3D world_3d;
+  std::vector<std::vector<LidarPoint>> clouds;
+  std::vector<CameraObservation> camera_observations;
+
+  /// Summary numbers (also written to the manifest).
+  double duration_s = 0.0;
+  double path_length_m = 0.0;
+  /// |t| and |angle| of T_truth_end^-1 * T_odometry_end: how far dead reckoning ends off.
+  double dead_reckoning_final_error_m = 0.0;
+  double dead_reckoning_final_error_rad = 0.0;
+  /// Largest position error of dead reckoning along the run, metres (the final error can be
+  /// small by chance when a loop ends where it started).
+  double dead_reckoning_max_error_m = 0.0;
+  /// Fraction of all readings equal to max range (misses and dropouts).
+  double max_range_fraction = 0.0;
+  /// Smallest distance from any ground-truth position to a wall or circle, metres.
+  double min_clearance_m = 0.0;
+};
+
+/// Runs `scenario` with `seed`. Precondition: scenario.is_valid().
+SimulationResult simulate(const Scenario& scenario, std::uint64_t seed);
+
+/// Writes every output file into `directory` (which must exist), atomically, and returns the
+/// file names in the order written: log.clf, log.relations, ground_truth.tum, odometry.tum,
+/// graph.g2o, graph_nodes.tum, loop_closures.csv, world.txt, [landmarks.csv,
+/// landmark_observations.csv], world.png. street-3d writes instead: velodyne/NNNNNN.bin,
+/// velodyne_times/NNNNNN.bin, poses.txt, times.txt, ground_truth.tum, odometry.tum,
+/// camera_observations.csv, landmarks_3d.csv, world_3d.txt, world.png (see docs/simulation.md). Throws io::ParseError when a file cannot be written.
+std::vector<std::string> write_outputs(const SimulationResult& result, const Scenario& scenario, std::uint64_t seed,
+                                       const std::string& directory);
+
+/// Builds the scenario's world (no randomness beyond the world's own seed).
+WorldWithRoute build_world(const Scenario& scenario);
+
+}  // namespace cairn::sim
