@@ -231,7 +231,8 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
 
   auto analyze_start = Clock::now();
   SparseCholesky cholesky;
-  cholesky.analyze(engine.pattern().matrix());
+  const std::vector<int> ordering = engine.pattern().block_amd_ordering();
+  cholesky.analyze(engine.pattern().matrix(), &ordering);
   summary.analyze_s = seconds_since(analyze_start);
 
   const bool lm = options.algorithm == Algorithm::kLevenbergMarquardt;

@@ -1,5 +1,6 @@
 #include "cairn/backend/sparse_cholesky.hpp"
 
+#include <amd.h>
 #include <cholmod.h>
 
 #include <algorithm>
@@ -67,6 +68,26 @@ void BlockPattern::add_diagonal(int c, const double* M) {
   }
 }
 
+std::vector<int> BlockPattern::block_amd_ordering() const {
+  // Upper-triangular block pattern (diagonal included) in compressed-column form.
+  std::vector<int> start(static_cast<std::size_t>(blocks_) + 1, 0);
+  std::vector<int> rows;
+  for (int c = 0; c < blocks_; ++c) {
+    for (const int r : column_block_rows_[static_cast<std::size_t>(c)]) rows.push_back(r);
+    rows.push_back(c);
+    start[static_cast<std::size_t>(c) + 1] = static_cast<int>(rows.size());
+  }
+  std::vector<int> block_order(static_cast<std::size_t>(blocks_));
+  const int status = amd_order(blocks_, start.data(), rows.data(), block_order.data(), nullptr, nullptr);
+  CAIRN_ASSERT(status == AMD_OK || status == AMD_OK_BUT_JUMBLED, "AMD ordering failed");
+  std::vector<int> order;
+  order.reserve(static_cast<std::size_t>(blocks_ * block_size_));
+  for (const int b : block_order) {
+    for (int k = 0; k < block_size_; ++k) order.push_back(b * block_size_ + k);
+  }
+  return order;
+}
+
 void BlockPattern::set_zero() { std::fill(csc_.value.begin(), csc_.value.end(), 0.0); }
 
 Eigen::VectorXd symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x) {
@@ -119,10 +140,19 @@ struct SparseCholesky::Impl {
 SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
 SparseCholesky::~SparseCholesky() = default;
 
-void SparseCholesky::analyze(const UpperCsc& A) {
+void SparseCholesky::analyze(const UpperCsc& A, const std::vector<int>* ordering) {
   if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
   cholmod_sparse S = Impl::view(A);
-  impl_->factor = cholmod_analyze(&S, &impl_->common);
+  if (ordering != nullptr) {
+    CAIRN_ASSERT(static_cast<int>(ordering->size()) == A.size, "ordering must permute every variable");
+    impl_->common.nmethods = 1;
+    impl_->common.method[0].ordering = CHOLMOD_GIVEN;
+    impl_->common.postorder = 1;
+    impl_->factor = cholmod_analyze_p(&S, const_cast<int*>(ordering->data()), nullptr, 0, &impl_->common);
+  } else {
+    impl_->common.nmethods = 0;
+    impl_->factor = cholmod_analyze(&S, &impl_->common);
+  }
   impl_->size = A.size;
   CAIRN_ASSERT(impl_->factor != nullptr, "CHOLMOD analysis failed (out of memory?)");
 }

@@ -38,6 +38,10 @@ class BlockPattern {
   /// Adds the upper triangle of the symmetric B x B block `M` at (c, c).
   void add_diagonal(int c, const double* M_row_major);
   void set_zero();
+  /// Fill-reducing ordering of the block graph (AMD, Amestoy, Davis & Duff 1996), expanded to
+  /// the scalar variables: a block's variables stay together, as Ceres orders its parameter
+  /// blocks before CHOLMOD sees them.
+  std::vector<int> block_amd_ordering() const;
   /// Index into value of the diagonal entry of scalar column k.
   int diagonal_index(int scalar_column) const { return csc_.column_start[scalar_column + 1] - 1; }
 
@@ -63,7 +67,9 @@ class SparseCholesky {
   SparseCholesky& operator=(const SparseCholesky&) = delete;
 
   /// Symbolic analysis of the pattern of `A` (values ignored). Call again when the pattern changes.
-  void analyze(const UpperCsc& A);
+  /// With `ordering` (a permutation of the scalar variables), CHOLMOD uses it as given;
+  /// otherwise it chooses (AMD, and METIS when AMD fills in badly).
+  void analyze(const UpperCsc& A, const std::vector<int>* ordering = nullptr);
   /// Numeric factorisation of A (same pattern as analyzed).
   FactorizationStatus factorize(const UpperCsc& A);
   /// Solves A x = b with the last successful factorisation.
