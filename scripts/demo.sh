@@ -75,6 +75,10 @@ PY
 fi
 
 echo
+echo "Simulation: a corridor of identical doors (perceptual aliasing), ground truth and sensor logs:"
+"$CAIRN" simulate corridor-aliasing --seed 1 --out "$OUT/simulated/corridor-aliasing" | sed 's/^/  /'
+
+echo
 "$CAIRN" convert "$ROOT/examples/square_loop.g2o" "$OUT/converted/square_loop.graph"
 if [[ -d "$DATA/posegraph" ]]; then
   "$CAIRN" convert "$DATA/posegraph/toro/w20000.txt" "$OUT/converted/w20000.g2o" --from toro 2>&1 | sed 's/^/  /'
@@ -94,6 +98,7 @@ Done. Look at:
   $OUT/info/<graph>.txt / .json     what each graph holds (cairn info)
   $OUT/info/<graph>.warnings.txt    what cairn noticed (indefinite information, skipped records)
   $OUT/optimized/                   optimised graphs, JSON reports with per-iteration logs (cairn optimize)
+  $OUT/simulated/corridor-aliasing/world.png   the simulated world and trajectories (cairn simulate)
   $OUT/converted/                   the same data in other formats (cairn convert)
 Next: cairn --help, docs/backend.md, docs/formats.md, docs/conventions.md
 MSG
