@@ -82,11 +82,14 @@ class Engine {
     for (int p = 0; p < problem.size(); ++p) {
       if (!problem.fixed[static_cast<std::size_t>(p)]) variable_[static_cast<std::size_t>(p)] = free_poses_++;
     }
+    // Edges with weight 0 (rejected by GNC) stay out of the pattern: random false loop
+    // closures couple distant poses and would otherwise fill the factor in.
     std::vector<std::pair<int, int>> pairs;
-    for (const auto& e : problem.edges) {
+    for (std::size_t k = 0; k < problem.edges.size(); ++k) {
+      const auto& e = problem.edges[k];
       const int a = variable_[static_cast<std::size_t>(e.i)];
       const int b = variable_[static_cast<std::size_t>(e.j)];
-      if (a >= 0 && b >= 0) pairs.emplace_back(a, b);
+      if (a >= 0 && b >= 0 && weight_of(k) != 0.0) pairs.emplace_back(a, b);
     }
     pattern_ = std::make_unique<BlockPattern>(free_poses_, D, pairs);
     blocks_.resize(problem.edges.size());
@@ -130,6 +133,7 @@ class Engine {
     pattern_->set_zero();
     gradient_.setZero();
     for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
+      if (weight_of(e) == 0.0) continue;
       const auto& edge = problem_.edges[e];
       const auto& b = blocks_[e];
       const int vi = variable_[static_cast<std::size_t>(edge.i)];
