@@ -11,7 +11,7 @@
 // gradient 1e-10, parameter 1e-8, 50 iterations). The final chi2 of both results is evaluated
 // with the same function (cairn's geodesic cost).
 //
-// Usage: bench_pose_graph_vs_ceres GRAPH.g2o [GRAPH.g2o ...]
+// Usage: bench_pose_graph_vs_ceres [--reuse-factorization] GRAPH.g2o [GRAPH.g2o ...]
 
 #include <ceres/ceres.h>
 #include <sys/resource.h>
@@ -41,8 +41,11 @@ struct RunResult {
   long peak_kb = 0;
 };
 
+bool g_reuse_factorization = false;
+
 backend::OptimizerOptions cairn_options() {
   backend::OptimizerOptions options;
+  options.reuse_factorization = g_reuse_factorization;
   options.function_tolerance = 1e-6;
   options.gradient_tolerance = 1e-10;
   options.parameter_tolerance = 1e-8;
@@ -247,13 +250,18 @@ void compare(const std::string& name, const Graph& graph) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: %s GRAPH.g2o [GRAPH.g2o ...]\n", argv[0]);
+  int first = 1;
+  if (argc > 1 && std::string(argv[1]) == "--reuse-factorization") {
+    g_reuse_factorization = true;  // cairn's OptimizerOptions::reuse_factorization
+    first = 2;
+  }
+  if (argc <= first) {
+    std::fprintf(stderr, "usage: %s [--reuse-factorization] GRAPH.g2o [GRAPH.g2o ...]\n", argv[0]);
     return 2;
   }
   std::printf("| graph | poses | chi2 at chordal start | cairn s (incl. init) | it | cairn chi2 | cairn MiB | factorisation share | Ceres s | it | Ceres chi2 | Ceres MiB | Ceres/cairn time |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  for (int k = 1; k < argc; ++k) {
+  for (int k = first; k < argc; ++k) {
     try {
       const io::GraphFile file = io::read_graph(argv[k]);
       const std::string name = std::filesystem::path(argv[k]).filename().string();

@@ -248,6 +248,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
   std::vector<double> diagonal;  // undamped diag(J^T J)
   Eigen::VectorXd gn_step;       // dog-leg: cached Gauss-Newton step at the current poses
   bool gn_step_valid = false;
+  bool reuse_next = false;       // LM: try the previous factorisation for the next step
   summary.termination = TerminationType::kNoConvergence;
   summary.message = "maximum number of iterations reached";
 
@@ -277,7 +278,15 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     Eigen::VectorXd step;
     auto& A = engine.pattern().matrix();
     bool solved = true;
-    if (!dogleg || !gn_step_valid) {
+    const bool reuse = lm && reuse_next;
+    reuse_next = false;
+    if (reuse) {
+      const auto t2 = Clock::now();
+      step = cholesky.solve(Eigen::VectorXd(-g));
+      it.solve_s = seconds_since(t2);
+      it.reused_factorization = true;
+      solved = step.allFinite();
+    } else if (!dogleg || !gn_step_valid) {
       std::vector<double> saved;
       if (lm) {
         saved = diagonal;
@@ -305,6 +314,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
         gn_step_valid = true;
       }
     }
+    if (!solved && reuse) continue;
     if (!solved) {
       if (lm) {
         lambda *= nu;
@@ -323,7 +333,12 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       break;
     }
     double predicted = 0.0;
-    if (dogleg) {
+    if (reuse) {
+      // The factor is of an older matrix: predict with the current J^T J.
+      const Eigen::VectorXd Hs = symmetric_multiply(A, step);
+      predicted = -2.0 * g.dot(step) - step.dot(Hs);
+      it.lambda = lambda;
+    } else if (dogleg) {
       // Powell's dog-leg (Nocedal & Wright, Numerical Optimization, 2nd ed., sec. 4.1).
       const Eigen::VectorXd Hg = symmetric_multiply(A, g);
       const double alpha = g.squaredNorm() / g.dot(Hg);
@@ -369,9 +384,19 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     const double new_cost = engine.cost(candidate);
     it.cost_change = cost - new_cost;
     it.relative_decrease = predicted > 0.0 ? it.cost_change / predicted : -1.0;
-    const bool accept = std::isfinite(new_cost) && (options.algorithm == Algorithm::kGaussNewton
+    const bool accept = std::isfinite(new_cost) && (reuse ? it.relative_decrease > 0.5
+                                                    : options.algorithm == Algorithm::kGaussNewton
                                                         ? new_cost <= cost
                                                         : it.relative_decrease > 1e-3);
+    if (reuse && !accept) {
+      // Not a real rejection: the next iteration factorises at the current point.
+      it.cost = cost;
+      it.iteration_s = seconds_since(iteration_start);
+      summary.iteration_log.push_back(it);
+      if (options.progress) options.progress(it);
+      summary.iterations = iteration;
+      continue;
+    }
     if (accept) {
       const double old_cost = cost;
       problem.T_world_pose = std::move(candidate);
@@ -379,7 +404,10 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       need_linearization = true;
       ++summary.successful_iterations;
       it.step_accepted = true;
-      if (lm) {
+      if (reuse) {
+        reuse_next = true;  // keep going with the same factor while it works
+      } else if (lm) {
+        reuse_next = options.reuse_factorization && it.relative_decrease > 0.75;
         // Nielsen's update (Madsen, Nielsen & Tingleff 2004, eq. 3.16), as Ceres' LM strategy.
         const double t = 2.0 * it.relative_decrease - 1.0;
         lambda *= std::max(1.0 / 3.0, 1.0 - t * t * t);

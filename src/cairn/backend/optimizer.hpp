@@ -34,6 +34,7 @@ struct IterationSummary {
   double relative_decrease = 0.0;  ///< actual / predicted decrease (rho)
   double lambda = 0.0;             ///< LM damping (1/trust radius) or dog-leg radius
   bool step_accepted = false;
+  bool reused_factorization = false;  ///< the step came from the previous factorisation
   double linearize_s = 0.0;
   double factorize_s = 0.0;
   double solve_s = 0.0;
@@ -58,6 +59,11 @@ struct OptimizerOptions {
   /// LM: initial damping lambda = 1 / radius, on Marquardt's scaling diag(J^T J) clamped to
   /// [1e-6, 1e32] (Ceres' defaults). Dog-leg: initial trust-region radius. > 0.
   double initial_trust_region_radius = 1e4;
+  /// LM only: after a step whose actual decrease matched the model well (rho > 0.75), try the
+  /// next step with the previous factorisation (a solve instead of a factorisation, which is
+  /// most of an iteration's time on large graphs); the step is kept only if rho > 0.5 under the
+  /// current linearisation, otherwise the iteration factorises as usual.
+  bool reuse_factorization = false;
   /// Threads for linearisation; 0 = all cores.
   int threads = 0;
   /// Called after every iteration (the CLI prints progress); may be empty.
