@@ -39,7 +39,8 @@ double tls_weight(double r2, double c2, double mu) {
 template <class Group>
 GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  CAIRN_ASSERT(options.mu_factor > 1.0 && options.max_outer_iterations >= 1 && options.binary_tolerance > 0.0,
+  CAIRN_ASSERT(options.mu_factor > 1.0 && options.max_outer_iterations >= 1 && options.binary_tolerance > 0.0 &&
+                   options.iterations_per_outer >= 1,
                "invalid GncOptions");
   GncSummary summary;
   const std::size_t m = problem.edges.size();
@@ -72,6 +73,8 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
     return summary;
   }
   double mu = c2 / (2.0 * max_r2 - c2);
+  const int final_iterations = inner.max_iterations;
+  inner.max_iterations = std::min(inner.max_iterations, options.iterations_per_outer);
   summary.message = "maximum number of outer iterations reached";
   for (int outer = 1; outer <= options.max_outer_iterations; ++outer) {
     summary.outer_iterations = outer;
@@ -97,6 +100,7 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
     inner.edge_weights[e] = inner.edge_weights[e] >= 0.5 ? 1.0 : 0.0;
     if (inner.edge_weights[e] == 0.0) summary.rejected_edges.push_back(e);
   }
+  inner.max_iterations = final_iterations;
   summary.final_solve = optimize(problem, inner);
   summary.inner_iterations += summary.final_solve.iterations;
   summary.weights = inner.edge_weights;

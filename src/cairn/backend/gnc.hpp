@@ -39,6 +39,9 @@ struct GncOptions {
   /// Start from the non-robust least-squares solution (the paper's choice) instead of the
   /// current poses. Default false: see the file comment.
   bool start_from_least_squares = false;
+  /// Iterations of each weighted solve between two weight updates (GNC only needs to track the
+  /// minimiser as mu grows); the final least-squares polish uses inner.max_iterations. >= 1.
+  int iterations_per_outer = 15;
   /// Also apply TLS to odometry edges (consecutive ids). Default: odometry is trusted.
   bool robust_odometry = false;
   /// Inner weighted least-squares solves (objective, algorithm, tolerances, threads, progress).

@@ -28,6 +28,7 @@ struct OptimizeFlags {
   std::string robust = "none";
   double robust_scale = 1.0;
   double gnc_threshold = 0.0;
+  int gnc_inner_iterations = 15;
   std::vector<std::int64_t> covariance_ids;
   int threads = 0;
   int max_iterations = 100;
@@ -125,6 +126,7 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     gnc_options.inner = options;
     gnc_options.inner.progress = nullptr;
     gnc_options.inlier_threshold_chi2 = flags.gnc_threshold;
+    gnc_options.iterations_per_outer = flags.gnc_inner_iterations;
     gnc = backend::optimize_gnc(problem, gnc_options);
     summary = gnc.final_solve;
     std::size_t loop_closures = 0;
@@ -307,6 +309,10 @@ Runner register_optimize(CLI::App& app) {
   app.add_option("--gnc-threshold", flags->gnc_threshold,
                  "GNC inlier threshold on the whitened squared residual (0 = chi-square 0.99 quantile)")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--gnc-inner-iterations", flags->gnc_inner_iterations,
+                 "GNC: solver iterations between two weight updates")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--threads", flags->threads, "Threads for linearisation (0 = all cores)")
       ->check(CLI::NonNegativeNumber)
