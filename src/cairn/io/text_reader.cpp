@@ -8,12 +8,17 @@
 
 namespace cairn::io {
 
+TextReader::TextReader(std::string path, std::string contents)
+    : path_(std::move(path)), stream_(std::make_unique<std::istringstream>(std::move(contents))), in_(stream_.get()) {}
+
 TextReader::TextReader(std::string path) : path_(std::move(path)) {
-  in_.open(path_, std::ios::binary);
-  if (!in_) throw ParseError(path_, 0, std::string("cannot open file: ") + std::strerror(errno));
+  auto file = std::make_unique<std::ifstream>(path_, std::ios::binary);
+  if (!*file) throw ParseError(path_, 0, std::string("cannot open file: ") + std::strerror(errno));
+  stream_ = std::move(file);
+  in_ = stream_.get();
   char magic[3] = {0, 0, 0};
-  in_.read(magic, 3);
-  const auto got = in_.gcount();
+  in_->read(magic, 3);
+  const auto got = in_->gcount();
   const auto b0 = static_cast<unsigned char>(magic[0]);
   const auto b1 = static_cast<unsigned char>(magic[1]);
   if (got >= 2 && b0 == 0x1f && b1 == 0x8b) {
@@ -22,17 +27,17 @@ TextReader::TextReader(std::string path) : path_(std::move(path)) {
   if (got >= 3 && std::memcmp(magic, "BZh", 3) == 0) {
     throw ParseError(path_, 0, "file is bzip2-compressed: expected plain text (decompress it first)");
   }
-  in_.clear();
-  in_.seekg(0);
+  in_->clear();
+  in_->seekg(0);
 }
 
 bool TextReader::next_line() {
   line_.clear();
-  if (!in_.good()) return false;
+  if (!in_->good()) return false;
   // Read by chunks so a file without newlines cannot make us allocate without bound.
   bool read_any = false;
   char c = 0;
-  while (in_.get(c)) {
+  while (in_->get(c)) {
     read_any = true;
     if (c == '\n') break;
     line_.push_back(c);

@@ -7,6 +7,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <fstream>
+#include <memory>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -21,6 +23,8 @@ class TextReader {
  public:
   /// Opens `path`; throws ParseError(path, 0, ...) when it cannot be opened or is compressed.
   explicit TextReader(std::string path);
+  /// Reads `contents` (for example a decompressed file) as if it were the file `path`.
+  TextReader(std::string path, std::string contents);
 
   /// Advances to the next line; false at the end of the file. The line has its '\n' and any
   /// trailing '\r' removed. Throws on binary bytes or an over-long line.
@@ -35,7 +39,8 @@ class TextReader {
 
  private:
   std::string path_;
-  std::ifstream in_;
+  std::unique_ptr<std::istream> stream_;
+  std::istream* in_ = nullptr;
   std::string line_;
   std::size_t line_number_ = 0;
 };
