@@ -181,6 +181,20 @@ TEST(Cli, ConvertRefusesGraphToTrajectory) {
   EXPECT_NE(r.err.find("cannot convert a pose graph"), std::string::npos) << r.err;
 }
 
+TEST(Cli, InfoReadsCompressedCarmenLogs) {
+  CAIRN_REQUIRE_DATA("laser2d/aces/aces.clf.bz2");
+  const Result r = run("info " + quoted(cairn::test::data_path("laser2d/aces/aces.clf.bz2")) + " --json -");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["format"], "carmen");
+  EXPECT_EQ(j["scans"], 7374);
+  EXPECT_EQ(j["records"]["ODOM"], 7375);
+  EXPECT_EQ(j["beams_per_scan"]["180"], 7374);
+  EXPECT_EQ(j["first_scan_time_s"], "70.289900000");
+  // laser2d/aces/SOURCE.txt: odometry path 325.2 m.
+  EXPECT_NEAR(j["odometry_path_length_m"].get<double>(), 325.2, 0.05);
+}
+
 TEST(Cli, OptimizeReachesTheCertifiedOptimumAndWritesItsReport) {
   CAIRN_REQUIRE_DATA("posegraph/se-sync/intel.g2o");
   const auto out = scratch() / "intel_opt.g2o";

@@ -31,6 +31,9 @@ int convert(const ConvertFlags& flags) {
                          "cannot tell the output format from the name: expected .g2o, .graph, .tum, "
                          ".kitti or .csv, or name it with --to");
   }
+  if (io::kind_of(from) == io::FileKind::kSensorLog || io::kind_of(to) == io::FileKind::kSensorLog) {
+    throw io::ParseError(flags.input, 0, "convert handles pose graphs and trajectories, not CARMEN sensor logs");
+  }
   if (io::kind_of(from) != io::kind_of(to)) {
     throw io::ParseError(flags.output, 0,
                          std::string("cannot convert ") +

@@ -5,12 +5,14 @@
 #include <iomanip>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/trajectory_files.hpp"
 #include "cairn/io/atomic_write.hpp"
+#include "cairn/io/carmen_log.hpp"
 #include "cairn/io/graph_statistics.hpp"
 
 namespace cairn::cli {
@@ -195,19 +197,73 @@ int info_trajectory(const InfoFlags& flags, io::FileFormat format) {
   return 0;
 }
 
+int info_carmen(const InfoFlags& flags) {
+  io::CarmenReadReport report;
+  const io::CarmenLog log = io::read_carmen_log(flags.path, &report);
+  double path_m = 0.0;
+  for (std::size_t k = 1; k < log.scans.size(); ++k) {
+    path_m += (log.scans[k].T_odom_robot.translation() - log.scans[k - 1].T_odom_robot.translation()).norm();
+  }
+  std::map<std::size_t, std::size_t> beams;
+  for (const auto& s : log.scans) ++beams[s.ranges_m.size()];
+  nlohmann::json j;
+  j["file"] = flags.path;
+  j["kind"] = "sensor_log";
+  j["format"] = "carmen";
+  j["records"] = report.records;
+  j["unknown_records"] = report.unknown_records;
+  j["scans"] = log.scans.size();
+  j["odometry_records"] = log.odometry.size();
+  nlohmann::json beam_counts = nlohmann::json::object();
+  for (const auto& [n, count] : beams) beam_counts[std::to_string(n)] = count;
+  j["beams_per_scan"] = beam_counts;
+  j["laser_geometry_source"] = report.flaser_geometry_source;
+  j["laser_timestamps_backwards"] = report.laser_timestamps_backwards;
+  j["odometry_path_length_m"] = path_m;
+  if (!log.scans.empty()) {
+    j["first_scan_time_s"] = log.scans.front().time.to_seconds_string();
+    j["last_scan_time_s"] = log.scans.back().time.to_seconds_string();
+  }
+  j["warnings"] = report.warnings;
+  if (flags.json != "-") {
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(3);
+    o << "file              " << flags.path << '\n';
+    o << "format            CARMEN log\n";
+    o << "records          ";
+    for (const auto& [tag, count] : report.records) o << ' ' << tag << ' ' << count;
+    o << '\n';
+    o << "beams per scan   ";
+    for (const auto& [n, count] : beams) o << ' ' << n << " (x" << count << ")";
+    o << "; geometry from " << report.flaser_geometry_source << '\n';
+    if (!log.scans.empty()) {
+      const double duration =
+          static_cast<double>(log.scans.back().time.nanoseconds() - log.scans.front().time.nanoseconds()) * 1e-9;
+      o << "scan times        " << log.scans.front().time.to_seconds_string() << " .. "
+        << log.scans.back().time.to_seconds_string() << " s (" << duration << " s)\n";
+    }
+    o << "odometry path     " << path_m << " m (from the scans' odometry fields)\n";
+    std::cout << o.str();
+    for (const auto& w : report.warnings) warn(w);
+  }
+  emit_json(flags.json, j);
+  return 0;
+}
+
 }  // namespace
 
 Runner register_info(CLI::App& app) {
   auto flags = std::make_shared<InfoFlags>();
-  app.add_option("FILE", flags->path, "Pose graph (.g2o, .graph) or trajectory (TUM, KITTI, EuRoC .csv)")
+  app.add_option("FILE", flags->path, "Pose graph (.g2o, .graph), trajectory (TUM, KITTI, EuRoC .csv) or CARMEN log (.clf, .log, also .gz/.bz2)")
       ->required();
-  app.add_option("--format", flags->format, "Override the format: g2o, toro, tum, kitti, euroc");
+  app.add_option("--format", flags->format, "Override the format: g2o, toro, tum, kitti, euroc, carmen");
   app.add_option("--times", flags->times, "KITTI times file (one time in seconds per pose)");
   app.add_option("--json", flags->json, "Also write the facts as JSON to this file ('-' for stdout only)");
   flags->graph.add_to(app);
   return [flags]() {
     const io::FileFormat format = resolve_format(flags->path, flags->format, "--format");
     if (io::kind_of(format) == io::FileKind::kPoseGraph) return info_graph(*flags, format);
+    if (io::kind_of(format) == io::FileKind::kSensorLog) return info_carmen(*flags);
     return info_trajectory(*flags, format);
   };
 }

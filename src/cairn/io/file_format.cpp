@@ -13,25 +13,30 @@ std::string_view to_string(FileFormat format) {
     case FileFormat::kTum: return "tum";
     case FileFormat::kKitti: return "kitti";
     case FileFormat::kEuroc: return "euroc";
+    case FileFormat::kCarmen: return "carmen";
   }
   return "?";
 }
 
 std::optional<FileFormat> file_format_from_name(std::string_view name) {
   for (FileFormat f : {FileFormat::kG2o, FileFormat::kToro, FileFormat::kTum, FileFormat::kKitti,
-                       FileFormat::kEuroc}) {
+                       FileFormat::kEuroc, FileFormat::kCarmen}) {
     if (to_string(f) == name) return f;
   }
   return std::nullopt;
 }
 
 FileKind kind_of(FileFormat format) {
+  if (format == FileFormat::kCarmen) return FileKind::kSensorLog;
   return format == FileFormat::kG2o || format == FileFormat::kToro ? FileKind::kPoseGraph
                                                                      : FileKind::kTrajectory;
 }
 
 std::optional<FileFormat> format_from_extension(const std::string& path) {
-  const std::string extension = std::filesystem::path(path).extension().string();
+  std::filesystem::path name(path);
+  if (name.extension() == ".gz" || name.extension() == ".bz2") name = name.stem();
+  const std::string extension = name.extension().string();
+  if (extension == ".clf" || extension == ".log") return FileFormat::kCarmen;
   if (extension == ".g2o") return FileFormat::kG2o;
   if (extension == ".graph" || extension == ".toro") return FileFormat::kToro;
   if (extension == ".tum") return FileFormat::kTum;

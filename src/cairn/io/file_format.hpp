@@ -9,17 +9,17 @@
 
 namespace cairn::io {
 
-enum class FileFormat { kG2o, kToro, kTum, kKitti, kEuroc };
+enum class FileFormat { kG2o, kToro, kTum, kKitti, kEuroc, kCarmen };
 
-enum class FileKind { kPoseGraph, kTrajectory };
+enum class FileKind { kPoseGraph, kTrajectory, kSensorLog };
 
 std::string_view to_string(FileFormat format);
-/// "g2o", "toro", "tum", "kitti", "euroc"; nullopt otherwise.
+/// "g2o", "toro", "tum", "kitti", "euroc", "carmen"; nullopt otherwise.
 std::optional<FileFormat> file_format_from_name(std::string_view name);
 FileKind kind_of(FileFormat format);
 
 /// By extension: .g2o -> g2o; .graph, .toro -> TORO; .tum -> TUM; .kitti -> KITTI;
-/// .csv -> EuRoC. Otherwise (".txt" and others) nullopt.
+/// .csv -> EuRoC; .clf, .log (also .clf.gz, .clf.bz2, ...) -> CARMEN. Otherwise nullopt.
 std::optional<FileFormat> format_from_extension(const std::string& path);
 
 /// format_from_extension, and if that does not tell and the file exists, its first record:
