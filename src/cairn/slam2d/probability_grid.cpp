@@ -1,0 +1,137 @@
+#include "cairn/slam2d/probability_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+
+#include "cairn/core/assert.hpp"
+
+namespace cairn::slam2d {
+namespace {
+double log_odds(double p) { return std::log(p / (1.0 - p)); }
+double probability_of(double l) { return 1.0 - 1.0 / (1.0 + std::exp(l)); }
+}  // namespace
+
+ProbabilityGrid::ProbabilityGrid(const ProbabilityGridOptions& options) : options_(options) {
+  CAIRN_ASSERT(options.resolution_m > 0.0 && options.hit_probability > 0.5 && options.hit_probability < 1.0 &&
+                   options.miss_probability > 0.0 && options.miss_probability < 0.5 &&
+                   options.min_probability < options.max_probability,
+               "invalid ProbabilityGridOptions");
+}
+
+// Cells are indexed globally by floor(p / r), and the grid stores the global index of its first
+// cell, so growing the grid never moves a point to another cell.
+bool ProbabilityGrid::cell_of(const Eigen::Vector2d& p, int& i, int& j) const {
+  const double gi = std::floor(p.x() / options_.resolution_m) - static_cast<double>(offset_i_);
+  const double gj = std::floor(p.y() / options_.resolution_m) - static_cast<double>(offset_j_);
+  if (!(gi >= 0.0 && gj >= 0.0 && gi < width_ && gj < height_)) return false;
+  i = static_cast<int>(gi);
+  j = static_cast<int>(gj);
+  return true;
+}
+
+void ProbabilityGrid::grow_to_contain(const Eigen::Vector2d& p) {
+  const double r = options_.resolution_m;
+  const double gi = std::floor(p.x() / r);
+  const double gj = std::floor(p.y() / r);
+  CAIRN_ASSERT(std::abs(gi) < 1e8 && std::abs(gj) < 1e8, "point too far from the origin for the grid");
+  if (width_ == 0) {
+    offset_i_ = static_cast<long>(gi) - 16;
+    offset_j_ = static_cast<long>(gj) - 16;
+    width_ = 32;
+    height_ = 32;
+    log_odds_.assign(static_cast<std::size_t>(width_ * height_), 0.0f);
+    known_.assign(log_odds_.size(), 0);
+  }
+  int i = 0;
+  int j = 0;
+  if (cell_of(p, i, j)) return;
+  // Double the grid in the needed directions until p fits.
+  long low_i = offset_i_, low_j = offset_j_;
+  long high_i = offset_i_ + width_, high_j = offset_j_ + height_;
+  const long pi = static_cast<long>(gi), pj = static_cast<long>(gj);
+  while (pi < low_i) low_i -= (high_i - low_i);
+  while (pj < low_j) low_j -= (high_j - low_j);
+  while (pi >= high_i) high_i += (high_i - low_i);
+  while (pj >= high_j) high_j += (high_j - low_j);
+  const int new_width = static_cast<int>(high_i - low_i);
+  const int new_height = static_cast<int>(high_j - low_j);
+  const int di = static_cast<int>(offset_i_ - low_i);
+  const int dj = static_cast<int>(offset_j_ - low_j);
+  std::vector<float> grown(static_cast<std::size_t>(new_width) * static_cast<std::size_t>(new_height), 0.0f);
+  std::vector<std::uint8_t> grown_known(grown.size(), 0);
+  for (int jj = 0; jj < height_; ++jj) {
+    for (int ii = 0; ii < width_; ++ii) {
+      const std::size_t from = static_cast<std::size_t>(jj * width_ + ii);
+      const std::size_t to = static_cast<std::size_t>((jj + dj) * new_width + (ii + di));
+      grown[to] = log_odds_[from];
+      grown_known[to] = known_[from];
+    }
+  }
+  offset_i_ = low_i;
+  offset_j_ = low_j;
+  width_ = new_width;
+  height_ = new_height;
+  log_odds_ = std::move(grown);
+  known_ = std::move(grown_known);
+}
+
+void ProbabilityGrid::update(int i, int j, double change) {
+  const std::size_t k = static_cast<std::size_t>(j * width_ + i);
+  const double l = std::clamp(static_cast<double>(log_odds_[k]) + change, log_odds(options_.min_probability),
+                              log_odds(options_.max_probability));
+  log_odds_[k] = static_cast<float>(l);
+  known_[k] = 1;
+}
+
+void ProbabilityGrid::insert(const core::SE2& T_map_sensor, const std::vector<Eigen::Vector2d>& points_sensor,
+                             const std::vector<bool>& hit) {
+  CAIRN_ASSERT(points_sensor.size() == hit.size(), "one hit flag per point");
+  const Eigen::Vector2d origin_map = T_map_sensor.translation();
+  grow_to_contain(origin_map);
+  const double miss = log_odds(options_.miss_probability);
+  const double hit_change = log_odds(options_.hit_probability);
+  for (std::size_t k = 0; k < points_sensor.size(); ++k) {
+    const Eigen::Vector2d end = T_map_sensor * points_sensor[k];
+    grow_to_contain(end);
+    int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
+    const bool ok = cell_of(origin_map, i0, j0) && cell_of(end, i1, j1);
+    CAIRN_ASSERT(ok, "grow_to_contain guarantees both cells exist");
+    // Bresenham's line from the sensor cell to the end cell (exclusive): misses.
+    int di = std::abs(i1 - i0), dj = -std::abs(j1 - j0);
+    const int si = i0 < i1 ? 1 : -1, sj = j0 < j1 ? 1 : -1;
+    int error = di + dj;
+    int i = i0, j = j0;
+    while (i != i1 || j != j1) {
+      update(i, j, miss);
+      const int e2 = 2 * error;
+      if (e2 >= dj) {
+        error += dj;
+        i += si;
+      }
+      if (e2 <= di) {
+        error += di;
+        j += sj;
+      }
+    }
+    update(i1, j1, hit[k] ? hit_change : miss);
+  }
+}
+
+double ProbabilityGrid::cell_probability(int i, int j) const {
+  if (i < 0 || j < 0 || i >= width_ || j >= height_) return 0.5;
+  const std::size_t k = static_cast<std::size_t>(j * width_ + i);
+  return known_[k] ? probability_of(log_odds_[k]) : 0.5;
+}
+
+double ProbabilityGrid::probability(const Eigen::Vector2d& p) const {
+  int i = 0, j = 0;
+  return cell_of(p, i, j) ? cell_probability(i, j) : 0.5;
+}
+
+bool ProbabilityGrid::known(const Eigen::Vector2d& p) const {
+  int i = 0, j = 0;
+  return cell_of(p, i, j) && known_[static_cast<std::size_t>(j * width_ + i)] != 0;
+}
+
+}  // namespace cairn::slam2d

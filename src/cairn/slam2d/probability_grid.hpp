@@ -1,0 +1,64 @@
+#pragma once
+/// \file
+/// 2D occupancy probability grid with log-odds updates (Thrun, Burgard & Fox, "Probabilistic
+/// Robotics", 2005, sec. 9.2), the map the scan matcher scores against. Cells are square, of side
+/// `resolution_m`; a point p lies in the cell with global index floor(p / r), whatever the grid's
+/// current extent.
+/// The grid grows to contain every inserted ray.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "cairn/core/se2.hpp"
+
+namespace cairn::slam2d {
+
+struct ProbabilityGridOptions {
+  double resolution_m = 0.05;      ///< cell side, metres; > 0
+  double hit_probability = 0.55;   ///< p(occupied | hit), in (0.5, 1) (Cartographer's default)
+  double miss_probability = 0.49;  ///< p(occupied | ray passed through), in (0, 0.5)
+  double min_probability = 0.12;   ///< clamp, keeps cells revisable
+  double max_probability = 0.97;
+};
+
+class ProbabilityGrid {
+ public:
+  explicit ProbabilityGrid(const ProbabilityGridOptions& options = {});
+
+  /// Inserts a scan taken at `T_map_sensor`: `points_sensor` are the hit points in the sensor
+  /// frame; cells on each ray are updated as misses, the end cell as a hit. Points flagged as
+  /// no-return (`hit[k] == false`) only update misses along the ray.
+  void insert(const core::SE2& T_map_sensor, const std::vector<Eigen::Vector2d>& points_sensor,
+              const std::vector<bool>& hit);
+
+  /// Occupancy probability at a point (nearest cell); `0.5` for unknown cells.
+  double probability(const Eigen::Vector2d& point_map) const;
+  /// Whether the cell containing `point_map` has been observed.
+  bool known(const Eigen::Vector2d& point_map) const;
+
+  double resolution() const { return options_.resolution_m; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  /// Lower-left corner of cell (0, 0).
+  Eigen::Vector2d origin() const {
+    return Eigen::Vector2d(static_cast<double>(offset_i_), static_cast<double>(offset_j_)) * options_.resolution_m;
+  }
+  /// Probability of cell (i, j); 0.5 if unknown or outside.
+  double cell_probability(int i, int j) const;
+
+ private:
+  void grow_to_contain(const Eigen::Vector2d& point_map);
+  bool cell_of(const Eigen::Vector2d& point_map, int& i, int& j) const;
+  void update(int i, int j, double log_odds_change);
+
+  ProbabilityGridOptions options_;
+  long offset_i_ = 0;  ///< global index floor(x / r) of cell column 0
+  long offset_j_ = 0;
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<float> log_odds_;
+  std::vector<std::uint8_t> known_;
+};
+
+}  // namespace cairn::slam2d
