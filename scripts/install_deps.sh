@@ -23,6 +23,7 @@ PACKAGES=(
   libbenchmark-dev     # bench/
   libceres-dev         # only for side-by-side comparisons in bench/
   libcairo2-dev        # PNG/SVG plots and maps
+  libyaml-cpp-dev      # slam2d configuration files
   zlib1g-dev           # reading .gz logs
   libbz2-dev           # reading .bz2 logs
 )

@@ -198,7 +198,16 @@ CarmenLog read_carmen_log(const std::string& path, CarmenReadReport* report, con
       ++out.comment_lines;
       continue;
     }
-    parser.line(split_whitespace(reader.line()));
+    if (!options.skip_malformed_records) {
+      parser.line(split_whitespace(reader.line()));
+      continue;
+    }
+    try {
+      parser.line(split_whitespace(reader.line()));
+    } catch (const ParseError& e) {
+      if (out.malformed_records == 0) out.first_malformed = e.what();
+      ++out.malformed_records;
+    }
   }
   return parser.finish();
 }

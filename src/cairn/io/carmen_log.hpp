@@ -69,12 +69,19 @@ struct CarmenReadReport {
   std::size_t first_backwards_line = 0;
   /// Where FLASER/RLASER geometry came from: "PARAM" or "default" (see read_carmen_log).
   std::string flaser_geometry_source;
+  /// Records skipped as malformed (CarmenReadOptions::skip_malformed_records), and the first
+  /// one's message ("file:line: ...").
+  std::size_t malformed_records = 0;
+  std::string first_malformed;
   std::vector<std::string> warnings;
 };
 
 struct CarmenReadOptions {
   /// Refuse unknown record types instead of counting them.
   bool reject_unknown_records = false;
+  /// Skip records that fail to parse (counted in the report) instead of stopping at the first.
+  /// Unreadable files (binary, compressed wrongly) still stop.
+  bool skip_malformed_records = false;
 };
 
 /// Reads a CARMEN log. FLASER/RLASER carry no beam angles: they come from the PARAM lines

@@ -124,6 +124,11 @@ double ProbabilityGrid::cell_probability(int i, int j) const {
   return known_[k] ? probability_of(log_odds_[k]) : 0.5;
 }
 
+bool ProbabilityGrid::cell_known(int i, int j) const {
+  if (i < 0 || j < 0 || i >= width_ || j >= height_) return false;
+  return known_[static_cast<std::size_t>(j * width_ + i)] != 0;
+}
+
 double ProbabilityGrid::probability(const Eigen::Vector2d& p) const {
   int i = 0, j = 0;
   return cell_of(p, i, j) ? cell_probability(i, j) : 0.5;

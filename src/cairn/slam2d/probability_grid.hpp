@@ -46,6 +46,11 @@ class ProbabilityGrid {
   }
   /// Probability of cell (i, j); 0.5 if unknown or outside.
   double cell_probability(int i, int j) const;
+  /// Whether cell (i, j) has been observed (false outside).
+  bool cell_known(int i, int j) const;
+  /// Global index floor(x / r) of column 0 and floor(y / r) of row 0.
+  long offset_i() const { return offset_i_; }
+  long offset_j() const { return offset_j_; }
 
  private:
   void grow_to_contain(const Eigen::Vector2d& point_map);

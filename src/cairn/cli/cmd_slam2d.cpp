@@ -1,0 +1,151 @@
+// `cairn slam2d LOG --out DIR`: 2D LiDAR SLAM on a CARMEN log (raw Freiburg benchmark logs, the
+// simulator's logs), fed scan by scan through the same streaming interface a robot would use.
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include "cairn/cli/commands.hpp"
+#include "cairn/eval/relations.hpp"
+#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/carmen_log.hpp"
+#include "cairn/io/parse_error.hpp"
+#include "cairn/io/trajectory.hpp"
+#include "cairn/slam2d/config.hpp"
+#include "cairn/slam2d/outputs.hpp"
+#include "cairn/slam2d/slam.hpp"
+
+namespace cairn::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Slam2dFlags {
+  std::string log;
+  std::string out;
+  std::string config;
+  std::string preset = "default";
+  std::string relations;
+  std::vector<std::string> set;
+  long max_scans = 0;
+  bool lenient = false;
+  bool quiet = false;
+  bool print_config = false;
+};
+
+void print_relations(const eval::RelationsResult& r, std::size_t relations) {
+  std::printf("relations metric (Kuemmerle et al. 2009) over %zu relations, mean +- std:\n", relations);
+  std::printf("  absolute translational  %.4f +- %.4f m\n", r.translation_absolute_m.mean, r.translation_absolute_m.std);
+  std::printf("  squared translational   %.4f +- %.4f m^2\n", r.translation_squared_m2.mean, r.translation_squared_m2.std);
+  std::printf("  absolute rotational     %.3f +- %.3f deg\n", r.rotation_absolute_deg.mean, r.rotation_absolute_deg.std);
+  std::printf("  squared rotational      %.3f +- %.3f deg^2\n", r.rotation_squared_deg2.mean, r.rotation_squared_deg2.std);
+}
+
+int slam2d_command(const Slam2dFlags& flags) {
+  slam2d::Slam2dOptions options = slam2d::preset_options(flags.preset);
+  if (!flags.config.empty()) slam2d::load_config(flags.config, options);
+  for (const std::string& assignment : flags.set) slam2d::apply_setting(assignment, options);
+  if (flags.print_config) {
+    std::cout << slam2d::config_to_yaml(options);
+    if (flags.log.empty()) return 0;
+  }
+  if (flags.log.empty()) throw std::invalid_argument("a LOG to process is required");
+  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
+  std::string error;
+  if (!options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
+
+  const auto start = std::chrono::steady_clock::now();
+  io::CarmenReadReport read_report;
+  io::CarmenReadOptions read_options;
+  read_options.skip_malformed_records = flags.lenient;
+  const io::CarmenLog log = io::read_carmen_log(flags.log, &read_report, read_options);
+  const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (log.scans.empty()) throw io::ParseError(flags.log, 0, "no laser records (FLASER, RLASER, ROBOTLASER1) in the log");
+  std::vector<eval::Relation> relations;
+  if (!flags.relations.empty()) relations = eval::read_relations(flags.relations);
+
+  fs::create_directories(flags.out);
+  slam2d::Slam2d slam(options);
+  const bool progress = !flags.quiet && isatty(fileno(stderr));
+  std::size_t n = log.scans.size();
+  if (flags.max_scans > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_scans));
+  slam2d::Health last_health = slam2d::Health::kOk;
+  for (std::size_t k = 0; k < n; ++k) {
+    const slam2d::ScanResult result = slam.add_scan(log.scans[k]);
+    if (result.health != last_health && !flags.quiet) {
+      std::fprintf(stderr, "%s[scan %zu, t = %s] %s\n", progress ? "\r" : "", k, log.scans[k].time.to_seconds_string().c_str(),
+                   std::string(slam2d::to_string(result.health)).c_str());
+      last_health = result.health;
+    }
+    if (progress && (k % 200 == 0 || k + 1 == n)) {
+      const auto& s = slam.summary();
+      std::fprintf(stderr, "\rscan %zu / %zu  keyframes %zu  loops %zu  %s   ", k + 1, n, s.keyframes, s.loops_accepted,
+                   std::string(slam2d::to_string(result.health)).c_str());
+    }
+  }
+  slam.finish();
+  if (progress) std::fprintf(stderr, "\n");
+  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  const slam2d::OutputFiles files = slam2d::write_outputs(slam, log, n, flags.out, options);
+  const auto& summary = slam.summary();
+  nlohmann::json report = slam2d::report_json(slam, options);
+  report["input"] = {{"log", flags.log}, {"scans", n}, {"read_s", read_s}, {"records", read_report.records}};
+  report["wall_time_s"] = total_s;
+  const double data_s = n > 1 ? log.scans[n - 1].time.seconds() - log.scans[0].time.seconds() : 0.0;
+  report["data_duration_s"] = data_s;
+  report["scans_per_second"] = total_s > 0 ? static_cast<double>(n) / total_s : 0.0;
+  if (!relations.empty()) {
+    const eval::RelationsResult r = eval::evaluate_relations(relations, slam2d::to_matrix_trajectory(slam));
+    if (!r.outcome.ok()) throw std::runtime_error("relations metric: " + r.outcome.message);
+    report["relations"] = {{"file", flags.relations},
+                           {"count", relations.size()},
+                           {"translation_absolute_m", {{"mean", r.translation_absolute_m.mean}, {"std", r.translation_absolute_m.std}}},
+                           {"translation_squared_m2", {{"mean", r.translation_squared_m2.mean}, {"std", r.translation_squared_m2.std}}},
+                           {"rotation_absolute_deg", {{"mean", r.rotation_absolute_deg.mean}, {"std", r.rotation_absolute_deg.std}}},
+                           {"rotation_squared_deg2", {{"mean", r.rotation_squared_deg2.mean}, {"std", r.rotation_squared_deg2.std}}}};
+    if (!flags.quiet) print_relations(r, relations.size());
+  }
+  io::write_file_atomically(files.report, [&](std::ostream& out) { out << report.dump(2) << '\n'; });
+  if (!flags.quiet) {
+    std::printf("%zu scans (%.0f s of data) in %.1f s: %.0f scans/s; %zu keyframes, %zu submaps\n", n, data_s, total_s,
+                report["scans_per_second"].get<double>(), summary.keyframes, summary.submaps);
+    std::printf("loop closures: %zu searches, %zu candidates, %zu accepted, %zu rejected by the back end (GNC)\n",
+                summary.loop_searches, summary.candidates.size(), summary.loops_accepted, summary.loops_rejected_by_gnc);
+    std::printf("health: %zu ok, %zu degraded, %zu lost scans; %zu relocalisations\n", summary.scans_ok,
+                summary.scans_degraded, summary.scans_lost, summary.relocalisations);
+    std::printf("time: match %.1f s, local map %.1f s, submaps %.1f s, loop search %.1f s, optimisation %.1f s\n",
+                summary.times.local_match_s, summary.times.local_map_s, summary.times.submap_s,
+                summary.times.loop_search_s, summary.times.optimize_s);
+    std::printf("wrote %s, %s, %s, %s, %s, %s\n", files.map_png.c_str(), files.map_pgm.c_str(), files.trajectory.c_str(),
+                files.graph.c_str(), files.corrected_log.c_str(), files.report.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+Runner register_slam2d(CLI::App& app) {
+  auto flags = std::make_shared<Slam2dFlags>();
+  app.add_option("LOG", flags->log, "CARMEN log (.clf/.log, also .gz/.bz2)");
+  app.add_option("--out", flags->out, "Output directory: map.pgm/.yaml/.png, trajectory.tum, graph.g2o, corrected.clf, report.json");
+  app.add_option("--config", flags->config, "YAML configuration (every key optional; see docs/configuration.md)");
+  app.add_option("--preset", flags->preset, "Starting configuration: default (SICK LMS-class 180-beam scanners), sim")
+      ->capture_default_str();
+  app.add_option("--set", flags->set, "Override one key: section.key=value (repeatable)");
+  app.add_option("--relations", flags->relations, "Freiburg relations file: print the relations metric at the end");
+  app.add_option("--max-scans", flags->max_scans, "Process only the first N scans");
+  app.add_flag("--lenient", flags->lenient, "Skip malformed log records (counted) instead of stopping");
+  app.add_flag("--print-config", flags->print_config, "Print the configuration in effect (YAML) and exit unless LOG is given");
+  app.add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
+  return [flags]() { return slam2d_command(*flags); };
+}
+
+}  // namespace cairn::cli

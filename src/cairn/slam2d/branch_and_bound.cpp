@@ -1,0 +1,214 @@
+#include "cairn/slam2d/branch_and_bound.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+
+#include "cairn/core/assert.hpp"
+#include "cairn/core/so2.hpp"
+
+namespace cairn::slam2d {
+namespace {
+
+std::uint8_t quantise_up(double p) {
+  return static_cast<std::uint8_t>(std::clamp(std::ceil(p * 255.0), 0.0, 255.0));
+}
+
+// out[k] = max(in[k .. k + w - 1]) with in padded by `pad` on the right; monotonic deque
+// (van Herk / Gil-Werman style running maximum), O(n).
+void sliding_max(const std::vector<std::uint8_t>& in, int w, std::uint8_t pad, std::vector<std::uint8_t>& out) {
+  const int n = static_cast<int>(in.size());
+  out.assign(in.size(), 0);
+  std::deque<int> window;  // indices into the padded sequence, values decreasing
+  auto at = [&](int k) { return k < n ? in[static_cast<std::size_t>(k)] : pad; };
+  for (int k = 0; k < n + w - 1; ++k) {
+    while (!window.empty() && at(window.back()) <= at(k)) window.pop_back();
+    window.push_back(k);
+    const int start = k - w + 1;
+    if (start < 0) continue;
+    while (window.front() < start) window.pop_front();
+    if (start < n) out[static_cast<std::size_t>(start)] = at(window.front());
+  }
+}
+
+}  // namespace
+
+PrecomputationGridStack::PrecomputationGridStack(const ProbabilityGrid& grid, const BranchAndBoundOptions& options)
+    : resolution_(grid.resolution()) {
+  CAIRN_ASSERT(options.depth >= 1 && options.depth <= 12, "branch-and-bound depth must be in [1, 12]");
+  outside_ = quantise_up(options.unknown_probability);
+  // Only the observed part of the grid matters (the grid grows by doubling, mostly unknown).
+  int i0 = grid.width(), j0 = grid.height(), i1 = -1, j1 = -1;
+  for (int j = 0; j < grid.height(); ++j) {
+    for (int i = 0; i < grid.width(); ++i) {
+      if (!grid.cell_known(i, j)) continue;
+      i0 = std::min(i0, i);
+      i1 = std::max(i1, i);
+      j0 = std::min(j0, j);
+      j1 = std::max(j1, j);
+    }
+  }
+  if (i1 < 0) i0 = j0 = i1 = j1 = 0;
+  const int known_width = i1 - i0 + 1, known_height = j1 - j0 + 1;
+  const long base_i = grid.offset_i() + i0;
+  const long base_j = grid.offset_j() + j0;
+  for (int h = 0; h < options.depth; ++h) {
+    const int w = 1 << h;
+    Level level;
+    // Cell (i, j) of level h covers cells [i, i + w): it touches the map for i in
+    // [base - w + 1, base + width).
+    level.offset_i = base_i - (w - 1);
+    level.offset_j = base_j - (w - 1);
+    level.width = known_width + w - 1;
+    level.height = known_height + w - 1;
+    // Padded base values: unknown outside the map.
+    std::vector<std::uint8_t> base(static_cast<std::size_t>(level.width) * static_cast<std::size_t>(level.height), outside_);
+    for (int j = 0; j < known_height; ++j) {
+      for (int i = 0; i < known_width; ++i) {
+        const bool known = grid.cell_known(i + i0, j + j0);
+        const double p = known ? grid.cell_probability(i + i0, j + j0) : options.unknown_probability;
+        base[static_cast<std::size_t>((j + w - 1) * level.width + (i + w - 1))] = quantise_up(p);
+      }
+    }
+    // Rows then columns.
+    std::vector<std::uint8_t> row(static_cast<std::size_t>(level.width)), row_max;
+    for (int j = 0; j < level.height; ++j) {
+      std::copy_n(base.begin() + static_cast<long>(j) * level.width, level.width, row.begin());
+      sliding_max(row, w, outside_, row_max);
+      std::copy(row_max.begin(), row_max.end(), base.begin() + static_cast<long>(j) * level.width);
+    }
+    std::vector<std::uint8_t> column(static_cast<std::size_t>(level.height)), column_max;
+    for (int i = 0; i < level.width; ++i) {
+      for (int j = 0; j < level.height; ++j) column[static_cast<std::size_t>(j)] = base[static_cast<std::size_t>(j * level.width + i)];
+      sliding_max(column, w, outside_, column_max);
+      for (int j = 0; j < level.height; ++j) base[static_cast<std::size_t>(j * level.width + i)] = column_max[static_cast<std::size_t>(j)];
+    }
+    level.values = std::move(base);
+    levels_.push_back(std::move(level));
+  }
+}
+
+double PrecomputationGridStack::value(int height, long i, long j) const {
+  const Level& level = levels_[static_cast<std::size_t>(height)];
+  const long li = i - level.offset_i;
+  const long lj = j - level.offset_j;
+  if (li < 0 || lj < 0 || li >= level.width || lj >= level.height) return outside_ / 255.0;
+  return level.values[static_cast<std::size_t>(lj * level.width + li)] / 255.0;
+}
+
+std::size_t PrecomputationGridStack::memory_bytes() const {
+  std::size_t bytes = 0;
+  for (const auto& level : levels_) bytes += level.values.size();
+  return bytes;
+}
+
+namespace {
+struct Candidate {
+  int angle_index = 0;
+  long dx = 0;  ///< offset in cells
+  long dy = 0;
+  double score = 0.0;
+};
+}  // namespace
+
+BranchAndBoundResult match_branch_and_bound(const PrecomputationGridStack& stack,
+                                            const std::vector<Eigen::Vector2d>& points_sensor,
+                                            const core::SE2& initial, double min_score,
+                                            const BranchAndBoundOptions& options, const core::SE2* excluded,
+                                            double excluded_distance_m, double excluded_angle_rad) {
+  BranchAndBoundResult result;
+  if (points_sensor.empty()) return result;
+  const double r = stack.resolution();
+  double d_max = 0.0;
+  for (const auto& p : points_sensor) d_max = std::max(d_max, p.norm());
+  // Hess 2016, eq. (7).
+  const double angular_step = d_max > r ? std::acos(1.0 - r * r / (2.0 * d_max * d_max)) : 0.1;
+  const int angular_steps = static_cast<int>(std::ceil(options.angular_search_window_rad / angular_step));
+  const long linear_steps = static_cast<long>(std::ceil(options.linear_search_window_m / r));
+  const int top = stack.depth() - 1;
+  const long top_width = 1L << top;
+
+  // Per angle: the cell of each point at zero offset (Hess eq. (9)-(10): the discretised scan).
+  const int angles = 2 * angular_steps + 1;
+  std::vector<std::vector<std::pair<long, long>>> cells(static_cast<std::size_t>(angles));
+  std::vector<double> angle_of(static_cast<std::size_t>(angles));
+  for (int a = 0; a < angles; ++a) {
+    const double angle = (a - angular_steps) * angular_step;
+    angle_of[static_cast<std::size_t>(a)] = angle;
+    const core::SE2 T(initial.so2() * core::SO2(angle), initial.translation());
+    auto& c = cells[static_cast<std::size_t>(a)];
+    c.reserve(points_sensor.size());
+    for (const auto& p : points_sensor) {
+      const Eigen::Vector2d q = T * p;
+      c.emplace_back(static_cast<long>(std::floor(q.x() / r)), static_cast<long>(std::floor(q.y() / r)));
+    }
+  }
+  const double inverse_count = 1.0 / static_cast<double>(points_sensor.size());
+  auto score = [&](const Candidate& c, int height) {
+    double sum = 0.0;
+    for (const auto& [i, j] : cells[static_cast<std::size_t>(c.angle_index)]) sum += stack.value(height, i + c.dx, j + c.dy);
+    ++result.nodes_scored;
+    return sum * inverse_count;
+  };
+  auto pose_of = [&](const Candidate& c) {
+    return core::SE2(initial.so2() * core::SO2(angle_of[static_cast<std::size_t>(c.angle_index)]),
+                     initial.translation() + Eigen::Vector2d(static_cast<double>(c.dx) * r, static_cast<double>(c.dy) * r));
+  };
+  auto is_excluded = [&](const Candidate& c) {
+    if (excluded == nullptr) return false;
+    const core::SE2 T = pose_of(c);
+    return (T.translation() - excluded->translation()).norm() <= excluded_distance_m &&
+           std::abs(core::wrap_angle(T.angle() - excluded->angle())) <= excluded_angle_rad;
+  };
+
+  // Root candidates at the top height (Hess Alg. 2), sorted by bound, best first.
+  std::vector<Candidate> roots;
+  for (int a = 0; a < angles; ++a) {
+    for (long dx = -linear_steps; dx <= linear_steps; dx += top_width) {
+      for (long dy = -linear_steps; dy <= linear_steps; dy += top_width) {
+        Candidate c{a, dx, dy, 0.0};
+        c.score = score(c, top);
+        roots.push_back(c);
+      }
+    }
+  }
+  std::sort(roots.begin(), roots.end(), [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+
+  double best = min_score;
+  Candidate best_candidate;
+  // Depth-first (Hess Alg. 3), explicit stack of (candidate, height).
+  std::vector<std::pair<Candidate, int>> pending;
+  for (auto it = roots.rbegin(); it != roots.rend(); ++it) pending.emplace_back(*it, top);
+  std::vector<Candidate> children;
+  while (!pending.empty()) {
+    const auto [c, height] = pending.back();
+    pending.pop_back();
+    if (c.score <= best) continue;
+    if (height == 0) {
+      if (is_excluded(c)) continue;
+      best = c.score;
+      best_candidate = c;
+      result.found = true;
+      continue;
+    }
+    const long half = 1L << (height - 1);
+    children.clear();
+    for (const long ox : {0L, half}) {
+      for (const long oy : {0L, half}) {
+        Candidate child{c.angle_index, c.dx + ox, c.dy + oy, 0.0};
+        if (child.dx > linear_steps || child.dy > linear_steps) continue;
+        child.score = score(child, height - 1);
+        if (child.score > best) children.push_back(child);
+      }
+    }
+    std::sort(children.begin(), children.end(), [](const Candidate& a, const Candidate& b) { return a.score < b.score; });
+    for (const auto& child : children) pending.emplace_back(child, height - 1);  // best child on top
+  }
+  if (result.found) {
+    result.T_map_sensor = pose_of(best_candidate);
+    result.score = best;
+  }
+  return result;
+}
+
+}  // namespace cairn::slam2d

@@ -1,0 +1,181 @@
+#include "cairn/slam2d/config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <charconv>
+#include <cmath>
+#include <functional>
+#include <sstream>
+#include <stdexcept>
+#include <variant>
+
+#include "cairn/io/number_format.hpp"
+#include "cairn/io/parse_error.hpp"
+
+namespace cairn::slam2d {
+namespace {
+
+struct Key {
+  std::string section;
+  std::string name;
+  std::variant<double*, int*, bool*> value;
+  std::string doc;
+  std::string full() const { return section + "." + name; }
+};
+
+std::vector<Key> keys(Slam2dOptions& o) {
+  return {
+      {"scan", "min_range_m", &o.filter.min_range_m, "readings below are dropped"},
+      {"scan", "max_range_m", &o.filter.max_range_m, "readings at or beyond are no-returns (the log's PARAM max range wins when smaller)"},
+      {"scan", "missing_ray_length_m", &o.filter.missing_ray_length_m, "free-space ray drawn for a no-return (0 = none)"},
+      {"scan", "voxel_size_m", &o.filter.voxel_size_m, "voxel filter applied to every scan"},
+      {"scan", "adaptive_min_points", &o.filter.adaptive_min_points, "adaptive voxel filter keeps at least this many points for matching"},
+      {"scan", "adaptive_max_voxel_size_m", &o.filter.adaptive_max_voxel_size_m, "largest voxel of the adaptive filter"},
+      {"front_end", "keyframe_distance_m", &o.keyframe_distance_m, "motion since the last keyframe that makes a new one"},
+      {"front_end", "keyframe_angle_rad", &o.keyframe_angle_rad, "rotation since the last keyframe that makes a new one"},
+      {"front_end", "local_map_keyframes", &o.local_map_keyframes, "keyframes whose points form the local map"},
+      {"front_end", "submap_keyframes", &o.submap_keyframes, "keyframes per submap (a new submap starts every half of this)"},
+      {"front_end", "map_cell_size_m", &o.map_points.cell_size_m, "hash cell of the point maps (>= icp.max_correspondence_m)"},
+      {"front_end", "normal_radius_m", &o.map_points.normal_radius_m, "neighbourhood radius for point normals"},
+      {"icp", "max_iterations", &o.icp.max_iterations, "Gauss-Newton iterations at most"},
+      {"icp", "max_correspondence_m", &o.icp.max_correspondence_m, "first search radius for correspondences"},
+      {"icp", "final_correspondence_m", &o.icp.final_correspondence_m, "final search radius (halved every 3 iterations down to this)"},
+      {"icp", "point_sigma_m", &o.icp.point_sigma_m, "range noise that scales the residuals"},
+      {"icp", "huber_threshold_m", &o.icp.huber_threshold_m, "Huber kernel width"},
+      {"icp", "inlier_distance_m", &o.icp.inlier_distance_m, "a point within this of the map is an inlier"},
+      {"icp", "prior_translation_sigma_m", &o.icp.prior_translation_sigma_m, "odometry prior, translation (<= 0 disables the prior)"},
+      {"icp", "prior_rotation_sigma_rad", &o.icp.prior_rotation_sigma_rad, "odometry prior, rotation"},
+      {"grid", "resolution_m", &o.grid.resolution_m, "cell side of submap grids and the output map"},
+      {"grid", "hit_probability", &o.grid.hit_probability, "p(occupied | hit)"},
+      {"grid", "miss_probability", &o.grid.miss_probability, "p(occupied | ray passed through)"},
+      {"loop_closure", "search_every_n_keyframes", &o.loop_search_every_n_keyframes, "search loops from every n-th keyframe"},
+      {"loop_closure", "max_distance_m", &o.loop_max_distance_m, "submaps farther than this from the keyframe are not searched"},
+      {"loop_closure", "max_submaps_per_search", &o.loop_max_submaps_per_search, "the nearest finished submaps searched per keyframe"},
+      {"loop_closure", "max_linear_window_m", &o.loop_search.linear_search_window_m, "largest half-width of the translation search"},
+      {"loop_closure", "max_angular_window_rad", &o.loop_search.angular_search_window_rad, "largest half-width of the angle search"},
+      {"loop_closure", "window_base_m", &o.loop_window_base_m, "translation window at zero path length"},
+      {"loop_closure", "window_drift_per_m", &o.loop_window_drift_per_m, "window growth per metre travelled since the submap"},
+      {"loop_closure", "angle_window_base_rad", &o.loop_angle_window_base_rad, "angle window at zero path length"},
+      {"loop_closure", "angle_window_drift_per_m", &o.loop_angle_window_drift_per_m, "angle window growth per metre"},
+      {"loop_closure", "branch_and_bound_depth", &o.loop_search.depth, "precomputation grids (2^(depth-1) cells at the top)"},
+      {"loop_closure", "unknown_probability", &o.loop_search.unknown_probability, "score of unexplored cells"},
+      {"loop_closure", "min_score", &o.loop_min_score, "branch-and-bound score a candidate needs"},
+      {"loop_closure", "min_inlier_fraction", &o.loop_min_inlier_fraction, "verification: ICP inliers against the submap"},
+      {"loop_closure", "max_rms_m", &o.loop_max_rms_m, "verification: ICP residual RMS"},
+      {"loop_closure", "ambiguity_distance_m", &o.loop_ambiguity_distance_m, "verification: another match farther than this ..."},
+      {"loop_closure", "ambiguity_angle_rad", &o.loop_ambiguity_angle_rad, "... or rotated more than this ..."},
+      {"loop_closure", "ambiguity_margin", &o.loop_ambiguity_margin, "... must score at least this much lower"},
+      {"back_end", "odometry_translation_sigma_m", &o.odometry_translation_sigma_m, "noise of keyframe-to-keyframe edges"},
+      {"back_end", "odometry_rotation_sigma_rad", &o.odometry_rotation_sigma_rad, "noise of keyframe-to-keyframe edges"},
+      {"back_end", "loop_translation_sigma_m", &o.loop_translation_sigma_m, "noise of loop-closure edges"},
+      {"back_end", "loop_rotation_sigma_rad", &o.loop_rotation_sigma_rad, "noise of loop-closure edges"},
+      {"back_end", "optimize_every_n_keyframes", &o.optimize_every_n_keyframes, "optimise when loops arrived and this many keyframes passed"},
+      {"back_end", "final_gnc", &o.final_gnc, "GNC over loop closures at the end (rejects the ones that disagree)"},
+      {"health", "degraded_min_inlier_fraction", &o.degraded_min_inlier_fraction, "below: degraded"},
+      {"health", "degraded_min_degeneracy", &o.degraded_min_degeneracy, "smallest normal-spread eigenvalue below: degraded"},
+      {"health", "lost_inlier_fraction", &o.lost_inlier_fraction, "a match below this failed (pose from odometry)"},
+      {"health", "lost_after_scans", &o.lost_after_scans, "consecutive failed matches before lost"},
+  };
+}
+
+bool parse_value(const std::string& text, std::variant<double*, int*, bool*> target) {
+  if (auto* d = std::get_if<double*>(&target)) {
+    double v = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v)) return false;
+    **d = v;
+    return true;
+  }
+  if (auto* i = std::get_if<int*>(&target)) {
+    int v = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size()) return false;
+    **i = v;
+    return true;
+  }
+  bool* b = std::get<bool*>(target);
+  if (text == "true") *b = true;
+  else if (text == "false") *b = false;
+  else return false;
+  return true;
+}
+
+const char* type_name(const std::variant<double*, int*, bool*>& v) {
+  return std::holds_alternative<double*>(v) ? "a finite number" : std::holds_alternative<int*>(v) ? "an integer" : "true or false";
+}
+
+}  // namespace
+
+std::vector<std::string> preset_names() { return {"default", "sim"}; }
+
+Slam2dOptions preset_options(const std::string& name) {
+  Slam2dOptions o;
+  if (name == "default") return o;
+  if (name == "sim") {
+    // cairn's simulator: the same scanner class; noise levels are those of the scenario.
+    return o;
+  }
+  throw std::invalid_argument("unknown preset '" + name + "' (known: default, sim)");
+}
+
+void apply_setting(const std::string& assignment, Slam2dOptions& options) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos) throw std::invalid_argument("--set expects section.key=value, got '" + assignment + "'");
+  const std::string name = assignment.substr(0, eq);
+  const std::string value = assignment.substr(eq + 1);
+  for (auto& key : keys(options)) {
+    if (key.full() != name) continue;
+    if (!parse_value(value, key.value))
+      throw std::invalid_argument("--set " + name + ": expected " + type_name(key.value) + ", got '" + value + "'");
+    return;
+  }
+  throw std::invalid_argument("--set: unknown key '" + name + "' (cairn slam2d --print-config lists them)");
+}
+
+void load_config(const std::string& path, Slam2dOptions& options) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw io::ParseError(path, 0, "cannot open the configuration file");
+  } catch (const YAML::Exception& e) {
+    throw io::ParseError(path, static_cast<std::size_t>(e.mark.line + 1), "YAML syntax error: " + e.msg);
+  }
+  if (root.IsNull()) return;
+  if (!root.IsMap()) throw io::ParseError(path, static_cast<std::size_t>(root.Mark().line + 1), "expected a map of sections");
+  auto all = keys(options);
+  for (const auto& section : root) {
+    const std::string section_name = section.first.as<std::string>();
+    const auto line = static_cast<std::size_t>(section.first.Mark().line + 1);
+    if (!section.second.IsMap()) throw io::ParseError(path, line, "section '" + section_name + "' must be a map of keys");
+    for (const auto& entry : section.second) {
+      const std::string name = section_name + "." + entry.first.as<std::string>();
+      const auto entry_line = static_cast<std::size_t>(entry.first.Mark().line + 1);
+      auto it = std::find_if(all.begin(), all.end(), [&](const Key& k) { return k.full() == name; });
+      if (it == all.end()) throw io::ParseError(path, entry_line, "unknown key '" + name + "' (cairn slam2d --print-config lists them)");
+      if (!entry.second.IsScalar() || !parse_value(entry.second.Scalar(), it->value))
+        throw io::ParseError(path, entry_line, "'" + name + "' expects " + type_name(it->value));
+    }
+  }
+}
+
+std::string config_to_yaml(const Slam2dOptions& options) {
+  Slam2dOptions copy = options;
+  std::ostringstream out;
+  out << "# cairn slam2d configuration: every key, its value and what it means.\n";
+  std::string section;
+  for (const auto& key : keys(copy)) {
+    if (key.section != section) {
+      section = key.section;
+      out << section << ":\n";
+    }
+    std::string value;
+    if (auto* d = std::get_if<double*>(&key.value)) io::append_number(value, **d);
+    else if (auto* i = std::get_if<int*>(&key.value)) value = std::to_string(**i);
+    else value = *std::get<bool*>(key.value) ? "true" : "false";
+    out << "  " << key.name << ": " << value << "  # " << key.doc << '\n';
+  }
+  return out.str();
+}
+
+}  // namespace cairn::slam2d

@@ -1,0 +1,32 @@
+#pragma once
+/// \file
+/// The slam2d configuration as YAML: every key of Slam2dOptions under a section, each with its
+/// documented default (docs/configuration.md is `cairn slam2d --print-config`). Files may set
+/// any subset; unknown keys and wrong types are errors naming the file and line.
+///
+///   front_end:
+///     keyframe_distance_m: 0.2
+///   loop_closure:
+///     min_score: 0.6
+
+#include <string>
+#include <vector>
+
+#include "cairn/slam2d/slam.hpp"
+
+namespace cairn::slam2d {
+
+/// "default" (SICK LMS-class scanners: 180-361 beams over 180 degrees, the Freiburg logs) or
+/// "sim" (cairn's simulator); throws std::invalid_argument naming the known presets otherwise.
+Slam2dOptions preset_options(const std::string& name);
+std::vector<std::string> preset_names();
+
+/// Reads `path` over `options` (keys absent from the file keep their value). Throws
+/// io::ParseError naming file and line on a syntax error, unknown key or wrong type.
+void load_config(const std::string& path, Slam2dOptions& options);
+/// "section.key=value". Throws std::invalid_argument on an unknown key or a bad value.
+void apply_setting(const std::string& assignment, Slam2dOptions& options);
+/// Every key with its value and a comment saying what it means.
+std::string config_to_yaml(const Slam2dOptions& options);
+
+}  // namespace cairn::slam2d

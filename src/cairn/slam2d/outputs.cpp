@@ -1,0 +1,329 @@
+#include "cairn/slam2d/outputs.hpp"
+
+#include <cairo.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <numeric>
+#include <ostream>
+
+#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/graph_io.hpp"
+#include "cairn/io/number_format.hpp"
+#include "cairn/io/parse_error.hpp"
+#include "cairn/slam2d/config.hpp"
+
+namespace cairn::slam2d {
+namespace {
+
+namespace fs = std::filesystem;
+
+core::SE3 to_se3(const core::SE2& T) {
+  return core::SE3(core::SO3::from_rpy(0.0, 0.0, T.angle()), Eigen::Vector3d(T.x(), T.y(), 0.0));
+}
+
+struct SurfaceDeleter {
+  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
+};
+struct ContextDeleter {
+  void operator()(cairo_t* c) const { cairo_destroy(c); }
+};
+cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
+  auto* out = static_cast<std::ostream*>(closure);
+  out->write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(length));
+  return *out ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
+}
+
+// Occupancy class of a cell for the map files: 0 free, 1 occupied, 2 unknown.
+int cell_class(const ProbabilityGrid& grid, int i, int j) {
+  if (!grid.cell_known(i, j)) return 2;
+  const double p = grid.cell_probability(i, j);
+  if (p >= 0.65) return 1;
+  if (p <= 0.196) return 0;
+  return 2;
+}
+
+void append_float(std::string& out, float value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  out.append(buffer, result.ptr);
+}
+
+// The observed part of the grid plus a margin of `margin` cells (the grid itself grows by
+// doubling and is mostly unknown).
+struct Crop {
+  int i0 = 0, j0 = 0, width = 1, height = 1;
+};
+Crop known_crop(const ProbabilityGrid& grid, int margin) {
+  int i0 = grid.width(), j0 = grid.height(), i1 = -1, j1 = -1;
+  for (int j = 0; j < grid.height(); ++j) {
+    for (int i = 0; i < grid.width(); ++i) {
+      if (!grid.cell_known(i, j)) continue;
+      i0 = std::min(i0, i);
+      i1 = std::max(i1, i);
+      j0 = std::min(j0, j);
+      j1 = std::max(j1, j);
+    }
+  }
+  if (i1 < 0) return {};
+  Crop c;
+  c.i0 = std::max(0, i0 - margin);
+  c.j0 = std::max(0, j0 - margin);
+  c.width = std::min(grid.width(), i1 + margin + 1) - c.i0;
+  c.height = std::min(grid.height(), j1 + margin + 1) - c.j0;
+  return c;
+}
+
+}  // namespace
+
+io::Trajectory to_trajectory(const Slam2d& slam) {
+  std::vector<ScanResult> scans = slam.trajectory();
+  std::stable_sort(scans.begin(), scans.end(), [](const ScanResult& a, const ScanResult& b) { return a.time < b.time; });
+  io::Trajectory trajectory;
+  for (const ScanResult& s : scans) {
+    if (!trajectory.stamps.empty() && !(trajectory.stamps.back() < s.time)) continue;
+    trajectory.stamps.push_back(s.time);
+    trajectory.poses.push_back(to_se3(s.T_world_laser));
+  }
+  return trajectory;
+}
+
+eval::MatrixTrajectory to_matrix_trajectory(const Slam2d& slam) { return eval::MatrixTrajectory(to_trajectory(slam)); }
+
+void write_map_pgm(const ProbabilityGrid& grid, const std::string& pgm_path, const std::string& yaml_path) {
+  const Crop crop = known_crop(grid, 10);
+  const int width = crop.width, height = crop.height;
+  io::write_file_atomically(pgm_path, [&](std::ostream& out) {
+    out << "P5\n# cairn slam2d occupancy grid, resolution " << grid.resolution() << " m\n"
+        << width << ' ' << height << "\n255\n";
+    std::string row(static_cast<std::size_t>(width), '\0');
+    for (int j = height - 1; j >= 0; --j) {  // first row = top = largest y
+      for (int i = 0; i < width; ++i) {
+        const int c = cell_class(grid, i + crop.i0, j + crop.j0);
+        row[static_cast<std::size_t>(i)] = static_cast<char>(c == 0 ? 254 : c == 1 ? 0 : 205);
+      }
+      out.write(row.data(), static_cast<std::streamsize>(row.size()));
+    }
+  });
+  io::write_file_atomically(yaml_path, [&](std::ostream& out) {
+    std::string x, y, r;
+    io::append_number(x, grid.origin().x() + crop.i0 * grid.resolution());
+    io::append_number(y, grid.origin().y() + crop.j0 * grid.resolution());
+    io::append_number(r, grid.resolution());
+    out << "image: " << fs::path(pgm_path).filename().string() << "\nresolution: " << r << "\norigin: [" << x << ", " << y
+        << ", 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+  });
+}
+
+void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& trajectory,
+                   const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& loops, const std::string& path) {
+  const Crop crop = known_crop(grid, 10);
+  const int width = std::max(360, crop.width), height = crop.height;
+  const int legend = 28;
+  std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
+  unsigned char* data = cairo_image_surface_get_data(surface.get());
+  const int stride = cairo_image_surface_get_stride(surface.get());
+  cairo_surface_flush(surface.get());
+  for (int row = 0; row < height; ++row) {
+    const int j = height - 1 - row;
+    auto* pixels = reinterpret_cast<std::uint32_t*>(data + static_cast<std::ptrdiff_t>(row) * stride);
+    for (int i = 0; i < width; ++i) {
+      std::uint32_t grey = 0xcd;
+      const int gi = i + crop.i0, gj = j + crop.j0;
+      if (grid.cell_known(gi, gj)) grey = static_cast<std::uint32_t>(std::lround(255.0 * (1.0 - grid.cell_probability(gi, gj))));
+      pixels[i] = (grey << 16) | (grey << 8) | grey;
+    }
+  }
+  for (int row = height; row < height + legend; ++row) {
+    auto* pixels = reinterpret_cast<std::uint32_t*>(data + static_cast<std::ptrdiff_t>(row) * stride);
+    std::fill(pixels, pixels + width, 0xffffffu);
+  }
+  cairo_surface_mark_dirty(surface.get());
+  std::unique_ptr<cairo_t, ContextDeleter> context(cairo_create(surface.get()));
+  cairo_t* cr = context.get();
+  const double r = grid.resolution();
+  const Eigen::Vector2d origin = grid.origin() + Eigen::Vector2d(crop.i0, crop.j0) * r;
+  auto to_image = [&](const Eigen::Vector2d& p) {
+    return Eigen::Vector2d((p.x() - origin.x()) / r, height - (p.y() - origin.y()) / r);
+  };
+  // Loop closures: thin green lines between the two poses.
+  cairo_set_line_width(cr, 1.0);
+  cairo_set_source_rgba(cr, 0.1, 0.7, 0.2, 0.6);
+  for (const auto& [a, b] : loops) {
+    const auto pa = to_image(a), pb = to_image(b);
+    cairo_move_to(cr, pa.x(), pa.y());
+    cairo_line_to(cr, pb.x(), pb.y());
+    cairo_stroke(cr);
+  }
+  // Trajectory: blue when ok, orange when degraded, red when lost.
+  cairo_set_line_width(cr, 1.5);
+  for (std::size_t k = 1; k < trajectory.size(); ++k) {
+    const Health h = trajectory[k].health;
+    if (h == Health::kOk) cairo_set_source_rgb(cr, 0.12, 0.35, 0.85);
+    else if (h == Health::kDegraded) cairo_set_source_rgb(cr, 0.95, 0.55, 0.05);
+    else cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
+    const auto pa = to_image(trajectory[k - 1].T_world_laser.translation());
+    const auto pb = to_image(trajectory[k].T_world_laser.translation());
+    cairo_move_to(cr, pa.x(), pa.y());
+    cairo_line_to(cr, pb.x(), pb.y());
+    cairo_stroke(cr);
+  }
+  // Legend and scale bar.
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, 12.0);
+  double x = 8.0;
+  const double y = height + 18.0;
+  auto swatch = [&](double red, double green, double blue, const char* text) {
+    cairo_set_source_rgb(cr, red, green, blue);
+    cairo_rectangle(cr, x, y - 9.0, 18.0, 4.0);
+    cairo_fill(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_move_to(cr, x + 22.0, y - 3.0);
+    cairo_show_text(cr, text);
+    cairo_text_extents_t extents;
+    cairo_text_extents(cr, text, &extents);
+    x += 22.0 + extents.x_advance + 14.0;
+  };
+  swatch(0.12, 0.35, 0.85, "ok");
+  swatch(0.95, 0.55, 0.05, "degraded");
+  swatch(0.9, 0.1, 0.1, "lost");
+  swatch(0.1, 0.7, 0.2, "loop closure");
+  const double bar_m = width * r > 40.0 ? 10.0 : 1.0;
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_rectangle(cr, x, y - 9.0, bar_m / r, 4.0);
+  cairo_fill(cr);
+  cairo_move_to(cr, x + bar_m / r + 6.0, y - 3.0);
+  cairo_show_text(cr, bar_m >= 10.0 ? "10 m" : "1 m");
+  cairo_surface_flush(surface.get());
+  io::write_file_atomically(path, [&](std::ostream& out) {
+    if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS)
+      throw io::ParseError(path, 0, "cairo could not encode the PNG");
+  });
+}
+
+OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::size_t scans_used,
+                          const std::string& directory, const Slam2dOptions& options) {
+  OutputFiles files;
+  const fs::path dir(directory);
+  files.map_pgm = (dir / "map.pgm").string();
+  files.map_yaml = (dir / "map.yaml").string();
+  files.map_png = (dir / "map.png").string();
+  files.trajectory = (dir / "trajectory.tum").string();
+  files.scans = (dir / "scans.csv").string();
+  files.graph = (dir / "graph.g2o").string();
+  files.corrected_log = (dir / "corrected.clf").string();
+  files.report = (dir / "report.json").string();
+
+  const ProbabilityGrid grid = slam.render_map(options.grid);
+  write_map_pgm(grid, files.map_pgm, files.map_yaml);
+  const std::vector<ScanResult> trajectory = slam.trajectory();
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> loops;
+  const io::PoseGraph2D graph = slam.pose_graph();
+  for (const auto& edge : graph.edges) {
+    if (edge.to == edge.from + 1) continue;
+    loops.emplace_back(graph.vertices[static_cast<std::size_t>(edge.from)].T_world_pose.translation(),
+                       graph.vertices[static_cast<std::size_t>(edge.to)].T_world_pose.translation());
+  }
+  write_map_png(grid, trajectory, loops, files.map_png);
+  io::write_tum(files.trajectory, to_trajectory(slam));
+  io::write_file_atomically(files.scans, [&](std::ostream& out) {
+    out << "time_s,x_m,y_m,theta_rad,health,inlier_fraction,degeneracy,sigma_x_m,sigma_y_m,sigma_theta_rad,keyframe\n";
+    std::string line;
+    for (const ScanResult& s : trajectory) {
+      line = s.time.to_seconds_string();
+      for (const double v : {s.T_world_laser.x(), s.T_world_laser.y(), s.T_world_laser.angle()}) {
+        line += ',';
+        io::append_number(line, v);
+      }
+      line += ',';
+      line += to_string(s.health);
+      for (const double v : {s.inlier_fraction, s.degeneracy, std::sqrt(s.covariance(0, 0)), std::sqrt(s.covariance(1, 1)),
+                             std::sqrt(s.covariance(2, 2))}) {
+        line += ',';
+        io::append_number(line, v);
+      }
+      line += s.keyframe ? ",1\n" : ",0\n";
+      out << line;
+    }
+  });
+  io::write_graph(files.graph, io::PoseGraph(graph), io::GraphFormat::kG2o);
+  io::write_file_atomically(files.corrected_log, [&](std::ostream& out) {
+    out << "# cairn slam2d: FLASER x y theta = corrected laser pose, odom_x odom_y odom_theta = odometry\n";
+    std::string line;
+    for (std::size_t k = 0; k < scans_used && k < trajectory.size(); ++k) {
+      const io::LaserScan& scan = log.scans[k];
+      line = "FLASER ";
+      line += std::to_string(scan.ranges_m.size());
+      for (const float range : scan.ranges_m) {
+        line += ' ';
+        append_float(line, range);
+      }
+      const core::SE2& T = trajectory[k].T_world_laser;
+      for (const double v : {T.x(), T.y(), T.angle(), scan.T_odom_laser.x(), scan.T_odom_laser.y(), scan.T_odom_laser.angle()}) {
+        line += ' ';
+        io::append_number(line, v);
+      }
+      const std::string stamp = scan.time.to_seconds_string();
+      line += ' ' + stamp + " cairn " + stamp + '\n';
+      out << line;
+    }
+  });
+  return files;
+}
+
+nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
+  const Slam2dSummary& s = slam.summary();
+  nlohmann::json report;
+  report["summary"] = {{"scans", s.scans},
+                       {"keyframes", s.keyframes},
+                       {"submaps", s.submaps},
+                       {"optimizations", s.optimizations},
+                       {"loop_searches", s.loop_searches},
+                       {"loop_candidates", s.candidates.size()},
+                       {"loops_accepted", s.loops_accepted},
+                       {"loops_rejected_by_gnc", s.loops_rejected_by_gnc},
+                       {"scans_ok", s.scans_ok},
+                       {"scans_degraded", s.scans_degraded},
+                       {"scans_lost", s.scans_lost},
+                       {"relocalisations", s.relocalisations},
+                       {"final_health", std::string(to_string(slam.health()))}};
+  report["time_s"] = {{"preprocess", s.times.preprocess_s}, {"local_match", s.times.local_match_s},
+                      {"local_map", s.times.local_map_s},   {"submaps", s.times.submap_s},
+                      {"loop_search", s.times.loop_search_s}, {"optimize", s.times.optimize_s},
+                      {"slam_total", s.total_s}};
+  nlohmann::json candidates = nlohmann::json::array();
+  for (const LoopCandidate& c : s.candidates) {
+    candidates.push_back({{"keyframe", c.keyframe},
+                          {"submap", c.submap},
+                          {"anchor_keyframe", c.anchor_keyframe},
+                          {"time", c.time.to_seconds_string()},
+                          {"search_window_m", c.search_window_m},
+                          {"score", c.score},
+                          {"second_score", c.second_score},
+                          {"inlier_fraction", c.inlier_fraction},
+                          {"rms_m", c.rms_m},
+                          {"T_anchor_keyframe", {c.T_anchor_keyframe.x(), c.T_anchor_keyframe.y(), c.T_anchor_keyframe.angle()}},
+                          {"accepted", c.accepted && !c.rejected_by_gnc},
+                          {"verified", c.accepted},
+                          {"rejected_by_gnc", c.rejected_by_gnc},
+                          {"relocalisation", c.relocalisation},
+                          {"reason", c.rejected_by_gnc ? std::string("rejected by GNC in the back end") : c.reason}});
+  }
+  report["loop_candidates"] = candidates;
+  nlohmann::json events = nlohmann::json::array();
+  for (const HealthEvent& e : s.health_events) {
+    events.push_back({{"time", e.time.to_seconds_string()},
+                      {"scan", e.scan},
+                      {"from", std::string(to_string(e.from))},
+                      {"to", std::string(to_string(e.to))},
+                      {"reason", e.reason}});
+  }
+  report["health_events"] = events;
+  report["config_yaml"] = config_to_yaml(options);
+  return report;
+}
+
+}  // namespace cairn::slam2d

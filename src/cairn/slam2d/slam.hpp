@@ -1,0 +1,189 @@
+#pragma once
+/// \file
+/// The streaming 2D LiDAR SLAM pipeline. One scan (with the odometry pose the robot reported for
+/// it) at a time goes in; `add_scan` returns the scan's pose and health at once, so a live robot
+/// drives it exactly as `cairn slam2d` does with a log.
+///
+/// Structure (after Cartographer, Hess et al. ICRA 2016, with a point-to-line front end):
+///  - Local SLAM: each scan is preprocessed (range_scan.hpp), predicted by odometry and aligned
+///    to a local map made of the last `local_map_keyframes` keyframes by point-to-line ICP with
+///    the odometry prediction as prior (icp.hpp). Local poses T_local_laser drift slowly.
+///  - Keyframes (graph nodes): a scan becomes a keyframe when the motion since the last one
+///    exceeds `keyframe_distance_m` or `keyframe_angle_rad`; every other scan keeps its pose
+///    relative to the keyframe before it. Consecutive keyframes are joined by the local match.
+///  - Submaps: `submap_keyframes` consecutive keyframes, a new one started every half of that
+///    (two overlapping submaps are active, as in Cartographer), rendered into a probability grid
+///    in the frame of their first keyframe (the anchor) once finished.
+///  - Loop closure: every `loop_search_every_n_keyframes`-th keyframe is searched against every
+///    finished submap within `loop_max_distance_m` by branch-and-bound (branch_and_bound.hpp),
+///    in a window growing with the path travelled since the submap (the drift it may have);
+///    a candidate above `loop_min_score` is refined by ICP against the submap's points and
+///    verified: enough inliers, small residual, and unambiguous (no other pose farther than
+///    `loop_ambiguity_distance_m` scores within `loop_ambiguity_margin` of it). Accepted loops
+///    become graph edges; the back end's GNC (Yang et al. 2020) has the last word at the end.
+///  - Back end: the pose graph of keyframes, optimised (Levenberg-Marquardt) whenever new loop
+///    closures have arrived and `optimize_every_n_keyframes` keyframes have passed.
+///  - Health: per scan, the match's inlier fraction and degeneracy (icp.hpp). `degraded` when the
+///    scan constrains the pose poorly (the odometry prior then carries the unobservable
+///    direction), `lost` after `lost_after_scans` consecutive failed matches (the pose follows
+///    odometry); while lost, each keyframe tries to relocalise against the finished submaps with
+///    the loop-closure search and verification, and the local map restarts from the found pose.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cairn/core/se2.hpp"
+#include "cairn/core/time.hpp"
+#include "cairn/io/carmen_log.hpp"
+#include "cairn/io/pose_graph.hpp"
+#include "cairn/slam2d/branch_and_bound.hpp"
+#include "cairn/slam2d/icp.hpp"
+#include "cairn/slam2d/point_map.hpp"
+#include "cairn/slam2d/probability_grid.hpp"
+#include "cairn/slam2d/range_scan.hpp"
+
+namespace cairn::slam2d {
+
+struct Slam2dOptions {
+  ScanFilterOptions filter;
+  PointMapOptions map_points;          ///< local map and submap point maps
+  IcpOptions icp;                      ///< local matching (scan to local map)
+  ProbabilityGridOptions grid;         ///< submap grids and the final map
+
+  double keyframe_distance_m = 0.2;    ///< motion that makes a keyframe; > 0
+  double keyframe_angle_rad = 0.1;     ///< (5.7 degrees); > 0
+  int local_map_keyframes = 8;         ///< keyframes in the local map; >= 1
+  int submap_keyframes = 40;           ///< keyframes per submap; >= 2
+
+  BranchAndBoundOptions loop_search;   ///< windows are the largest the search may use
+  int loop_search_every_n_keyframes = 2;
+  double loop_max_distance_m = 15.0;   ///< keyframe to submap centre, current estimate
+  int loop_max_submaps_per_search = 4; ///< the nearest finished submaps searched per keyframe
+  /// Search window = base + drift_per_metre * d, clamped to loop_search's windows, where d is
+  /// the path length between submap and keyframe or since the last accepted loop closure,
+  /// whichever is shorter (the drift the estimate may have).
+  double loop_window_base_m = 0.5;
+  double loop_window_drift_per_m = 0.03;
+  double loop_angle_window_base_rad = 0.1;
+  double loop_angle_window_drift_per_m = 0.003;
+  double loop_min_score = 0.6;         ///< branch-and-bound score (mean probability)
+  double loop_min_inlier_fraction = 0.8;  ///< ICP verification against the submap points
+  double loop_max_rms_m = 0.03;
+  double loop_ambiguity_distance_m = 0.6;
+  double loop_ambiguity_angle_rad = 0.15;
+  double loop_ambiguity_margin = 0.06;  ///< best score - best elsewhere must exceed this
+
+  /// Edge noise of the pose graph (standard deviations).
+  double odometry_translation_sigma_m = 0.02;
+  double odometry_rotation_sigma_rad = 0.005;
+  double loop_translation_sigma_m = 0.05;
+  double loop_rotation_sigma_rad = 0.01;
+  int optimize_every_n_keyframes = 20;
+  bool final_gnc = true;               ///< GNC over loop closures at finish()
+
+  double degraded_min_inlier_fraction = 0.5;
+  double degraded_min_degeneracy = 0.03;
+  int lost_after_scans = 5;            ///< consecutive matches below lost_inlier_fraction
+  double lost_inlier_fraction = 0.25;
+
+  /// False with the reason when an option is out of range.
+  bool is_valid(std::string* error) const;
+};
+
+enum class Health { kOk, kDegraded, kLost };
+std::string_view to_string(Health health);
+
+struct ScanResult {
+  core::Timestamp time;
+  core::SE2 T_world_laser;     ///< current global estimate (changes after optimisations)
+  Health health = Health::kOk;
+  double inlier_fraction = 0.0;
+  double degeneracy = 0.0;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  ///< of the local match, (x, y, theta)
+  bool keyframe = false;
+};
+
+struct LoopCandidate {
+  int keyframe = 0;
+  int submap = 0;
+  int anchor_keyframe = 0;
+  core::Timestamp time;
+  double search_window_m = 0.0;
+  double score = 0.0;             ///< branch-and-bound score, 0 when nothing above min_score
+  double second_score = 0.0;      ///< best score away from the match (ambiguity)
+  double inlier_fraction = 0.0;   ///< ICP verification
+  double rms_m = 0.0;
+  core::SE2 T_anchor_keyframe;    ///< the verified relative pose (when found)
+  bool accepted = false;          ///< passed verification and became an edge
+  bool rejected_by_gnc = false;   ///< an accepted edge the back end rejected at finish()
+  bool relocalisation = false;
+  std::string reason;             ///< why rejected, or "accepted"
+};
+
+struct HealthEvent {
+  core::Timestamp time;
+  std::size_t scan = 0;
+  Health from = Health::kOk;
+  Health to = Health::kOk;
+  std::string reason;
+};
+
+struct StageTimes {
+  double preprocess_s = 0.0;
+  double local_match_s = 0.0;
+  double local_map_s = 0.0;
+  double submap_s = 0.0;
+  double loop_search_s = 0.0;
+  double optimize_s = 0.0;
+};
+
+struct Slam2dSummary {
+  std::size_t scans = 0;
+  std::size_t keyframes = 0;
+  std::size_t submaps = 0;
+  std::size_t optimizations = 0;
+  std::size_t loop_searches = 0;
+  std::size_t loops_accepted = 0;
+  std::size_t loops_rejected_by_gnc = 0;
+  std::size_t scans_ok = 0, scans_degraded = 0, scans_lost = 0;
+  std::size_t relocalisations = 0;
+  std::vector<LoopCandidate> candidates;  ///< every verified-or-rejected candidate above min score
+  std::vector<HealthEvent> health_events;
+  StageTimes times;
+  double total_s = 0.0;
+};
+
+class Slam2d {
+ public:
+  explicit Slam2d(const Slam2dOptions& options = {});
+  ~Slam2d();
+  Slam2d(const Slam2d&) = delete;
+  Slam2d& operator=(const Slam2d&) = delete;
+
+  /// Processes one scan; `scan.T_odom_laser` is the odometry prediction (raw CARMEN logs carry
+  /// odometry there).
+  ScanResult add_scan(const io::LaserScan& scan);
+  /// Final optimisation (GNC over loop closures if enabled). Further scans may still be added.
+  void finish();
+
+  /// Global poses of every scan added, in input order.
+  std::vector<ScanResult> trajectory() const;
+  /// The keyframe pose graph with current estimates (vertex id = keyframe index).
+  io::PoseGraph2D pose_graph() const;
+  /// Probability grid of all keyframes at their current global poses.
+  ProbabilityGrid render_map(const ProbabilityGridOptions& options) const;
+  const Slam2dSummary& summary() const { return summary_; }
+  Health health() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Slam2dSummary summary_;
+};
+
+}  // namespace cairn::slam2d
