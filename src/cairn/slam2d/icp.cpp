@@ -41,8 +41,8 @@ IcpResult match_icp(const PointMap& map, const std::vector<Eigen::Vector2d>& poi
         const double w = huber_weight(r, options.huber_threshold_m) * inv_sigma2;
         H += w * J * J.transpose();
         g += w * J * r;
-      } else {
-        const double w = huber_weight(e.norm(), options.huber_threshold_m) * inv_sigma2;
+      } else if (options.point_to_point_weight > 0.0) {
+        const double w = options.point_to_point_weight * huber_weight(e.norm(), options.huber_threshold_m) * inv_sigma2;
         Eigen::Matrix<double, 2, 3> J;
         J << 1.0, 0.0, dtheta.x(), 0.0, 1.0, dtheta.y();
         H += w * J.transpose() * J;
@@ -99,10 +99,11 @@ IcpResult match_icp(const PointMap& map, const std::vector<Eigen::Vector2d>& poi
       const double w = huber_weight(distance, options.huber_threshold_m) * inv_sigma2;
       result.hessian += w * J * J.transpose();
       normals += q->normal * q->normal.transpose();
-    } else {
+    } else if (options.point_to_point_weight > 0.0) {
       Eigen::Matrix<double, 2, 3> J;
       J << 1.0, 0.0, dtheta.x(), 0.0, 1.0, dtheta.y();
-      result.hessian += huber_weight(distance, options.huber_threshold_m) * inv_sigma2 * J.transpose() * J;
+      result.hessian += options.point_to_point_weight * huber_weight(distance, options.huber_threshold_m) * inv_sigma2 *
+                        J.transpose() * J;
       normals += Eigen::Matrix2d::Identity() * 0.5;
     }
   }

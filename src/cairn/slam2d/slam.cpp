@@ -85,6 +85,7 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (local_map_keyframes < 1) problems << "local_map_keyframes must be >= 1; ";
   if (submap_keyframes < 2) problems << "submap_keyframes must be >= 2; ";
   if (loop_search_every_n_keyframes < 1) problems << "loop_search_every_n_keyframes must be >= 1; ";
+  if (!(loop_ambiguity_window_m >= 0.0)) problems << "loop_ambiguity_window_m must be >= 0; ";
   if (!(loop_min_score > 0.0 && loop_min_score < 1.0)) problems << "loop_min_score must be in (0, 1); ";
   if (!(odometry_translation_sigma_m > 0.0 && odometry_rotation_sigma_rad > 0.0 && loop_translation_sigma_m > 0.0 &&
         loop_rotation_sigma_rad > 0.0))
@@ -180,6 +181,7 @@ struct Slam2d::Impl {
     candidate.submap = s;
     candidate.anchor_keyframe = submap.anchor;
     candidate.time = kf.time;
+    candidate.anchor_time = anchor.time;
     candidate.search_window_m = window.linear_search_window_m;
     candidate.score = best.score;
     candidate.relocalisation = relocalisation;
@@ -189,6 +191,7 @@ struct Slam2d::Impl {
     const IcpResult icp = match_icp(*submap.points, kf.matching, best.T_map_sensor, nullptr, refine);
     candidate.inlier_fraction = icp.inlier_fraction;
     candidate.rms_m = icp.rms_m;
+    candidate.degeneracy = icp.degeneracy;
     candidate.T_anchor_keyframe = icp.T_map_sensor;
     const double moved = (icp.T_map_sensor.translation() - best.T_map_sensor.translation()).norm();
     if (icp.inlier_fraction < options.loop_min_inlier_fraction) {
@@ -197,10 +200,14 @@ struct Slam2d::Impl {
       candidate.reason = "ICP residual above maximum";
     } else if (moved > 2.0 * options.grid.resolution_m + 0.05) {
       candidate.reason = "ICP moved away from the branch-and-bound match";
+    } else if (icp.degeneracy < options.loop_min_degeneracy) {
+      candidate.reason = "degenerate: the match does not constrain every direction (corridor)";
     } else {
       // Verification 2: ambiguity. Is there a pose elsewhere in the window nearly as good?
+      BranchAndBoundOptions wide = window;
+      wide.linear_search_window_m = std::max(window.linear_search_window_m, options.loop_ambiguity_window_m);
       const BranchAndBoundResult other = match_branch_and_bound(
-          *submap.stack, kf.matching, initial, best.score - options.loop_ambiguity_margin, window, &best.T_map_sensor,
+          *submap.stack, kf.matching, initial, best.score - options.loop_ambiguity_margin, wide, &best.T_map_sensor,
           options.loop_ambiguity_distance_m, options.loop_ambiguity_angle_rad);
       candidate.second_score = other.found ? other.score : 0.0;
       if (other.found) {

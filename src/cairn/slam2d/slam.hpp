@@ -74,6 +74,10 @@ struct Slam2dOptions {
   double loop_min_score = 0.6;         ///< branch-and-bound score (mean probability)
   double loop_min_inlier_fraction = 0.8;  ///< ICP verification against the submap points
   double loop_max_rms_m = 0.03;
+  double loop_min_degeneracy = 0.1;    ///< verification: the match constrains every direction
+  /// The ambiguity search spans at least this half-width, whatever the match window (repeated
+  /// structure such as identical doors lies farther away than a small match window reaches).
+  double loop_ambiguity_window_m = 3.0;
   double loop_ambiguity_distance_m = 0.6;
   double loop_ambiguity_angle_rad = 0.15;
   double loop_ambiguity_margin = 0.06;  ///< best score - best elsewhere must exceed this
@@ -112,12 +116,14 @@ struct LoopCandidate {
   int keyframe = 0;
   int submap = 0;
   int anchor_keyframe = 0;
-  core::Timestamp time;
+  core::Timestamp time;          ///< of the keyframe's scan
+  core::Timestamp anchor_time;   ///< of the submap anchor's scan
   double search_window_m = 0.0;
   double score = 0.0;             ///< branch-and-bound score, 0 when nothing above min_score
   double second_score = 0.0;      ///< best score away from the match (ambiguity)
   double inlier_fraction = 0.0;   ///< ICP verification
   double rms_m = 0.0;
+  double degeneracy = 0.0;        ///< of the ICP verification (icp.hpp)
   core::SE2 T_anchor_keyframe;    ///< the verified relative pose (when found)
   bool accepted = false;          ///< passed verification and became an edge
   bool rejected_by_gnc = false;   ///< an accepted edge the back end rejected at finish()
