@@ -45,6 +45,7 @@ std::vector<Key> keys(Slam2dOptions& o) {
       {"icp", "point_to_point_weight", &o.icp.point_to_point_weight, "weight of map points without a normal (0 = ignored)"},
       {"icp", "inlier_distance_m", &o.icp.inlier_distance_m, "a point within this of the map is an inlier"},
       {"icp", "prior_translation_sigma_m", &o.icp.prior_translation_sigma_m, "odometry prior, translation (<= 0 disables the prior)"},
+      {"icp", "degenerate_threshold", &o.icp.degenerate_threshold, "translation directions constrained less than this follow the odometry prior"},
       {"icp", "prior_rotation_sigma_rad", &o.icp.prior_rotation_sigma_rad, "odometry prior, rotation"},
       {"grid", "resolution_m", &o.grid.resolution_m, "cell side of submap grids and the output map"},
       {"grid", "hit_probability", &o.grid.hit_probability, "p(occupied | hit)"},

@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "cairn/core/assert.hpp"
 #include "cairn/core/so2.hpp"
@@ -28,6 +29,9 @@ IcpResult match_icp(const PointMap& map, const std::vector<Eigen::Vector2d>& poi
     const double c = std::cos(theta), s = std::sin(theta);
     Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    Eigen::Matrix2d normal_outer = Eigen::Matrix2d::Zero();
+    int normal_count = 0;
+    std::optional<Eigen::Vector2d> degenerate_direction;
     for (const auto& p : points_sensor) {
       const Eigen::Vector2d Rp(c * p.x() - s * p.y(), s * p.x() + c * p.y());
       const Eigen::Vector2d world(Rp.x() + x, Rp.y() + y);
@@ -41,6 +45,8 @@ IcpResult match_icp(const PointMap& map, const std::vector<Eigen::Vector2d>& poi
         const double w = huber_weight(r, options.huber_threshold_m) * inv_sigma2;
         H += w * J * J.transpose();
         g += w * J * r;
+        normal_outer += q->normal * q->normal.transpose();
+        ++normal_count;
       } else if (options.point_to_point_weight > 0.0) {
         const double w = options.point_to_point_weight * huber_weight(e.norm(), options.huber_threshold_m) * inv_sigma2;
         Eigen::Matrix<double, 2, 3> J;
@@ -48,6 +54,14 @@ IcpResult match_icp(const PointMap& map, const std::vector<Eigen::Vector2d>& poi
         H += w * J.transpose() * J;
         g += w * J.transpose() * e;
       }
+    }
+    if (use_prior && normal_count > 0) {
+      // Degeneracy-aware update (Zhang, Kaess & Singh, "On degeneracy of optimization-based
+      // state estimation problems", ICRA 2016, solution remapping): along a translation direction
+      // the normals do not constrain (a corridor's axis), noisy normals still carry a little
+      // information that pins the pose to where the map was sampled; there the prior decides.
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> spread(normal_outer / normal_count);
+      if (spread.eigenvalues()(0) < options.degenerate_threshold) degenerate_direction = spread.eigenvectors().col(0);
     }
     if (use_prior) {
       const double wt = 1.0 / (options.prior_translation_sigma_m * options.prior_translation_sigma_m);
@@ -62,10 +76,19 @@ IcpResult match_icp(const PointMap& map, const std::vector<Eigen::Vector2d>& poi
     if (H.trace() <= 0.0) break;
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
     if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
-    const Eigen::Vector3d step = -ldlt.solve(g);
+    Eigen::Vector3d step = -ldlt.solve(g);
     if (!step.allFinite()) break;
     x += step(0);
     y += step(1);
+    if (degenerate_direction) {
+      const Eigen::Vector2d v = *degenerate_direction;
+      const double along = v.dot(Eigen::Vector2d(x - prior->x(), y - prior->y()));
+      x -= along * v.x();
+      y -= along * v.y();
+      step(0) -= along * v.x();
+      step(1) -= along * v.y();
+      result.remapped = true;
+    }
     theta = core::wrap_angle(theta + step(2));
     const bool small = step.head<2>().norm() < options.convergence_translation_m &&
                        std::abs(step(2)) < options.convergence_rotation_rad;

@@ -38,6 +38,9 @@ struct IcpOptions {
   /// Prior standard deviations (odometry prediction); <= 0 disables the prior.
   double prior_translation_sigma_m = 0.1;
   double prior_rotation_sigma_rad = 0.05;
+  /// With a prior: translation directions whose normal spread (see `degeneracy`) is below this
+  /// take the prior's value (Zhang et al. ICRA 2016 solution remapping); 0 disables.
+  double degenerate_threshold = 0.03;
   double convergence_translation_m = 1e-5;
   double convergence_rotation_rad = 1e-6;
 };
@@ -53,6 +56,7 @@ struct IcpResult {
   double degeneracy = 0.0;   ///< see file comment
   int iterations = 0;
   bool converged = false;
+  bool remapped = false;     ///< a degenerate direction was taken from the prior
 };
 
 /// Aligns `points_sensor` to `map` from `initial`. `prior` (may equal `initial`) is the pose the
