@@ -7,7 +7,11 @@
 
 #include <cmath>
 
+#include <random>
+
+#include "cairn/slam2d/branch_and_bound.hpp"
 #include "cairn/slam2d/correlative_scan_matcher.hpp"
+#include "cairn/slam2d/icp.hpp"
 
 namespace cairn::slam2d {
 namespace {
@@ -83,6 +87,112 @@ TEST(CorrelativeScanMatcher, RecoversADisplacedPose) {
   const MatchResult at_guess = match_exhaustive(grid, scan, guess, CorrelativeMatcherOptions{0.0, 0.0});
   EXPECT_LT(at_guess.score + 0.05, result.score);
   EXPECT_GT(result.candidates, 1000);
+}
+
+// Branch and bound must find the exhaustive search's best score (Hess 2016: "the same result"),
+// up to the 1/255 quantisation of the precomputation grids, while scoring far fewer poses.
+TEST(BranchAndBound, FindsTheExhaustiveOptimum) {
+  ProbabilityGrid grid;
+  const core::SE2 T_map_first(2.0, 3.0, 0.1);
+  for (int repeat = 0; repeat < 3; ++repeat) {
+    const auto points = room_scan(T_map_first);
+    grid.insert(T_map_first, points, std::vector<bool>(points.size(), true));
+  }
+  BranchAndBoundOptions options;
+  options.linear_search_window_m = 0.3;
+  options.angular_search_window_rad = 0.35;
+  options.unknown_probability = 0.5;  // what match_exhaustive scores unknown cells with
+  const PrecomputationGridStack stack(grid, options);
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> offset(-0.2, 0.2);
+  for (int trial = 0; trial < 10; ++trial) {
+    const core::SE2 truth(2.6 + offset(random), 2.8 + offset(random), 0.25 + offset(random));
+    const auto scan = room_scan(truth);
+    const core::SE2 guess(truth.x() + 0.5 * offset(random), truth.y() + 0.5 * offset(random), truth.angle() + 0.5 * offset(random));
+    const MatchResult exhaustive = match_exhaustive(grid, scan, guess, CorrelativeMatcherOptions{0.3, 0.35});
+    const BranchAndBoundResult fast = match_branch_and_bound(stack, scan, guess, 0.0, options);
+    ASSERT_TRUE(fast.found);
+    EXPECT_NEAR(fast.score, exhaustive.score, 1.0 / 255.0 + 1e-9) << "trial " << trial;
+    EXPECT_LT((fast.T_map_sensor.translation() - truth.translation()).norm(), 2.0 * grid.resolution());
+    EXPECT_LT(fast.nodes_scored * 5, exhaustive.candidates) << "branch and bound should prune most of the window";
+  }
+}
+
+// A pose inside the excluded region is never returned: the ambiguity search of loop
+// verification relies on it.
+TEST(BranchAndBound, ExclusionSkipsTheBestMatch) {
+  ProbabilityGrid grid;
+  const core::SE2 T(2.0, 3.0, 0.1);
+  for (int repeat = 0; repeat < 3; ++repeat) {
+    const auto points = room_scan(T);
+    grid.insert(T, points, std::vector<bool>(points.size(), true));
+  }
+  BranchAndBoundOptions options;
+  options.linear_search_window_m = 1.0;
+  const PrecomputationGridStack stack(grid, options);
+  const auto scan = room_scan(T);
+  const BranchAndBoundResult best = match_branch_and_bound(stack, scan, T, 0.0, options);
+  ASSERT_TRUE(best.found);
+  const BranchAndBoundResult other = match_branch_and_bound(stack, scan, T, 0.0, options, &best.T_map_sensor, 0.5, 0.2);
+  ASSERT_TRUE(other.found);
+  const bool outside = (other.T_map_sensor.translation() - best.T_map_sensor.translation()).norm() > 0.5 ||
+                       std::abs(core::wrap_angle(other.T_map_sensor.angle() - best.T_map_sensor.angle())) > 0.2;
+  EXPECT_TRUE(outside);
+  EXPECT_LT(other.score, best.score - 0.1);  // a room with a pillar has one good pose
+}
+
+std::vector<Eigen::Vector2d> transform(const core::SE2& T, const std::vector<Eigen::Vector2d>& points) {
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& p : points) out.push_back(T * p);
+  return out;
+}
+
+TEST(Icp, RecoversADisplacedPoseToTheMillimetre) {
+  const core::SE2 T_map_first(2.0, 3.0, 0.1);
+  PointMap map;
+  map.build(transform(T_map_first, room_scan(T_map_first)));
+  const core::SE2 truth(2.3, 2.9, 0.2);
+  const auto scan = room_scan(truth);
+  const core::SE2 guess(2.4, 2.85, 0.15);
+  const IcpResult result = match_icp(map, scan, guess, nullptr);
+  EXPECT_LT((result.T_map_sensor.translation() - truth.translation()).norm(), 0.005);
+  EXPECT_LT(std::abs(core::wrap_angle(result.T_map_sensor.angle() - truth.angle())), 0.002);
+  EXPECT_GT(result.inlier_fraction, 0.9);
+  EXPECT_GT(result.degeneracy, 0.1);  // walls in both directions
+}
+
+// Two parallel walls 60 m long: the axis is unobservable. The match must say so (degeneracy
+// near 0) and take the along-corridor position from the prior, correcting only across.
+TEST(Icp, CorridorIsDegenerateAndFollowsThePrior) {
+  auto corridor_scan = [](const core::SE2& T) {
+    std::vector<Eigen::Vector2d> points;
+    for (int k = 0; k < 180; ++k) {
+      const double a = -M_PI / 2 + k * M_PI / 180.0;
+      const Eigen::Vector2d d = T.so2() * Eigen::Vector2d(std::cos(a), std::sin(a));
+      if (std::abs(d.y()) < 1e-9) continue;
+      const double wall = d.y() > 0 ? 1.2 : -1.2;
+      const double t = (wall - T.y()) / d.y();
+      const Eigen::Vector2d hit = T.translation() + t * d;
+      if (t > 0 && t < 30.0 && std::abs(hit.x()) < 30.0) points.push_back(t * Eigen::Vector2d(std::cos(a), std::sin(a)));
+    }
+    return points;
+  };
+  const core::SE2 T_map_first(0.0, 0.0, 0.0);
+  PointMap map;
+  std::vector<Eigen::Vector2d> dense;
+  for (double x = -30.0; x <= 30.0; x += 0.02) {
+    dense.emplace_back(x, 1.2);
+    dense.emplace_back(x, -1.2);
+  }
+  map.build(dense);
+  const core::SE2 truth(1.0, 0.1, 0.02);
+  const core::SE2 prior(1.3, 0.2, 0.0);  // 0.3 m ahead along the axis, 0.1 m across
+  const IcpResult result = match_icp(map, corridor_scan(truth), prior, &prior);
+  EXPECT_LT(result.degeneracy, 0.01);
+  EXPECT_TRUE(result.remapped);
+  EXPECT_NEAR(result.T_map_sensor.x(), prior.x(), 1e-6);  // unobservable: the prior's value
+  EXPECT_NEAR(result.T_map_sensor.y(), truth.y(), 0.005);  // observable: corrected
+  EXPECT_NEAR(result.T_map_sensor.angle(), truth.angle(), 0.002);
 }
 
 }  // namespace

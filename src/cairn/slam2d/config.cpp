@@ -77,6 +77,7 @@ std::vector<Key> keys(Slam2dOptions& o) {
       {"back_end", "final_gnc", &o.final_gnc, "GNC over loop closures at the end (rejects the ones that disagree)"},
       {"health", "degraded_min_inlier_fraction", &o.degraded_min_inlier_fraction, "below: degraded"},
       {"health", "degraded_min_degeneracy", &o.degraded_min_degeneracy, "smallest normal-spread eigenvalue below: degraded"},
+      {"health", "min_matching_points", &o.min_matching_points, "scans with fewer returns are not matched (degraded, odometry only)"},
       {"health", "lost_inlier_fraction", &o.lost_inlier_fraction, "a match below this failed (pose from odometry)"},
       {"health", "lost_after_scans", &o.lost_after_scans, "consecutive failed matches before lost"},
   };

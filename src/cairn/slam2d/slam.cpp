@@ -92,6 +92,7 @@ bool Slam2dOptions::is_valid(std::string* error) const {
     problems << "edge sigmas must be > 0; ";
   if (optimize_every_n_keyframes < 1) problems << "optimize_every_n_keyframes must be >= 1; ";
   if (loop_max_submaps_per_search < 1) problems << "loop_max_submaps_per_search must be >= 1; ";
+  if (min_matching_points < 3) problems << "min_matching_points must be >= 3; ";
   if (lost_after_scans < 1) problems << "lost_after_scans must be >= 1; ";
   if (!(icp.point_sigma_m > 0.0) || icp.max_iterations < 1) problems << "icp: point_sigma_m > 0, max_iterations >= 1; ";
   if (!(grid.resolution_m > 0.0)) problems << "grid resolution must be > 0; ";
@@ -305,7 +306,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   if (m.have_previous) {
     const core::SE2 predicted = m.previous_local * (m.previous_odom.inverse() * scan.T_odom_laser);
     T_local_laser = predicted;
-    if (!m.local_map.empty() && points.matching.size() >= 10) {
+    if (!m.local_map.empty() && static_cast<int>(points.matching.size()) >= o.min_matching_points) {
       IcpResult icp = match_icp(m.local_map, points.matching, predicted, &predicted, o.icp);
       if (icp.inlier_fraction < o.degraded_min_inlier_fraction) {
         // The odometry prediction may be what is wrong (a stale or slipping odometry reading):
@@ -333,8 +334,12 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   }
   summary_.times.local_match_s += seconds_since(match_start);
 
-  // 2. Health.
-  if (!matched) {
+  // 2. Health. A scan with too few returns to match (open space beyond the sensor's range)
+  // is no evidence of being lost: the pose follows odometry and the state says degraded.
+  const bool too_few_returns = m.have_previous && static_cast<int>(points.matching.size()) < o.min_matching_points;
+  if (too_few_returns) {
+    // leave the failed-match counter as it is
+  } else if (!matched) {
     ++m.bad_matches_in_a_row;
   } else {
     m.bad_matches_in_a_row = 0;
@@ -344,6 +349,9 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   if (m.bad_matches_in_a_row >= o.lost_after_scans) {
     next = Health::kLost;
     reason = "scan matching failed " + std::to_string(m.bad_matches_in_a_row) + " times in a row; following odometry";
+  } else if (too_few_returns) {
+    next = Health::kDegraded;
+    reason = "too few returns to match (" + std::to_string(points.matching.size()) + "); following odometry";
   } else if (!matched || record.inlier_fraction < o.degraded_min_inlier_fraction) {
     next = Health::kDegraded;
     reason = "few scan points agree with the local map (inlier fraction " + std::to_string(record.inlier_fraction) + ")";

@@ -92,6 +92,7 @@ struct Slam2dOptions {
 
   double degraded_min_inlier_fraction = 0.5;
   double degraded_min_degeneracy = 0.03;
+  int min_matching_points = 10;        ///< fewer returns: no match, degraded, odometry only
   int lost_after_scans = 5;            ///< consecutive matches below lost_inlier_fraction
   double lost_inlier_fraction = 0.25;
 

@@ -1,0 +1,277 @@
+// The 2D SLAM pipeline end to end, on the simulator (exact ground truth, every failure mode on
+// demand) and on the real Freiburg benchmark logs (relations files as ground truth). The numbers
+// the issue asks for are checked here; docs/benchmarks.md records the measured values.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "cairn/eval/ape.hpp"
+#include "cairn/eval/relations.hpp"
+#include "cairn/io/carmen_log.hpp"
+#include "cairn/io/parse_error.hpp"
+#include "cairn/sim/scenario.hpp"
+#include "cairn/slam2d/outputs.hpp"
+#include "cairn/slam2d/slam.hpp"
+#include "test_data.hpp"
+
+namespace cairn::slam2d {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("cairn-test-slam2d-" + name + "-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+struct SimRun {
+  sim::SimulationResult truth;
+  std::unique_ptr<Slam2d> slam;
+  std::vector<eval::Relation> relations;
+  double ate_rmse_m = 0.0;
+  double odometry_ate_rmse_m = 0.0;
+  eval::RelationsResult relations_result;
+};
+
+std::map<std::int64_t, core::SE2> truth_by_stamp(const sim::SimulationResult& truth) {
+  std::map<std::int64_t, core::SE2> out;
+  for (const auto& sample : truth.truth) out[sample.stamp.nanoseconds()] = sample.T_world_body;
+  return out;
+}
+
+core::SE3 lift(const core::SE2& T) {
+  return core::SE3(core::SO3::from_rpy(0.0, 0.0, T.angle()), Eigen::Vector3d(T.x(), T.y(), 0.0));
+}
+
+double ate(const io::Trajectory& reference, const io::Trajectory& estimate) {
+  eval::ApeOptions options;
+  options.alignment.method = eval::AlignmentMethod::kSE2;
+  const eval::ApeResult result = eval::evaluate_ape(reference, estimate, options);
+  EXPECT_TRUE(result.outcome.ok()) << result.outcome.message;
+  return result.statistics.rmse;
+}
+
+// Simulates `scenario` with `seed`, writes its files (the log goes through the CARMEN reader
+// exactly as `cairn slam2d` reads it) and runs the pipeline scan by scan.
+SimRun run_simulated(const std::string& scenario_name, std::uint64_t seed, const Slam2dOptions& options = {}) {
+  auto scenario = sim::make_scenario(scenario_name);
+  EXPECT_TRUE(scenario.has_value());
+  SimRun run;
+  run.truth = sim::simulate(*scenario, seed);
+  const fs::path dir = temp_dir(scenario_name + "-" + std::to_string(seed));
+  sim::write_outputs(run.truth, *scenario, seed, dir.string());
+  const io::CarmenLog log = io::read_carmen_log((dir / "log.clf").string());
+  run.relations = eval::read_relations((dir / "log.relations").string());
+  run.slam = std::make_unique<Slam2d>(options);
+  for (const auto& scan : log.scans) run.slam->add_scan(scan);
+  run.slam->finish();
+  io::Trajectory reference, odometry;
+  for (const auto& sample : run.truth.truth) {
+    reference.stamps.push_back(sample.stamp);
+    reference.poses.push_back(lift(sample.T_world_body));
+  }
+  for (const auto& scan : log.scans) {
+    odometry.stamps.push_back(scan.time);
+    odometry.poses.push_back(lift(scan.T_odom_laser));
+  }
+  run.ate_rmse_m = ate(reference, to_trajectory(*run.slam));
+  run.odometry_ate_rmse_m = ate(reference, odometry);
+  run.relations_result = eval::evaluate_relations(run.relations, to_matrix_trajectory(*run.slam));
+  EXPECT_TRUE(run.relations_result.outcome.ok()) << run.relations_result.outcome.message;
+  fs::remove_all(dir);
+  return run;
+}
+
+struct LoopCheck {
+  int accepted = 0;
+  int false_accepted = 0;
+};
+
+// An accepted loop closure is false when its relative pose differs from the ground truth's by
+// more than 0.3 m or 3 degrees.
+LoopCheck check_loops(const SimRun& run) {
+  const auto truth = truth_by_stamp(run.truth);
+  LoopCheck check;
+  for (const LoopCandidate& c : run.slam->summary().candidates) {
+    if (!c.accepted || c.rejected_by_gnc) continue;
+    ++check.accepted;
+    const core::SE2 T_true = truth.at(c.anchor_time.nanoseconds()).inverse() * truth.at(c.time.nanoseconds());
+    const core::SE2 error = T_true.inverse() * c.T_anchor_keyframe;
+    if (error.translation().norm() > 0.3 || std::abs(error.angle()) > 3.0 * M_PI / 180.0) ++check.false_accepted;
+  }
+  return check;
+}
+
+// Issue 9: simulated office loop, 180 beams over 180 degrees, range noise 1 cm, 1 % max-range
+// dropouts, odometry drifting more than 1 m; five seeds: relations error below Cartographer's
+// best published row (0.0229 m, 0.352 deg) and ATE RMSE below 5 cm.
+TEST(Slam2dSimulation, OfficeFiveSeeds) {
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    const SimRun run = run_simulated("office", seed);
+    EXPECT_GT(run.truth.dead_reckoning_max_error_m, 1.0) << "seed " << seed << ": odometry must drift more than 1 m";
+    const auto& r = run.relations_result;
+    std::printf("office seed %llu: ATE %.4f m (odometry %.3f m), relations %.4f m %.3f deg, loops %zu\n",
+                static_cast<unsigned long long>(seed), run.ate_rmse_m, run.odometry_ate_rmse_m,
+                r.translation_absolute_m.mean, r.rotation_absolute_deg.mean, run.slam->summary().loops_accepted);
+    EXPECT_LT(r.translation_absolute_m.mean, 0.0229) << "seed " << seed;
+    EXPECT_LT(r.rotation_absolute_deg.mean, 0.352) << "seed " << seed;
+    EXPECT_LT(run.ate_rmse_m, 0.05) << "seed " << seed;
+    EXPECT_EQ(check_loops(run).false_accepted, 0) << "seed " << seed;
+  }
+}
+
+// Corridor of identical doors every 4 m, ten seeds: no false loop closure accepted, true ones
+// close, and the result beats dead reckoning.
+TEST(Slam2dSimulation, CorridorAliasingTenSeedsNoFalseLoops) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const SimRun run = run_simulated("corridor-aliasing", seed);
+    const LoopCheck loops = check_loops(run);
+    std::printf("corridor seed %llu: %d loops accepted, %d false; ATE %.3f m (odometry %.3f m)\n",
+                static_cast<unsigned long long>(seed), loops.accepted, loops.false_accepted, run.ate_rmse_m,
+                run.odometry_ate_rmse_m);
+    EXPECT_EQ(loops.false_accepted, 0) << "seed " << seed;
+    EXPECT_GT(loops.accepted, 0) << "seed " << seed << ": the true loops must close";
+    EXPECT_LT(run.ate_rmse_m, run.odometry_ate_rmse_m) << "seed " << seed;
+  }
+}
+
+// Open hall (LiDAR max range 10 m, mostly nothing in reach): the pipeline must say degraded,
+// not report confident matches.
+TEST(Slam2dSimulation, OpenHallReportsDegraded) {
+  const SimRun run = run_simulated("open-hall", 1);
+  const auto& s = run.slam->summary();
+  EXPECT_GT(s.scans_degraded + s.scans_lost, s.scans * 9 / 10);
+  bool named = false;
+  for (const auto& event : s.health_events) named = named || event.reason.find("too few returns") != std::string::npos;
+  EXPECT_TRUE(named) << "the health events should say why";
+  EXPECT_EQ(check_loops(run).false_accepted, 0);
+}
+
+// People walking through the office: ghost trails are occupied cells where the world has no
+// wall. Measured as the fraction of occupied cells (p >= 0.65) farther than 0.15 m from every
+// wall and pillar of the simulated world, after SE(2)-free comparison (the estimate starts in
+// the world frame: odometry starts at the true pose).
+double ghost_fraction(const SimRun& run) {
+  const ProbabilityGrid grid = run.slam->render_map(ProbabilityGridOptions{});
+  const auto& world = run.truth.world.world;
+  auto distance_to_world = [&](const Eigen::Vector2d& p) {
+    double best = 1e9;
+    for (const auto& wall : world.walls) {
+      const Eigen::Vector2d ab = wall.b - wall.a;
+      const double t = std::clamp((p - wall.a).dot(ab) / std::max(ab.squaredNorm(), 1e-12), 0.0, 1.0);
+      best = std::min(best, (wall.a + t * ab - p).norm());
+    }
+    for (const auto& circle : world.circles) best = std::min(best, std::abs((p - circle.center).norm() - circle.radius_m));
+    return best;
+  };
+  int occupied = 0, ghosts = 0;
+  for (int j = 0; j < grid.height(); ++j) {
+    for (int i = 0; i < grid.width(); ++i) {
+      if (!grid.cell_known(i, j) || grid.cell_probability(i, j) < 0.65) continue;
+      ++occupied;
+      const Eigen::Vector2d centre = grid.origin() + (Eigen::Vector2d(i, j).array() + 0.5).matrix() * grid.resolution();
+      if (distance_to_world(centre) > 0.15) ++ghosts;
+    }
+  }
+  return occupied > 0 ? static_cast<double>(ghosts) / occupied : 1.0;
+}
+
+TEST(Slam2dSimulation, PeopleLeaveNoGhostTrails) {
+  const SimRun people = run_simulated("office-people", 1);
+  const SimRun empty = run_simulated("office", 1);
+  const double with_people = ghost_fraction(people);
+  const double without = ghost_fraction(empty);
+  std::printf("ghost cells: %.4f with 8 people, %.4f without (fraction of occupied cells > 0.15 m from any wall)\n",
+              with_people, without);
+  EXPECT_LT(with_people, 0.01);
+  EXPECT_LT(people.ate_rmse_m, 0.05);
+}
+
+// Real data: the Freiburg benchmark logs with one configuration (the defaults) for both.
+struct RealResult {
+  eval::RelationsResult relations;
+  Slam2dSummary summary;
+};
+
+RealResult run_real(const std::string& name) {
+  const std::string log_path = test::data_path("laser2d/" + name + "/" + name + ".clf.bz2").string();
+  const io::CarmenLog log = io::read_carmen_log(log_path);
+  Slam2d slam;
+  for (const auto& scan : log.scans) slam.add_scan(scan);
+  slam.finish();
+  RealResult result;
+  result.summary = slam.summary();
+  const fs::path relations = test::data_path("laser2d/" + name + "/" + name + ".relations");
+  if (fs::exists(relations)) {
+    result.relations = eval::evaluate_relations(eval::read_relations(relations.string()), to_matrix_trajectory(slam));
+    EXPECT_TRUE(result.relations.outcome.ok()) << result.relations.outcome.message;
+    std::printf("%s: relations %.4f +- %.4f m, %.3f +- %.3f deg; %zu loops accepted, %.1f s\n", name.c_str(),
+                result.relations.translation_absolute_m.mean, result.relations.translation_absolute_m.std,
+                result.relations.rotation_absolute_deg.mean, result.relations.rotation_absolute_deg.std,
+                result.summary.loops_accepted, result.summary.total_s);
+  }
+  for (const LoopCandidate& c : result.summary.candidates) {
+    if (c.accepted) {
+      EXPECT_EQ(c.reason, "accepted");  // every accepted loop passed verification
+    }
+  }
+  return result;
+}
+
+TEST(Slam2dRealData, AcesBelowCartographer) {
+  CAIRN_REQUIRE_DATA("laser2d/aces/aces.clf.bz2");
+  const RealResult r = run_real("aces");
+  EXPECT_LT(r.relations.translation_absolute_m.mean, 0.0375);  // Hess et al. 2016, Table II
+  EXPECT_LT(r.relations.rotation_absolute_deg.mean, 0.373);
+}
+
+TEST(Slam2dRealData, IntelBelowCartographer) {
+  CAIRN_REQUIRE_DATA("laser2d/intel/intel.clf.bz2");
+  const RealResult r = run_real("intel");
+  EXPECT_LT(r.relations.translation_absolute_m.mean, 0.0229);
+  EXPECT_LT(r.relations.rotation_absolute_deg.mean, 0.453);
+}
+
+TEST(Slam2dRealData, MitCsailRunsToCompletion) {
+  CAIRN_REQUIRE_DATA("laser2d/mit-csail/mit-csail.clf.bz2");
+  const RealResult r = run_real("mit-csail");
+  EXPECT_GT(r.summary.scans, 1900u);
+  EXPECT_EQ(r.summary.scans_lost, 0u);
+}
+
+// A truncated log: a clear error naming the line, or with skip_malformed_records the bad
+// record is counted and the rest processed.
+TEST(Slam2dInput, TruncatedLogNamesTheLineOrIsSkippedLeniently) {
+  const fs::path dir = temp_dir("truncated");
+  const fs::path path = dir / "cut.clf";
+  {
+    std::ofstream out(path);
+    out << "ODOM 0 0 0 0 0 0 1.0 host 1.0\n";
+    out << "FLASER 3 1.0 1.1 1.2 0 0 0 0 0 0 1.1 host 1.1\n";
+    out << "FLASER 3 1.0 1.1\n";  // cut in the middle
+    out << "FLASER 3 1.0 1.1 1.2 0.1 0 0 0.1 0 0 1.3 host 1.3\n";
+  }
+  try {
+    io::read_carmen_log(path.string());
+    ADD_FAILURE() << "a truncated record must not be accepted";
+  } catch (const io::ParseError& e) {
+    EXPECT_EQ(e.line(), 3u) << e.what();
+  }
+  io::CarmenReadOptions lenient;
+  lenient.skip_malformed_records = true;
+  io::CarmenReadReport report;
+  const io::CarmenLog log = io::read_carmen_log(path.string(), &report, lenient);
+  EXPECT_EQ(log.scans.size(), 2u);
+  EXPECT_EQ(report.malformed_records, 1u);
+  EXPECT_NE(report.first_malformed.find(":3:"), std::string::npos) << report.first_malformed;
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace cairn::slam2d
