@@ -137,7 +137,7 @@ Runner register_slam2d(CLI::App& app) {
   app.add_option("LOG", flags->log, "CARMEN log (.clf/.log, also .gz/.bz2)");
   app.add_option("--out", flags->out, "Output directory: map.pgm/.yaml/.png, trajectory.tum, graph.g2o, corrected.clf, report.json");
   app.add_option("--config", flags->config, "YAML configuration (every key optional; see docs/configuration.md)");
-  app.add_option("--preset", flags->preset, "Starting configuration: default (SICK LMS-class 180-beam scanners), sim")
+  app.add_option("--preset", flags->preset, "Starting configuration: default (SICK LMS-class, 180-361 beams over 180 degrees), short-range (360-degree scanners up to 12 m, 2-3 cm noise)")
       ->capture_default_str();
   app.add_option("--set", flags->set, "Override one key: section.key=value (repeatable)");
   app.add_option("--relations", flags->relations, "Freiburg relations file: print the relations metric at the end");

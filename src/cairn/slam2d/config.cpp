@@ -62,6 +62,7 @@ std::vector<Key> keys(Slam2dOptions& o) {
       {"loop_closure", "branch_and_bound_depth", &o.loop_search.depth, "precomputation grids (2^(depth-1) cells at the top)"},
       {"loop_closure", "unknown_probability", &o.loop_search.unknown_probability, "score of unexplored cells"},
       {"loop_closure", "min_score", &o.loop_min_score, "branch-and-bound score a candidate needs"},
+      {"loop_closure", "relocalisation_min_score", &o.relocalisation_min_score, "branch-and-bound score a relocalisation needs (while matching fails)"},
       {"loop_closure", "min_inlier_fraction", &o.loop_min_inlier_fraction, "verification: ICP inliers against the submap"},
       {"loop_closure", "max_rms_m", &o.loop_max_rms_m, "verification: ICP residual RMS"},
       {"loop_closure", "min_degeneracy", &o.loop_min_degeneracy, "verification: smallest normal-spread eigenvalue of the match"},
@@ -75,6 +76,7 @@ std::vector<Key> keys(Slam2dOptions& o) {
       {"back_end", "loop_rotation_sigma_rad", &o.loop_rotation_sigma_rad, "noise of loop-closure edges"},
       {"back_end", "optimize_every_n_keyframes", &o.optimize_every_n_keyframes, "optimise when loops arrived and this many keyframes passed"},
       {"back_end", "final_gnc", &o.final_gnc, "GNC over loop closures at the end (rejects the ones that disagree)"},
+      {"output", "map_resolution_m", &o.output_map_resolution_m, "cell side of the written map (map.pgm, map.png)"},
       {"health", "degraded_min_inlier_fraction", &o.degraded_min_inlier_fraction, "below: degraded"},
       {"health", "degraded_min_degeneracy", &o.degraded_min_degeneracy, "smallest normal-spread eigenvalue below: degraded"},
       {"health", "min_matching_points", &o.min_matching_points, "scans with fewer returns are not matched (degraded, odometry only)"},
@@ -111,16 +113,25 @@ const char* type_name(const std::variant<double*, int*, bool*>& v) {
 
 }  // namespace
 
-std::vector<std::string> preset_names() { return {"default", "sim"}; }
+std::vector<std::string> preset_names() { return {"default", "short-range"}; }
 
 Slam2dOptions preset_options(const std::string& name) {
   Slam2dOptions o;
+  // SICK LMS-class scanners: 180-361 beams over 180 degrees, range noise about 1 cm, up to 30 m
+  // used. The Freiburg logs (ACES, Intel, MIT CSAIL) and cairn's simulator all run with this.
   if (name == "default") return o;
-  if (name == "sim") {
-    // cairn's simulator: the same scanner class; noise levels are those of the scenario.
+  if (name == "short-range") {
+    // Low-cost 360-degree scanners (RPLIDAR A1/A2, YDLIDAR X4 class): 12 m at most, range noise
+    // 2-3 cm. Residual scale, inlier band and the loop verification's RMS widen with the noise.
+    o.filter.max_range_m = 12.0;
+    o.filter.missing_ray_length_m = 3.0;
+    o.icp.point_sigma_m = 0.03;
+    o.icp.huber_threshold_m = 0.05;
+    o.icp.inlier_distance_m = 0.08;
+    o.loop_max_rms_m = 0.05;
     return o;
   }
-  throw std::invalid_argument("unknown preset '" + name + "' (known: default, sim)");
+  throw std::invalid_argument("unknown preset '" + name + "' (known: default, short-range)");
 }
 
 void apply_setting(const std::string& assignment, Slam2dOptions& options) {

@@ -17,7 +17,8 @@
 namespace cairn::slam2d {
 
 /// "default" (SICK LMS-class scanners: 180-361 beams over 180 degrees, the Freiburg logs) or
-/// "sim" (cairn's simulator); throws std::invalid_argument naming the known presets otherwise.
+/// "short-range" (360-degree scanners up to 12 m with 2-3 cm noise, RPLIDAR/YDLIDAR class);
+/// throws std::invalid_argument naming the known presets otherwise.
 Slam2dOptions preset_options(const std::string& name);
 std::vector<std::string> preset_names();
 

@@ -217,7 +217,9 @@ OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::siz
   files.corrected_log = (dir / "corrected.clf").string();
   files.report = (dir / "report.json").string();
 
-  const ProbabilityGrid grid = slam.render_map(options.grid);
+  ProbabilityGridOptions map_options = options.grid;
+  map_options.resolution_m = options.output_map_resolution_m;
+  const ProbabilityGrid grid = slam.render_map(map_options);
   write_map_pgm(grid, files.map_pgm, files.map_yaml);
   const std::vector<ScanResult> trajectory = slam.trajectory();
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> loops;

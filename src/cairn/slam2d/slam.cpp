@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -58,6 +59,9 @@ struct Edge {
   core::SE2 T_from_to;
   bool loop = false;
   int candidate = -1;  ///< index into summary.candidates
+  /// Spans a scan whose match failed: odometry alone, possibly a slip or a kidnapping; kept only
+  /// to connect the graph (sigma 10 m, 3 rad) so a relocalisation loop can move it freely.
+  bool weak = false;
 };
 
 Eigen::Matrix3d information(double sigma_t, double sigma_r) {
@@ -87,6 +91,7 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (loop_search_every_n_keyframes < 1) problems << "loop_search_every_n_keyframes must be >= 1; ";
   if (!(loop_ambiguity_window_m >= 0.0)) problems << "loop_ambiguity_window_m must be >= 0; ";
   if (!(loop_min_score > 0.0 && loop_min_score < 1.0)) problems << "loop_min_score must be in (0, 1); ";
+  if (!(relocalisation_min_score > 0.0 && relocalisation_min_score < 1.0)) problems << "relocalisation_min_score must be in (0, 1); ";
   if (!(odometry_translation_sigma_m > 0.0 && odometry_rotation_sigma_rad > 0.0 && loop_translation_sigma_m > 0.0 &&
         loop_rotation_sigma_rad > 0.0))
     problems << "edge sigmas must be > 0; ";
@@ -95,6 +100,7 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (min_matching_points < 3) problems << "min_matching_points must be >= 3; ";
   if (lost_after_scans < 1) problems << "lost_after_scans must be >= 1; ";
   if (!(icp.point_sigma_m > 0.0) || icp.max_iterations < 1) problems << "icp: point_sigma_m > 0, max_iterations >= 1; ";
+  if (!(output_map_resolution_m > 0.0)) problems << "output map resolution must be > 0; ";
   if (!(grid.resolution_m > 0.0)) problems << "grid resolution must be > 0; ";
   if (!(map_points.cell_size_m >= icp.max_correspondence_m))
     problems << "map_points.cell_size_m must be >= icp.max_correspondence_m; ";
@@ -120,16 +126,25 @@ struct Slam2d::Impl {
   int keyframes_since_optimization = 0;
   int local_map_start = 0;  ///< first keyframe allowed in the local map (reset on relocalisation)
   bool have_loop = false;
+  bool lost_since_keyframe = false;  ///< a scan since the last keyframe failed to match
+  /// The current stretch of failed matches: its first scan and the first keyframe made in it.
+  std::optional<std::size_t> failed_since_scan;
+  std::size_t failed_since_keyframe = 0;
   double last_loop_path_m = 0.0;  ///< path length at the last accepted loop closure
 
   explicit Impl(const Slam2dOptions& o) : options(o), local_map(o.map_points) {}
 
   void rebuild_local_map() {
     std::vector<Eigen::Vector2d> points;
-    const int last = static_cast<int>(keyframes.size());
-    const int first = std::max(local_map_start, last - options.local_map_keyframes);
-    for (int k = first; k < last; ++k) {
-      for (const auto& p : keyframes[static_cast<std::size_t>(k)].hits) points.push_back(keyframes[static_cast<std::size_t>(k)].T_local_laser * p);
+    // The newest `local_map_keyframes` keyframes that carry points: keyframes of failed matches
+    // carry none, so after a stretch of garbage scans the map of the last good stretch is kept.
+    int first = static_cast<int>(keyframes.size());
+    for (int used = 0; first > local_map_start && used < options.local_map_keyframes;) {
+      if (!keyframes[static_cast<std::size_t>(--first)].hits.empty()) ++used;
+    }
+    for (int k = first; k < static_cast<int>(keyframes.size()); ++k) {
+      const Keyframe& kf = keyframes[static_cast<std::size_t>(k)];
+      for (const auto& p : kf.hits) points.push_back(kf.T_local_laser * p);
     }
     local_map.build(voxel_filter(points, options.filter.voxel_size_m));
   }
@@ -175,21 +190,34 @@ struct Slam2d::Impl {
     }
     const core::SE2 initial = anchor.T_world_laser.inverse() * kf.T_world_laser;
     ++summary.loop_searches;
-    const BranchAndBoundResult best = match_branch_and_bound(*submap.stack, kf.matching, initial, options.loop_min_score, window);
-    if (!best.found) return -1;
     LoopCandidate candidate;
+    const double min_score = relocalisation ? options.relocalisation_min_score : options.loop_min_score;
+    if (!search_and_verify(*submap.stack, *submap.points, kf.matching, initial, window, min_score, candidate)) return -1;
     candidate.keyframe = k;
     candidate.submap = s;
     candidate.anchor_keyframe = submap.anchor;
     candidate.time = kf.time;
     candidate.anchor_time = anchor.time;
+    candidate.relocalisation = relocalisation;
+    summary.candidates.push_back(candidate);
+    return static_cast<int>(summary.candidates.size()) - 1;
+  }
+
+  // Branch-and-bound search of `matching` in a map (grid stack + points, one frame) around
+  // `initial`, then the loop-closure verification: ICP refinement without prior (inliers, RMS,
+  // agreement with the search, degeneracy) and an ambiguity search. Fills the match fields of
+  // `candidate`; returns false when the search finds nothing above `min_score`.
+  bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map_points,
+                         const std::vector<Eigen::Vector2d>& matching, const core::SE2& initial,
+                         const BranchAndBoundOptions& window, double min_score, LoopCandidate& candidate) const {
+    const BranchAndBoundResult best = match_branch_and_bound(stack, matching, initial, min_score, window);
+    if (!best.found) return false;
     candidate.search_window_m = window.linear_search_window_m;
     candidate.score = best.score;
-    candidate.relocalisation = relocalisation;
     // Verification 1: refine by ICP against the submap's points (no prior) and check the fit.
     IcpOptions refine = options.icp;
     refine.prior_translation_sigma_m = 0.0;
-    const IcpResult icp = match_icp(*submap.points, kf.matching, best.T_map_sensor, nullptr, refine);
+    const IcpResult icp = match_icp(map_points, matching, best.T_map_sensor, nullptr, refine);
     candidate.inlier_fraction = icp.inlier_fraction;
     candidate.rms_m = icp.rms_m;
     candidate.degeneracy = icp.degeneracy;
@@ -208,7 +236,7 @@ struct Slam2d::Impl {
       BranchAndBoundOptions wide = window;
       wide.linear_search_window_m = std::max(window.linear_search_window_m, options.loop_ambiguity_window_m);
       const BranchAndBoundResult other = match_branch_and_bound(
-          *submap.stack, kf.matching, initial, best.score - options.loop_ambiguity_margin, wide, &best.T_map_sensor,
+          stack, matching, initial, best.score - options.loop_ambiguity_margin, wide, &best.T_map_sensor,
           options.loop_ambiguity_distance_m, options.loop_ambiguity_angle_rad);
       candidate.second_score = other.found ? other.score : 0.0;
       if (other.found) {
@@ -218,8 +246,38 @@ struct Slam2d::Impl {
         candidate.reason = "accepted";
       }
     }
-    summary.candidates.push_back(candidate);
-    return static_cast<int>(summary.candidates.size()) - 1;
+    return true;
+  }
+
+  // Tracking relocalisation: searches the scan in the map of the last keyframes that carry points
+  // (front-end frame) over the loop-search window around `predicted`, with the loop verification.
+  // Recovers a slip or jump of the odometry that the finished submaps do not cover yet (the
+  // robot is usually still inside its active submap). Returns the verified pose or nothing.
+  std::optional<core::SE2> relocalise_locally(const std::vector<Eigen::Vector2d>& matching, const core::SE2& predicted,
+                                              LoopCandidate& candidate) const {
+    ProbabilityGrid grid(options.grid);
+    std::vector<Eigen::Vector2d> points;
+    int used = 0;
+    for (int k = static_cast<int>(keyframes.size()) - 1; k >= local_map_start && used < options.submap_keyframes; --k) {
+      const Keyframe& kf = keyframes[static_cast<std::size_t>(k)];
+      if (kf.hits.empty()) continue;
+      ++used;
+      std::vector<Eigen::Vector2d> all = kf.hits;
+      std::vector<bool> hit(all.size(), true);
+      all.insert(all.end(), kf.misses.begin(), kf.misses.end());
+      hit.resize(all.size(), false);
+      grid.insert(kf.T_local_laser, all, hit);
+      for (const auto& p : kf.hits) points.push_back(kf.T_local_laser * p);
+    }
+    if (used == 0) return std::nullopt;
+    const PrecomputationGridStack stack(grid, options.loop_search);
+    PointMap map_points(options.map_points);
+    map_points.build(voxel_filter(points, options.filter.voxel_size_m));
+    const bool found =
+        search_and_verify(stack, map_points, matching, predicted, options.loop_search, options.relocalisation_min_score, candidate);
+    if (!found || !candidate.accepted)
+      return std::nullopt;
+    return candidate.T_anchor_keyframe;
   }
 
   backend::Problem2D make_graph_problem(io::PoseGraph2D* graph_out = nullptr) const {
@@ -230,8 +288,9 @@ struct Slam2d::Impl {
       edge.from = e.from;
       edge.to = e.to;
       edge.T_from_to = e.T_from_to;
-      edge.information = e.loop ? information(options.loop_translation_sigma_m, options.loop_rotation_sigma_rad)
-                                : information(options.odometry_translation_sigma_m, options.odometry_rotation_sigma_rad);
+      edge.information = e.loop   ? information(options.loop_translation_sigma_m, options.loop_rotation_sigma_rad)
+                         : e.weak ? information(10.0, 3.0)
+                                  : information(options.odometry_translation_sigma_m, options.odometry_rotation_sigma_rad);
       graph.edges.push_back(edge);
     }
     graph.fixed.push_back(0);
@@ -272,6 +331,36 @@ struct Slam2d::Impl {
     summary.times.optimize_s += seconds_since(start);
   }
 
+  // Matching resumed after a stretch of failed matches: the stretch followed odometry from the
+  // last good pose, but the failure most likely began with what made it fail (a jump or slip of
+  // the odometry, a kidnapping), so its poses are re-placed by odometry backwards from the first
+  // good match instead: every front-end pose of the stretch is moved by the correction
+  // `C_local` (matched pose times predicted pose inverse) and the keyframe chain is rebuilt.
+  void replace_failed_stretch(const core::SE2& C_local) {
+    const std::size_t first_scan = *failed_since_scan;
+    std::vector<core::SE2> T_local_scans;
+    for (std::size_t i = first_scan; i < scans.size(); ++i) {
+      const ScanRecord& record = scans[i];
+      T_local_scans.push_back(C_local * (keyframes[static_cast<std::size_t>(record.keyframe)].T_local_laser * record.T_keyframe_laser));
+    }
+    for (std::size_t k = std::max<std::size_t>(failed_since_keyframe, 1); k < keyframes.size(); ++k) {
+      Keyframe& kf = keyframes[k];
+      const Keyframe& previous = keyframes[k - 1];
+      kf.T_local_laser = C_local * kf.T_local_laser;
+      kf.T_world_laser = previous.T_world_laser * (previous.T_local_laser.inverse() * kf.T_local_laser);
+    }
+    for (Edge& e : edges) {
+      if (e.loop || e.to < static_cast<int>(failed_since_keyframe)) continue;
+      e.T_from_to = keyframes[static_cast<std::size_t>(e.from)].T_local_laser.inverse() * keyframes[static_cast<std::size_t>(e.to)].T_local_laser;
+    }
+    for (std::size_t i = first_scan; i < scans.size(); ++i) {
+      ScanRecord& record = scans[i];
+      record.T_keyframe_laser = keyframes[static_cast<std::size_t>(record.keyframe)].T_local_laser.inverse() * T_local_scans[i - first_scan];
+    }
+    previous_local = C_local * previous_local;
+    failed_since_scan.reset();
+  }
+
   void set_health(Health next, std::size_t scan, core::Timestamp time, const std::string& reason, Slam2dSummary& summary) {
     if (next == health) return;
     summary.health_events.push_back({time, scan, health, next, reason});
@@ -303,8 +392,9 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   core::SE2 T_local_laser = scan.T_odom_laser;
   const auto match_start = Clock::now();
   bool matched = false;
+  core::SE2 predicted = T_local_laser;
   if (m.have_previous) {
-    const core::SE2 predicted = m.previous_local * (m.previous_odom.inverse() * scan.T_odom_laser);
+    predicted = m.previous_local * (m.previous_odom.inverse() * scan.T_odom_laser);
     T_local_laser = predicted;
     if (!m.local_map.empty() && static_cast<int>(points.matching.size()) >= o.min_matching_points) {
       IcpResult icp = match_icp(m.local_map, points.matching, predicted, &predicted, o.icp);
@@ -331,6 +421,31 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
     matched = true;
     record.inlier_fraction = 1.0;
     record.degeneracy = 0.5;
+  }
+  // A failed match may be a jump or slip of the odometry: search the recent map over the loop
+  // window, verified like a loop closure (every failed scan until lost, then every 5th).
+  std::string relocalised_reason;
+  if (!matched && m.have_previous && static_cast<int>(points.matching.size()) >= o.min_matching_points &&
+      (m.bad_matches_in_a_row < o.lost_after_scans || m.bad_matches_in_a_row % 5 == 0)) {
+    LoopCandidate candidate;
+    if (const auto T = m.relocalise_locally(points.matching, T_local_laser, candidate)) {
+      T_local_laser = *T;
+      matched = true;
+      record.inlier_fraction = candidate.inlier_fraction;
+      record.degeneracy = candidate.degeneracy;
+      ++summary_.relocalisations;
+      relocalised_reason = "relocalised in the recent map (score " + std::to_string(candidate.score) + ", inlier fraction " +
+                           std::to_string(candidate.inlier_fraction) + ", moved " +
+                           std::to_string((T->translation() - m.previous_local.translation()).norm()) + " m from the last pose)";
+    }
+  }
+  if (m.have_previous && !matched && static_cast<int>(points.matching.size()) >= o.min_matching_points) {
+    if (!m.failed_since_scan) {
+      m.failed_since_scan = scan_index;
+      m.failed_since_keyframe = m.keyframes.size();
+    }
+  } else if (matched && m.failed_since_scan) {
+    m.replace_failed_stretch(T_local_laser * predicted.inverse());
   }
   summary_.times.local_match_s += seconds_since(match_start);
 
@@ -360,8 +475,13 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
     reason = "degenerate geometry (degeneracy " + std::to_string(record.degeneracy) + "); odometry carries the unconstrained direction";
   }
   if (next == Health::kOk && m.health == Health::kLost) reason = "matching recovered";
+  if (!relocalised_reason.empty()) {
+    next = Health::kDegraded;  // one scan: the next one matching normally brings it back to ok
+    reason = relocalised_reason;
+  }
   m.set_health(next, scan_index, scan.time, reason, summary_);
   record.health = next;
+  if (!matched && !too_few_returns && m.have_previous) m.lost_since_keyframe = true;
   if (next == Health::kOk) ++summary_.scans_ok;
   if (next == Health::kDegraded) ++summary_.scans_degraded;
   if (next == Health::kLost) ++summary_.scans_lost;
@@ -382,8 +502,14 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
     Keyframe kf;
     kf.time = scan.time;
     kf.T_local_laser = T_local_laser;
-    kf.hits = std::move(points.hits);
-    kf.misses = std::move(points.misses);
+    // A scan that failed to match keeps its points out of the maps (it may be garbage, or
+    // placed wrong); the keyframe still carries the pose chain.
+    // Its matching points are kept: relocalisation searches them against the submaps.
+    const bool placed = matched || too_few_returns;
+    if (placed) {
+      kf.hits = std::move(points.hits);
+      kf.misses = std::move(points.misses);
+    }
     kf.matching = std::move(points.matching);
     kf.path_length_m = m.path_length_m;
     kf.scan = scan_index;
@@ -394,9 +520,9 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
       const Keyframe& previous = m.keyframes.back();
       const core::SE2 T_prev_kf = previous.T_local_laser.inverse() * T_local_laser;
       kf.T_world_laser = previous.T_world_laser * T_prev_kf;
-      // A lost stretch is not a measurement: the edge still joins the chain (odometry), with the
-      // same weight; loop closures and GNC must correct it.
-      m.edges.push_back({k - 1, k, T_prev_kf, false, -1});
+      Edge edge{k - 1, k, T_prev_kf, false, -1, m.lost_since_keyframe};
+      m.edges.push_back(edge);
+      m.lost_since_keyframe = false;
     }
     m.keyframes.push_back(std::move(kf));
     ++summary_.keyframes;
@@ -471,8 +597,16 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
         if (lost) {
           // Relocalised: place the keyframe where the submap says, restart the local map there.
           ++summary_.relocalisations;
-          m.keyframes.back().T_world_laser = anchor.T_world_laser * candidate.T_anchor_keyframe;
+          Keyframe& relocalised = m.keyframes.back();
+          relocalised.T_world_laser = anchor.T_world_laser * candidate.T_anchor_keyframe;
+          if (!placed) {
+            // Verified against the map: its points are trustworthy now.
+            relocalised.hits = std::move(points.hits);
+            relocalised.misses = std::move(points.misses);
+          }
           m.local_map_start = k;
+          m.rebuild_local_map();
+          m.failed_since_scan.reset();  // placed by the submap; the stretch keeps its odometry
           m.bad_matches_in_a_row = 0;
           m.set_health(Health::kDegraded, scan_index, scan.time, "relocalised against submap " + std::to_string(s), summary_);
           break;

@@ -72,6 +72,9 @@ struct Slam2dOptions {
   double loop_angle_window_base_rad = 0.1;
   double loop_angle_window_drift_per_m = 0.003;
   double loop_min_score = 0.6;         ///< branch-and-bound score (mean probability)
+  /// Relocalisation (while matching fails) accepts a lower search score: the scan may see space the
+  /// map does not hold yet. The ICP and ambiguity verification are the same as for loops.
+  double relocalisation_min_score = 0.5;
   double loop_min_inlier_fraction = 0.8;  ///< ICP verification against the submap points
   double loop_max_rms_m = 0.03;
   double loop_min_degeneracy = 0.1;    ///< verification: the match constrains every direction
@@ -89,6 +92,7 @@ struct Slam2dOptions {
   double loop_rotation_sigma_rad = 0.01;
   int optimize_every_n_keyframes = 20;
   bool final_gnc = true;               ///< GNC over loop closures at finish()
+  double output_map_resolution_m = 0.05;  ///< cell of the written map (PGM, PNG); > 0
 
   double degraded_min_inlier_fraction = 0.5;
   double degraded_min_degeneracy = 0.03;
