@@ -121,7 +121,7 @@ void write_map_pgm(const ProbabilityGrid& grid, const std::string& pgm_path, con
 void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& trajectory,
                    const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& loops, const std::string& path) {
   const Crop crop = known_crop(grid, 10);
-  const int width = std::max(360, crop.width), height = crop.height;
+  const int width = std::max(480, crop.width), height = crop.height;
   const int legend = 28;
   std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
   unsigned char* data = cairo_image_surface_get_data(surface.get());
@@ -150,8 +150,9 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
     return Eigen::Vector2d((p.x() - origin.x()) / r, height - (p.y() - origin.y()) / r);
   };
   // Loop closures: thin green lines between the two poses.
+  // Many loop closures would hide the map: the more there are, the fainter each line.
   cairo_set_line_width(cr, 1.0);
-  cairo_set_source_rgba(cr, 0.1, 0.7, 0.2, 0.6);
+  cairo_set_source_rgba(cr, 0.1, 0.7, 0.2, std::clamp(60.0 / static_cast<double>(std::max<std::size_t>(loops.size(), 1)), 0.1, 0.6));
   for (const auto& [a, b] : loops) {
     const auto pa = to_image(a), pb = to_image(b);
     cairo_move_to(cr, pa.x(), pa.y());
@@ -191,12 +192,19 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
   swatch(0.95, 0.55, 0.05, "degraded");
   swatch(0.9, 0.1, 0.1, "lost");
   swatch(0.1, 0.7, 0.2, "loop closure");
-  const double bar_m = width * r > 40.0 ? 10.0 : 1.0;
+  // The longest round scale bar that fits beside the legend.
+  double bar_m = 1.0;
+  for (const double length : {10.0, 5.0, 2.0}) {
+    if (x + length / r + 50.0 <= width) {
+      bar_m = length;
+      break;
+    }
+  }
   cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_rectangle(cr, x, y - 9.0, bar_m / r, 4.0);
   cairo_fill(cr);
   cairo_move_to(cr, x + bar_m / r + 6.0, y - 3.0);
-  cairo_show_text(cr, bar_m >= 10.0 ? "10 m" : "1 m");
+  cairo_show_text(cr, (std::to_string(static_cast<int>(bar_m)) + " m").c_str());
   cairo_surface_flush(surface.get());
   io::write_file_atomically(path, [&](std::ostream& out) {
     if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS)
