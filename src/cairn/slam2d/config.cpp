@@ -76,6 +76,7 @@ std::vector<Key> keys(Slam2dOptions& o) {
       {"back_end", "loop_rotation_sigma_rad", &o.loop_rotation_sigma_rad, "noise of loop-closure edges"},
       {"back_end", "optimize_every_n_keyframes", &o.optimize_every_n_keyframes, "optimise when loops arrived and this many keyframes passed"},
       {"back_end", "final_gnc", &o.final_gnc, "GNC over loop closures at the end (rejects the ones that disagree)"},
+      {"back_end", "edge_covariance_from_matcher", &o.edge_covariance_from_matcher, "keyframe edges add the match covariance (weak along degenerate directions)"},
       {"output", "map_resolution_m", &o.output_map_resolution_m, "cell side of the written map (map.pgm, map.png)"},
       {"health", "degraded_min_inlier_fraction", &o.degraded_min_inlier_fraction, "below: degraded"},
       {"health", "degraded_min_degeneracy", &o.degraded_min_degeneracy, "smallest normal-spread eigenvalue below: degraded"},

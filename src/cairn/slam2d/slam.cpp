@@ -62,6 +62,9 @@ struct Edge {
   /// Spans a scan whose match failed: odometry alone, possibly a slip or a kidnapping; kept only
   /// to connect the graph (sigma 10 m, 3 rad) so a relocalisation loop can move it freely.
   bool weak = false;
+  /// Covariance of the keyframe's match in the `from` frame (x, y, theta); added to the
+  /// odometry sigmas when edge_covariance_from_matcher is set.
+  Eigen::Matrix3d match_covariance = Eigen::Matrix3d::Zero();
 };
 
 Eigen::Matrix3d information(double sigma_t, double sigma_r) {
@@ -288,9 +291,18 @@ struct Slam2d::Impl {
       edge.from = e.from;
       edge.to = e.to;
       edge.T_from_to = e.T_from_to;
-      edge.information = e.loop   ? information(options.loop_translation_sigma_m, options.loop_rotation_sigma_rad)
-                         : e.weak ? information(10.0, 3.0)
-                                  : information(options.odometry_translation_sigma_m, options.odometry_rotation_sigma_rad);
+      if (e.loop) {
+        edge.information = information(options.loop_translation_sigma_m, options.loop_rotation_sigma_rad);
+      } else if (e.weak) {
+        edge.information = information(10.0, 3.0);
+      } else {
+        edge.information = information(options.odometry_translation_sigma_m, options.odometry_rotation_sigma_rad);
+        if (options.edge_covariance_from_matcher) {
+          const Eigen::Matrix3d covariance = edge.information.inverse() + e.match_covariance;
+          edge.information = covariance.inverse();
+          edge.information = 0.5 * (edge.information + edge.information.transpose()).eval();
+        }
+      }
       graph.edges.push_back(edge);
     }
     graph.fixed.push_back(0);
@@ -393,6 +405,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   const auto match_start = Clock::now();
   bool matched = false;
   core::SE2 predicted = T_local_laser;
+  Eigen::Matrix3d match_hessian = Eigen::Matrix3d::Zero();  // scan term of the accepted match
   if (m.have_previous) {
     predicted = m.previous_local * (m.previous_odom.inverse() * scan.T_odom_laser);
     T_local_laser = predicted;
@@ -414,6 +427,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
         record.covariance = icp.hessian.inverse();
       if (icp.inlier_fraction >= o.lost_inlier_fraction) {
         T_local_laser = icp.T_map_sensor;
+        match_hessian = icp.hessian;
         matched = true;
       }
     }
@@ -521,6 +535,21 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
       const core::SE2 T_prev_kf = previous.T_local_laser.inverse() * T_local_laser;
       kf.T_world_laser = previous.T_world_laser * T_prev_kf;
       Edge edge{k - 1, k, T_prev_kf, false, -1, m.lost_since_keyframe};
+      if (!edge.weak) {
+        // (H_scan + H_prior)^-1 in the local frame, rotated into the previous keyframe's frame.
+        Eigen::Matrix3d H = match_hessian;
+        if (o.icp.prior_translation_sigma_m > 0.0) {
+          H(0, 0) += 1.0 / (o.icp.prior_translation_sigma_m * o.icp.prior_translation_sigma_m);
+          H(1, 1) += 1.0 / (o.icp.prior_translation_sigma_m * o.icp.prior_translation_sigma_m);
+          H(2, 2) += 1.0 / (o.icp.prior_rotation_sigma_rad * o.icp.prior_rotation_sigma_rad);
+        }
+        const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
+        if (ldlt.info() == Eigen::Success && ldlt.isPositive() && H.determinant() > 0.0) {
+          Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
+          J.topLeftCorner<2, 2>() = previous.T_local_laser.so2().matrix().transpose();
+          edge.match_covariance = J * H.inverse() * J.transpose();
+        }
+      }
       m.edges.push_back(edge);
       m.lost_since_keyframe = false;
     }

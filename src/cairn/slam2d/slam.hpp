@@ -92,6 +92,11 @@ struct Slam2dOptions {
   double loop_rotation_sigma_rad = 0.01;
   int optimize_every_n_keyframes = 20;
   bool final_gnc = true;               ///< GNC over loop closures at finish()
+  /// Keyframe edges: covariance = odometry sigmas^2 + the covariance of the keyframe's match,
+  /// (H_scan + H_prior)^-1 (Censi 2007 first-order estimate, with the ICP prior), rotated into the
+  /// edge's frame. Where the match is degenerate (a corridor) the edge is weak along the
+  /// unobservable direction, so loop closures can move the chain along it. false: odometry sigmas only.
+  bool edge_covariance_from_matcher = true;
   double output_map_resolution_m = 0.05;  ///< cell of the written map (PGM, PNG); > 0
 
   double degraded_min_inlier_fraction = 0.5;
