@@ -14,6 +14,8 @@
 #include "cairn/core/assert.hpp"
 #include "cairn/core/so2.hpp"
 
+#include <tbb/parallel_for.h>
+
 namespace cairn::slam2d {
 namespace {
 
@@ -175,9 +177,11 @@ struct Slam2d::Impl {
     submap.finished = true;
   }
 
-  // Searches keyframe `k` against submap `s`; records the candidate; returns its index or -1.
-  int search_loop(int k, int s, bool relocalisation, Slam2dSummary& summary) {
-    Submap& submap = submaps[static_cast<std::size_t>(s)];
+  // Searches keyframe `k` against submap `s`; returns the verified (or rejected) candidate, or
+  // nothing when the search finds no pose above the minimum score. Reads the state only, so the
+  // searches of one keyframe run in parallel.
+  std::optional<LoopCandidate> search_loop(int k, int s, bool relocalisation) const {
+    const Submap& submap = submaps[static_cast<std::size_t>(s)];
     const Keyframe& kf = keyframes[static_cast<std::size_t>(k)];
     const Keyframe& anchor = keyframes[static_cast<std::size_t>(submap.anchor)];
     // The drift the estimate may have accumulated relative to the submap: the path travelled
@@ -192,18 +196,16 @@ struct Slam2d::Impl {
                                                   options.loop_angle_window_base_rad + options.loop_angle_window_drift_per_m * path);
     }
     const core::SE2 initial = anchor.T_world_laser.inverse() * kf.T_world_laser;
-    ++summary.loop_searches;
     LoopCandidate candidate;
     const double min_score = relocalisation ? options.relocalisation_min_score : options.loop_min_score;
-    if (!search_and_verify(*submap.stack, *submap.points, kf.matching, initial, window, min_score, candidate)) return -1;
+    if (!search_and_verify(*submap.stack, *submap.points, kf.matching, initial, window, min_score, candidate)) return std::nullopt;
     candidate.keyframe = k;
     candidate.submap = s;
     candidate.anchor_keyframe = submap.anchor;
     candidate.time = kf.time;
     candidate.anchor_time = anchor.time;
     candidate.relocalisation = relocalisation;
-    summary.candidates.push_back(candidate);
-    return static_cast<int>(summary.candidates.size()) - 1;
+    return candidate;
   }
 
   // Branch-and-bound search of `matching` in a map (grid stack + points, one frame) around
@@ -607,12 +609,20 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
         }
         nearby = std::move(chosen);
       }
-      for (const auto& [distance, s] : nearby) {
+      // The searches are independent: run them in parallel, then take their results in order.
+      // All searches of one keyframe size their window from the state before any of them (a loop
+      // accepted by one does not narrow the windows of the others), so the run is deterministic.
+      std::vector<std::optional<LoopCandidate>> found(nearby.size());
+      tbb::parallel_for(std::size_t{0}, nearby.size(), [&](std::size_t i) { found[i] = m.search_loop(k, nearby[i].second, lost); });
+      for (std::size_t i = 0; i < nearby.size(); ++i) {
+        const int s = nearby[i].second;
         const Submap& submap = m.submaps[static_cast<std::size_t>(s)];
         const Keyframe& anchor = m.keyframes[static_cast<std::size_t>(submap.anchor)];
-        const int c = m.search_loop(k, s, lost, summary_);
-        if (c < 0) continue;
-        LoopCandidate& candidate = summary_.candidates[static_cast<std::size_t>(c)];
+        ++summary_.loop_searches;
+        if (!found[i]) continue;
+        summary_.candidates.push_back(*found[i]);
+        const int c = static_cast<int>(summary_.candidates.size()) - 1;
+        LoopCandidate& candidate = summary_.candidates.back();
         if (!candidate.accepted) continue;
         m.edges.push_back({submap.anchor, k, candidate.T_anchor_keyframe, true, c});
         ++summary_.loops_accepted;
