@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 
 #include "cairn/core/assert.hpp"
 #include "cairn/core/so2.hpp"
@@ -14,23 +13,6 @@ std::uint8_t quantise_up(double p) {
   return static_cast<std::uint8_t>(std::clamp(std::ceil(p * 255.0), 0.0, 255.0));
 }
 
-// out[k] = max(in[k .. k + w - 1]) with in padded by `pad` on the right; monotonic deque
-// (van Herk / Gil-Werman style running maximum), O(n).
-void sliding_max(const std::vector<std::uint8_t>& in, int w, std::uint8_t pad, std::vector<std::uint8_t>& out) {
-  const int n = static_cast<int>(in.size());
-  out.assign(in.size(), 0);
-  std::deque<int> window;  // indices into the padded sequence, values decreasing
-  auto at = [&](int k) { return k < n ? in[static_cast<std::size_t>(k)] : pad; };
-  for (int k = 0; k < n + w - 1; ++k) {
-    while (!window.empty() && at(window.back()) <= at(k)) window.pop_back();
-    window.push_back(k);
-    const int start = k - w + 1;
-    if (start < 0) continue;
-    while (window.front() < start) window.pop_front();
-    if (start < n) out[static_cast<std::size_t>(start)] = at(window.front());
-  }
-}
-
 }  // namespace
 
 PrecomputationGridStack::PrecomputationGridStack(const ProbabilityGrid& grid, const BranchAndBoundOptions& options)
@@ -38,52 +20,48 @@ PrecomputationGridStack::PrecomputationGridStack(const ProbabilityGrid& grid, co
   CAIRN_ASSERT(options.depth >= 1 && options.depth <= 12, "branch-and-bound depth must be in [1, 12]");
   outside_ = quantise_up(options.unknown_probability);
   // Only the observed part of the grid matters (the grid grows by doubling, mostly unknown).
-  int i0 = grid.width(), j0 = grid.height(), i1 = -1, j1 = -1;
-  for (int j = 0; j < grid.height(); ++j) {
-    for (int i = 0; i < grid.width(); ++i) {
-      if (!grid.cell_known(i, j)) continue;
-      i0 = std::min(i0, i);
-      i1 = std::max(i1, i);
-      j0 = std::min(j0, j);
-      j1 = std::max(j1, j);
-    }
-  }
-  if (i1 < 0) i0 = j0 = i1 = j1 = 0;
+  int i0 = 0, j0 = 0, i1 = -1, j1 = -1;
+  if (!grid.known_bounds(i0, j0, i1, j1)) i0 = j0 = i1 = j1 = 0;
   const int known_width = i1 - i0 + 1, known_height = j1 - j0 + 1;
   const long base_i = grid.offset_i() + i0;
   const long base_j = grid.offset_j() + j0;
   for (int h = 0; h < options.depth; ++h) {
     const int w = 1 << h;
     Level level;
-    // Cell (i, j) of level h covers cells [i, i + w): it touches the map for i in
-    // [base - w + 1, base + width).
+    // Cell (i, j) of level h holds the maximum over cells [i, i + w) x [j, j + w) of the map:
+    // it touches the map for i in [base - w + 1, base + width).
     level.offset_i = base_i - (w - 1);
     level.offset_j = base_j - (w - 1);
     level.width = known_width + w - 1;
     level.height = known_height + w - 1;
-    // Padded base values: unknown outside the map.
-    std::vector<std::uint8_t> base(static_cast<std::size_t>(level.width) * static_cast<std::size_t>(level.height), outside_);
-    for (int j = 0; j < known_height; ++j) {
-      for (int i = 0; i < known_width; ++i) {
-        const bool known = grid.cell_known(i + i0, j + j0);
-        const double p = known ? grid.cell_probability(i + i0, j + j0) : options.unknown_probability;
-        base[static_cast<std::size_t>((j + w - 1) * level.width + (i + w - 1))] = quantise_up(p);
+    level.values.assign(static_cast<std::size_t>(level.width) * static_cast<std::size_t>(level.height), outside_);
+    if (h == 0) {
+      for (int j = 0; j < known_height; ++j) {
+        for (int i = 0; i < known_width; ++i) {
+          const bool known = grid.cell_known(i + i0, j + j0);
+          const double p = known ? grid.cell_probability(i + i0, j + j0) : options.unknown_probability;
+          level.values[static_cast<std::size_t>(j * level.width + i)] = quantise_up(p);
+        }
+      }
+    } else {
+      // A square of side w is four squares of side w / 2: the maximum of four cells of the
+      // previous level (outside it: unknown). Exact, O(area) per level.
+      const Level& previous = levels_.back();
+      const long half = w / 2;
+      auto at = [&](long gi, long gj) {
+        const long li = gi - previous.offset_i, lj = gj - previous.offset_j;
+        if (li < 0 || lj < 0 || li >= previous.width || lj >= previous.height) return outside_;
+        return previous.values[static_cast<std::size_t>(lj * previous.width + li)];
+      };
+      for (int j = 0; j < level.height; ++j) {
+        const long gj = level.offset_j + j;
+        for (int i = 0; i < level.width; ++i) {
+          const long gi = level.offset_i + i;
+          level.values[static_cast<std::size_t>(j * level.width + i)] =
+              std::max(std::max(at(gi, gj), at(gi + half, gj)), std::max(at(gi, gj + half), at(gi + half, gj + half)));
+        }
       }
     }
-    // Rows then columns.
-    std::vector<std::uint8_t> row(static_cast<std::size_t>(level.width)), row_max;
-    for (int j = 0; j < level.height; ++j) {
-      std::copy_n(base.begin() + static_cast<long>(j) * level.width, level.width, row.begin());
-      sliding_max(row, w, outside_, row_max);
-      std::copy(row_max.begin(), row_max.end(), base.begin() + static_cast<long>(j) * level.width);
-    }
-    std::vector<std::uint8_t> column(static_cast<std::size_t>(level.height)), column_max;
-    for (int i = 0; i < level.width; ++i) {
-      for (int j = 0; j < level.height; ++j) column[static_cast<std::size_t>(j)] = base[static_cast<std::size_t>(j * level.width + i)];
-      sliding_max(column, w, outside_, column_max);
-      for (int j = 0; j < level.height; ++j) base[static_cast<std::size_t>(j * level.width + i)] = column_max[static_cast<std::size_t>(j)];
-    }
-    level.values = std::move(base);
     levels_.push_back(std::move(level));
   }
 }

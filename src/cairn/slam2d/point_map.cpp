@@ -1,6 +1,7 @@
 #include "cairn/slam2d/point_map.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 #include "cairn/core/assert.hpp"
@@ -62,13 +63,19 @@ void PointMap::build(const std::vector<Eigen::Vector2d>& points) {
 }
 
 const MapPoint* PointMap::nearest(const Eigen::Vector2d& query, double max_distance_m) const {
-  const auto ci = static_cast<std::int64_t>(std::floor(query.x() / options_.cell_size_m));
-  const auto cj = static_cast<std::int64_t>(std::floor(query.y() / options_.cell_size_m));
+  // Only the cells the disc of radius max_distance_m touches (1 to 4 of the 3 x 3 around the
+  // query when the radius is below half a cell, as in ICP's final iterations).
+  const double r = std::min(max_distance_m, options_.cell_size_m);
+  const double c = options_.cell_size_m;
+  const auto i_low = static_cast<std::int64_t>(std::floor((query.x() - r) / c));
+  const auto i_high = static_cast<std::int64_t>(std::floor((query.x() + r) / c));
+  const auto j_low = static_cast<std::int64_t>(std::floor((query.y() - r) / c));
+  const auto j_high = static_cast<std::int64_t>(std::floor((query.y() + r) / c));
   const MapPoint* best = nullptr;
   double best_d2 = max_distance_m * max_distance_m;
-  for (int di = -1; di <= 1; ++di) {
-    for (int dj = -1; dj <= 1; ++dj) {
-      const auto it = cells_.find(key(ci + di, cj + dj));
+  for (std::int64_t i = i_low; i <= i_high; ++i) {
+    for (std::int64_t j = j_low; j <= j_high; ++j) {
+      const auto it = cells_.find(key(i, j));
       if (it == cells_.end()) continue;
       for (const std::uint32_t k : it->second) {
         const double d2 = (points_[k].position - query).squaredNorm();

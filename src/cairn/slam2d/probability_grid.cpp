@@ -17,6 +17,8 @@ ProbabilityGrid::ProbabilityGrid(const ProbabilityGridOptions& options) : option
                    options.miss_probability > 0.0 && options.miss_probability < 0.5 &&
                    options.min_probability < options.max_probability,
                "invalid ProbabilityGridOptions");
+  min_log_odds_ = log_odds(options.min_probability);
+  max_log_odds_ = log_odds(options.max_probability);
 }
 
 // Cells are indexed globally by floor(p / r), and the grid stores the global index of its first
@@ -78,8 +80,7 @@ void ProbabilityGrid::grow_to_contain(const Eigen::Vector2d& p) {
 
 void ProbabilityGrid::update(int i, int j, double change) {
   const std::size_t k = static_cast<std::size_t>(j * width_ + i);
-  const double l = std::clamp(static_cast<double>(log_odds_[k]) + change, log_odds(options_.min_probability),
-                              log_odds(options_.max_probability));
+  const double l = std::clamp(static_cast<double>(log_odds_[k]) + change, min_log_odds_, max_log_odds_);
   log_odds_[k] = static_cast<float>(l);
   known_[k] = 1;
 }
@@ -127,6 +128,28 @@ double ProbabilityGrid::cell_probability(int i, int j) const {
 bool ProbabilityGrid::cell_known(int i, int j) const {
   if (i < 0 || j < 0 || i >= width_ || j >= height_) return false;
   return known_[static_cast<std::size_t>(j * width_ + i)] != 0;
+}
+
+bool ProbabilityGrid::known_bounds(int& i0, int& j0, int& i1, int& j1) const {
+  i0 = width_;
+  j0 = height_;
+  i1 = -1;
+  j1 = -1;
+  for (int j = 0; j < height_; ++j) {
+    const std::uint8_t* row = known_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+    int first = -1, last = -1;
+    for (int i = 0; i < width_; ++i) {
+      if (row[i] == 0) continue;
+      if (first < 0) first = i;
+      last = i;
+    }
+    if (first < 0) continue;
+    i0 = std::min(i0, first);
+    i1 = std::max(i1, last);
+    j0 = std::min(j0, j);
+    j1 = j;
+  }
+  return i1 >= 0;
 }
 
 double ProbabilityGrid::probability(const Eigen::Vector2d& p) const {

@@ -48,6 +48,8 @@ class ProbabilityGrid {
   double cell_probability(int i, int j) const;
   /// Whether cell (i, j) has been observed (false outside).
   bool cell_known(int i, int j) const;
+  /// Bounding box [i0, i1] x [j0, j1] of the observed cells; false if none is observed.
+  bool known_bounds(int& i0, int& j0, int& i1, int& j1) const;
   /// Global index floor(x / r) of column 0 and floor(y / r) of row 0.
   long offset_i() const { return offset_i_; }
   long offset_j() const { return offset_j_; }
@@ -58,6 +60,8 @@ class ProbabilityGrid {
   void update(int i, int j, double log_odds_change);
 
   ProbabilityGridOptions options_;
+  double min_log_odds_ = 0.0;  ///< clamp bounds, log-odds of min/max_probability
+  double max_log_odds_ = 0.0;
   long offset_i_ = 0;  ///< global index floor(x / r) of cell column 0
   long offset_j_ = 0;
   int width_ = 0;
