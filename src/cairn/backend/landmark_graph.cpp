@@ -203,6 +203,7 @@ LandmarkGraphSummary optimize(LandmarkGraph2D& graph, const LandmarkGraphOptions
   LandmarkGraphSummary summary;
   const Layout layout{graph.poses.size(), graph.landmarks.size()};
   summary.variables = static_cast<std::size_t>(layout.size());
+  summary.factorised_variables = summary.variables;
   summary.initial_cost = summary.final_cost = graph.cost();
   if (layout.size() == 0) {
     summary.status = LandmarkGraphStatus::kConverged;

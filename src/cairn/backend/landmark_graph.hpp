@@ -98,6 +98,7 @@ struct LandmarkGraphSummary {
   double initial_cost = 0.0;
   double final_cost = 0.0;
   std::size_t variables = 0;         ///< scalar unknowns (free poses x 3 + landmarks x 2)
+  std::size_t factorised_variables = 0;  ///< size of the system factorised (< variables after Schur elimination)
   std::size_t factor_nonzeros = 0;   ///< non-zeros of the last Cholesky factor
   double time_linearise_s = 0.0;
   double time_solve_s = 0.0;
