@@ -8,8 +8,6 @@
 #include <utility>
 
 #include <Eigen/Cholesky>
-#include <Eigen/OrderingMethods>
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
 #include "cairn/backend/factors.hpp"
@@ -237,8 +235,9 @@ class SchurSolver {
   std::size_t factor_nonzeros_ = 0;
 };
 
-// The LM step on the joint system, one AMD ordering over poses and landmarks (Eigen's
-// simplicial LDL^T, as the 2D solver).
+// The LM step on the joint system: one fill-reducing ordering over poses and landmarks chosen
+// by CHOLMOD, the same sparse Cholesky as the Schur path (so that the two differ only in the
+// elimination order).
 class JointSolver {
  public:
   JointSolver(const LandmarkGraph3D& graph, const Links& links) : graph_(graph), links_(links) {}
@@ -279,16 +278,23 @@ class JointSolver {
         add(c, 6 * static_cast<Eigen::Index>(links_.link[link].second), Eigen::Matrix<double, 3, 6>(n.W[link].transpose()));
       }
     }
-    Eigen::SparseMatrix<double> H(size, size);
-    H.setFromTriplets(triplets.begin(), triplets.end());
+    Eigen::SparseMatrix<double> H_lower(size, size);
+    H_lower.setFromTriplets(triplets.begin(), triplets.end());
+    // CHOLMOD takes the upper triangle in compressed columns: the transpose of the lower one.
+    Eigen::SparseMatrix<double> H_upper = H_lower.transpose();
+    H_upper.makeCompressed();
+    UpperCsc A;
+    A.size = static_cast<int>(size);
+    A.column_start.assign(H_upper.outerIndexPtr(), H_upper.outerIndexPtr() + size + 1);
+    A.row.assign(H_upper.innerIndexPtr(), H_upper.innerIndexPtr() + H_upper.nonZeros());
+    A.value.assign(H_upper.valuePtr(), H_upper.valuePtr() + H_upper.nonZeros());
     if (!analysed_) {
-      solver_.analyzePattern(H);
+      cholesky_.analyze(A);  // CHOLMOD's own fill-reducing ordering (AMD, METIS if AMD fills badly)
       analysed_ = true;
     }
-    solver_.factorize(H);
-    if (solver_.info() != Eigen::Success) return false;
-    const Eigen::VectorXd dx = solver_.solve(rhs);
-    factor_nonzeros_ = static_cast<std::size_t>(solver_.matrixL().nestedExpression().nonZeros());
+    if (cholesky_.factorize(A) != FactorizationStatus::kSuccess) return false;
+    const Eigen::VectorXd dx = cholesky_.solve(rhs);
+    factor_nonzeros_ = cholesky_.factor_nonzeros();
     *dx_poses = dx.head(pose_size);
     dx_landmarks->resize(graph_.landmarks.size());
     for (std::size_t l = 0; l < graph_.landmarks.size(); ++l) {
@@ -303,7 +309,7 @@ class JointSolver {
  private:
   const LandmarkGraph3D& graph_;
   const Links& links_;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> solver_;
+  SparseCholesky cholesky_;
   bool analysed_ = false;
   std::size_t factor_nonzeros_ = 0;
 };
@@ -328,6 +334,7 @@ LandmarkGraphSummary levenberg_marquardt(LandmarkGraph3D& graph, const LandmarkG
   double cost = linearise(graph, links, &normal);
   summary.time_linearise_s += seconds_since(start);
   double lambda = options.initial_lambda;
+  double nu = 2.0;
   summary.status = LandmarkGraphStatus::kMaxIterations;
   summary.message = "reached max_iterations";
   Eigen::VectorXd dx_poses;
@@ -361,12 +368,29 @@ LandmarkGraphSummary levenberg_marquardt(LandmarkGraph3D& graph, const LandmarkG
     std::swap(graph.poses, trial_poses);
     std::swap(graph.landmarks, trial_landmarks);
     const double trial_cost = graph.cost();
+    // Decrease predicted by the damped quadratic model: with (H + lambda D) dx = -b,
+    // m(0) - m(dx) = -b^T dx + lambda dx^T D dx (cost = e^T Omega e, D = diag(H)).
+    double predicted = 0.0;
+    for (std::size_t p = 0; p + 1 < graph.poses.size(); ++p) {
+      const Vector6 d = dx_poses.segment<6>(6 * static_cast<Eigen::Index>(p));
+      predicted += -normal.b_pose[p].dot(d) + lambda * d.dot(normal.A_diagonal[p].diagonal().cwiseProduct(d));
+    }
+    for (std::size_t l = 0; l < graph.landmarks.size(); ++l) {
+      const Vector3& d = dx_landmarks[l];
+      predicted += -normal.b_landmark[l].dot(d) + lambda * d.dot(normal.V[l].diagonal().cwiseProduct(d));
+    }
     if (std::isfinite(trial_cost) && trial_cost <= cost) {
       const double decrease = cost - trial_cost;
       start = Clock::now();
       cost = linearise(graph, links, &normal);
       summary.time_linearise_s += seconds_since(start);
-      lambda = std::max(lambda / 10.0, 1e-12);
+      // Nielsen's update (Madsen, Nielsen & Tingleff 2004, "Methods for non-linear least squares
+      // problems", eq. 2.21; Ceres' LevenbergMarquardtStrategy): shrink lambda by up to 3x
+      // when the model predicted the decrease well (rho near 1), keep it when it did not.
+      const double rho = predicted > 0.0 ? decrease / predicted : 0.0;
+      const double t = 2.0 * rho - 1.0;
+      lambda = std::max(lambda * std::max(1.0 / 3.0, 1.0 - t * t * t), 1e-12);
+      nu = 2.0;
       if (decrease <= options.relative_cost_tolerance * cost || largest_step <= options.step_tolerance) {
         summary.status = LandmarkGraphStatus::kConverged;
         summary.message = "converged";
@@ -375,7 +399,8 @@ LandmarkGraphSummary levenberg_marquardt(LandmarkGraph3D& graph, const LandmarkG
     } else {
       std::swap(graph.poses, trial_poses);  // reject: restore the previous estimate
       std::swap(graph.landmarks, trial_landmarks);
-      lambda *= 10.0;
+      lambda *= nu;
+      nu *= 2.0;
       if (lambda > 1e12) {
         summary.status = LandmarkGraphStatus::kConverged;
         summary.message = "no step lowers the cost (at a minimum to machine precision)";

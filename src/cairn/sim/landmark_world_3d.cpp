@@ -37,6 +37,7 @@ bool LandmarkWorld3DOptions::is_valid(std::string* why) const {
   if (!(climb_m >= 0.0) || !std::isfinite(attitude_amplitude_rad)) add("climb_m must be >= 0, the attitude amplitude finite");
   if (landmarks < 0) add("landmarks must be >= 0");
   if (!(extent_m > 0.0)) add("extent_m must be > 0");
+  if (!(ring_half_width_m >= 0.0 && std::isfinite(ring_half_width_m))) add("ring_half_width_m must be >= 0");
   if (!(landmark_z_max_m > landmark_z_min_m)) add("landmark_z_max_m must be > landmark_z_min_m");
   if (!(max_range_m > 0.0)) add("max_range_m must be > 0");
   if (!(field_of_view_rad > 0.0 && field_of_view_rad <= 2.0 * kPi)) add("field_of_view_rad must be in (0, 2 pi]");
@@ -59,10 +60,17 @@ LandmarkWorld3D simulate_landmark_world_3d(const LandmarkWorld3DOptions& options
   Random odometry_noise(Random::derive_seed(seed, 2));
   Random observation_noise(Random::derive_seed(seed, 3));
   for (int l = 0; l < options.landmarks; ++l) {
-    const double x = placement.uniform(-options.extent_m, options.extent_m);
-    const double y = placement.uniform(-options.extent_m, options.extent_m);
+    const double a = placement.uniform(-options.extent_m, options.extent_m);
+    const double b = placement.uniform(-options.extent_m, options.extent_m);
     const double z = placement.uniform(options.landmark_z_min_m, options.landmark_z_max_m);
-    world.p_world.emplace_back(x, y, z);
+    if (options.ring_half_width_m > 0.0) {
+      // a, b in [-E, E) mapped to an angle and a radius.
+      const double angle = kPi * a / options.extent_m;
+      const double radius = options.circle_radius_m + options.ring_half_width_m * b / options.extent_m;
+      world.p_world.emplace_back(radius * std::cos(angle), radius * std::sin(angle), z);
+    } else {
+      world.p_world.emplace_back(a, b, z);
+    }
   }
   for (int k = 0; k < options.poses; ++k) world.T_world_body.push_back(true_pose(options, k));
 

@@ -9,7 +9,9 @@
 ///   position (R cos s, R sin s, h sin(3 s / L)),  yaw s + pi/2 (along the circle),
 ///   roll a sin(2 s), pitch a cos(5 s)        (a = attitude_amplitude_rad),
 /// so every rotational degree of freedom is excited. Landmarks are uniform in
-/// [-E, E] x [-E, E] x [z_min, z_max].
+/// [-E, E] x [-E, E] x [z_min, z_max], or, with ring_half_width_m = w > 0, uniform in the annulus
+/// R - w <= |(x, y)| <= R + w (uniform in angle and in radius) for the same z range, so that
+/// their density along the route stays constant when R grows.
 ///
 /// Sensors (one Gaussian variate per noisy component, drawn from independent streams):
 /// * odometry: Z_k = T_k^-1 T_k+1 exp(n), n ~ N(0, diag(sigma_t^2 I3, sigma_r^2 I3)), translation
@@ -40,6 +42,7 @@ struct LandmarkWorld3DOptions {
   double attitude_amplitude_rad = 0.2;
   int landmarks = 400;                ///< >= 0
   double extent_m = 25.0;             ///< E, > 0
+  double ring_half_width_m = 0.0;     ///< w, >= 0 (0: the box)
   double landmark_z_min_m = -5.0;
   double landmark_z_max_m = 10.0;     ///< > z_min
   LandmarkSensor3D sensor = LandmarkSensor3D::kPoint;
