@@ -120,6 +120,7 @@ std::string report_json(const LandmarkSlamReport& r) {
                              : g.status == backend::LandmarkGraphStatus::kMaxIterations ? "max_iterations"
                                                                                         : "failed"},
                   {"message", g.message},
+                  {"solves", r.graph_solves},
                   {"iterations_last_solve", g.iterations},
                   {"initial_cost_last_solve", g.initial_cost},
                   {"final_cost", g.final_cost},
@@ -130,7 +131,7 @@ std::string report_json(const LandmarkSlamReport& r) {
                    {"ekf", r.ekf_time_s},
                    {"ekf_mean_step", r.ekf_mean_step_s},
                    {"ekf_max_step", r.ekf_max_step_s},
-                   {"graph_all_checkpoints", r.graph_time_s},
+                   {"graph_all_solves", r.graph_time_s},
                    {"graph_last_solve_and_marginals", r.graph_final_solve_s}};
   return j.dump(2) + "\n";
 }
