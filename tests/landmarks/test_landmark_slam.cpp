@@ -262,6 +262,22 @@ TEST(LandmarkSlam, BadObservationsAreCountedAndLeaveTheEstimateIntact) {
 
 namespace cairn::landmarks {
 namespace {
+// The sparse world (15 landmarks, 6 m range), odometry with only the white heading noise both
+// methods model (no scale errors, biases or slips), four laps (412 s).
+LandmarkRun sparse_unbiased_run(std::uint64_t seed, double yaw_rad_per_sqrt_rad, double yaw_rad_per_sqrt_m) {
+  return simulated_run(seed, [&](sim::Scenario& s) {
+    s.landmark_field.landmarks = 15;
+    s.landmarks.max_range_m = 6.0;
+    s.odometry.scale_error = 0.0;
+    s.odometry.yaw_scale_error = 0.0;
+    s.odometry.yaw_bias_rad_per_m = 0.0;
+    s.odometry.slip_rate_per_s = 0.0;
+    s.odometry.yaw_sigma_rad_per_sqrt_rad = yaw_rad_per_sqrt_rad;
+    s.odometry.yaw_sigma_rad_per_sqrt_m = yaw_rad_per_sqrt_m;
+    s.trajectory.laps = 4;
+  });
+}
+
 // Large heading uncertainty (odometry yaw noise 0.05 rad/sqrt(rad) + 0.02 rad/sqrt(m), 2.5x and
 // 2.5x the default, modelled exactly by both methods), few landmarks, four laps (412 s): the
 // regime in which EKF-SLAM's linearisation makes it overconfident (Huang & Dissanayake, IEEE
@@ -275,17 +291,7 @@ TEST(LandmarkSlam, NeesLargeHeadingUncertaintyEkfOverconfidentGraphNot) {
   const double yaw_rad = 0.05, yaw_m = 0.02;
   NeesTable table;
   for (int r = 0; r < kRuns; ++r) {
-    const LandmarkRun run = simulated_run(static_cast<std::uint64_t>(100 + r), [&](sim::Scenario& s) {
-      s.landmark_field.landmarks = 15;
-      s.landmarks.max_range_m = 6.0;
-      s.odometry.scale_error = 0.0;
-      s.odometry.yaw_scale_error = 0.0;
-      s.odometry.yaw_bias_rad_per_m = 0.0;
-      s.odometry.slip_rate_per_s = 0.0;
-      s.odometry.yaw_sigma_rad_per_sqrt_rad = yaw_rad;
-      s.odometry.yaw_sigma_rad_per_sqrt_m = yaw_m;
-      s.trajectory.laps = 4;
-    });
+    const LandmarkRun run = sparse_unbiased_run(static_cast<std::uint64_t>(100 + r), yaw_rad, yaw_m);
     auto ekf_options = options_for(Method::kEkf, Association::kKnown, 8);
     ekf_options.odometry.yaw_sigma_rad_per_sqrt_rad = yaw_rad;
     ekf_options.odometry.yaw_sigma_rad_per_sqrt_m = yaw_m;
@@ -333,17 +339,7 @@ TEST(LandmarkSlam, PeriodicGraphSolvesSurviveVeryLargeHeadingNoise) {
   const double yaw_rad = 0.08, yaw_m = 0.03;
   int checkpoint_only_failures = 0;
   for (int r = 0; r < 8; ++r) {
-    const LandmarkRun run = simulated_run(static_cast<std::uint64_t>(100 + r), [&](sim::Scenario& s) {
-      s.landmark_field.landmarks = 15;
-      s.landmarks.max_range_m = 6.0;
-      s.odometry.scale_error = 0.0;
-      s.odometry.yaw_scale_error = 0.0;
-      s.odometry.yaw_bias_rad_per_m = 0.0;
-      s.odometry.slip_rate_per_s = 0.0;
-      s.odometry.yaw_sigma_rad_per_sqrt_rad = yaw_rad;
-      s.odometry.yaw_sigma_rad_per_sqrt_m = yaw_m;
-      s.trajectory.laps = 4;
-    });
+    const LandmarkRun run = sparse_unbiased_run(static_cast<std::uint64_t>(100 + r), yaw_rad, yaw_m);
     auto options = options_for(Method::kGraph, Association::kKnown, 8);
     options.odometry.yaw_sigma_rad_per_sqrt_rad = yaw_rad;
     options.odometry.yaw_sigma_rad_per_sqrt_m = yaw_m;
