@@ -75,6 +75,24 @@ struct NeesTable {
   std::vector<double> ekf_pose, graph_pose, ekf_landmark, graph_landmark;
 };
 
+// Adds one run's NEES at each checkpoint, divided by the number of runs (a running mean).
+void add_run(NeesTable* table, const LandmarkSlamReport& ekf, const LandmarkSlamReport& graph, int runs) {
+  if (table->time_s.empty()) {
+    for (const NeesPoint& p : ekf.nees) table->time_s.push_back(p.time_s);
+    const std::size_t n = table->time_s.size();
+    table->ekf_pose.assign(n, 0.0);
+    table->graph_pose.assign(n, 0.0);
+    table->ekf_landmark.assign(n, 0.0);
+    table->graph_landmark.assign(n, 0.0);
+  }
+  for (std::size_t c = 0; c < table->time_s.size(); ++c) {
+    table->ekf_pose[c] += ekf.nees[c].pose_nees / runs;
+    table->graph_pose[c] += graph.nees[c].pose_nees / runs;
+    table->ekf_landmark[c] += ekf.nees[c].landmark_nees_mean / runs;
+    table->graph_landmark[c] += graph.nees[c].landmark_nees_mean / runs;
+  }
+}
+
 // Mean NEES over Monte-Carlo seeds (noise varies, the world stays) at each checkpoint.
 NeesTable monte_carlo_nees(int runs, int checkpoints, const std::function<void(sim::Scenario&)>& adjust) {
   NeesTable table;
@@ -82,20 +100,7 @@ NeesTable monte_carlo_nees(int runs, int checkpoints, const std::function<void(s
     const LandmarkRun run = simulated_run(static_cast<std::uint64_t>(100 + r), adjust);
     const auto ekf = run_landmark_slam(run, options_for(Method::kEkf, Association::kKnown, checkpoints)).report;
     const auto graph = run_landmark_slam(run, options_for(Method::kGraph, Association::kKnown, checkpoints)).report;
-    if (table.time_s.empty()) {
-      for (const NeesPoint& p : ekf.nees) table.time_s.push_back(p.time_s);
-      const std::size_t n = table.time_s.size();
-      table.ekf_pose.assign(n, 0.0);
-      table.graph_pose.assign(n, 0.0);
-      table.ekf_landmark.assign(n, 0.0);
-      table.graph_landmark.assign(n, 0.0);
-    }
-    for (std::size_t c = 0; c < table.time_s.size(); ++c) {
-      table.ekf_pose[c] += ekf.nees[c].pose_nees / runs;
-      table.graph_pose[c] += graph.nees[c].pose_nees / runs;
-      table.ekf_landmark[c] += ekf.nees[c].landmark_nees_mean / runs;
-      table.graph_landmark[c] += graph.nees[c].landmark_nees_mean / runs;
-    }
+    add_run(&table, ekf, graph, runs);
   }
   return table;
 }
@@ -300,20 +305,7 @@ TEST(LandmarkSlam, NeesLargeHeadingUncertaintyEkfOverconfidentGraphNot) {
     const auto ekf = run_landmark_slam(run, ekf_options).report;
     const auto graph = run_landmark_slam(run, graph_options).report;
     std::printf("seed %d: ATE EKF %.3f m, graph %.3f m\n", 100 + r, ekf.ate_rmse_m, graph.ate_rmse_m);
-    if (table.time_s.empty()) {
-      for (const NeesPoint& p : ekf.nees) table.time_s.push_back(p.time_s);
-      const std::size_t n = table.time_s.size();
-      table.ekf_pose.assign(n, 0.0);
-      table.graph_pose.assign(n, 0.0);
-      table.ekf_landmark.assign(n, 0.0);
-      table.graph_landmark.assign(n, 0.0);
-    }
-    for (std::size_t c = 0; c < table.time_s.size(); ++c) {
-      table.ekf_pose[c] += ekf.nees[c].pose_nees / kRuns;
-      table.graph_pose[c] += graph.nees[c].pose_nees / kRuns;
-      table.ekf_landmark[c] += ekf.nees[c].landmark_nees_mean / kRuns;
-      table.graph_landmark[c] += graph.nees[c].landmark_nees_mean / kRuns;
-    }
+    add_run(&table, ekf, graph, kRuns);
   }
   print_table("sparse variant, no biases, large heading noise, 4 laps", table, kRuns);
   int ekf_above = 0, graph_above = 0;

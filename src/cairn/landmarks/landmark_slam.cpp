@@ -373,7 +373,7 @@ struct GraphPass {
   backend::LandmarkGraphSummary summary;
   double time_s = 0.0;
   double final_solve_s = 0.0;
-  std::size_t intermediate_solves = 0;
+  std::size_t solves = 0;  // every optimize() call: checkpoints and graph_solve_every_steps
 };
 
 // Graph SLAM over growing prefixes of the run, warm-started from the previous prefix.
@@ -425,11 +425,12 @@ GraphPass run_graph(const LandmarkRun& run, const std::vector<Step>& steps, cons
       const int every = options.graph_solve_every_steps;
       if (every > 0 && built > 0 && built < checkpoint && built % static_cast<std::size_t>(every) == 0) {
         backend::optimize(graph, options.graph);
-        ++pass.intermediate_solves;
+        ++pass.solves;
       }
     }
     const auto solve_start = Clock::now();
     pass.summary = backend::optimize(graph, options.graph);
+    ++pass.solves;
     std::vector<std::size_t> all_landmarks(graph.landmarks.size());
     for (std::size_t l = 0; l < all_landmarks.size(); ++l) all_landmarks[l] = l;
     const backend::LandmarkGraphMarginals marginals =
@@ -574,7 +575,7 @@ LandmarkSlamResult run_landmark_slam(const LandmarkRun& run, const LandmarkSlamO
       report.graph_summary = graph.summary;
       report.graph_time_s = graph.time_s;
       report.graph_final_solve_s = graph.final_solve_s;
-      report.graph_solves = graph.nees.size() + graph.intermediate_solves;
+      report.graph_solves = graph.solves;
       report.mean_pose_nees_all_steps = kNaN;
     }
   } else {
@@ -611,7 +612,7 @@ LandmarkSlamResult run_landmark_slam(const LandmarkRun& run, const LandmarkSlamO
     report.graph_summary = graph.summary;
     report.graph_time_s = graph.time_s;
     report.graph_final_solve_s = graph.final_solve_s;
-    report.graph_solves = graph.nees.size() + graph.intermediate_solves;
+    report.graph_solves = graph.solves;
     report.mean_pose_nees_all_steps = kNaN;
   }
 
