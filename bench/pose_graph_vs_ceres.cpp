@@ -7,18 +7,28 @@
 // vector part of the quaternion error (3D), whitened by the square-root information, automatic
 // derivatives, EigenQuaternionManifold), SPARSE_NORMAL_CHOLESKY over SuiteSparse, one thread.
 // cairn: Levenberg-Marquardt on the log-map residual, CHOLMOD, one thread, chordal
-// initialisation included in its time. Both stop on Ceres' default tolerances (function 1e-6,
-// gradient 1e-10, parameter 1e-8, 50 iterations). The final chi2 of both results is evaluated
-// with the same function (cairn's geodesic cost).
+// initialisation included in its time, its default options (undamped start, PCG on the last
+// factorisation). Both stop on Ceres' default tolerances (function 1e-6, gradient 1e-10,
+// parameter 1e-8, 50 iterations). The final chi2 of both results is evaluated with the same
+// function (cairn's geodesic cost). Ceres runs twice: with its default initial trust-region
+// radius (1e4) and with cairn's (1e16, an undamped start), so the gain from the damping choice
+// and the gain from the implementation can be told apart.
 //
-// Usage: bench_pose_graph_vs_ceres [--reuse-factorization] GRAPH.g2o [GRAPH.g2o ...]
+// Every solve is repeated (at least 3 times, until 1 s has passed, at most 15) in its child
+// process and the median time is reported: a single cold run mostly measures page faults and
+// thread start-up on the small graphs.
+//
+// Usage: bench_pose_graph_vs_ceres [--no-reuse-factorization] GRAPH.g2o [GRAPH.g2o ...]
 
 #include <ceres/ceres.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <vector>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -34,14 +44,16 @@ using namespace cairn;
 using Clock = std::chrono::steady_clock;
 
 struct RunResult {
-  double seconds = 0.0;
+  double seconds = 0.0;  // median over the repetitions
+  int repetitions = 0;
+  int factorizations = 0;  // cairn: numeric factorisations
   int iterations = 0;
   double chi2 = 0.0;
   double factor_share = 0.0;  // cairn: share of time spent in numeric factorisation
   long peak_kb = 0;
 };
 
-bool g_reuse_factorization = false;
+bool g_reuse_factorization = true;
 
 backend::OptimizerOptions cairn_options() {
   backend::OptimizerOptions options;
@@ -106,8 +118,11 @@ struct Error3D {
   Eigen::Matrix<double, 6, 6> sqrt_information_;
 };
 
+double g_ceres_radius = 1e4;  // Ceres' default initial_trust_region_radius
+
 ceres::Solver::Options ceres_options() {
   ceres::Solver::Options options;
+  options.initial_trust_region_radius = g_ceres_radius;
   options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
   options.num_threads = 1;
@@ -138,8 +153,9 @@ RunResult run_ceres(backend::Problem2D problem) {
   RunResult result;
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  if (summary.termination_type == ceres::FAILURE) result.chi2 = std::nan("");
   for (std::size_t k = 0; k < x.size(); ++k) problem.T_world_pose[k] = core::SE2(x[k][0], x[k][1], x[k][2]);
-  result.chi2 = backend::evaluate_cost(problem, cairn_options());
+  if (!std::isnan(result.chi2)) result.chi2 = backend::evaluate_cost(problem, cairn_options());
   return result;
 }
 
@@ -173,8 +189,9 @@ RunResult run_ceres(backend::Problem3D problem) {
   RunResult result;
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  if (summary.termination_type == ceres::FAILURE) result.chi2 = std::nan("");
   for (std::size_t k = 0; k < p.size(); ++k) problem.T_world_pose[k] = core::SE3(q[k], p[k]);
-  result.chi2 = backend::evaluate_cost(problem, cairn_options());
+  if (!std::isnan(result.chi2)) result.chi2 = backend::evaluate_cost(problem, cairn_options());
   return result;
 }
 
@@ -187,7 +204,27 @@ RunResult run_cairn(Problem problem, double init_seconds) {
   result.iterations = summary.iterations;
   result.chi2 = summary.final_cost;
   result.factor_share = summary.factorize_s / result.seconds;
+  for (const auto& it : summary.iteration_log) result.factorizations += it.factorize_s > 0.0 ? 1 : 0;
   return result;
+}
+
+// Runs `solve` (returning a RunResult with its time) repeatedly: the median time; the rest (and
+// the factorisation share) from the last run, every run being the same computation
+
+template <class Solve>
+RunResult repeated(Solve solve) {
+  std::vector<double> times;
+  RunResult last;
+  double total = 0.0;
+  while (times.size() < 3 || (total < 1.0 && times.size() < 15)) {
+    last = solve();
+    times.push_back(last.seconds);
+    total += last.seconds;
+  }
+  std::sort(times.begin(), times.end());
+  last.seconds = times[times.size() / 2];
+  last.repetitions = static_cast<int>(times.size());
+  return last;
 }
 
 // Runs `work` in a child process; returns its result and peak RSS.
@@ -233,17 +270,27 @@ void compare(const std::string& name, const Graph& graph) {
     return r;
   });
   const RunResult c = in_child([&] {
-    double seconds = 0.0;
-    const auto problem = initialised(&seconds);
-    return run_cairn(problem, seconds);
+    return repeated([&] {
+      double seconds = 0.0;
+      const auto problem = initialised(&seconds);
+      return run_cairn(problem, seconds);
+    });
   });
-  const RunResult r = in_child([&] {
-    double seconds = 0.0;
-    return run_ceres(initialised(&seconds));
-  });
-  std::printf("| %-28s | %6d | %12.6g | %8.3f | %3d | %12.6g | %6.1f | %4.0f%% | %8.3f | %3d | %12.6g | %6.1f | %5.1fx |\n",
-              name.c_str(), start.iterations, start.chi2, c.seconds, c.iterations, c.chi2, c.peak_kb / 1024.0,
-              100.0 * c.factor_share, r.seconds, r.iterations, r.chi2, r.peak_kb / 1024.0, r.seconds / c.seconds);
+  auto ceres_with_radius = [&](double radius) {
+    g_ceres_radius = radius;
+    return in_child([&] {
+      return repeated([&] {
+        double seconds = 0.0;
+        return run_ceres(initialised(&seconds));
+      });
+    });
+  };
+  const RunResult r = ceres_with_radius(1e4);
+  const RunResult u = ceres_with_radius(1e16);
+  std::printf("| %-28s | %6d | %12.6g | %8.4f | %3d | %2d | %12.6g | %6.1f | %4.0f%% | %8.4f | %3d | %12.6g | %6.1f | %5.1fx | %8.4f | %3d | %12.6g | %5.1fx |\n",
+              name.c_str(), start.iterations, start.chi2, c.seconds, c.iterations, c.factorizations, c.chi2,
+              c.peak_kb / 1024.0, 100.0 * c.factor_share, r.seconds, r.iterations, r.chi2, r.peak_kb / 1024.0,
+              r.seconds / c.seconds, u.seconds, u.iterations, u.chi2, u.seconds / c.seconds);
   std::fflush(stdout);
 }
 
@@ -251,16 +298,16 @@ void compare(const std::string& name, const Graph& graph) {
 
 int main(int argc, char** argv) {
   int first = 1;
-  if (argc > 1 && std::string(argv[1]) == "--reuse-factorization") {
-    g_reuse_factorization = true;  // cairn's OptimizerOptions::reuse_factorization
+  if (argc > 1 && std::string(argv[1]) == "--no-reuse-factorization") {
+    g_reuse_factorization = false;  // cairn's OptimizerOptions::reuse_factorization
     first = 2;
   }
   if (argc <= first) {
-    std::fprintf(stderr, "usage: %s [--reuse-factorization] GRAPH.g2o [GRAPH.g2o ...]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s [--no-reuse-factorization] GRAPH.g2o [GRAPH.g2o ...]\n", argv[0]);
     return 2;
   }
-  std::printf("| graph | poses | chi2 at chordal start | cairn s (incl. init) | it | cairn chi2 | cairn MiB | factorisation share | Ceres s | it | Ceres chi2 | Ceres MiB | Ceres/cairn time |\n");
-  std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf("| graph | poses | chi2 at chordal start | cairn s (incl. init) | it | fact | cairn chi2 | cairn MiB | factorisation share | Ceres s | it | Ceres chi2 | Ceres MiB | Ceres/cairn time | Ceres r=1e16 s | it | chi2 | Ceres r=1e16/cairn |\n");
+  std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (int k = first; k < argc; ++k) {
     try {
       const io::GraphFile file = io::read_graph(argv[k]);

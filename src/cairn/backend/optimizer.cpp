@@ -51,6 +51,8 @@ bool OptimizerOptions::is_valid(std::string* error) const {
   check(initial_trust_region_radius > 0.0, "initial_trust_region_radius must be > 0");
   check(kernel_scale > 0.0, "kernel_scale must be > 0");
   check(threads >= 0, "threads must be >= 0");
+  check(reuse_cg_tolerance > 0.0 && reuse_cg_tolerance < 1.0, "reuse_cg_tolerance must be in (0, 1)");
+  check(reuse_max_cg_iterations >= 0, "reuse_max_cg_iterations must be >= 0");
   if (error != nullptr) *error = problems;
   return problems.empty();
 }
@@ -66,6 +68,11 @@ std::string OptimizerSummary::brief_report() const {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// LM damping after a rejected step is at least Ceres' initial damping (1 / radius 1e4), so an
+// undamped (Gauss-Newton) start that overshoots is damped at once instead of after a dozen
+// doublings from 1e-16.
+constexpr double kRejectionDampingFloor = 1e-4;
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -212,6 +219,64 @@ class Engine {
   Eigen::VectorXd gradient_;
 };
 
+// Preconditioned conjugate gradients (Hestenes & Stiefel 1952; Nocedal & Wright, Numerical
+// Optimization, 2nd ed., alg. 5.3) on (H + diag(damping)) x = b, H the upper-stored J^T J,
+// preconditioned by a Cholesky factorisation of an earlier damped matrix. Converged when
+// ||b - A x|| <= forcing ||b|| (an inexact Newton step, Dembo, Eisenstat & Steihaug 1982).
+// Gives up after `max_iterations`, or earlier, from the third iteration on, when the mean
+// residual reduction so far would need more than `max_iterations` in all.
+struct PcgResult {
+  Eigen::VectorXd x;
+  int iterations = 0;
+  bool converged = false;
+};
+
+PcgResult preconditioned_cg(const UpperCsc& H, const Eigen::VectorXd& damping, const Eigen::VectorXd& b,
+                            SparseCholesky& preconditioner, int max_iterations, double forcing) {
+  PcgResult result;
+  const Eigen::Index n = b.size();
+  result.x = Eigen::VectorXd::Zero(n);
+  const double b_norm = b.norm();
+  if (b_norm == 0.0) {
+    result.converged = true;
+    return result;
+  }
+  Eigen::VectorXd r = b;
+  Eigen::VectorXd z(n);
+  Eigen::VectorXd p(n);
+  double rz_previous = 0.0;
+  for (int i = 1; i <= max_iterations; ++i) {
+    preconditioner.solve_in_place(r, z);
+    const double rz = r.dot(z);
+    if (!std::isfinite(rz) || rz <= 0.0) break;  // preconditioner not positive definite here
+    if (i == 1) {
+      p = z;
+    } else {
+      p = z + (rz / rz_previous) * p;
+    }
+    rz_previous = rz;
+    const Eigen::VectorXd Ap = symmetric_multiply(H, p) + damping.cwiseProduct(p);
+    const double pAp = p.dot(Ap);
+    if (!std::isfinite(pAp) || pAp <= 0.0) break;  // not positive definite along p
+    const double alpha = rz / pAp;
+    result.x += alpha * p;
+    r -= alpha * Ap;
+    result.iterations = i;
+    const double relative = r.norm() / b_norm;
+    if (relative <= forcing) {
+      result.converged = true;
+      break;
+    }
+    if (i >= 3 && relative < 1.0) {
+      const double rate = std::pow(relative, 1.0 / i);
+      if (i + std::log(forcing / relative) / std::log(rate) > max_iterations) break;
+    } else if (i >= 3) {
+      break;  // no progress at all
+    }
+  }
+  return result;
+}
+
 template <class Group, class Factor>
 OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& options) {
   const auto start = Clock::now();
@@ -241,6 +306,17 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
 
   const bool lm = options.algorithm == Algorithm::kLevenbergMarquardt;
   const bool dogleg = options.algorithm == Algorithm::kDogleg;
+  const bool reuse = lm && options.reuse_factorization;
+  // PCG budget before refactorising: a quarter of a factorisation's flops spent in iterations of
+  // two triangular solves (4 flops per factor non-zero) and one product with H (4 per stored entry).
+  int cg_budget = options.reuse_max_cg_iterations;
+  if (cg_budget == 0) {
+    const double per_iteration = 4.0 * static_cast<double>(cholesky.factor_nonzeros()) +
+                                 4.0 * static_cast<double>(engine.pattern().matrix().value.size());
+    cg_budget = static_cast<int>(std::clamp(0.25 * cholesky.factor_flops() / per_iteration, 3.0, 30.0));
+  }
+  double first_gradient_max_norm = 1.0;
+  bool force_factorization = false;  // after a rejected inexact step
   double lambda = 1.0 / options.initial_trust_region_radius;
   double nu = 2.0;
   double radius = options.initial_trust_region_radius;
@@ -248,7 +324,6 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
   std::vector<double> diagonal;  // undamped diag(J^T J)
   Eigen::VectorXd gn_step;       // dog-leg: cached Gauss-Newton step at the current poses
   bool gn_step_valid = false;
-  bool reuse_next = false;       // LM: try the previous factorisation for the next step
   summary.termination = TerminationType::kNoConvergence;
   summary.message = "maximum number of iterations reached";
 
@@ -268,6 +343,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     }
     const Eigen::VectorXd& g = engine.gradient();
     it.gradient_max_norm = g.cwiseAbs().maxCoeff();
+    if (iteration == 1) first_gradient_max_norm = it.gradient_max_norm;
     if (it.gradient_max_norm < options.gradient_tolerance) {
       summary.termination = TerminationType::kConvergence;
       summary.message = "gradient tolerance reached (max |J^T r| = " + std::to_string(it.gradient_max_norm) + ")";
@@ -277,16 +353,26 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     // Solve for the step.
     Eigen::VectorXd step;
     auto& A = engine.pattern().matrix();
-    bool solved = true;
-    const bool reuse = lm && reuse_next;
-    reuse_next = false;
-    if (reuse) {
+    bool solved = false;
+    if (reuse && cholesky.has_factor() && !force_factorization) {
+      // Inexact LM step: PCG on the current damped system, the last factorisation as preconditioner.
+      Eigen::VectorXd damping(A.size);
+      for (int k = 0; k < A.size; ++k) damping[k] = lambda * std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
       const auto t2 = Clock::now();
-      step = cholesky.solve(Eigen::VectorXd(-g));
+      // Forcing term: the gradient's size relative to the first iteration's, in
+      // [1e-10, reuse_cg_tolerance] (Eisenstat & Walker 1996 in spirit): loose far from the
+      // minimum, tight near it, where the last factorisation is an excellent preconditioner.
+      const double forcing = std::clamp(it.gradient_max_norm / first_gradient_max_norm, 1e-10, options.reuse_cg_tolerance);
+      PcgResult pcg = preconditioned_cg(A, damping, -g, cholesky, cg_budget, forcing);
       it.solve_s = seconds_since(t2);
-      it.reused_factorization = true;
-      solved = step.allFinite();
-    } else if (!dogleg || !gn_step_valid) {
+      it.cg_iterations = pcg.iterations;
+      if (pcg.converged && pcg.x.allFinite()) {
+        step = std::move(pcg.x);
+        solved = true;
+        it.reused_factorization = true;
+      }
+    }
+    if (!solved && (!dogleg || !gn_step_valid)) {
       std::vector<double> saved;
       if (lm) {
         saved = diagonal;
@@ -295,29 +381,29 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
           A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] += lambda * d;
         }
       }
+      force_factorization = false;
       const auto t1 = Clock::now();
       const FactorizationStatus status = cholesky.factorize(A);
       it.factorize_s = seconds_since(t1);
       if (lm) {
         for (int k = 0; k < A.size; ++k) A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] = saved[static_cast<std::size_t>(k)];
       }
-      if (status != FactorizationStatus::kSuccess) {
-        solved = false;
-      } else {
+      if (status == FactorizationStatus::kSuccess) {
         const auto t2 = Clock::now();
         step = cholesky.solve(Eigen::VectorXd(-g));
-        it.solve_s = seconds_since(t2);
-        if (!step.allFinite()) solved = false;
+        it.solve_s += seconds_since(t2);
+        solved = step.allFinite();
       }
       if (dogleg && solved) {
         gn_step = step;
         gn_step_valid = true;
       }
+    } else if (dogleg) {
+      solved = true;  // the cached Gauss-Newton step
     }
-    if (!solved && reuse) continue;
     if (!solved) {
       if (lm) {
-        lambda *= nu;
+        lambda = std::max(lambda * nu, kRejectionDampingFloor);
         nu *= 2.0;
         it.lambda = lambda;
         it.cost = cost;
@@ -333,12 +419,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       break;
     }
     double predicted = 0.0;
-    if (reuse) {
-      // The factor is of an older matrix: predict with the current J^T J.
-      const Eigen::VectorXd Hs = symmetric_multiply(A, step);
-      predicted = -2.0 * g.dot(step) - step.dot(Hs);
-      it.lambda = lambda;
-    } else if (dogleg) {
+    if (dogleg) {
       // Powell's dog-leg (Nocedal & Wright, Numerical Optimization, 2nd ed., sec. 4.1).
       const Eigen::VectorXd Hg = symmetric_multiply(A, g);
       const double alpha = g.squaredNorm() / g.dot(Hg);
@@ -358,6 +439,11 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       const Eigen::VectorXd Hs = symmetric_multiply(A, step);
       predicted = -2.0 * g.dot(step) - step.dot(Hs);
       it.lambda = radius;
+    } else if (it.reused_factorization) {
+      // An inexact step: the decrease of ||r + J step||^2 from the model itself.
+      const Eigen::VectorXd Hs = symmetric_multiply(A, step);
+      predicted = -2.0 * g.dot(step) - step.dot(Hs);
+      it.lambda = lambda;
     } else {
       // (H + lambda D) step = -g  =>  step^T H step = -g^T step - lambda step^T D step, so the
       // decrease of ||r + J step||^2 is -g^T step + lambda step^T D step (D = 0 for GN).
@@ -384,19 +470,9 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     const double new_cost = engine.cost(candidate);
     it.cost_change = cost - new_cost;
     it.relative_decrease = predicted > 0.0 ? it.cost_change / predicted : -1.0;
-    const bool accept = std::isfinite(new_cost) && (reuse ? it.relative_decrease > 0.5
-                                                    : options.algorithm == Algorithm::kGaussNewton
+    const bool accept = std::isfinite(new_cost) && (options.algorithm == Algorithm::kGaussNewton
                                                         ? new_cost <= cost
                                                         : it.relative_decrease > 1e-3);
-    if (reuse && !accept) {
-      // Not a real rejection: the next iteration factorises at the current point.
-      it.cost = cost;
-      it.iteration_s = seconds_since(iteration_start);
-      summary.iteration_log.push_back(it);
-      if (options.progress) options.progress(it);
-      summary.iterations = iteration;
-      continue;
-    }
     if (accept) {
       const double old_cost = cost;
       problem.T_world_pose = std::move(candidate);
@@ -404,17 +480,14 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       need_linearization = true;
       ++summary.successful_iterations;
       it.step_accepted = true;
-      if (reuse) {
-        reuse_next = true;  // keep going with the same factor while it works
-      } else if (lm) {
-        reuse_next = options.reuse_factorization && it.relative_decrease > 0.75;
+      if (lm) {
         // Nielsen's update (Madsen, Nielsen & Tingleff 2004, eq. 3.16), as Ceres' LM strategy.
         const double t = 2.0 * it.relative_decrease - 1.0;
         lambda *= std::max(1.0 / 3.0, 1.0 - t * t * t);
         nu = 2.0;
       } else if (dogleg) {
         if (it.relative_decrease > 0.75) radius = std::max(radius, 3.0 * it.step_norm);
-        if (it.relative_decrease < 0.25) radius *= 0.25;
+        if (it.relative_decrease < 0.25) radius = 0.25 * std::min(radius, it.step_norm);
       }
       it.cost = cost;
       it.iteration_s = seconds_since(iteration_start);
@@ -426,6 +499,16 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
         summary.message = "function tolerance reached";
         break;
       }
+    } else if (it.reused_factorization) {
+      // An inexact step failed: the fault may be PCG's, not the model's. Keep lambda and take
+      // the next step from a fresh factorisation.
+      force_factorization = true;
+      it.cost = cost;
+      it.lambda = lambda;
+      it.iteration_s = seconds_since(iteration_start);
+      summary.iteration_log.push_back(it);
+      if (options.progress) options.progress(it);
+      summary.iterations = iteration;
     } else {
       if (options.algorithm == Algorithm::kGaussNewton) {
         summary.termination = TerminationType::kConvergence;
@@ -436,10 +519,10 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
         break;
       }
       if (lm) {
-        lambda *= nu;
+        lambda = std::max(lambda * nu, kRejectionDampingFloor);
         nu *= 2.0;
       } else {
-        radius *= 0.25;
+        radius = 0.25 * std::min(radius, it.step_norm);
       }
       it.cost = cost;
       it.iteration_s = seconds_since(iteration_start);

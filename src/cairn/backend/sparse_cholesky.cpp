@@ -107,6 +107,12 @@ struct SparseCholesky::Impl {
   cholmod_common common{};
   cholmod_factor* factor = nullptr;
   int size = 0;
+  bool factorized = false;
+  double flops = 0.0;
+  // cholmod_solve2 workspace, kept between solves.
+  cholmod_dense* solve_x = nullptr;
+  cholmod_dense* solve_y = nullptr;
+  cholmod_dense* solve_e = nullptr;
 
   Impl() {
     cholmod_start(&common);
@@ -114,6 +120,9 @@ struct SparseCholesky::Impl {
     common.supernodal = CHOLMOD_AUTO;
   }
   ~Impl() {
+    cholmod_free_dense(&solve_x, &common);
+    cholmod_free_dense(&solve_y, &common);
+    cholmod_free_dense(&solve_e, &common);
     if (factor != nullptr) cholmod_free_factor(&factor, &common);
     cholmod_finish(&common);
   }
@@ -154,17 +163,21 @@ void SparseCholesky::analyze(const UpperCsc& A, const std::vector<int>* ordering
     impl_->factor = cholmod_analyze(&S, &impl_->common);
   }
   impl_->size = A.size;
+  impl_->factorized = false;
   CAIRN_ASSERT(impl_->factor != nullptr, "CHOLMOD analysis failed (out of memory?)");
+  impl_->flops = impl_->common.fl;
 }
 
 FactorizationStatus SparseCholesky::factorize(const UpperCsc& A) {
   CAIRN_ASSERT(impl_->factor != nullptr && A.size == impl_->size, "factorize() before analyze()");
   cholmod_sparse S = Impl::view(A);
   const int ok = cholmod_factorize(&S, impl_->factor, &impl_->common);
+  impl_->factorized = false;
   if (impl_->common.status == CHOLMOD_NOT_POSDEF || impl_->factor->minor < impl_->factor->n) {
     return FactorizationStatus::kNotPositiveDefinite;
   }
   if (ok == 0 || impl_->common.status != CHOLMOD_OK) return FactorizationStatus::kFailure;
+  impl_->factorized = true;
   return FactorizationStatus::kSuccess;
 }
 
@@ -191,6 +204,27 @@ Eigen::MatrixXd SparseCholesky::inverse_columns(const std::vector<int>& columns)
   for (std::size_t k = 0; k < columns.size(); ++k) E(columns[k], static_cast<Eigen::Index>(k)) = 1.0;
   return solve(E);
 }
+
+void SparseCholesky::solve_in_place(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  CAIRN_ASSERT(impl_->factorized && b.size() == impl_->size, "solve_in_place() needs a factorisation of the right size");
+  cholmod_dense B{};
+  B.nrow = static_cast<std::size_t>(b.size());
+  B.ncol = 1;
+  B.nzmax = B.nrow;
+  B.d = B.nrow;
+  B.x = const_cast<double*>(b.data());
+  B.xtype = CHOLMOD_REAL;
+  B.dtype = CHOLMOD_DOUBLE;
+  const int ok = cholmod_solve2(CHOLMOD_A, impl_->factor, &B, nullptr, &impl_->solve_x, nullptr, &impl_->solve_y,
+                                &impl_->solve_e, &impl_->common);
+  CAIRN_ASSERT(ok != 0 && impl_->solve_x != nullptr, "CHOLMOD solve failed");
+  x.resize(b.size());
+  std::memcpy(x.data(), impl_->solve_x->x, sizeof(double) * static_cast<std::size_t>(b.size()));
+}
+
+bool SparseCholesky::has_factor() const { return impl_->factorized; }
+
+double SparseCholesky::factor_flops() const { return impl_->flops; }
 
 std::size_t SparseCholesky::factor_nonzeros() const {
   return impl_->factor == nullptr ? 0 : static_cast<std::size_t>(impl_->common.lnz);

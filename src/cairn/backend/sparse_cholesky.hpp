@@ -78,8 +78,15 @@ class SparseCholesky {
   Eigen::MatrixXd solve(const Eigen::MatrixXd& B);
   /// Columns `columns` of A^-1 (for marginal covariances), via solves with unit vectors.
   Eigen::MatrixXd inverse_columns(const std::vector<int>& columns);
-  /// Non-zeros of the factor L (fill-in), after factorize.
+  /// Solves A x = b into `x` (size n) reusing CHOLMOD's workspace between calls (cholmod_solve2),
+  /// for iterative methods that solve with the same factor many times.
+  void solve_in_place(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  /// True when the last factorize() succeeded (solves are valid).
+  bool has_factor() const;
+  /// Non-zeros of the factor L (fill-in), after analyze.
   std::size_t factor_nonzeros() const;
+  /// Floating-point operations of one numeric factorisation, after analyze (CHOLMOD's estimate).
+  double factor_flops() const;
   /// Peak memory CHOLMOD reported, bytes.
   std::size_t peak_memory_bytes() const;
 

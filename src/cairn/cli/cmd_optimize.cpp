@@ -60,6 +60,7 @@ nlohmann::json summary_json(const backend::OptimizerSummary& s) {
                    {"relative_decrease", it.relative_decrease},
                    {"lambda_or_radius", it.lambda},
                    {"accepted", it.step_accepted},
+                   {"cg_iterations", it.cg_iterations},
                    {"linearize_s", it.linearize_s},
                    {"factorize_s", it.factorize_s},
                    {"solve_s", it.solve_s},
@@ -109,12 +110,14 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                  problem.ids.size(), problem.edges.size(), std::string(backend::to_string(init)).c_str(),
                  init_summary.total_s, std::string(backend::to_string(options.algorithm)).c_str(),
                  std::string(backend::to_string(options.objective)).c_str(), flags.robust.c_str());
-    std::fprintf(stderr, "%5s %16s %12s %10s %10s %10s %4s %9s\n", "iter", "cost", "change", "max|grad|", "step",
-                 "lambda", "ok", "time[s]");
+    std::fprintf(stderr, "%5s %16s %12s %10s %10s %10s %4s %6s %9s\n", "iter", "cost", "change", "max|grad|", "step",
+                 "lambda", "ok", "linsol", "time[s]");
     options.progress = [](const backend::IterationSummary& it) {
-      std::fprintf(stderr, "%5d %16.10g %12.4g %10.3g %10.3g %10.3g %4s %9.4f\n", it.iteration, it.cost,
+      // linsol: "chol" = factorised this iteration, "cg N" = N PCG iterations on the last factor.
+      const std::string linear_solve = it.factorize_s > 0.0 ? "chol" : "cg " + std::to_string(it.cg_iterations);
+      std::fprintf(stderr, "%5d %16.10g %12.4g %10.3g %10.3g %10.3g %4s %6s %9.4f\n", it.iteration, it.cost,
                    it.cost_change, it.gradient_max_norm, it.step_norm, it.lambda, it.step_accepted ? "yes" : "no",
-                   it.iteration_s);
+                   linear_solve.c_str(), it.iteration_s);
     };
   }
   const double initial_cost = backend::evaluate_cost(problem, options);
