@@ -473,6 +473,20 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     const bool accept = std::isfinite(new_cost) && (options.algorithm == Algorithm::kGaussNewton
                                                         ? new_cost <= cost
                                                         : it.relative_decrease > 1e-3);
+    if (!accept && std::isfinite(new_cost) && std::abs(it.cost_change) <= options.function_tolerance * cost) {
+      // Ceres' rule (trust_region_minimizer.cc, FunctionToleranceReached): the candidate's cost
+      // change is tested whether or not the step is taken, so steps at the floating-point floor
+      // of the cost end the solve instead of raising the damping again and again.
+      it.cost = cost;
+      it.lambda = lm ? lambda : it.lambda;
+      it.iteration_s = seconds_since(iteration_start);
+      summary.iteration_log.push_back(it);
+      if (options.progress) options.progress(it);
+      summary.iterations = iteration;
+      summary.termination = TerminationType::kConvergence;
+      summary.message = "function tolerance reached (the last step, not taken, changed the cost by a negligible amount)";
+      break;
+    }
     if (accept) {
       const double old_cost = cost;
       problem.T_world_pose = std::move(candidate);

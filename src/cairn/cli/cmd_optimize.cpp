@@ -32,6 +32,8 @@ struct OptimizeFlags {
   std::vector<std::int64_t> covariance_ids;
   int threads = 0;
   int max_iterations = 100;
+  double initial_radius = backend::OptimizerOptions{}.initial_trust_region_radius;
+  bool exact_steps = false;
   std::string report;
   bool quiet = false;
   GraphReadFlags graph;
@@ -103,6 +105,8 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
   options.kernel_scale = flags.robust_scale;
   options.threads = flags.threads;
   options.max_iterations = flags.max_iterations;
+  options.initial_trust_region_radius = flags.initial_radius;
+  options.reuse_factorization = !flags.exact_steps;
   std::string invalid;
   if (!options.is_valid(&invalid)) throw io::ParseError("cairn optimize", 0, invalid);
   if (!flags.quiet) {
@@ -323,6 +327,13 @@ Runner register_optimize(CLI::App& app) {
   app.add_option("--max-iterations", flags->max_iterations, "Iteration limit")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  app.add_option("--initial-radius", flags->initial_radius,
+                 "Initial trust-region radius (LM: damping 1/radius; default 1e16 = an undamped, Gauss-Newton "
+                 "first step; Ceres' default is 1e4)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_flag("--exact-steps", flags->exact_steps,
+               "LM: factorise every iteration instead of solving by PCG on the last factorisation");
   app.add_option("--report", flags->report, "Write a JSON report (summary, per-iteration log, timings)");
   app.add_option("--covariance", flags->covariance_ids,
                  "Pose ids whose marginal covariance goes into the report (comma separated)")
