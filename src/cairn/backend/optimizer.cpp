@@ -331,6 +331,13 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     const auto iteration_start = Clock::now();
     IterationSummary it;
     it.iteration = iteration;
+    // Logs the iteration (time, progress callback, count).
+    auto record = [&](IterationSummary& logged) {
+      logged.iteration_s = seconds_since(iteration_start);
+      summary.iteration_log.push_back(logged);
+      if (options.progress) options.progress(logged);
+      summary.iterations = iteration;
+    };
     if (need_linearization) {
       const auto t0 = Clock::now();
       engine.linearize();
@@ -407,10 +414,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
         nu *= 2.0;
         it.lambda = lambda;
         it.cost = cost;
-        it.iteration_s = seconds_since(iteration_start);
-        summary.iteration_log.push_back(it);
-        if (options.progress) options.progress(it);
-        summary.iterations = iteration;
+        record(it);
         continue;
       }
       summary.termination = TerminationType::kFailure;
@@ -479,10 +483,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       // of the cost end the solve instead of raising the damping again and again.
       it.cost = cost;
       it.lambda = lm ? lambda : it.lambda;
-      it.iteration_s = seconds_since(iteration_start);
-      summary.iteration_log.push_back(it);
-      if (options.progress) options.progress(it);
-      summary.iterations = iteration;
+      record(it);
       summary.termination = TerminationType::kConvergence;
       summary.message = "function tolerance reached (the last step, not taken, changed the cost by a negligible amount)";
       break;
@@ -504,10 +505,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
         if (it.relative_decrease < 0.25) radius = 0.25 * std::min(radius, it.step_norm);
       }
       it.cost = cost;
-      it.iteration_s = seconds_since(iteration_start);
-      summary.iteration_log.push_back(it);
-      if (options.progress) options.progress(it);
-      summary.iterations = iteration;
+      record(it);
       if (std::abs(old_cost - new_cost) <= options.function_tolerance * old_cost) {
         summary.termination = TerminationType::kConvergence;
         summary.message = "function tolerance reached";
@@ -519,10 +517,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       force_factorization = true;
       it.cost = cost;
       it.lambda = lambda;
-      it.iteration_s = seconds_since(iteration_start);
-      summary.iteration_log.push_back(it);
-      if (options.progress) options.progress(it);
-      summary.iterations = iteration;
+      record(it);
     } else {
       if (options.algorithm == Algorithm::kGaussNewton) {
         summary.termination = TerminationType::kConvergence;
@@ -539,10 +534,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
         radius = 0.25 * std::min(radius, it.step_norm);
       }
       it.cost = cost;
-      it.iteration_s = seconds_since(iteration_start);
-      summary.iteration_log.push_back(it);
-      if (options.progress) options.progress(it);
-      summary.iterations = iteration;
+      record(it);
       if (lm && lambda > 1e32) {
         summary.termination = TerminationType::kConvergence;
         summary.message = "no further decrease possible (damping reached 1e32)";
