@@ -313,10 +313,10 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
   if (cg_budget == 0) {
     const double per_iteration = 4.0 * static_cast<double>(cholesky.factor_nonzeros()) +
                                  4.0 * static_cast<double>(engine.pattern().matrix().value.size());
-    cg_budget = static_cast<int>(std::clamp(0.25 * cholesky.factor_flops() / per_iteration, 3.0, 30.0));
+    cg_budget = static_cast<int>(std::clamp(0.25 * cholesky.factor_flops() / per_iteration, 8.0, 30.0));
   }
-  double first_gradient_max_norm = 1.0;
   bool force_factorization = false;  // after a rejected inexact step
+  double previous_gradient_max_norm = 1.0;  // at the last accepted point before this one
   double lambda = 1.0 / options.initial_trust_region_radius;
   double nu = 2.0;
   double radius = options.initial_trust_region_radius;
@@ -350,7 +350,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     }
     const Eigen::VectorXd& g = engine.gradient();
     it.gradient_max_norm = g.cwiseAbs().maxCoeff();
-    if (iteration == 1) first_gradient_max_norm = it.gradient_max_norm;
+    if (iteration == 1) previous_gradient_max_norm = it.gradient_max_norm;
     if (it.gradient_max_norm < options.gradient_tolerance) {
       summary.termination = TerminationType::kConvergence;
       summary.message = "gradient tolerance reached (max |J^T r| = " + std::to_string(it.gradient_max_norm) + ")";
@@ -366,10 +366,11 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       Eigen::VectorXd damping(A.size);
       for (int k = 0; k < A.size; ++k) damping[k] = lambda * std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
       const auto t2 = Clock::now();
-      // Forcing term: the gradient's size relative to the first iteration's, in
-      // [1e-10, reuse_cg_tolerance] (Eisenstat & Walker 1996 in spirit): loose far from the
-      // minimum, tight near it, where the last factorisation is an excellent preconditioner.
-      const double forcing = std::clamp(it.gradient_max_norm / first_gradient_max_norm, 1e-10, options.reuse_cg_tolerance);
+      // Forcing term (Eisenstat & Walker 1996, choice 1 in spirit): the gradient's reduction
+      // over the last iteration, at most reuse_cg_tolerance, at least 1e-8. Loose while the
+      // gradient falls slowly, tight when it falls fast, so the superlinear convergence of the
+      // exact steps is kept near the minimum.
+      const double forcing = std::clamp(it.gradient_max_norm / previous_gradient_max_norm, 1e-8, options.reuse_cg_tolerance);
       PcgResult pcg = preconditioned_cg(A, damping, -g, cholesky, cg_budget, forcing);
       it.solve_s = seconds_since(t2);
       it.cg_iterations = pcg.iterations;
@@ -493,6 +494,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       problem.T_world_pose = std::move(candidate);
       cost = new_cost;
       need_linearization = true;
+      previous_gradient_max_norm = it.gradient_max_norm;
       ++summary.successful_iterations;
       it.step_accepted = true;
       if (lm) {

@@ -61,8 +61,8 @@ struct OptimizerOptions {
   /// [1e-6, 1e32] (Ceres' clamp). Dog-leg: initial trust-region radius. > 0.
   /// The default starts as Gauss-Newton (lambda = 1e-16): damping only after a rejected step,
   /// which raises lambda to at least 1e-4 (Ceres' initial damping, radius 1e4). Measured on the
-  /// SE-Sync graphs from a chordal start (docs/benchmarks.md), Ceres' radius 1e4 needs 6-16
-  /// iterations where the undamped start needs 3-4: the damping holds back the steps along the
+  /// SE-Sync graphs from a chordal start (docs/benchmarks.md), Ceres' radius 1e4 needs 8-16
+  /// iterations where the undamped start needs 2-5: the damping holds back the steps along the
   /// graphs' flat directions iteration after iteration.
   double initial_trust_region_radius = 1e16;
   /// LM only: once a factorisation exists, solve the next damped systems (H + lambda D) x = -g
@@ -70,20 +70,20 @@ struct OptimizerOptions {
   /// Nocedal & Wright alg. 5.3) and factorise again only when PCG does not converge within
   /// `reuse_max_cg_iterations`. Near a minimum H changes little between iterations, so a few
   /// triangular solves replace a numeric factorisation, most of an iteration's time on large
-  /// graphs. The function tolerance is only tested after steps solved to tolerance.
+  /// graphs. Only steps that reach the forcing term below are taken, so every step is the
+  /// damped Gauss-Newton step to 1 %. Off: a factorisation every iteration (as Ceres).
   bool reuse_factorization = true;
-  /// Largest relative residual ||(H + lambda D) x + g|| / ||g|| at which a PCG step is taken
-  /// (the forcing term, Dembo, Eisenstat & Steihaug 1982). The forcing used is the gradient's
-  /// max-norm relative to the first iteration's, clamped to [1e-10, reuse_cg_tolerance]: loose
-  /// far from the minimum, tight near it. A rejected PCG step is retried from a fresh
-  /// factorisation with the same damping. 0.01 measured best on the SE-Sync graphs (0.1 let
-  /// loose steps be rejected on MIT and cost cubicle a factorisation). In (0, 1).
+  /// Relative residual ||(H + lambda D) x + g|| / ||g|| at which a PCG step is taken (the
+  /// forcing term of an inexact Newton step, Dembo, Eisenstat & Steihaug 1982). A rejected PCG
+  /// step is retried from a fresh factorisation with the same damping. 0.01 measured best on the
+  /// SE-Sync graphs (0.1 let loose steps be rejected on MIT and cost cubicle a factorisation; a
+  /// forcing shrinking with the gradient made PCG miss its budget near the minimum). In (0, 1).
   double reuse_cg_tolerance = 0.01;
   /// PCG iterations before giving up and factorising; 0 = derived from CHOLMOD's operation
   /// counts (a quarter of a factorisation's flops spent in triangular solves and products with
-  /// H, at least 3, at most 30), so the choice does not depend on timing and runs are
-  /// repeatable. PCG also gives up early when its residual reduction so far projects past
-  /// the budget. >= 0.
+  /// H, at least 8, at most 30; small graphs pay CHOLMOD overheads the flop count misses), so
+  /// the choice does not depend on timing and runs are repeatable. PCG also gives up early
+  /// when its residual reduction so far projects past the budget. >= 0.
   int reuse_max_cg_iterations = 0;
   /// Threads for linearisation; 0 = all cores.
   int threads = 0;
