@@ -214,6 +214,37 @@ TEST(Cli, OptimizeReachesTheCertifiedOptimumAndWritesItsReport) {
   EXPECT_EQ(nlohmann::json::parse(info.out)["vertices"], 1728);
 }
 
+// --exact-steps and --initial-radius 1e4 give Ceres' choices (a factorisation every iteration,
+// damped start); both roads end at the same minimum, the default one in fewer iterations.
+TEST(Cli, OptimizeExactStepsAndCeresRadiusReachTheSameMinimum) {
+  CAIRN_REQUIRE_DATA("posegraph/se-sync/sphere2500.g2o");
+  const std::string graph = quoted(cairn::test::data_path("posegraph/se-sync/sphere2500.g2o"));
+  auto solve = [&](const std::string& name, const std::string& flags) {
+    const auto report = scratch() / (name + ".json");
+    const Result r = run("optimize " + graph + " -o " + quoted(scratch() / (name + ".g2o")) + " --init chordal " + flags +
+                         " --report " + quoted(report));
+    EXPECT_EQ(r.status, 0) << r.err;
+    std::ifstream in(report);
+    return std::make_pair(nlohmann::json::parse(in)["summary"], r.err);
+  };
+  const auto [fast, fast_progress] = solve("default_steps", "");
+  const auto [ceres_like, ceres_progress] = solve("exact_steps", "--exact-steps --initial-radius 1e4");
+  EXPECT_NEAR(fast["final_cost"].get<double>(), ceres_like["final_cost"].get<double>(),
+              1e-8 * ceres_like["final_cost"].get<double>());
+  EXPECT_LT(fast["iterations"].get<int>(), ceres_like["iterations"].get<int>());
+  int pcg_steps = 0;
+  for (const auto& it : fast["iteration_log"]) pcg_steps += it["cg_iterations"].get<int>() > 0 && it["factorize_s"].get<double>() == 0.0;
+  EXPECT_GE(pcg_steps, 1);
+  for (const auto& it : ceres_like["iteration_log"]) {
+    EXPECT_EQ(it["cg_iterations"].get<int>(), 0);
+    EXPECT_GT(it["factorize_s"].get<double>(), 0.0);
+  }
+  EXPECT_NE(fast_progress.find(" cg "), std::string::npos) << fast_progress;
+  EXPECT_EQ(ceres_progress.find(" cg "), std::string::npos) << ceres_progress;
+  const Result bad = run("optimize " + graph + " -o " + quoted(scratch() / "bad.g2o") + " --initial-radius 0");
+  EXPECT_EQ(bad.status, 2) << bad.err;
+}
+
 TEST(Cli, OptimizeRefusesAnUnanchoredComponent) {
   const std::string graph = write_file("two.g2o", "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_SE2 2 0 0 0\n"
                                                   "VERTEX_SE2 3 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n"
