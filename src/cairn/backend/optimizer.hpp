@@ -61,9 +61,9 @@ struct OptimizerOptions {
   /// [1e-6, 1e32] (Ceres' clamp). Dog-leg: initial trust-region radius. > 0.
   /// The default starts as Gauss-Newton (lambda = 1e-16): damping only after a rejected step,
   /// which raises lambda to at least 1e-4 (Ceres' initial damping, radius 1e4). Measured on the
-  /// SE-Sync graphs from a chordal start (docs/benchmarks.md), Ceres' radius 1e4 needs 8-16
-  /// iterations where the undamped start needs 2-5: the damping holds back the steps along the
-  /// graphs' flat directions iteration after iteration.
+  /// SE-Sync graphs from a chordal start (docs/benchmarks.md), Ceres' radius 1e4 needs 5-16
+  /// iterations on 11 of 14 graphs where the undamped start needs 2-5: the damping holds back
+  /// the steps along the graphs' flat directions iteration after iteration.
   double initial_trust_region_radius = 1e16;
   /// LM only: once a factorisation exists, solve the next damped systems (H + lambda D) x = -g
   /// by conjugate gradients preconditioned with it (an inexact LM step, Wright & Holt 1985;
@@ -71,13 +71,15 @@ struct OptimizerOptions {
   /// `reuse_max_cg_iterations`. Near a minimum H changes little between iterations, so a few
   /// triangular solves replace a numeric factorisation, most of an iteration's time on large
   /// graphs. Only steps that reach the forcing term below are taken, so every step is the
-  /// damped Gauss-Newton step to 1 %. Off: a factorisation every iteration (as Ceres).
+  /// damped Gauss-Newton step to at most 1 %. Off: a factorisation every iteration (as Ceres).
   bool reuse_factorization = true;
-  /// Relative residual ||(H + lambda D) x + g|| / ||g|| at which a PCG step is taken (the
-  /// forcing term of an inexact Newton step, Dembo, Eisenstat & Steihaug 1982). A rejected PCG
-  /// step is retried from a fresh factorisation with the same damping. 0.01 measured best on the
-  /// SE-Sync graphs (0.1 let loose steps be rejected on MIT and cost cubicle a factorisation; a
-  /// forcing shrinking with the gradient made PCG miss its budget near the minimum). In (0, 1).
+  /// Largest forcing term of an inexact Newton step (Dembo, Eisenstat & Steihaug 1982): a PCG
+  /// step is taken when ||(H + lambda D) x + g|| / ||g|| <= forcing, forcing = the max-norm
+  /// gradient's reduction over the last accepted step clamped to [1e-8, reuse_cg_tolerance]
+  /// (Eisenstat & Walker 1996, choice 1 in spirit). A rejected PCG step is retried from a fresh
+  /// factorisation with the same damping. 0.01 measured best on the SE-Sync graphs (0.1 let
+  /// loose steps be rejected on MIT and cost cubicle a factorisation; a forcing relative to the
+  /// first iteration's gradient made PCG miss its budget near the minimum). In (0, 1).
   double reuse_cg_tolerance = 0.01;
   /// PCG iterations before giving up and factorising; 0 = derived from CHOLMOD's operation
   /// counts (a quarter of a factorisation's flops spent in triangular solves and products with
