@@ -361,10 +361,15 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     Eigen::VectorXd step;
     auto& A = engine.pattern().matrix();
     bool solved = false;
+    // LM's damping lambda D, D = diag(J^T J) clamped as Ceres does; used by PCG and added to the
+    // diagonal before a factorisation.
+    Eigen::VectorXd damping;
+    if (lm) {
+      damping.resize(A.size);
+      for (int k = 0; k < A.size; ++k) damping[k] = lambda * std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
+    }
     if (reuse && cholesky.has_factor() && !force_factorization) {
       // Inexact LM step: PCG on the current damped system, the last factorisation as preconditioner.
-      Eigen::VectorXd damping(A.size);
-      for (int k = 0; k < A.size; ++k) damping[k] = lambda * std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
       const auto t2 = Clock::now();
       // Forcing term (Eisenstat & Walker 1996, choice 1 in spirit): the gradient's reduction
       // over the last iteration, at most reuse_cg_tolerance, at least 1e-8. Loose while the
@@ -381,20 +386,15 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       }
     }
     if (!solved && (!dogleg || !gn_step_valid)) {
-      std::vector<double> saved;
       if (lm) {
-        saved = diagonal;
-        for (int k = 0; k < A.size; ++k) {
-          const double d = std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
-          A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] += lambda * d;
-        }
+        for (int k = 0; k < A.size; ++k) A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] += damping[k];
       }
       force_factorization = false;
       const auto t1 = Clock::now();
       const FactorizationStatus status = cholesky.factorize(A);
       it.factorize_s = seconds_since(t1);
-      if (lm) {
-        for (int k = 0; k < A.size; ++k) A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] = saved[static_cast<std::size_t>(k)];
+      if (lm) {  // back to the undamped J^T J
+        for (int k = 0; k < A.size; ++k) A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] = diagonal[static_cast<std::size_t>(k)];
       }
       if (status == FactorizationStatus::kSuccess) {
         const auto t2 = Clock::now();
@@ -483,7 +483,6 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       // change is tested whether or not the step is taken, so steps at the floating-point floor
       // of the cost end the solve instead of raising the damping again and again.
       it.cost = cost;
-      it.lambda = lm ? lambda : it.lambda;
       record(it);
       summary.termination = TerminationType::kConvergence;
       summary.message = "function tolerance reached (the last step, not taken, changed the cost by a negligible amount)";
@@ -518,7 +517,6 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       // the next step from a fresh factorisation.
       force_factorization = true;
       it.cost = cost;
-      it.lambda = lambda;
       record(it);
     } else {
       if (options.algorithm == Algorithm::kGaussNewton) {
