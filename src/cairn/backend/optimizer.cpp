@@ -452,14 +452,9 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     } else {
       // (H + lambda D) step = -g  =>  step^T H step = -g^T step - lambda step^T D step, so the
       // decrease of ||r + J step||^2 is -g^T step + lambda step^T D step (D = 0 for GN).
-      double damping = 0.0;
-      if (lm) {
-        for (int k = 0; k < A.size; ++k) {
-          const double d = std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
-          damping += d * step[k] * step[k];
-        }
-      }
-      predicted = -g.dot(step) + lambda * damping;
+      // `damping` already holds lambda D.
+      const double step_damping = lm ? step.dot(damping.cwiseProduct(step)) : 0.0;
+      predicted = -g.dot(step) + step_damping;
       it.lambda = lm ? lambda : 0.0;
     }
     it.step_norm = step.norm();
