@@ -10,7 +10,9 @@
 #include <optional>
 #include <vector>
 
+#include "cairn/backend/optimizer.hpp"
 #include "cairn/backend/problem.hpp"
+#include "cairn/backend/sparse_cholesky.hpp"
 
 namespace cairn::backend {
 
@@ -20,6 +22,14 @@ struct MarginalCovariances {
   std::vector<int> poses;        ///< requested pose indices
   std::vector<Matrix> covariance;  ///< same order
 };
+
+/// Factorises J^T J (whitened Jacobians of `objective`, each edge's block scaled by its weight;
+/// edges of weight 0 left out; `weights` empty = all 1) over the free poses, numbered in
+/// `variable` (pose index -> block, -1 for fixed poses). False when not positive definite.
+template <class Group>
+bool factorize_normal_equations(const PoseGraphProblem<Group>& problem, Objective objective,
+                                const std::vector<double>& weights, std::vector<int>& variable,
+                                SparseCholesky& cholesky);
 
 /// nullopt when J^T J is not positive definite (a pose not constrained by the edges).
 template <class Group>

@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numeric>
 
+#include <Eigen/Dense>
+
+#include "cairn/backend/covariance.hpp"
 #include "cairn/backend/factors.hpp"
 #include "cairn/core/assert.hpp"
 
@@ -19,8 +23,8 @@ double chi2_quantile_99(int dof) {
 
 namespace {
 
-double squared_residual(const auto& problem, const auto& edge, Objective objective) {
-  using Group = std::decay_t<decltype(problem.T_world_pose[0])>;
+template <class Group>
+double squared_residual(const PoseGraphProblem<Group>& problem, const PoseEdge<Group>& edge, Objective objective) {
   const auto& Ti = problem.T_world_pose[static_cast<std::size_t>(edge.i)];
   const auto& Tj = problem.T_world_pose[static_cast<std::size_t>(edge.j)];
   if (objective == Objective::kChordal) return ChordalFactor<Group>::evaluate(Ti, Tj, edge, nullptr, nullptr).squaredNorm();
@@ -34,76 +38,370 @@ double tls_weight(double r2, double c2, double mu) {
   return std::sqrt(c2 / r2) * std::sqrt(mu * (mu + 1.0)) - mu;
 }
 
+// Adjoint of T, Ad(T) xi = log(T exp(xi) T^-1), by central differences (exact to ~1e-10 for
+// the poses of a pose graph; the group classes carry no closed form).
+template <class Group>
+Eigen::Matrix<double, Group::kDoF, Group::kDoF> adjoint(const Group& T) {
+  constexpr int D = Group::kDoF;
+  constexpr double h = 1e-6;
+  Eigen::Matrix<double, D, D> Ad;
+  const Group T_inverse = T.inverse();
+  for (int k = 0; k < D; ++k) {
+    typename Group::Tangent xi = Group::Tangent::Zero();
+    xi[k] = h;
+    Ad.col(k) = ((T * Group::exp(xi) * T_inverse).log() - (T * Group::exp(-xi) * T_inverse).log()) / (2.0 * h);
+  }
+  return Ad;
+}
+
+// Covariance of an edge: the pseudo-inverse of its information (which may be singular after
+// the reader's projection to positive semi-definite).
+template <class Group>
+Eigen::Matrix<double, Group::kDoF, Group::kDoF> covariance_of(const PoseEdge<Group>& edge) {
+  constexpr int D = Group::kDoF;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>> eigen(edge.information);
+  Eigen::Matrix<double, D, 1> inverse_values;
+  const double floor = 1e-12 * std::max(eigen.eigenvalues().maxCoeff(), 1e-300);
+  for (int k = 0; k < D; ++k) inverse_values[k] = eigen.eigenvalues()[k] > floor ? 1.0 / eigen.eigenvalues()[k] : 0.0;
+  return eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+}
+
+struct DisjointSets {
+  std::vector<std::size_t> parent;
+  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), std::size_t{0}); }
+  std::size_t find(std::size_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  }
+  void unite(std::size_t a, std::size_t b) { parent[find(a)] = find(b); }
+};
+
+// State shared by the stages: the problem, which edges are robust, the weighted inner solver
+// with its workspace, and the counters of the summary.
+template <class Group>
+class Stages {
+ public:
+  Stages(PoseGraphProblem<Group>& problem, const GncOptions& options, GncSummary& summary)
+      : problem_(problem), options_(options), summary_(summary), inner_(options.inner) {
+    const std::size_t m = problem.edges.size();
+    robust_.assign(m, 0);
+    for (std::size_t e = 0; e < m; ++e) {
+      robust_[e] = options.robust_odometry || problem.edges[e].kind == EdgeKind::kLoopClosure;
+    }
+    inner_.kernel = RobustKernel::kNone;
+    inner_.edge_weights.assign(m, 1.0);
+  }
+
+  std::vector<double>& weights() { return inner_.edge_weights; }
+  const std::vector<char>& robust() const { return robust_; }
+  Objective objective() const { return inner_.objective; }
+
+  double r2(std::size_t e) const { return squared_residual(problem_, problem_.edges[e], inner_.objective); }
+
+  OptimizerSummary solve(int max_iterations, double initial_radius) {
+    inner_.max_iterations = max_iterations;
+    inner_.initial_trust_region_radius = initial_radius;
+    OptimizerSummary s = optimize(problem_, inner_, &workspace_);
+    summary_.inner_iterations += s.iterations;
+    summary_.factorizations += s.factorizations;
+    summary_.analyses = workspace_.analyses;
+    ++summary_.solves;
+    return s;
+  }
+
+  /// Truncated least squares at the current poses: trusted edges r^2, robust ones min(r^2, c^2).
+  double tls_cost(double c2) const {
+    double sum = 0.0;
+    for (std::size_t e = 0; e < problem_.edges.size(); ++e) sum += robust_[e] ? std::min(r2(e), c2) : r2(e);
+    return sum;
+  }
+
+  /// The graduation of Yang et al. (2020) from the current poses; leaves binary weights.
+  void graduate(double c2) {
+    const std::size_t m = problem_.edges.size();
+    std::fill(weights().begin(), weights().end(), 1.0);
+    double max_r2 = 0.0;
+    for (std::size_t e = 0; e < m; ++e) {
+      if (robust_[e]) max_r2 = std::max(max_r2, r2(e));
+    }
+    if (max_r2 <= c2) {
+      summary_.graduation_converged = true;  // every residual is already an inlier's
+      return;
+    }
+    double mu = c2 / (2.0 * max_r2 - c2);
+    double radius = options_.inner.initial_trust_region_radius;
+    bool binary = false;
+    for (int outer = 1; outer <= options_.max_outer_iterations && !binary; ++outer) {
+      ++summary_.outer_iterations;
+      double non_binary = 0.0;
+      for (std::size_t e = 0; e < m; ++e) {
+        if (!robust_[e]) continue;
+        const double w = tls_weight(r2(e), c2, mu);
+        weights()[e] = w;
+        non_binary += w * (1.0 - w);
+      }
+      const OptimizerSummary s = solve(std::min(options_.inner.max_iterations, options_.iterations_per_outer), radius);
+      // The next weighted solve starts with this one's damping: the weights change little
+      // between outer iterations.
+      if (options_.carry_damping && s.final_lambda > 0.0) radius = 1.0 / s.final_lambda;
+      binary = non_binary < options_.binary_tolerance;
+      if (!binary) mu *= options_.mu_factor;
+    }
+    summary_.final_mu = mu;
+    summary_.graduation_converged = binary;
+    for (std::size_t e = 0; e < m; ++e) {
+      if (robust_[e]) weights()[e] = weights()[e] >= 0.5 ? 1.0 : 0.0;
+    }
+  }
+
+  /// TLS at mu = infinity by majorisation-minimisation: accept the robust edges with r^2 <= c^2,
+  /// solve least squares on them, repeat until the accepted set is stable. Each round minimises
+  /// an upper bound of the TLS cost that touches it at the current poses, so the cost never
+  /// rises. Returns the last solve.
+  OptimizerSummary reclassify(double c2) {
+    OptimizerSummary last = solve(options_.inner.max_iterations, options_.inner.initial_trust_region_radius);
+    for (int round = 0; round < options_.max_reclassify_rounds; ++round) {
+      int changed = 0;
+      for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
+        if (!robust_[e]) continue;
+        const double w = r2(e) <= c2 ? 1.0 : 0.0;
+        changed += w != weights()[e];
+        weights()[e] = w;
+      }
+      if (changed == 0) break;
+      ++summary_.reclassify_rounds;
+      last = solve(options_.inner.max_iterations, options_.inner.initial_trust_region_radius);
+    }
+    return last;
+  }
+
+  /// Groups of rejected loop closures that agree with each other: two loop closures a = (i, j)
+  /// and b = (k, l) with |i - k| and |j - l| at most `group_window` poses are consistent when
+  /// the cycle T_jl^-1 Z_a^-1 T_ik Z_b (the short segments i->k and j->l from the current poses)
+  /// is the identity within c^2 of its covariance Ad(T_jl^-1) Sigma_a Ad(T_jl^-1)^T + Sigma_b
+  /// (the pairwise consistency of Mangelson et al., ICRA 2018, restricted to nearby pairs).
+  /// Each group (connected components, at least two edges) is tried back in, largest first,
+  /// and kept when the TLS cost falls and every edge of the group ends below c^2: a move of a
+  /// local search on the TLS objective, which GNC's continuation can miss when a whole group of
+  /// true loop closures closes a loop with much drift. Random false loop closures hardly ever
+  /// form such groups. Returns the edges readmitted.
+  std::size_t readmit_groups(double c2) {
+    constexpr int D = Group::kDoF;
+    using Matrix = Eigen::Matrix<double, D, D>;
+    struct Candidate {
+      std::size_t edge;
+      int a, b;        // pose indices, a < b
+      Group Z_a_b;     // measurement oriented a -> b
+      Matrix sigma;    // its covariance
+    };
+    std::vector<Candidate> candidates;
+    for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
+      if (!robust_[e] || weights()[e] != 0.0) continue;
+      const auto& edge = problem_.edges[e];
+      Candidate c{e, edge.i, edge.j, edge.T_i_j, covariance_of(edge)};
+      if (edge.i > edge.j) {
+        // Z^-1 with Z exp(d) -> Z^-1 exp(-Ad(Z) d): Sigma' = Ad(Z) Sigma Ad(Z)^T.
+        const Matrix Ad = adjoint(edge.T_i_j);
+        c = Candidate{e, edge.j, edge.i, edge.T_i_j.inverse(), Ad * c.sigma * Ad.transpose()};
+      }
+      candidates.push_back(c);
+    }
+    if (candidates.size() < 2) return 0;
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) { return x.a < y.a; });
+    DisjointSets sets(candidates.size());
+    const auto& T = problem_.T_world_pose;
+    const int window = options_.group_window;
+    for (std::size_t x = 0; x < candidates.size(); ++x) {
+      const Candidate& ca = candidates[x];
+      for (std::size_t y = x + 1; y < candidates.size() && candidates[y].a - ca.a <= window; ++y) {
+        const Candidate& cb = candidates[y];
+        if (std::abs(cb.b - ca.b) > window) continue;
+        const Group T_i_k = T[static_cast<std::size_t>(ca.a)].inverse() * T[static_cast<std::size_t>(cb.a)];
+        const Group T_j_l = T[static_cast<std::size_t>(ca.b)].inverse() * T[static_cast<std::size_t>(cb.b)];
+        const Group T_l_j = T_j_l.inverse();
+        const typename Group::Tangent cycle = (T_l_j * ca.Z_a_b.inverse() * T_i_k * cb.Z_a_b).log();
+        const Matrix Ad = adjoint(T_l_j);
+        const Matrix sigma = Ad * ca.sigma * Ad.transpose() + cb.sigma;
+        const Eigen::LDLT<Matrix> ldlt(sigma);
+        if (ldlt.info() != Eigen::Success) continue;
+        const double d2 = cycle.dot(ldlt.solve(cycle));
+        if (std::isfinite(d2) && d2 <= c2) sets.unite(x, y);
+      }
+    }
+    std::vector<std::vector<std::size_t>> groups(candidates.size());
+    for (std::size_t x = 0; x < candidates.size(); ++x) groups[sets.find(x)].push_back(candidates[x].edge);
+    std::erase_if(groups, [](const auto& g) { return g.size() < 2; });
+    std::sort(groups.begin(), groups.end(), [](const auto& x, const auto& y) { return x.size() > y.size(); });
+    summary_.groups_tried += static_cast<int>(groups.size());
+    std::size_t readmitted = 0;
+    for (const auto& group : groups) {
+      const double cost_before = tls_cost(c2);
+      const std::vector<Group> poses_before = problem_.T_world_pose;
+      for (const std::size_t e : group) weights()[e] = 1.0;
+      solve(options_.inner.max_iterations, options_.inner.initial_trust_region_radius);
+      bool fits = true;
+      for (const std::size_t e : group) fits = fits && r2(e) <= c2;
+      if (fits && tls_cost(c2) < cost_before) {
+        readmitted += group.size();
+        ++summary_.groups_readmitted;
+      } else {
+        for (const std::size_t e : group) weights()[e] = 0.0;
+        problem_.T_world_pose = poses_before;
+      }
+    }
+    return readmitted;
+  }
+
+  /// Rejected loop closures that the map predicts well enough: adding one measurement to a
+  /// least-squares problem raises its minimum by the innovation's squared Mahalanobis norm
+  /// d^2 = r^T (I + J H^-1 J^T)^-1 r (whitened residual r and Jacobian J at the current poses, H
+  /// the accepted edges' J^T J; the Kalman update's identity, to first order), so accepting it
+  /// lowers the TLS cost exactly when d^2 < c^2, while its bare residual r^2 overstates that
+  /// cost by the map's own uncertainty. Short true loop closures are the typical case: left out,
+  /// the odometry between their ends relaxes away from them. Readmits every such edge; the
+  /// caller's reclassification then settles the set. Returns the number readmitted.
+  std::size_t readmit_by_innovation(double c2) {
+    return inner_.objective == Objective::kChordal ? readmit_by_innovation_with<ChordalFactor<Group>>(c2)
+                                                   : readmit_by_innovation_with<GeodesicFactor<Group>>(c2);
+  }
+
+  template <class Factor>
+  std::size_t readmit_by_innovation_with(double c2) {
+    constexpr int D = Group::kDoF;
+    constexpr int R = Factor::kResidualDim;
+    std::vector<std::size_t> candidates;
+    for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
+      if (robust_[e] && weights()[e] == 0.0) candidates.push_back(e);
+    }
+    if (candidates.empty()) return 0;
+    std::vector<int> variable;
+    SparseCholesky cholesky;
+    if (!factorize_normal_equations(problem_, inner_.objective, weights(), variable, cholesky)) return 0;
+    Eigen::Index n = 0;
+    for (const int v : variable) n = std::max<Eigen::Index>(n, (v + 1) * D);
+    if (n == 0) return 0;
+    // Right-hand sides J^T of a batch of candidates, at most ~64 MB of them at once.
+    const std::size_t batch = std::max<std::size_t>(1, static_cast<std::size_t>(8'000'000 / (n * R)));
+    std::size_t readmitted = 0;
+    std::vector<std::size_t> accepted;
+    for (std::size_t first = 0; first < candidates.size(); first += batch) {
+      const std::size_t count = std::min(batch, candidates.size() - first);
+      Eigen::MatrixXd B = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(count) * R);
+      std::vector<typename Factor::Jacobian> Ji(count), Jj(count);
+      std::vector<typename Factor::Residual> r(count);
+      for (std::size_t c = 0; c < count; ++c) {
+        const auto& edge = problem_.edges[candidates[first + c]];
+        r[c] = Factor::evaluate(problem_.T_world_pose[static_cast<std::size_t>(edge.i)],
+                                problem_.T_world_pose[static_cast<std::size_t>(edge.j)], edge, &Ji[c], &Jj[c]);
+        const int vi = variable[static_cast<std::size_t>(edge.i)];
+        const int vj = variable[static_cast<std::size_t>(edge.j)];
+        const auto column = static_cast<Eigen::Index>(c) * R;
+        if (vi >= 0) B.block(vi * D, column, D, R) += Ji[c].transpose();
+        if (vj >= 0) B.block(vj * D, column, D, R) += Jj[c].transpose();
+      }
+      const Eigen::MatrixXd X = cholesky.solve(B);
+      for (std::size_t c = 0; c < count; ++c) {
+        const auto& edge = problem_.edges[candidates[first + c]];
+        const int vi = variable[static_cast<std::size_t>(edge.i)];
+        const int vj = variable[static_cast<std::size_t>(edge.j)];
+        const auto column = static_cast<Eigen::Index>(c) * R;
+        Eigen::Matrix<double, R, R> C = Eigen::Matrix<double, R, R>::Identity();
+        if (vi >= 0) C += Ji[c] * X.block(vi * D, column, D, R);
+        if (vj >= 0) C += Jj[c] * X.block(vj * D, column, D, R);
+        const Eigen::Matrix<double, R, R> S = 0.5 * (C + C.transpose());
+        const Eigen::LDLT<Eigen::Matrix<double, R, R>> ldlt(S);
+        if (ldlt.info() != Eigen::Success) continue;
+        const double d2 = r[c].dot(ldlt.solve(r[c]));
+        if (std::isfinite(d2) && d2 <= c2) accepted.push_back(candidates[first + c]);
+      }
+    }
+    for (const std::size_t e : accepted) weights()[e] = 1.0;
+    readmitted = accepted.size();
+    summary_.readmitted_by_innovation += static_cast<int>(readmitted);
+    return readmitted;
+  }
+
+  /// Variance of unit weight (a posteriori variance factor, e.g. Foerstner & Wrobel,
+  /// Photogrammetric Computer Vision, 2016, eq. 4.91): chi^2 of the accepted edges over their
+  /// redundancy (accepted edges minus free poses, times the degrees of freedom). 1 when the
+  /// stated information matrices match the errors; 0 when there is no redundancy.
+  double variance_of_unit_weight() const {
+    double chi2 = 0.0;
+    std::size_t accepted = 0;
+    for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
+      if (inner_.edge_weights[e] == 0.0) continue;
+      chi2 += r2(e);
+      ++accepted;
+    }
+    std::size_t free_poses = 0;
+    for (const char f : problem_.fixed) free_poses += f == 0;
+    if (accepted <= free_poses) return 0.0;
+    return chi2 / static_cast<double>((accepted - free_poses) * static_cast<std::size_t>(Group::kDoF));
+  }
+
+ private:
+  PoseGraphProblem<Group>& problem_;
+  const GncOptions& options_;
+  GncSummary& summary_;
+  OptimizerOptions inner_;
+  OptimizerWorkspace workspace_;
+  std::vector<char> robust_;
+};
+
 }  // namespace
 
 template <class Group>
 GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   CAIRN_ASSERT(options.mu_factor > 1.0 && options.max_outer_iterations >= 1 && options.binary_tolerance > 0.0 &&
-                   options.iterations_per_outer >= 1,
+                   options.iterations_per_outer >= 1 && options.max_reclassify_rounds >= 0 &&
+                   options.group_window >= 0 && options.scaled_threshold_multiplier > 0.0,
                "invalid GncOptions");
   GncSummary summary;
-  const std::size_t m = problem.edges.size();
-  const double c2 = options.inlier_threshold_chi2 > 0.0 ? options.inlier_threshold_chi2 : chi2_quantile_99(Group::kDoF);
+  Stages<Group> stages(problem, options, summary);
+  const double quantile = chi2_quantile_99(Group::kDoF);
+  const bool adaptive = options.inlier_threshold_chi2 <= 0.0 && options.estimate_noise_scale;
+  double c2 = options.inlier_threshold_chi2 > 0.0 ? options.inlier_threshold_chi2 : quantile;
+  summary.initial_threshold_chi2 = c2;
+  const std::vector<Group> initial_poses = problem.T_world_pose;
+
+  if (options.start_from_least_squares) stages.solve(options.inner.max_iterations, options.inner.initial_trust_region_radius);
+  stages.graduate(c2);
+  if (adaptive) {
+    // The stated information matrices may be off by a common factor (intel's overstate its
+    // errors some 50 times in variance): estimate it on the accepted edges and measure the
+    // threshold in the estimated noise instead.
+    summary.final_solve = stages.reclassify(c2);
+    summary.noise_variance_factor = stages.variance_of_unit_weight();
+    if (summary.noise_variance_factor > 0.0) {
+      // Clamped: noise-free (simulated) measurements must not collapse the threshold to 0.
+      const double factor = std::clamp(summary.noise_variance_factor, 1e-3, 1e3);
+      const double scaled = options.scaled_threshold_multiplier * quantile * factor;
+      if (scaled < c2 / 1.2) {
+        // Tighter: the first pass may have bent the map around false loop closures that a
+        // looser threshold let in, so graduate again from the initial guess.
+        problem.T_world_pose = initial_poses;
+        summary.regraduated = true;
+        stages.graduate(scaled);
+      }
+      c2 = scaled;
+    }
+  }
   summary.threshold_chi2 = c2;
-  std::vector<char> robust(m, 0);
-  for (std::size_t e = 0; e < m; ++e) {
-    robust[e] = options.robust_odometry || problem.edges[e].kind == EdgeKind::kLoopClosure;
+  summary.final_solve = stages.reclassify(c2);
+  if (options.group_window > 0 && stages.readmit_groups(c2) > 0) summary.final_solve = stages.reclassify(c2);
+  for (int round = 0; options.readmit_by_innovation && round < options.max_reclassify_rounds; ++round) {
+    if (stages.readmit_by_innovation(c2) == 0) break;
+    summary.final_solve = stages.reclassify(c2);
   }
+  summary.tls_cost = stages.tls_cost(c2);
 
-  OptimizerOptions inner = options.inner;
-  inner.kernel = RobustKernel::kNone;
-  inner.edge_weights.assign(m, 1.0);
-
-  // Non-robust solution, then mu_0 from its largest robust residual (Remark 5).
-  OptimizerSummary solve;
-  if (options.start_from_least_squares) {
-    solve = optimize(problem, inner);
-    summary.inner_iterations += solve.iterations;
+  summary.weights = stages.weights();
+  for (std::size_t e = 0; e < problem.edges.size(); ++e) {
+    if (stages.robust()[e] && summary.weights[e] == 0.0) summary.rejected_edges.push_back(e);
   }
-  double max_r2 = 0.0;
-  for (std::size_t e = 0; e < m; ++e) {
-    if (robust[e]) max_r2 = std::max(max_r2, squared_residual(problem, problem.edges[e], inner.objective));
-  }
-  if (max_r2 <= c2) {
-    summary.weights = inner.edge_weights;
-    summary.final_solve = solve;
-    summary.message = "every residual is below the inlier threshold: nothing to reject";
-    summary.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return summary;
-  }
-  double mu = c2 / (2.0 * max_r2 - c2);
-  const int final_iterations = inner.max_iterations;
-  inner.max_iterations = std::min(inner.max_iterations, options.iterations_per_outer);
-  summary.message = "maximum number of outer iterations reached";
-  for (int outer = 1; outer <= options.max_outer_iterations; ++outer) {
-    summary.outer_iterations = outer;
-    double non_binary = 0.0;
-    for (std::size_t e = 0; e < m; ++e) {
-      if (!robust[e]) continue;
-      const double w = tls_weight(squared_residual(problem, problem.edges[e], inner.objective), c2, mu);
-      inner.edge_weights[e] = w;
-      non_binary += w * (1.0 - w);
-    }
-    solve = optimize(problem, inner);
-    summary.inner_iterations += solve.iterations;
-    if (non_binary < options.binary_tolerance) {
-      summary.message = "weights converged to 0 or 1";
-      break;
-    }
-    mu *= options.mu_factor;
-  }
-  summary.final_mu = mu;
-  // Binary decision, then least squares on the accepted edges.
-  for (std::size_t e = 0; e < m; ++e) {
-    if (!robust[e]) continue;
-    inner.edge_weights[e] = inner.edge_weights[e] >= 0.5 ? 1.0 : 0.0;
-    if (inner.edge_weights[e] == 0.0) summary.rejected_edges.push_back(e);
-  }
-  inner.max_iterations = final_iterations;
-  summary.final_solve = optimize(problem, inner);
-  summary.inner_iterations += summary.final_solve.iterations;
-  summary.weights = inner.edge_weights;
+  summary.message = summary.graduation_converged ? "weights converged to 0 or 1"
+                                                 : "maximum number of outer iterations reached before the weights were binary";
   summary.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

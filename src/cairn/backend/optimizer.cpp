@@ -83,28 +83,20 @@ class Engine {
   static constexpr int D = Group::kDoF;
   using BlockVector = Eigen::Matrix<double, D, 1>;
 
-  Engine(PoseGraphProblem<Group>& problem, const OptimizerOptions& options)
-      : problem_(problem), options_(options), arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {
-    variable_.assign(static_cast<std::size_t>(problem.size()), -1);
-    for (int p = 0; p < problem.size(); ++p) {
-      if (!problem.fixed[static_cast<std::size_t>(p)]) variable_[static_cast<std::size_t>(p)] = free_poses_++;
-    }
-    // Edges with weight 0 (rejected by GNC) stay out of the pattern: random false loop
-    // closures couple distant poses and would otherwise fill the factor in.
-    std::vector<std::pair<int, int>> pairs;
-    for (std::size_t k = 0; k < problem.edges.size(); ++k) {
-      const auto& e = problem.edges[k];
-      const int a = variable_[static_cast<std::size_t>(e.i)];
-      const int b = variable_[static_cast<std::size_t>(e.j)];
-      if (a >= 0 && b >= 0 && weight_of(k) != 0.0) pairs.emplace_back(a, b);
-    }
-    pattern_ = std::make_unique<BlockPattern>(free_poses_, D, pairs);
+  Engine(PoseGraphProblem<Group>& problem, const OptimizerOptions& options, const std::vector<int>& variable,
+         BlockPattern& pattern)
+      : problem_(problem),
+        options_(options),
+        arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic),
+        variable_(variable),
+        free_poses_(pattern.matrix().size / D),
+        pattern_(pattern) {
     blocks_.resize(problem.edges.size());
     gradient_ = Eigen::VectorXd::Zero(free_poses_ * D);
   }
 
   int free_poses() const { return free_poses_; }
-  BlockPattern& pattern() { return *pattern_; }
+  BlockPattern& pattern() { return pattern_; }
   const Eigen::VectorXd& gradient() const { return gradient_; }
 
   double weight_of(std::size_t e) const {
@@ -137,7 +129,7 @@ class Engine {
                           for (std::size_t e = range.begin(); e != range.end(); ++e) linearize_edge(e, poses);
                         });
     });
-    pattern_->set_zero();
+    pattern_.set_zero();
     gradient_.setZero();
     for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
       if (weight_of(e) == 0.0) continue;
@@ -146,19 +138,19 @@ class Engine {
       const int vi = variable_[static_cast<std::size_t>(edge.i)];
       const int vj = variable_[static_cast<std::size_t>(edge.j)];
       if (vi >= 0) {
-        pattern_->add_diagonal(vi, b.Hii.data());
+        pattern_.add_diagonal(vi, b.Hii.data());
         gradient_.template segment<D>(vi * D) += b.gi;
       }
       if (vj >= 0) {
-        pattern_->add_diagonal(vj, b.Hjj.data());
+        pattern_.add_diagonal(vj, b.Hjj.data());
         gradient_.template segment<D>(vj * D) += b.gj;
       }
       if (vi >= 0 && vj >= 0) {
         if (vi < vj) {
-          pattern_->add_off_diagonal(vi, vj, b.Hij.data());
+          pattern_.add_off_diagonal(vi, vj, b.Hij.data());
         } else {
           const Eigen::Matrix<double, D, D, Eigen::RowMajor> Hji = b.Hij.transpose();
-          pattern_->add_off_diagonal(vj, vi, Hji.data());
+          pattern_.add_off_diagonal(vj, vi, Hji.data());
         }
       }
     }
@@ -212,9 +204,9 @@ class Engine {
   PoseGraphProblem<Group>& problem_;
   const OptimizerOptions& options_;
   tbb::task_arena arena_;
-  std::vector<int> variable_;
+  const std::vector<int>& variable_;
   int free_poses_ = 0;
-  std::unique_ptr<BlockPattern> pattern_;
+  BlockPattern& pattern_;
   std::vector<EdgeBlocks> blocks_;
   Eigen::VectorXd gradient_;
 };
@@ -277,15 +269,91 @@ PcgResult preconditioned_cg(const UpperCsc& H, const Eigen::VectorXd& damping, c
   return result;
 }
 
+}  // namespace
+
+struct OptimizerWorkspace::State {
+  std::vector<int> variable;     // pose -> variable index, -1 for fixed poses
+  std::vector<char> in_pattern;  // per edge: its blocks are in `pattern`
+  std::size_t pattern_edges = 0;
+  std::unique_ptr<BlockPattern> pattern;
+  std::unique_ptr<SparseCholesky> cholesky;
+};
+
+OptimizerWorkspace::OptimizerWorkspace() = default;
+OptimizerWorkspace::~OptimizerWorkspace() = default;
+
+namespace {
+
+// Brings `state` to a pattern (and symbolic analysis) that holds every edge with non-zero
+// weight: kept if it already does and few of its edges are inactive, else rebuilt without the
+// zero-weight edges (random false loop closures couple distant poses and fill the factor in).
+// Returns true when it analysed anew.
+template <class Group>
+bool prepare_pattern(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options,
+                     double max_inactive_fraction, OptimizerWorkspace::State& state) {
+  const std::size_t m = problem.edges.size();
+  auto weight_of = [&](std::size_t e) { return options.edge_weights.empty() ? 1.0 : options.edge_weights[e]; };
+  std::vector<int> variable(static_cast<std::size_t>(problem.size()), -1);
+  int free_poses = 0;
+  for (int p = 0; p < problem.size(); ++p) {
+    if (!problem.fixed[static_cast<std::size_t>(p)]) variable[static_cast<std::size_t>(p)] = free_poses++;
+  }
+  if (state.pattern && state.variable == variable && state.in_pattern.size() == m) {
+    bool covered = true;
+    std::size_t inactive = 0;
+    for (std::size_t e = 0; e < m && covered; ++e) {
+      const bool active = weight_of(e) != 0.0;
+      if (active && !state.in_pattern[e]) covered = false;
+      if (!active && state.in_pattern[e]) ++inactive;
+    }
+    if (covered && static_cast<double>(inactive) <= max_inactive_fraction * static_cast<double>(state.pattern_edges)) {
+      return false;
+    }
+  }
+  state.variable = std::move(variable);
+  state.in_pattern.assign(m, 0);
+  state.pattern_edges = 0;
+  std::vector<std::pair<int, int>> pairs;
+  for (std::size_t e = 0; e < m; ++e) {
+    if (weight_of(e) == 0.0) continue;
+    state.in_pattern[e] = 1;
+    ++state.pattern_edges;
+    const int a = state.variable[static_cast<std::size_t>(problem.edges[e].i)];
+    const int b = state.variable[static_cast<std::size_t>(problem.edges[e].j)];
+    if (a >= 0 && b >= 0) pairs.emplace_back(a, b);
+  }
+  state.pattern = std::make_unique<BlockPattern>(free_poses, Group::kDoF, pairs);
+  state.cholesky = std::make_unique<SparseCholesky>();
+  if (free_poses > 0) {
+    const std::vector<int> ordering = state.pattern->block_amd_ordering();
+    state.cholesky->analyze(state.pattern->matrix(), &ordering);
+  }
+  return true;
+}
+
 template <class Group, class Factor>
-OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& options) {
+OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& options, OptimizerWorkspace* workspace) {
   const auto start = Clock::now();
   OptimizerSummary summary;
   std::string invalid;
   CAIRN_ASSERT(options.is_valid(&invalid), invalid.c_str());
   CAIRN_ASSERT(options.edge_weights.empty() || options.edge_weights.size() == problem.edges.size(),
                "edge_weights must be empty or hold one weight per edge");
-  Engine<Group, Factor> engine(problem, options);
+  OptimizerWorkspace::State local_state;
+  OptimizerWorkspace::State* state = &local_state;
+  if (workspace != nullptr) {
+    CAIRN_ASSERT(workspace->max_inactive_fraction >= 0.0 && workspace->max_inactive_fraction <= 1.0,
+                 "OptimizerWorkspace::max_inactive_fraction must be in [0, 1]");
+    if (!workspace->state) workspace->state = std::make_unique<OptimizerWorkspace::State>();
+    state = workspace->state.get();
+  }
+  const auto analyze_start = Clock::now();
+  if (prepare_pattern(problem, options, workspace != nullptr ? workspace->max_inactive_fraction : 0.0, *state)) {
+    summary.analyze_s = seconds_since(analyze_start);
+    if (workspace != nullptr) ++workspace->analyses;
+  }
+  SparseCholesky& cholesky = *state->cholesky;
+  Engine<Group, Factor> engine(problem, options, state->variable, *state->pattern);
   summary.free_poses = engine.free_poses();
   summary.edges = static_cast<int>(problem.edges.size());
   double cost = engine.cost(problem.T_world_pose);
@@ -297,12 +365,6 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     summary.total_s = seconds_since(start);
     return summary;
   }
-
-  auto analyze_start = Clock::now();
-  SparseCholesky cholesky;
-  const std::vector<int> ordering = engine.pattern().block_amd_ordering();
-  cholesky.analyze(engine.pattern().matrix(), &ordering);
-  summary.analyze_s = seconds_since(analyze_start);
 
   const bool lm = options.algorithm == Algorithm::kLevenbergMarquardt;
   const bool dogleg = options.algorithm == Algorithm::kDogleg;
@@ -392,6 +454,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       force_factorization = false;
       const auto t1 = Clock::now();
       const FactorizationStatus status = cholesky.factorize(A);
+      ++summary.factorizations;
       it.factorize_s = seconds_since(t1);
       if (lm) {  // back to the undamped J^T J
         for (int k = 0; k < A.size; ++k) A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] = diagonal[static_cast<std::size_t>(k)];
@@ -543,6 +606,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     }
   }
   summary.final_cost = cost;
+  summary.final_lambda = dogleg ? 1.0 / radius : lambda;
   summary.factor_nonzeros = cholesky.factor_nonzeros();
   for (const auto& it : summary.iteration_log) {
     summary.linearize_s += it.linearize_s;
@@ -556,9 +620,15 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
 }  // namespace
 
 template <class Group>
+OptimizerSummary optimize(PoseGraphProblem<Group>& problem, const OptimizerOptions& options,
+                          OptimizerWorkspace* workspace) {
+  if (options.objective == Objective::kChordal) return run<Group, ChordalFactor<Group>>(problem, options, workspace);
+  return run<Group, GeodesicFactor<Group>>(problem, options, workspace);
+}
+
+template <class Group>
 OptimizerSummary optimize(PoseGraphProblem<Group>& problem, const OptimizerOptions& options) {
-  if (options.objective == Objective::kChordal) return run<Group, ChordalFactor<Group>>(problem, options);
-  return run<Group, GeodesicFactor<Group>>(problem, options);
+  return optimize(problem, options, nullptr);
 }
 
 template <class Group>
@@ -579,6 +649,8 @@ double evaluate_cost(const PoseGraphProblem<Group>& problem, const OptimizerOpti
 
 template OptimizerSummary optimize(Problem2D&, const OptimizerOptions&);
 template OptimizerSummary optimize(Problem3D&, const OptimizerOptions&);
+template OptimizerSummary optimize(Problem2D&, const OptimizerOptions&, OptimizerWorkspace*);
+template OptimizerSummary optimize(Problem3D&, const OptimizerOptions&, OptimizerWorkspace*);
 template double evaluate_cost(const Problem2D&, const OptimizerOptions&);
 template double evaluate_cost(const Problem3D&, const OptimizerOptions&);
 

@@ -9,6 +9,7 @@
 /// parameter tolerances, each with its formula below.
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -112,6 +113,11 @@ struct OptimizerSummary {
   double final_cost = 0.0;
   int iterations = 0;
   int successful_iterations = 0;
+  /// Numeric factorisations (the other steps came from PCG on an earlier factorisation).
+  int factorizations = 0;
+  /// LM's damping lambda when the solve ended (1 / trust-region radius; dog-leg: 1 / radius),
+  /// to start a related solve where this one stopped (GNC's outer loop).
+  double final_lambda = 0.0;
   std::vector<IterationSummary> iteration_log;
   int free_poses = 0;
   int edges = 0;
@@ -127,9 +133,40 @@ struct OptimizerSummary {
   std::string brief_report() const;
 };
 
+/// What a sequence of solves of one graph whose edge weights change (GNC's outer loop) can
+/// share: the sparsity pattern with its symbolic analysis (fill-reducing ordering, CHOLMOD's
+/// supernodes) and the last numeric factorisation, which preconditions the next solve's first
+/// steps (PCG, as OptimizerOptions::reuse_factorization) instead of a factorisation of its own.
+/// Edges whose weight is 0 are dropped from the pattern when the next solve re-analyses it,
+/// which happens when more than `max_inactive_fraction` of the pattern's edges are inactive
+/// (GNC's rejected false loop closures would otherwise keep their fill-in). Opaque; one per
+/// graph; not thread-safe.
+class OptimizerWorkspace {
+ public:
+  OptimizerWorkspace();
+  ~OptimizerWorkspace();
+  OptimizerWorkspace(const OptimizerWorkspace&) = delete;
+  OptimizerWorkspace& operator=(const OptimizerWorkspace&) = delete;
+
+  /// Share of the pattern's edges with weight 0 above which the next solve re-analyses. [0, 1].
+  double max_inactive_fraction = 0.02;
+  /// Symbolic analyses done so far (for tests and reports).
+  int analyses = 0;
+
+  /// Implementation state (defined in optimizer.cpp).
+  struct State;
+  std::unique_ptr<State> state;
+};
+
 /// Optimises problem.T_world_pose in place (fixed poses untouched).
 template <class Group>
 OptimizerSummary optimize(PoseGraphProblem<Group>& problem, const OptimizerOptions& options);
+
+/// As above; `workspace` (may be null) carries the analysis and the last factorisation from the
+/// previous solve of the same graph (same edges, same fixed poses; checked) into this one.
+template <class Group>
+OptimizerSummary optimize(PoseGraphProblem<Group>& problem, const OptimizerOptions& options,
+                          OptimizerWorkspace* workspace);
 
 /// Cost of the current poses under `options` (objective, kernel, edge weights).
 template <class Group>

@@ -29,6 +29,7 @@ struct OptimizeFlags {
   double robust_scale = 1.0;
   double gnc_threshold = 0.0;
   int gnc_inner_iterations = 15;
+  double gnc_mu_factor = 1.4;
   std::vector<std::int64_t> covariance_ids;
   int threads = 0;
   int max_iterations = 100;
@@ -134,14 +135,21 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     gnc_options.inner.progress = nullptr;
     gnc_options.inlier_threshold_chi2 = flags.gnc_threshold;
     gnc_options.iterations_per_outer = flags.gnc_inner_iterations;
+    gnc_options.mu_factor = flags.gnc_mu_factor;
     gnc = backend::optimize_gnc(problem, gnc_options);
     summary = gnc.final_solve;
     std::size_t loop_closures = 0;
     for (const auto& e : problem.edges) loop_closures += e.kind == backend::EdgeKind::kLoopClosure;
-    std::printf("GNC: %d outer iterations, %d inner iterations, %.3f s: %s; rejected %zu of %zu loop closures "
-                "(threshold chi2 %.3f)\n",
-                gnc.outer_iterations, gnc.inner_iterations, gnc.total_s, gnc.message.c_str(), gnc.rejected_edges.size(),
-                loop_closures, gnc.threshold_chi2);
+    std::printf("GNC: %d outer iterations, %d solves, %d inner iterations (%d factorisations), %.3f s: %s; rejected "
+                "%zu of %zu loop closures (threshold chi2 %.3f",
+                gnc.outer_iterations, gnc.solves, gnc.inner_iterations, gnc.factorizations, gnc.total_s,
+                gnc.message.c_str(), gnc.rejected_edges.size(), loop_closures, gnc.threshold_chi2);
+    if (gnc.noise_variance_factor > 0.0) {
+      std::printf("; estimated noise variance %.3g x the stated%s", gnc.noise_variance_factor,
+                  gnc.regraduated ? ", graduated again" : "");
+    }
+    std::printf("; %d of %d consistent groups and %d edges by their innovation readmitted)\n", gnc.groups_readmitted,
+                gnc.groups_tried, gnc.readmitted_by_innovation);
   } else {
     summary = backend::optimize(problem, options);
   }
@@ -214,7 +222,15 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                             {"edge_index", e}});
       }
       j["gnc"] = {{"outer_iterations", gnc.outer_iterations}, {"inner_iterations", gnc.inner_iterations},
+                  {"factorizations", gnc.factorizations},     {"analyses", gnc.analyses},
                   {"threshold_chi2", gnc.threshold_chi2},     {"final_mu", gnc.final_mu},
+                  {"initial_threshold_chi2", gnc.initial_threshold_chi2},
+                  {"noise_variance_factor", gnc.noise_variance_factor},
+                  {"regraduated", gnc.regraduated},           {"solves", gnc.solves},
+                  {"reclassify_rounds", gnc.reclassify_rounds},
+                  {"groups_tried", gnc.groups_tried},         {"groups_readmitted", gnc.groups_readmitted},
+                  {"readmitted_by_innovation", gnc.readmitted_by_innovation},
+                  {"tls_cost", gnc.tls_cost},
                   {"message", gnc.message},                   {"time_s", gnc.total_s},
                   {"rejected", rejected}};
     }
@@ -314,9 +330,14 @@ Runner register_optimize(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--gnc-threshold", flags->gnc_threshold,
-                 "GNC inlier threshold on the whitened squared residual (0 = chi-square 0.99 quantile)")
+                 "GNC inlier threshold on the whitened squared residual, fixed; 0 = adaptive (chi-square 0.99 quantile "
+                 "first, then 4x that quantile in the noise variance estimated from the accepted edges)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  app.add_option("--gnc-mu-factor", flags->gnc_mu_factor,
+                 "GNC: growth of the non-convexity parameter mu per outer iteration (> 1; smaller is slower and "
+                 "follows the minimiser more closely)")
+      ->check(CLI::Range(1.0 + 1e-9, 1e9));
   app.add_option("--gnc-inner-iterations", flags->gnc_inner_iterations,
                  "GNC: solver iterations between two weight updates")
       ->check(CLI::PositiveNumber)
