@@ -82,11 +82,12 @@ TEST_P(GncOnSeSync, RejectsEveryFalseLoopClosureAndKeepsTheTrueOnes) {
         add_false_loop_closures(corrupted, OutlierOptions{static_cast<int>(true_loops), 1, 10.0});
         const std::size_t true_edges = original.edges.size();
 
-        // Least squares from the same (odometry) start, 50 iterations.
+        // Least squares from the same (odometry) start, 20 iterations (each factorises a matrix the
+        // false loop closures have filled in; bent far beyond 1 m long before).
         auto least_squares = make_problem(corrupted, relative);
         initialize_odometry(least_squares);
         OptimizerOptions ls_options;
-        ls_options.max_iterations = 50;
+        ls_options.max_iterations = 20;
         optimize(least_squares, ls_options);
         const Difference ls = difference<Group>(least_squares.T_world_pose, reference.T_world_pose);
         EXPECT_GT(ls.position_rms, 1.0) << "least squares should be visibly bent by the false loop closures";

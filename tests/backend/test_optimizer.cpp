@@ -223,6 +223,41 @@ TEST(Optimizer, ReusedFactorisationReachesTheSameOptimumAsExactSteps) {
   }
 }
 
+// A workspace carried from one solve to the next with changed edge weights (GNC's outer loop)
+// keeps the analysis while no edge's weight is 0, and its last factorisation preconditions the
+// next solve: same minimum as a fresh solve, no factorisation at all when the weights change
+// little. With weights at 0 the pattern is rebuilt without those edges.
+TEST(Optimizer, WorkspaceCarriesTheAnalysisAndFactorisationToTheNextSolve) {
+  CAIRN_REQUIRE_DATA("posegraph/se-sync/intel.g2o");
+  with_chordal_start("intel.g2o", [&](auto start) {
+    OptimizerOptions options;
+    options.edge_weights.assign(start.edges.size(), 1.0);
+    OptimizerWorkspace workspace;
+    auto carried = start;
+    ASSERT_TRUE(optimize(carried, options, &workspace).is_solution_usable());
+    EXPECT_EQ(workspace.analyses, 1);
+    for (std::size_t e = 0; e < start.edges.size(); ++e) {
+      if (start.edges[e].kind == EdgeKind::kLoopClosure) options.edge_weights[e] = 0.99;
+    }
+    const OptimizerSummary second = optimize(carried, options, &workspace);
+    auto fresh = carried;
+    fresh.T_world_pose = start.T_world_pose;
+    const OptimizerSummary reference = optimize(fresh, options);
+    EXPECT_EQ(workspace.analyses, 1) << "no weight is 0: the analysis is kept";
+    EXPECT_EQ(second.factorizations, 0) << second.brief_report();
+    EXPECT_GE(second.iterations, 1);
+    EXPECT_NEAR(second.final_cost, reference.final_cost, 1e-8 * reference.final_cost);
+    // Every loop closure out: more than 2 % of the pattern inactive, so it is analysed anew.
+    for (std::size_t e = 0; e < start.edges.size(); ++e) {
+      if (start.edges[e].kind == EdgeKind::kLoopClosure) options.edge_weights[e] = 0.0;
+    }
+    const OptimizerSummary third = optimize(carried, options, &workspace);
+    EXPECT_EQ(workspace.analyses, 2);
+    EXPECT_TRUE(third.is_solution_usable());
+    EXPECT_LT(third.final_cost, 1e-6 * second.final_cost) << "odometry alone is a tree: zero cost";
+  });
+}
+
 // The default undamped start (initial_trust_region_radius 1e16) against Ceres' default damping
 // (radius 1e4) from the same chordal start, Ceres' stopping rule: the same minimum in far fewer
 // iterations, because the damping holds back the steps along the graphs' flat directions.

@@ -257,7 +257,7 @@ TEST(Cli, OptimizeRefusesAnUnanchoredComponent) {
 
 // The report names each rejected edge by ids and file line, and those lines are the edges named.
 // (How many false edges GNC rejects on this graph is a measurement, in docs/backend.md, not an
-// assertion: on input_INTEL_g2o with 20 false loop closures it rejected 19 and 4 true ones.)
+// assertion: on input_INTEL_g2o with 20 false loop closures it rejects 18 and no true one.)
 TEST(Cli, CorruptThenGncReportsRejectedEdgesByIdAndLine) {
   CAIRN_REQUIRE_DATA("posegraph/other/input_INTEL_g2o.g2o");
   const auto bad = scratch() / "intel_bad.g2o";

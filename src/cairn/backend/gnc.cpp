@@ -66,6 +66,80 @@ Eigen::Matrix<double, Group::kDoF, Group::kDoF> covariance_of(const PoseEdge<Gro
   return eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
 }
 
+// Median of chi-square with `dof` degrees of freedom, dof 1..12 (standard tables).
+double chi2_median(int dof) {
+  static constexpr double kTable[] = {0.455, 1.386, 2.366, 3.357, 4.351, 5.348,
+                                      6.346, 7.344, 8.343, 9.342, 10.341, 11.340};
+  return kTable[dof - 1];
+}
+
+// Variance factor of the stated information from short loop closures alone, before any
+// optimisation: for a loop closure Z between poses a < b at most `window` apart along an
+// unbroken odometry chain, the cycle e = log(Z^-1 Z_a,a+1 ... Z_b-1,b) has covariance
+// Sigma_Z + Sigma_chain (the chain's by first-order propagation, Sigma_AB = Ad(B^-1) Sigma_A
+// Ad(B^-1)^T + Sigma_B), so e^T (Sigma_Z + Sigma_chain)^-1 e is chi-square with kDoF degrees of
+// freedom times the factor. Its median over these loops, over chi-square's median, is robust to
+// the false loop closures among them (random ones rarely join poses this close and then fail by
+// far). 0 when fewer than `minimum_loops` loop closures qualify.
+template <class Group>
+double short_loop_variance_factor(const PoseGraphProblem<Group>& problem, int window, int minimum_loops) {
+  constexpr int D = Group::kDoF;
+  using Matrix = Eigen::Matrix<double, D, D>;
+  const std::size_t n = static_cast<std::size_t>(problem.size());
+  // Odometry from index k to k + 1, oriented forwards, with its covariance.
+  std::vector<char> has_odometry(n, 0);
+  std::vector<Group> Z_k(n);
+  std::vector<Matrix> sigma_k(n);
+  for (const auto& edge : problem.edges) {
+    if (edge.kind != EdgeKind::kOdometry) continue;
+    if (edge.j == edge.i + 1) {
+      Z_k[static_cast<std::size_t>(edge.i)] = edge.T_i_j;
+      sigma_k[static_cast<std::size_t>(edge.i)] = covariance_of(edge);
+    } else if (edge.i == edge.j + 1) {
+      const Matrix Ad = adjoint(edge.T_i_j);
+      Z_k[static_cast<std::size_t>(edge.j)] = edge.T_i_j.inverse();
+      sigma_k[static_cast<std::size_t>(edge.j)] = Ad * covariance_of(edge) * Ad.transpose();
+    } else {
+      continue;
+    }
+    has_odometry[static_cast<std::size_t>(std::min(edge.i, edge.j))] = 1;
+  }
+  std::vector<double> d2;
+  for (const auto& edge : problem.edges) {
+    if (edge.kind != EdgeKind::kLoopClosure || std::abs(edge.j - edge.i) > window) continue;
+    const int a = std::min(edge.i, edge.j);
+    const int b = std::max(edge.i, edge.j);
+    Group chain;
+    Matrix sigma_chain = Matrix::Zero();
+    bool unbroken = true;
+    for (int k = a; k < b && unbroken; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
+      unbroken = has_odometry[kk] != 0;
+      if (!unbroken) break;
+      const Matrix Ad = adjoint(Z_k[kk].inverse());
+      sigma_chain = Ad * sigma_chain * Ad.transpose() + sigma_k[kk];
+      chain = chain * Z_k[kk];
+    }
+    if (!unbroken) continue;
+    Group Z = edge.T_i_j;
+    Matrix sigma_Z = covariance_of(edge);
+    if (edge.i > edge.j) {
+      const Matrix Ad = adjoint(edge.T_i_j);
+      Z = edge.T_i_j.inverse();
+      sigma_Z = Ad * sigma_Z * Ad.transpose();
+    }
+    const typename Group::Tangent e = (Z.inverse() * chain).log();
+    const Eigen::LDLT<Matrix> ldlt(sigma_Z + sigma_chain);
+    if (ldlt.info() != Eigen::Success) continue;
+    const double value = e.dot(ldlt.solve(e));
+    if (std::isfinite(value)) d2.push_back(value);
+  }
+  if (static_cast<int>(d2.size()) < minimum_loops) return 0.0;
+  const auto middle = d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2);
+  std::nth_element(d2.begin(), middle, d2.end());
+  return *middle / chi2_median(D);
+}
+
 struct DisjointSets {
   std::vector<std::size_t> parent;
   explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), std::size_t{0}); }
@@ -355,13 +429,29 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   const auto start = std::chrono::steady_clock::now();
   CAIRN_ASSERT(options.mu_factor > 1.0 && options.max_outer_iterations >= 1 && options.binary_tolerance > 0.0 &&
                    options.iterations_per_outer >= 1 && options.max_reclassify_rounds >= 0 &&
-                   options.group_window >= 0 && options.scaled_threshold_multiplier > 0.0,
+                   options.group_window >= 0 && options.scaled_threshold_multiplier > 0.0 &&
+                   options.short_loop_window >= 1 && options.regraduation_ratio > 1.0 &&
+                   options.final_threshold_factor >= 1.0,
                "invalid GncOptions");
   GncSummary summary;
   Stages<Group> stages(problem, options, summary);
   const double quantile = chi2_quantile_99(Group::kDoF);
   const bool adaptive = options.inlier_threshold_chi2 <= 0.0 && options.estimate_noise_scale;
+  // Noise variance factors are clamped: noise-free (simulated) measurements must not collapse
+  // the threshold to 0.
+  auto scaled_threshold = [&](double factor) {
+    return options.scaled_threshold_multiplier * quantile * std::clamp(factor, 1e-3, 1e3);
+  };
   double c2 = options.inlier_threshold_chi2 > 0.0 ? options.inlier_threshold_chi2 : quantile;
+  if (adaptive) {
+    summary.short_loop_variance_factor =
+        short_loop_variance_factor(problem, options.short_loop_window, options.minimum_short_loops);
+    // Only to tighten: where false loop closures make up much of the short ones (a small graph
+    // whose loops are all short) the median is theirs and far above 1.
+    if (summary.short_loop_variance_factor > 0.0) {
+      c2 = scaled_threshold(std::min(summary.short_loop_variance_factor, 1.0));
+    }
+  }
   summary.initial_threshold_chi2 = c2;
   const std::vector<Group> initial_poses = problem.T_world_pose;
 
@@ -369,17 +459,15 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   stages.graduate(c2);
   if (adaptive) {
     // The stated information matrices may be off by a common factor (intel's overstate its
-    // errors some 50 times in variance): estimate it on the accepted edges and measure the
-    // threshold in the estimated noise instead.
+    // errors some 50 times in variance): estimate it again on the accepted edges and measure
+    // the threshold in it.
     summary.final_solve = stages.reclassify(c2);
     summary.noise_variance_factor = stages.variance_of_unit_weight();
     if (summary.noise_variance_factor > 0.0) {
-      // Clamped: noise-free (simulated) measurements must not collapse the threshold to 0.
-      const double factor = std::clamp(summary.noise_variance_factor, 1e-3, 1e3);
-      const double scaled = options.scaled_threshold_multiplier * quantile * factor;
-      if (scaled < c2 / 1.2) {
-        // Tighter: the first pass may have bent the map around false loop closures that a
-        // looser threshold let in, so graduate again from the initial guess.
+      const double scaled = scaled_threshold(summary.noise_variance_factor);
+      if (scaled < c2 / options.regraduation_ratio) {
+        // Much tighter: the first graduation may have bent the map around false loop closures
+        // that its loose threshold let in, so graduate again from the initial guess.
         problem.T_world_pose = initial_poses;
         summary.regraduated = true;
         stages.graduate(scaled);
@@ -387,12 +475,30 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
       c2 = scaled;
     }
   }
+  summary.graduation_threshold_chi2 = c2;
+  // The stages after the graduation decide on a map that is right by now, so they can afford a
+  // looser threshold for the heavy tails of real errors (intel's true loop closures reach 38x
+  // their median r^2 at the optimum; chi-square's 0.999 quantile is 7x its median).
+  if (adaptive) c2 *= options.final_threshold_factor;
   summary.threshold_chi2 = c2;
   summary.final_solve = stages.reclassify(c2);
   if (options.group_window > 0 && stages.readmit_groups(c2) > 0) summary.final_solve = stages.reclassify(c2);
   for (int round = 0; options.readmit_by_innovation && round < options.max_reclassify_rounds; ++round) {
+    // Each readmitted edge alone lowers the TLS cost; several that contradict each other need
+    // not, and the reclassification may then reject them again: keep a round only if the cost
+    // fell, else undo it and stop (no cycling).
+    const double cost_before = stages.tls_cost(c2);
+    const std::vector<Group> poses_before = problem.T_world_pose;
+    const std::vector<double> weights_before = stages.weights();
+    const OptimizerSummary solve_before = summary.final_solve;
     if (stages.readmit_by_innovation(c2) == 0) break;
     summary.final_solve = stages.reclassify(c2);
+    if (!(stages.tls_cost(c2) < cost_before * (1.0 - 1e-12))) {
+      problem.T_world_pose = poses_before;
+      stages.weights() = weights_before;
+      summary.final_solve = solve_before;
+      break;
+    }
   }
   summary.tls_cost = stages.tls_cost(c2);
 

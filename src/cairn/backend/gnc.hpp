@@ -43,6 +43,18 @@ struct GncOptions {
   /// as true ones: TLS at the 0.99 quantile itself rejects 2.6 % of the true ones (its minimum
   /// trades an edge for c^2 whenever that relaxes its neighbours by more). > 0.
   double scaled_threshold_multiplier = 4.0;
+  /// The first graduation's threshold comes from the short loop closures (at most this many
+  /// poses apart along an unbroken odometry chain; gnc.cpp) when at least `minimum_short_loops`
+  /// of them exist, else from the stated matrices. >= 1.
+  int short_loop_window = 50;
+  int minimum_short_loops = 20;
+  /// After the first graduation the factor is estimated again on the accepted edges; when the
+  /// threshold it implies is tighter than the first by more than this ratio, the graduation is
+  /// run again from the initial guess with it. > 1.
+  double regraduation_ratio = 2.0;
+  /// With the adaptive threshold, the reclassification and readmission after the graduation use
+  /// this many times the graduation's threshold. >= 1.
+  double final_threshold_factor = 4.0;
   /// Growth of mu per outer iteration (the paper uses 1.4). > 1.
   double mu_factor = 1.4;
   /// Outer iterations at most, per graduation. >= 1.
@@ -79,10 +91,14 @@ struct GncSummary {
   double final_mu = 0.0;
   /// True when the (last) graduation ended with binary weights.
   bool graduation_converged = false;
-  /// Threshold of the first graduation, and the one of the result (they differ when adaptive).
+  /// Threshold of the first graduation, of the last one, and of the result (the stages after
+  /// the graduation); they differ when adaptive.
   double initial_threshold_chi2 = 0.0;
+  double graduation_threshold_chi2 = 0.0;
   double threshold_chi2 = 0.0;
-  /// Estimated variance factor of the stated information (0 = not estimated).
+  /// Estimated variance factor of the stated information: from the short loop closures before
+  /// the graduation, and from the accepted edges after it (0 = not estimated).
+  double short_loop_variance_factor = 0.0;
   double noise_variance_factor = 0.0;
   /// A second graduation from the initial guess ran (the adaptive threshold was tighter).
   bool regraduated = false;

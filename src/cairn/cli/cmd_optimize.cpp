@@ -144,8 +144,11 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                 "%zu of %zu loop closures (threshold chi2 %.3f",
                 gnc.outer_iterations, gnc.solves, gnc.inner_iterations, gnc.factorizations, gnc.total_s,
                 gnc.message.c_str(), gnc.rejected_edges.size(), loop_closures, gnc.threshold_chi2);
+    if (gnc.short_loop_variance_factor > 0.0) {
+      std::printf("; noise variance %.3g x the stated from short loop closures", gnc.short_loop_variance_factor);
+    }
     if (gnc.noise_variance_factor > 0.0) {
-      std::printf("; estimated noise variance %.3g x the stated%s", gnc.noise_variance_factor,
+      std::printf("; %.3g x from the accepted edges%s", gnc.noise_variance_factor,
                   gnc.regraduated ? ", graduated again" : "");
     }
     std::printf("; %d of %d consistent groups and %d edges by their innovation readmitted)\n", gnc.groups_readmitted,
@@ -225,7 +228,9 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                   {"factorizations", gnc.factorizations},     {"analyses", gnc.analyses},
                   {"threshold_chi2", gnc.threshold_chi2},     {"final_mu", gnc.final_mu},
                   {"initial_threshold_chi2", gnc.initial_threshold_chi2},
+                  {"graduation_threshold_chi2", gnc.graduation_threshold_chi2},
                   {"noise_variance_factor", gnc.noise_variance_factor},
+                  {"short_loop_variance_factor", gnc.short_loop_variance_factor},
                   {"regraduated", gnc.regraduated},           {"solves", gnc.solves},
                   {"reclassify_rounds", gnc.reclassify_rounds},
                   {"groups_tried", gnc.groups_tried},         {"groups_readmitted", gnc.groups_readmitted},
