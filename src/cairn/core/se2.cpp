@@ -1,6 +1,7 @@
 #include "cairn/core/se2.hpp"
 
 #include <cmath>
+#include <numbers>
 
 namespace cairn::core {
 namespace {
@@ -33,18 +34,47 @@ SE2 SE2::from_matrix(const Matrix3& T) {
 }
 
 SE2 SE2::exp(const Tangent& xi) {
-  double a = 0.0;
-  double b = 0.0;
-  v_coefficients(xi.z(), a, b);
+  const double theta = xi.z();
+  if (std::abs(theta) < kSmallAngle || theta <= -std::numbers::pi || theta > std::numbers::pi) {
+    double a = 0.0;
+    double b = 0.0;
+    v_coefficients(theta, a, b);
+    const Vector2 t(a * xi.x() - b * xi.y(), b * xi.x() + a * xi.y());
+    return SE2(SO2(theta), t);
+  }
+  // One sincos of theta/2 gives everything: sin = 2 s c, cos = 1 - 2 s^2 (no cancellation),
+  // a = sin(theta)/theta, b = 2 s^2/theta (v_coefficients' forms).
+  const double s = std::sin(0.5 * theta);
+  const double c = std::cos(0.5 * theta);
+  const double sin_theta = 2.0 * s * c;
+  const double a = sin_theta / theta;
+  const double b = 2.0 * s * s / theta;
   const Vector2 t(a * xi.x() - b * xi.y(), b * xi.x() + a * xi.y());
-  return SE2(SO2(xi.z()), t);
+  return SE2(SO2(theta, 1.0 - 2.0 * s * s, sin_theta), t);
 }
 
 SE2::Tangent SE2::log() const {
   const double theta = R_.angle();
   double a = 0.0;
   double b = 0.0;
-  v_coefficients(theta, a, b);
+  if (std::abs(theta) < kSmallAngle) {
+    v_coefficients(theta, a, b);
+  } else if (std::abs(theta) < 0.25) {
+    // Taylor series to the theta^10 / theta^11 terms (next terms below 4e-18): residual angles
+    // are small, and the cached sine, rounded independently of theta, would put a relative
+    // error of ~1e-16 / theta into sin(theta)/theta.
+    const double t2 = theta * theta;
+    a = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0 * (1.0 - t2 / 110.0))));
+    b = theta / 2.0 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0 * (1.0 - t2 / 132.0)))));
+  } else {
+    // From the cached cosine and sine: sin^2(theta/2) = (1 - c)/2 = s^2 / (2 (1 + c)), the form
+    // without cancellation on each side of c = 0.
+    const double c = R_.cos();
+    const double s = R_.sin();
+    const double half_sin2 = c > 0.0 ? s * s / (2.0 * (1.0 + c)) : 0.5 * (1.0 - c);
+    a = s / theta;
+    b = 2.0 * half_sin2 / theta;
+  }
   // V^-1 = 1/(a^2 + b^2) [[a, b], [-b, a]]; a^2 + b^2 > 0 for |theta| <= pi.
   const double inv = 1.0 / (a * a + b * b);
   return {inv * (a * t_.x() + b * t_.y()), inv * (-b * t_.x() + a * t_.y()), theta};

@@ -20,9 +20,18 @@ SO2 SO2::from_matrix(const Matrix2& M) {
   return SO2(std::atan2(M(1, 0) - M(0, 1), M(0, 0) + M(1, 1)));
 }
 
-SO2 SO2::inverse() const { return SO2(-theta_); }
+SO2 SO2::inverse() const {
+  if (theta_ == std::numbers::pi) return *this;  // pi is its own inverse in (-pi, pi]
+  return SO2(-theta_, c_, -s_);
+}
 
-SO2 SO2::operator*(const SO2& other) const { return SO2(theta_ + other.theta_); }
+SO2 SO2::operator*(const SO2& other) const {
+  const double c = c_ * other.c_ - s_ * other.s_;
+  const double s = s_ * other.c_ + c_ * other.s_;
+  // One Newton step towards unit norm keeps long products on the circle.
+  const double scale = 1.5 - 0.5 * (c * c + s * s);
+  return SO2(wrap_angle(theta_ + other.theta_), scale * c, scale * s);
+}
 
 Matrix2 SO2::matrix() const {
   Matrix2 R;
