@@ -491,12 +491,14 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
     const std::vector<Group> poses_before = problem.T_world_pose;
     const std::vector<double> weights_before = stages.weights();
     const OptimizerSummary solve_before = summary.final_solve;
+    const int readmitted_before = summary.readmitted_by_innovation;
     if (stages.readmit_by_innovation(c2) == 0) break;
     summary.final_solve = stages.reclassify(c2);
     if (!(stages.tls_cost(c2) < cost_before * (1.0 - 1e-12))) {
       problem.T_world_pose = poses_before;
       stages.weights() = weights_before;
       summary.final_solve = solve_before;
+      summary.readmitted_by_innovation = readmitted_before;
       break;
     }
   }

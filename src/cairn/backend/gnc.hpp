@@ -16,8 +16,15 @@
 /// by default from the current poses, which the CLI sets from the odometry chain (a spanning
 /// tree over odometry edges that no loop closure can bend). Measured on SE-Sync's intel.g2o with
 /// 785 random false loop closures (as many as true ones) and threshold 3: from least squares,
-/// 207 true loop closures were rejected; from odometry, none, and all 785 false ones were. Edges whose final weight is below 0.5 are
-/// rejected; the result is polished by least squares on the accepted edges.
+/// 207 true loop closures were rejected; from odometry, none, and all 785 false ones were.
+/// Edges whose final weight is below 0.5 are rejected.
+///
+/// Around the graduation (gnc.cpp, docs/backend.md "Robustness"): by default the threshold is
+/// measured in the noise estimated from the data (short loop closures before, the accepted
+/// edges after the graduation; a second graduation when the first was far too loose); after it,
+/// the accepted set is reclassified by TLS at mu = inf, and rejected loop closures are
+/// readmitted as consistent groups or by their innovation when that lowers the TLS cost. The
+/// result is least squares on the accepted edges.
 
 #include <cstddef>
 #include <vector>
