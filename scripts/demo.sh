@@ -83,7 +83,7 @@ if [[ -d "$DATA/posegraph/se-sync" ]]; then
   echo
   echo "False loop closures: intel.g2o plus 785 random ones (as many as the true loop closures), GNC:"
   "$CAIRN" corrupt "$DATA/posegraph/se-sync/intel.g2o" --outliers 785 --seed 1 -o "$OUT/optimized/intel_corrupted.g2o"
-  "$CAIRN" optimize "$OUT/optimized/intel_corrupted.g2o" -o "$OUT/optimized/intel_gnc.g2o" --robust gnc --gnc-threshold 3 \
+  "$CAIRN" optimize "$OUT/optimized/intel_corrupted.g2o" -o "$OUT/optimized/intel_gnc.g2o" --robust gnc \
     --max-iterations 30 -q --report "$OUT/optimized/intel_gnc.json" | head -1
   python3 - "$OUT/optimized/intel_gnc.json" <<'PY'
 import json, sys
