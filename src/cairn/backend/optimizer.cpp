@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -138,11 +139,11 @@ class Engine {
       const int vi = variable_[static_cast<std::size_t>(edge.i)];
       const int vj = variable_[static_cast<std::size_t>(edge.j)];
       if (vi >= 0) {
-        pattern_.add_diagonal(vi, b.Hii.data());
+        pattern_.add_diagonal_packed(vi, b.Hii.data());
         gradient_.template segment<D>(vi * D) += b.gi;
       }
       if (vj >= 0) {
-        pattern_.add_diagonal(vj, b.Hjj.data());
+        pattern_.add_diagonal_packed(vj, b.Hjj.data());
         gradient_.template segment<D>(vj * D) += b.gj;
       }
       if (vi >= 0 && vj >= 0) {
@@ -175,10 +176,20 @@ class Engine {
 
  private:
   struct EdgeBlocks {
-    // Row-major storage so BlockPattern can read blocks as M[a * B + k].
-    Eigen::Matrix<double, D, D, Eigen::RowMajor> Hii, Hjj, Hij;
+    // The symmetric diagonal blocks as packed upper triangles (BlockPattern::add_diagonal_packed;
+    // 2 x 15 doubles less per 3D edge, measured 2.1 MB on sphere_bignoise), the off-diagonal one
+    // row-major so BlockPattern can read it as M[a * B + k].
+    std::array<double, D*(D + 1) / 2> Hii, Hjj;
+    Eigen::Matrix<double, D, D, Eigen::RowMajor> Hij;
     BlockVector gi, gj;
   };
+
+  static void pack_upper(const Eigen::Matrix<double, D, D>& H, std::array<double, D*(D + 1) / 2>& packed) {
+    std::size_t index = 0;
+    for (int k = 0; k < D; ++k) {
+      for (int a = 0; a <= k; ++a) packed[index++] = H(a, k);
+    }
+  }
 
   void linearize_edge(std::size_t e, const std::vector<Group>& poses) {
     const auto& edge = problem_.edges[e];
@@ -194,8 +205,8 @@ class Engine {
       Jj *= scale;
     }
     auto& b = blocks_[e];
-    b.Hii.noalias() = Ji.transpose() * Ji;
-    b.Hjj.noalias() = Jj.transpose() * Jj;
+    pack_upper(Ji.transpose() * Ji, b.Hii);
+    pack_upper(Jj.transpose() * Jj, b.Hjj);
     b.Hij.noalias() = Ji.transpose() * Jj;
     b.gi.noalias() = Ji.transpose() * r;
     b.gj.noalias() = Jj.transpose() * r;

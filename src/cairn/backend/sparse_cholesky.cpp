@@ -68,6 +68,15 @@ void BlockPattern::add_diagonal(int c, const double* M) {
   }
 }
 
+void BlockPattern::add_diagonal_packed(int c, const double* upper) {
+  const int B = block_size_;
+  const int base = static_cast<int>(column_block_rows_[static_cast<std::size_t>(c)].size()) * B;
+  for (int k = 0; k < B; ++k) {
+    double* column = csc_.value.data() + csc_.column_start[static_cast<std::size_t>(c * B + k)] + base;
+    for (int a = 0; a <= k; ++a) column[a] += *upper++;
+  }
+}
+
 std::vector<int> BlockPattern::block_amd_ordering() const {
   // Upper-triangular block pattern (diagonal included) in compressed-column form.
   std::vector<int> start(static_cast<std::size_t>(blocks_) + 1, 0);

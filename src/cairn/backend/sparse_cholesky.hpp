@@ -37,6 +37,9 @@ class BlockPattern {
   void add_off_diagonal(int r, int c, const double* M_row_major_r_by_c);
   /// Adds the upper triangle of the symmetric B x B block `M` at (c, c).
   void add_diagonal(int c, const double* M_row_major);
+  /// Same, from the upper triangle packed column by column: (0,0), (0,1), (1,1), (0,2), ...
+  /// (B (B + 1) / 2 values).
+  void add_diagonal_packed(int c, const double* upper_by_columns);
   void set_zero();
   /// Fill-reducing ordering of the block graph (AMD, Amestoy, Davis & Duff 1996), expanded to
   /// the scalar variables: a block's variables stay together, as Ceres orders its parameter
