@@ -38,22 +38,6 @@ double tls_weight(double r2, double c2, double mu) {
   return std::sqrt(c2 / r2) * std::sqrt(mu * (mu + 1.0)) - mu;
 }
 
-// Adjoint of T, Ad(T) xi = log(T exp(xi) T^-1), by central differences (exact to ~1e-10 for
-// the poses of a pose graph; the group classes carry no closed form).
-template <class Group>
-Eigen::Matrix<double, Group::kDoF, Group::kDoF> adjoint(const Group& T) {
-  constexpr int D = Group::kDoF;
-  constexpr double h = 1e-6;
-  Eigen::Matrix<double, D, D> Ad;
-  const Group T_inverse = T.inverse();
-  for (int k = 0; k < D; ++k) {
-    typename Group::Tangent xi = Group::Tangent::Zero();
-    xi[k] = h;
-    Ad.col(k) = ((T * Group::exp(xi) * T_inverse).log() - (T * Group::exp(-xi) * T_inverse).log()) / (2.0 * h);
-  }
-  return Ad;
-}
-
 // Covariance of an edge: the pseudo-inverse of its information (which may be singular after
 // the reader's projection to positive semi-definite).
 template <class Group>
@@ -96,7 +80,7 @@ double short_loop_variance_factor(const PoseGraphProblem<Group>& problem, int wi
       Z_k[static_cast<std::size_t>(edge.i)] = edge.T_i_j;
       sigma_k[static_cast<std::size_t>(edge.i)] = covariance_of(edge);
     } else if (edge.i == edge.j + 1) {
-      const Matrix Ad = adjoint(edge.T_i_j);
+      const Matrix Ad = edge.T_i_j.Adj();
       Z_k[static_cast<std::size_t>(edge.j)] = edge.T_i_j.inverse();
       sigma_k[static_cast<std::size_t>(edge.j)] = Ad * covariance_of(edge) * Ad.transpose();
     } else {
@@ -116,7 +100,7 @@ double short_loop_variance_factor(const PoseGraphProblem<Group>& problem, int wi
       const auto kk = static_cast<std::size_t>(k);
       unbroken = has_odometry[kk] != 0;
       if (!unbroken) break;
-      const Matrix Ad = adjoint(Z_k[kk].inverse());
+      const Matrix Ad = Z_k[kk].inverse().Adj();
       sigma_chain = Ad * sigma_chain * Ad.transpose() + sigma_k[kk];
       chain = chain * Z_k[kk];
     }
@@ -124,7 +108,7 @@ double short_loop_variance_factor(const PoseGraphProblem<Group>& problem, int wi
     Group Z = edge.T_i_j;
     Matrix sigma_Z = covariance_of(edge);
     if (edge.i > edge.j) {
-      const Matrix Ad = adjoint(edge.T_i_j);
+      const Matrix Ad = edge.T_i_j.Adj();
       Z = edge.T_i_j.inverse();
       sigma_Z = Ad * sigma_Z * Ad.transpose();
     }
@@ -275,7 +259,7 @@ class Stages {
       Candidate c{e, edge.i, edge.j, edge.T_i_j, covariance_of(edge)};
       if (edge.i > edge.j) {
         // Z^-1 with Z exp(d) -> Z^-1 exp(-Ad(Z) d): Sigma' = Ad(Z) Sigma Ad(Z)^T.
-        const Matrix Ad = adjoint(edge.T_i_j);
+        const Matrix Ad = edge.T_i_j.Adj();
         c = Candidate{e, edge.j, edge.i, edge.T_i_j.inverse(), Ad * c.sigma * Ad.transpose()};
       }
       candidates.push_back(c);
@@ -294,7 +278,7 @@ class Stages {
         const Group T_j_l = T[static_cast<std::size_t>(ca.b)].inverse() * T[static_cast<std::size_t>(cb.b)];
         const Group T_l_j = T_j_l.inverse();
         const typename Group::Tangent cycle = (T_l_j * ca.Z_a_b.inverse() * T_i_k * cb.Z_a_b).log();
-        const Matrix Ad = adjoint(T_l_j);
+        const Matrix Ad = T_l_j.Adj();
         const Matrix sigma = Ad * ca.sigma * Ad.transpose() + cb.sigma;
         const Eigen::LDLT<Matrix> ldlt(sigma);
         if (ldlt.info() != Eigen::Success) continue;
@@ -308,14 +292,16 @@ class Stages {
     std::sort(groups.begin(), groups.end(), [](const auto& x, const auto& y) { return x.size() > y.size(); });
     summary_.groups_tried += static_cast<int>(groups.size());
     std::size_t readmitted = 0;
+    double cost = tls_cost(c2);  // at the current poses; poses change only with a kept group
     for (const auto& group : groups) {
-      const double cost_before = tls_cost(c2);
       const std::vector<Group> poses_before = problem_.T_world_pose;
       for (const std::size_t e : group) weights()[e] = 1.0;
       solve(options_.inner.max_iterations, options_.inner.initial_trust_region_radius);
       bool fits = true;
       for (const std::size_t e : group) fits = fits && r2(e) <= c2;
-      if (fits && tls_cost(c2) < cost_before) {
+      const double trial_cost = fits ? tls_cost(c2) : cost;
+      if (fits && trial_cost < cost) {
+        cost = trial_cost;
         readmitted += group.size();
         ++summary_.groups_readmitted;
       } else {
@@ -356,7 +342,6 @@ class Stages {
     if (n == 0) return 0;
     // Right-hand sides J^T of a batch of candidates, at most ~64 MB of them at once.
     const std::size_t batch = std::max<std::size_t>(1, static_cast<std::size_t>(8'000'000 / (n * R)));
-    std::size_t readmitted = 0;
     std::vector<std::size_t> accepted;
     for (std::size_t first = 0; first < candidates.size(); first += batch) {
       const std::size_t count = std::min(batch, candidates.size() - first);
@@ -390,9 +375,8 @@ class Stages {
       }
     }
     for (const std::size_t e : accepted) weights()[e] = 1.0;
-    readmitted = accepted.size();
-    summary_.readmitted_by_innovation += static_cast<int>(readmitted);
-    return readmitted;
+    summary_.readmitted_by_innovation += static_cast<int>(accepted.size());
+    return accepted.size();
   }
 
   /// Variance of unit weight (a posteriori variance factor, e.g. Foerstner & Wrobel,
