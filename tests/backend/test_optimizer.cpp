@@ -3,6 +3,7 @@
 // ../shared/data/README.md ("Optima measured with SE-Sync on this data").
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <random>
 
@@ -12,6 +13,7 @@
 #include "cairn/backend/initialization.hpp"
 #include "cairn/backend/outliers.hpp"
 #include "cairn/backend/optimizer.hpp"
+#include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/io/graph_io.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "test_data.hpp"
@@ -227,6 +229,69 @@ TEST(Optimizer, ReusedFactorisationReachesTheSameOptimumAsExactSteps) {
 // keeps the analysis while no edge's weight is 0, and its last factorisation preconditions the
 // next solve: same minimum as a fresh solve, no factorisation at all when the weights change
 // little. With weights at 0 the pattern is rebuilt without those edges.
+// A random sparse SPD system large enough for CHOLMOD's supernodal path and its OpenMP regions
+// (n > 128): the factorisation solves it as a dense Cholesky does, and the caller's OpenMP
+// setting, which SparseCholesky lowers around every CHOLMOD call, is back afterwards.
+TEST(SparseCholesky, SolvesAsDenseCholeskyAndRestoresTheCallersOpenMpSetting) {
+  const int blocks = 150;
+  const int B = 3;
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> pick(0, blocks - 1);
+  std::normal_distribution<double> normal;
+  std::vector<std::pair<int, int>> pairs;
+  for (int k = 1; k < blocks; ++k) pairs.emplace_back(k - 1, k);
+  for (int k = 0; k < 200; ++k) {
+    const int a = pick(rng);
+    const int b = pick(rng);
+    if (a != b) pairs.emplace_back(a, b);
+  }
+  BlockPattern pattern(blocks, B, pairs);
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(blocks * B, blocks * B);
+  // H = sum over pairs of J^T J with J = [A_a, A_b] random 3x6, plus a diagonal: SPD.
+  for (const auto& [a, b] : pairs) {
+    const Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::NullaryExpr([&] { return normal(rng); });
+    const Eigen::Matrix<double, 6, 6> H = J.transpose() * J;
+    const int lo = std::min(a, b);
+    const int hi = std::max(a, b);
+    const int off_lo = a == lo ? 0 : 3;
+    const int off_hi = a == lo ? 3 : 0;
+    const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> H_lo = H.block<3, 3>(off_lo, off_lo);
+    const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> H_hi = H.block<3, 3>(off_hi, off_hi);
+    const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> H_lo_hi = H.block<3, 3>(off_lo, off_hi);
+    pattern.add_diagonal(lo, H_lo.data());
+    pattern.add_diagonal(hi, H_hi.data());
+    pattern.add_off_diagonal(lo, hi, H_lo_hi.data());
+    dense.block<3, 3>(lo * B, lo * B) += H_lo;
+    dense.block<3, 3>(hi * B, hi * B) += H_hi;
+    dense.block<3, 3>(lo * B, hi * B) += H_lo_hi;
+    dense.block<3, 3>(hi * B, lo * B) += H_lo_hi.transpose();
+  }
+  for (int k = 0; k < blocks * B; ++k) {
+    pattern.matrix().value[static_cast<std::size_t>(pattern.diagonal_index(k))] += 0.5;
+    dense(k, k) += 0.5;
+  }
+  const Eigen::VectorXd rhs = Eigen::VectorXd::NullaryExpr(blocks * B, [&] { return normal(rng); });
+  const Eigen::VectorXd expected = dense.llt().solve(rhs);
+
+  const int callers_levels = 3;
+  omp_set_max_active_levels(callers_levels);
+  SparseCholesky cholesky;
+  const std::vector<int> ordering = pattern.block_amd_ordering();
+  cholesky.analyze(pattern.matrix(), &ordering);
+  EXPECT_EQ(omp_get_max_active_levels(), callers_levels);
+  ASSERT_EQ(cholesky.factorize(pattern.matrix()), FactorizationStatus::kSuccess);
+  EXPECT_EQ(omp_get_max_active_levels(), callers_levels);
+  const Eigen::VectorXd x = cholesky.solve(rhs);
+  EXPECT_EQ(omp_get_max_active_levels(), callers_levels);
+  Eigen::VectorXd y;
+  cholesky.solve_in_place(rhs, y);
+  EXPECT_EQ(omp_get_max_active_levels(), callers_levels);
+  EXPECT_LT((x - expected).norm(), 1e-9 * expected.norm());
+  EXPECT_LT((y - expected).norm(), 1e-9 * expected.norm());
+  // The sparse product used by PCG agrees with the dense matrix too.
+  EXPECT_LT((symmetric_multiply(pattern.matrix(), rhs) - dense * rhs).norm(), 1e-9 * (dense * rhs).norm());
+}
+
 TEST(Optimizer, WorkspaceCarriesTheAnalysisAndFactorisationToTheNextSolve) {
   CAIRN_REQUIRE_DATA("posegraph/se-sync/intel.g2o");
   with_chordal_start("intel.g2o", [&](auto start) {

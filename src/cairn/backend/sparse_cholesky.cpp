@@ -2,6 +2,7 @@
 
 #include <amd.h>
 #include <cholmod.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cstring>
@@ -112,6 +113,32 @@ Eigen::VectorXd symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x) 
   return y;
 }
 
+namespace {
+
+// Debian 12's CHOLMOD (SuiteSparse 5.12) is compiled with OpenMP and opens parallel regions with a
+// fixed team of CHOLMOD_OMP_NUM_THREADS = 4 threads (cholmod_core.h) around the supernodal
+// factorisation's memory clears and assembly loops (t_cholmod_super_numeric.c, `if (n > 128)`),
+// while the dense work of the same factorisation runs in OpenBLAS' own thread pool. On a machine
+// with fewer than 4 + OpenBLAS' threads worth of cores the two pools preempt each other (spinning
+// OpenMP workers against spinning OpenBLAS workers): on the 2-core machine of docs/benchmarks.md
+// the numeric factorisation took 2.4x longer on sphere_bignoise and 1.9x on sphere2500 than with
+// those regions serialised (OMP_MAX_ACTIVE_LEVELS=0, measured 2026-11-24). The loops they
+// parallelise are memory-bound and short, so every CHOLMOD call here runs them on the calling
+// thread: the max-active-levels ICV is 0 for the call and restored after it (OpenMP 5.1,
+// sec. 2.4: a parallel region beyond max-active-levels gets a team of one thread).
+class SerialOpenMpRegions {
+ public:
+  SerialOpenMpRegions() : saved_(omp_get_max_active_levels()) { omp_set_max_active_levels(0); }
+  ~SerialOpenMpRegions() { omp_set_max_active_levels(saved_); }
+  SerialOpenMpRegions(const SerialOpenMpRegions&) = delete;
+  SerialOpenMpRegions& operator=(const SerialOpenMpRegions&) = delete;
+
+ private:
+  int saved_;
+};
+
+}  // namespace
+
 struct SparseCholesky::Impl {
   cholmod_common common{};
   cholmod_factor* factor = nullptr;
@@ -159,6 +186,7 @@ SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
 SparseCholesky::~SparseCholesky() = default;
 
 void SparseCholesky::analyze(const UpperCsc& A, const std::vector<int>* ordering) {
+  const SerialOpenMpRegions serial;
   if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
   cholmod_sparse S = Impl::view(A);
   if (ordering != nullptr) {
@@ -178,6 +206,7 @@ void SparseCholesky::analyze(const UpperCsc& A, const std::vector<int>* ordering
 }
 
 FactorizationStatus SparseCholesky::factorize(const UpperCsc& A) {
+  const SerialOpenMpRegions serial;
   CAIRN_ASSERT(impl_->factor != nullptr && A.size == impl_->size, "factorize() before analyze()");
   cholmod_sparse S = Impl::view(A);
   const int ok = cholmod_factorize(&S, impl_->factor, &impl_->common);
@@ -191,6 +220,7 @@ FactorizationStatus SparseCholesky::factorize(const UpperCsc& A) {
 }
 
 Eigen::MatrixXd SparseCholesky::solve(const Eigen::MatrixXd& B) {
+  const SerialOpenMpRegions serial;
   cholmod_dense* rhs = cholmod_allocate_dense(static_cast<std::size_t>(B.rows()), static_cast<std::size_t>(B.cols()),
                                               static_cast<std::size_t>(B.rows()), CHOLMOD_REAL, &impl_->common);
   std::memcpy(rhs->x, B.data(), sizeof(double) * static_cast<std::size_t>(B.size()));
@@ -215,6 +245,7 @@ Eigen::MatrixXd SparseCholesky::inverse_columns(const std::vector<int>& columns)
 }
 
 void SparseCholesky::solve_in_place(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  const SerialOpenMpRegions serial;
   CAIRN_ASSERT(impl_->factorized && b.size() == impl_->size, "solve_in_place() needs a factorisation of the right size");
   cholmod_dense B{};
   B.nrow = static_cast<std::size_t>(b.size());

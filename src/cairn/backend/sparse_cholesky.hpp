@@ -62,6 +62,9 @@ enum class FactorizationStatus { kSuccess, kNotPositiveDefinite, kFailure };
 /// y = A x for a symmetric matrix stored as its upper triangle.
 Eigen::VectorXd symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x);
 
+/// Sparse Cholesky factorisation through CHOLMOD (supernodal, OpenBLAS for the dense blocks).
+/// CHOLMOD's own OpenMP regions run on the calling thread (why: sparse_cholesky.cpp); the
+/// caller's OpenMP setting (max-active-levels) is restored after every call.
 class SparseCholesky {
  public:
   SparseCholesky();
