@@ -147,6 +147,7 @@ class Stages {
       robust_[e] = options.robust_odometry || problem.edges[e].kind == EdgeKind::kLoopClosure;
     }
     inner_.kernel = RobustKernel::kNone;
+    inner_.reuse_max_cg_iterations = options.reuse_max_cg_iterations;
     inner_.edge_weights.assign(m, 1.0);
   }
 

@@ -380,8 +380,9 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
   const bool lm = options.algorithm == Algorithm::kLevenbergMarquardt;
   const bool dogleg = options.algorithm == Algorithm::kDogleg;
   const bool reuse = lm && options.reuse_factorization;
-  // PCG budget before refactorising: a quarter of a factorisation's flops spent in iterations of
-  // two triangular solves (4 flops per factor non-zero) and one product with H (4 per stored entry).
+  // PCG budget before refactorising (OptimizerOptions::reuse_max_cg_iterations); 0: a quarter of
+  // a factorisation's flops spent in iterations of two triangular solves (4 flops per factor
+  // non-zero) and one product with H (4 per stored entry).
   int cg_budget = options.reuse_max_cg_iterations;
   if (cg_budget == 0) {
     const double per_iteration = 4.0 * static_cast<double>(cholesky.factor_nonzeros()) +

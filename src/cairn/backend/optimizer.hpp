@@ -82,12 +82,18 @@ struct OptimizerOptions {
   /// loose steps be rejected on MIT and cost cubicle a factorisation; a forcing relative to the
   /// first iteration's gradient made PCG miss its budget near the minimum). In (0, 1).
   double reuse_cg_tolerance = 0.01;
-  /// PCG iterations before giving up and factorising; 0 = derived from CHOLMOD's operation
-  /// counts (a quarter of a factorisation's flops spent in triangular solves and products with
-  /// H, at least 8, at most 30; small graphs pay CHOLMOD overheads the flop count misses), so
-  /// the choice does not depend on timing and runs are repeatable. PCG also gives up early
-  /// when its residual reduction so far projects past the budget. >= 0.
-  int reuse_max_cg_iterations = 0;
+  /// PCG iterations before giving up and factorising. One PCG iteration (two triangular solves
+  /// with the factor, memory-bound, and a product with H) took 1/6 to 1/17 of a numeric
+  /// factorisation's time on every SE-Sync graph (2026-11-24, docs/backend.md), so with 6 a
+  /// failed attempt costs at most about one factorisation; successful ones took 1-7 iterations.
+  /// 0 = derived from CHOLMOD's flop counts (a quarter of a factorisation's flops spent in
+  /// triangular solves and products with H, 8 to 30 iterations): that count puts the ratio at
+  /// 1.2-93, so on the large 3D graphs failed attempts ran 11-17 iterations, more than the
+  /// factorisation they were to save; GNC uses it for its weighted solves, whose factors the
+  /// outliers fill in (GncOptions::reuse_max_cg_iterations). A count, not a time, keeps runs
+  /// repeatable. PCG also gives up early when its residual reduction so far projects past the
+  /// budget. >= 0.
+  int reuse_max_cg_iterations = 6;
   /// Threads for linearisation; 0 = all cores.
   int threads = 0;
   /// Called after every iteration (the CLI prints progress); may be empty.
