@@ -122,10 +122,11 @@ namespace {
 // with fewer than 4 + OpenBLAS' threads worth of cores the two pools preempt each other (spinning
 // OpenMP workers against spinning OpenBLAS workers): on the 2-core machine of docs/benchmarks.md
 // the numeric factorisation took 2.4x longer on sphere_bignoise and 1.9x on sphere2500 than with
-// those regions serialised (OMP_MAX_ACTIVE_LEVELS=0, measured 2026-11-24). The loops they
-// parallelise are memory-bound and short, so every CHOLMOD call here runs them on the calling
-// thread: the max-active-levels ICV is 0 for the call and restored after it (OpenMP 5.1,
-// sec. 2.4: a parallel region beyond max-active-levels gets a team of one thread).
+// those regions serialised (OMP_MAX_ACTIVE_LEVELS=0; median of 30 solves, 2026-11-24). The
+// loops they parallelise are memory-bound and short, so every CHOLMOD call here runs them on
+// the calling thread: the max-active-levels ICV is 0 for the call and restored after it
+// (OpenMP 5.1, sec. 2.4: a parallel region beyond max-active-levels gets a team of one thread).
+// docs/backend.md, "Sparse Cholesky and threads".
 class SerialOpenMpRegions {
  public:
   SerialOpenMpRegions() : saved_(omp_get_max_active_levels()) { omp_set_max_active_levels(0); }
