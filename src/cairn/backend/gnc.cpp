@@ -199,7 +199,9 @@ class Stages {
         weights()[e] = w;
         non_binary += w * (1.0 - w);
       }
+      inner_.function_tolerance = std::max(options_.inner.function_tolerance, options_.graduation_function_tolerance);
       const OptimizerSummary s = solve(std::min(options_.inner.max_iterations, options_.iterations_per_outer), radius);
+      inner_.function_tolerance = options_.inner.function_tolerance;
       // The next weighted solve starts with this one's damping: the weights change little
       // between outer iterations.
       if (options_.carry_damping && s.final_lambda > 0.0) radius = 1.0 / s.final_lambda;
@@ -440,13 +442,23 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   summary.initial_threshold_chi2 = c2;
   const std::vector<Group> initial_poses = problem.T_world_pose;
 
+  using Clock = std::chrono::steady_clock;
+  // Adds the time since `from` to `seconds` and returns now.
+  auto lap = [](double& seconds, Clock::time_point from) {
+    const Clock::time_point now = Clock::now();
+    seconds += std::chrono::duration<double>(now - from).count();
+    return now;
+  };
+  Clock::time_point t = Clock::now();
   if (options.start_from_least_squares) stages.solve(options.inner.max_iterations, options.inner.initial_trust_region_radius);
   stages.graduate(c2);
+  t = lap(summary.graduation_s, t);
   if (adaptive) {
     // The stated information matrices may be off by a common factor (intel's overstate its
     // errors some 50 times in variance): estimate it again on the accepted edges and measure
     // the threshold in it.
     summary.final_solve = stages.reclassify(c2);
+    t = lap(summary.reclassify_s, t);
     summary.noise_variance_factor = stages.variance_of_unit_weight();
     if (summary.noise_variance_factor > 0.0) {
       const double scaled = scaled_threshold(summary.noise_variance_factor);
@@ -455,7 +467,9 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
         // that its loose threshold let in, so graduate again from the initial guess.
         problem.T_world_pose = initial_poses;
         summary.regraduated = true;
+        t = Clock::now();
         stages.graduate(scaled);
+        t = lap(summary.graduation_s, t);
       }
       c2 = scaled;
     }
@@ -466,8 +480,11 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   // their median r^2 at the optimum; chi-square's 0.999 quantile is 7x its median).
   if (adaptive) c2 *= options.final_threshold_factor;
   summary.threshold_chi2 = c2;
+  t = Clock::now();
   summary.final_solve = stages.reclassify(c2);
+  t = lap(summary.reclassify_s, t);
   if (options.group_window > 0 && stages.readmit_groups(c2) > 0) summary.final_solve = stages.reclassify(c2);
+  t = lap(summary.groups_s, t);
   for (int round = 0; options.readmit_by_innovation && round < options.max_reclassify_rounds; ++round) {
     // Each readmitted edge alone lowers the TLS cost; several that contradict each other need
     // not, and the reclassification may then reject them again: keep a round only if the cost
@@ -487,6 +504,7 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
       break;
     }
   }
+  t = lap(summary.innovation_s, t);
   summary.tls_cost = stages.tls_cost(c2);
 
   summary.weights = stages.weights();

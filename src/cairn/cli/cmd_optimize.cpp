@@ -153,6 +153,8 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     }
     std::printf("; %d of %d consistent groups and %d edges by their innovation readmitted)\n", gnc.groups_readmitted,
                 gnc.groups_tried, gnc.readmitted_by_innovation);
+    std::printf("GNC time: graduation %.3f s, reclassification %.3f s, groups %.3f s, innovation test %.3f s\n",
+                gnc.graduation_s, gnc.reclassify_s, gnc.groups_s, gnc.innovation_s);
   } else {
     summary = backend::optimize(problem, options);
   }
@@ -237,6 +239,11 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                   {"readmitted_by_innovation", gnc.readmitted_by_innovation},
                   {"tls_cost", gnc.tls_cost},
                   {"message", gnc.message},                   {"time_s", gnc.total_s},
+                  {"stage_time_s",
+                   {{"graduation", gnc.graduation_s},
+                    {"reclassification", gnc.reclassify_s},
+                    {"group_readmission", gnc.groups_s},
+                    {"innovation_readmission", gnc.innovation_s}}},
                   {"rejected", rejected}};
     }
     io::write_file_atomically(flags.report, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
