@@ -121,7 +121,11 @@ TEST_P(GncOnSeSync, RejectsEveryFalseLoopClosureAndKeepsTheTrueOnes) {
 
 INSTANTIATE_TEST_SUITE_P(SeSync, GncOnSeSync,
                          ::testing::Values(Case{"intel.g2o", false}, Case{"manhattan.g2o", false},
-                                           Case{"sphere2500.g2o", false}, Case{"city10000.g2o", true}),
+                                           // city10000: about 2.5 minutes on two cores (GNC 51 s
+                                           // of it, least squares on the corrupted graph most of
+                                           // the rest), since GNC keeps fading false loop closures
+                                           // out of the factor; it took 6 minutes before.
+                                           Case{"sphere2500.g2o", false}, Case{"city10000.g2o", false}),
                          [](const ::testing::TestParamInfo<Case>& param_info) {
                            std::string name = param_info.param.file;
                            return name.substr(0, name.find('.'));

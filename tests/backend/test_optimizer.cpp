@@ -225,10 +225,6 @@ TEST(Optimizer, ReusedFactorisationReachesTheSameOptimumAsExactSteps) {
   }
 }
 
-// A workspace carried from one solve to the next with changed edge weights (GNC's outer loop)
-// keeps the analysis while no edge's weight is 0, and its last factorisation preconditions the
-// next solve: same minimum as a fresh solve, no factorisation at all when the weights change
-// little. With weights at 0 the pattern is rebuilt without those edges.
 // A random sparse SPD system large enough for CHOLMOD's supernodal path and its OpenMP regions
 // (n > 128): the factorisation solves it as a dense Cholesky does, and the caller's OpenMP
 // setting, which SparseCholesky lowers around every CHOLMOD call, is back afterwards.
@@ -292,6 +288,55 @@ TEST(SparseCholesky, SolvesAsDenseCholeskyAndRestoresTheCallersOpenMpSetting) {
   EXPECT_LT((symmetric_multiply(pattern.matrix(), rhs) - dense * rhs).norm(), 1e-9 * (dense * rhs).norm());
 }
 
+// Edges below OptimizerOptions::coupling_weight_floor enter the cost and the gradient exactly but
+// not the Hessian (GNC's fading false loop closures): the minimum stays where it is, and the
+// factor is smaller, since those edges join distant poses.
+TEST(Optimizer, WeakEdgesKeptOutOfTheFactorLeaveTheMinimumWhereItIs) {
+  CAIRN_REQUIRE_DATA("posegraph/se-sync/intel.g2o");
+  const io::GraphFile file = io::read_graph(test::data_path("posegraph/se-sync/intel.g2o").string());
+  std::visit(
+      [&](const auto& original) {
+        auto corrupted = original;
+        add_false_loop_closures(corrupted, OutlierOptions{300, 5, 10.0});
+        auto start = make_problem(corrupted, "intel + 300 false loop closures");
+        // From the chordal start of the uncorrupted graph, so both solves face one basin.
+        auto uncorrupted = make_problem(original, "intel");
+        initialize_chordal(uncorrupted);
+        ASSERT_EQ(uncorrupted.T_world_pose.size(), start.T_world_pose.size());
+        start.T_world_pose = uncorrupted.T_world_pose;
+        OptimizerOptions options;
+        // Both to the gradient or step tolerance: the weak edges leave flat directions, along
+        // which the cost tolerance would stop the two solves at different points.
+        options.function_tolerance = 0.0;
+        options.max_iterations = 500;
+        options.edge_weights.assign(start.edges.size(), 1.0);
+        for (std::size_t e = original.edges.size(); e < start.edges.size(); ++e) options.edge_weights[e] = 1e-4;
+        auto coupled = start;
+        const OptimizerSummary all = optimize(coupled, options);
+        options.coupling_weight_floor = 1e-3;
+        auto decoupled = start;
+        const OptimizerSummary strong = optimize(decoupled, options);
+        ASSERT_EQ(all.termination, TerminationType::kConvergence) << all.brief_report();
+        ASSERT_EQ(strong.termination, TerminationType::kConvergence) << strong.brief_report();
+        EXPECT_NEAR(strong.final_cost, all.final_cost, 1e-9 * all.final_cost);
+        double worst = 0.0;
+        for (std::size_t k = 0; k < coupled.T_world_pose.size(); ++k) {
+          worst = std::max(worst, (coupled.T_world_pose[k].inverse() * decoupled.T_world_pose[k]).log().norm());
+        }
+        EXPECT_LT(worst, 1e-5);
+        EXPECT_LT(2 * strong.factor_nonzeros, all.factor_nonzeros)
+            << "300 random false loop closures fill the factor in: " << strong.factor_nonzeros << " vs "
+            << all.factor_nonzeros;
+        std::printf("coupled: %d iterations, factor %zu non-zeros; weak edges out: %d iterations, %zu non-zeros; poses within %.2e\n",
+                    all.iterations, all.factor_nonzeros, strong.iterations, strong.factor_nonzeros, worst);
+      },
+      file.graph);
+}
+
+// A workspace carried from one solve to the next with changed edge weights (GNC's outer loop)
+// keeps the analysis while no edge's weight is 0, and its last factorisation preconditions the
+// next solve: same minimum as a fresh solve, no factorisation at all when the weights change
+// little. With weights at 0 the pattern is rebuilt without those edges.
 TEST(Optimizer, WorkspaceCarriesTheAnalysisAndFactorisationToTheNextSolve) {
   CAIRN_REQUIRE_DATA("posegraph/se-sync/intel.g2o");
   with_chordal_start("intel.g2o", [&](auto start) {

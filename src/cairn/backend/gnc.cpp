@@ -200,8 +200,10 @@ class Stages {
         non_binary += w * (1.0 - w);
       }
       inner_.function_tolerance = std::max(options_.inner.function_tolerance, options_.graduation_function_tolerance);
+      inner_.coupling_weight_floor = options_.negligible_weight * tls_weight(c2, c2, mu);
       const OptimizerSummary s = solve(std::min(options_.inner.max_iterations, options_.iterations_per_outer), radius);
       inner_.function_tolerance = options_.inner.function_tolerance;
+      inner_.coupling_weight_floor = options_.inner.coupling_weight_floor;
       // The next weighted solve starts with this one's damping: the weights change little
       // between outer iterations.
       if (options_.carry_damping && s.final_lambda > 0.0) radius = 1.0 / s.final_lambda;

@@ -100,6 +100,14 @@ struct OptimizerOptions {
   std::function<void(const IterationSummary&)> progress;
   /// Optional per-edge weights multiplying rho (GNC's weights); empty = all 1.
   std::vector<double> edge_weights;
+  /// Edges with 0 < weight < coupling_weight_floor enter the cost and the gradient exactly but
+  /// not the Hessian: they stay out of the sparsity pattern, where edges between distant poses
+  /// (GNC's not yet rejected false loop closures) would fill the factor in for a change of H of
+  /// that weight's order. The weighted problem and its stationary points are unchanged; the
+  /// steps become approximate Newton steps, which LM's ratio test keeps safe (test
+  /// Optimizer.WeakEdgesKeptOutOfTheFactorLeaveTheMinimumWhereItIs). 0 = every weighted edge
+  /// couples. GNC sets it during its graduation (GncOptions::negligible_weight). >= 0.
+  double coupling_weight_floor = 0.0;
 
   /// False with every problem described in `error`, like Ceres' Solver::Options::IsValid.
   bool is_valid(std::string* error) const;
