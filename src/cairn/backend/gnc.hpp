@@ -78,15 +78,13 @@ struct GncOptions {
   /// function tolerance; the larger of this and inner.function_tolerance is used). The weights
   /// change after every such solve, so converging it further only burns iterations: with
   /// inner.function_tolerance's 1e-12 the solves ran 13 of at most 15 iterations per weight
-  /// update on average, and city10000's
-  /// graduation took 317 of GNC's 352 s (docs/backend.md). The solves after the graduation use
-  /// inner.function_tolerance. >= 0.
+  /// update on average, and city10000's graduation took 317 of GNC's 352 s (docs/backend.md).
+  /// The solves after the graduation use inner.function_tolerance. >= 0.
   double graduation_function_tolerance = 1e-6;
   /// During the graduation, loop closures whose weight is below this fraction of the weight a
   /// loop closure at the threshold has (eq. 14 at r^2 = c^2) enter the gradient but not H
-  /// (OptimizerOptions::coupling_weight_floor): the weighted
-  /// problem stays the paper's, but far-off false loop closures no longer fill the factor in
-  /// while their weights fade. city10000 with 10,688 false loop closures: graduation 291 s
+  /// (OptimizerOptions::coupling_weight_floor): the weighted problem stays the paper's, but
+  /// far-off false loop closures no longer fill the factor in while their weights fade. city10000 with 10,688 false loop closures: graduation 291 s
   /// without, 18 s with, the same edges rejected (docs/backend.md). 0 = off. >= 0.
   double negligible_weight = 0.01;
   /// Start each weighted solve of the graduation with the damping the previous one ended with
@@ -109,8 +107,8 @@ struct GncOptions {
   /// Replaces inner.reuse_max_cg_iterations in the weighted solves: 0 = the flop-derived budget
   /// (8-30 PCG iterations). While outliers still weigh, they fill the factor in and a
   /// factorisation costs many triangular solves: with the plain solver's 6, GNC on corrupted
-  /// manhattan factorised 504 times instead of 380 (24.8 s instead of 18.9 s) and on corrupted
-  /// sphere2500 57 instead of 27 (44 s instead of 36 s; measured 2026-11-24, docs/backend.md).
+  /// sphere2500 factorised 56 times instead of 32 (21.1 s instead of 16.3 s; manhattan equal
+  /// within noise; measured 2026-11-24 with negligible_weight on, docs/backend.md).
   int reuse_max_cg_iterations = 0;
 };
 

@@ -125,7 +125,8 @@ namespace {
 // those regions serialised (OMP_MAX_ACTIVE_LEVELS=0; median of 30 solves, 2026-11-24). The
 // loops they parallelise are memory-bound and short, so every CHOLMOD call here runs them on
 // the calling thread: the max-active-levels ICV is 0 for the call and restored after it
-// (OpenMP 5.1, sec. 2.4: a parallel region beyond max-active-levels gets a team of one thread).
+// (OpenMP 5.1, "Determining the Number of Threads for a parallel Region": a region that would
+// exceed max-active-levels active levels gets a team of one thread).
 // docs/backend.md, "Sparse Cholesky and threads".
 class SerialOpenMpRegions {
  public:
