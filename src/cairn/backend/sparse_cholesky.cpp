@@ -126,7 +126,9 @@ namespace {
 // loops they parallelise are memory-bound and short, so every CHOLMOD call here runs them on
 // the calling thread: the max-active-levels ICV is 0 for the call and restored after it
 // (OpenMP 5.1, "Determining the Number of Threads for a parallel Region": a region that would
-// exceed max-active-levels active levels gets a team of one thread).
+// exceed max-active-levels active levels gets a team of one thread). GCC 12's libgomp keeps that
+// setting per thread (checked: set to 0 in one std::thread, it stays 1 in main), so OpenMP
+// regions in other threads are untouched.
 // docs/backend.md, "Sparse Cholesky and threads".
 class SerialOpenMpRegions {
  public:
