@@ -63,8 +63,9 @@ template <class Group>
 bool factorize_normal_equations(const PoseGraphProblem<Group>& problem, Objective objective,
                                 const std::vector<double>& weights, std::vector<int>& variable,
                                 SparseCholesky& cholesky) {
-  if (objective == Objective::kChordal) return factorize_with<Group, ChordalFactor<Group>>(problem, weights, variable, cholesky);
-  return factorize_with<Group, GeodesicFactor<Group>>(problem, weights, variable, cholesky);
+  return with_factor<Group>(objective, [&](auto factor) {
+    return factorize_with<Group, decltype(factor)>(problem, weights, variable, cholesky);
+  });
 }
 
 template <class Group>

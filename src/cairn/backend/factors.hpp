@@ -19,6 +19,12 @@
 
 namespace cairn::backend {
 
+/// The cost a solve minimises; each has its factor below (with_factor maps one to the other).
+enum class Objective {
+  kGeodesic,  ///< r = S log(Z^-1 T_i^-1 T_j): the maximum-likelihood cost g2o, GTSAM, Ceres use
+  kChordal,   ///< SE-Sync's f with isotropic weights kappa, tau (published certified optima)
+};
+
 template <class Group>
 struct GeodesicFactor {
   static constexpr int kDoF = Group::kDoF;
@@ -42,6 +48,23 @@ struct ChordalFactor {
   static Residual evaluate(const Group& T_world_i, const Group& T_world_j, const PoseEdge<Group>& edge,
                            Jacobian* J_r_i, Jacobian* J_r_j);
 };
+
+/// Calls `f` with a value of the factor type of `objective` (GeodesicFactor<Group>{} or
+/// ChordalFactor<Group>{}), so code templated on the factor is dispatched in one place.
+template <class Group, class F>
+decltype(auto) with_factor(Objective objective, F&& f) {
+  if (objective == Objective::kChordal) return f(ChordalFactor<Group>{});
+  return f(GeodesicFactor<Group>{});
+}
+
+/// ||r||^2 of `edge` at the given poses under `objective` (no Jacobians).
+template <class Group>
+double squared_residual(const Group& T_world_i, const Group& T_world_j, const PoseEdge<Group>& edge,
+                        Objective objective) {
+  return with_factor<Group>(objective, [&](auto factor) {
+    return decltype(factor)::evaluate(T_world_i, T_world_j, edge, nullptr, nullptr).squaredNorm();
+  });
+}
 
 /// Unwhitened geodesic error log(Z^-1 T_i^-1 T_j).
 template <class Group>

@@ -23,14 +23,6 @@ double chi2_quantile_99(int dof) {
 
 namespace {
 
-template <class Group>
-double squared_residual(const PoseGraphProblem<Group>& problem, const PoseEdge<Group>& edge, Objective objective) {
-  const auto& Ti = problem.T_world_pose[static_cast<std::size_t>(edge.i)];
-  const auto& Tj = problem.T_world_pose[static_cast<std::size_t>(edge.j)];
-  if (objective == Objective::kChordal) return ChordalFactor<Group>::evaluate(Ti, Tj, edge, nullptr, nullptr).squaredNorm();
-  return GeodesicFactor<Group>::evaluate(Ti, Tj, edge, nullptr, nullptr).squaredNorm();
-}
-
 // Eq. (14) of Yang et al. 2020.
 double tls_weight(double r2, double c2, double mu) {
   if (r2 <= mu / (mu + 1.0) * c2) return 1.0;
@@ -48,6 +40,22 @@ Eigen::Matrix<double, Group::kDoF, Group::kDoF> covariance_of(const PoseEdge<Gro
   const double floor = 1e-12 * std::max(eigen.eigenvalues().maxCoeff(), 1e-300);
   for (int k = 0; k < D; ++k) inverse_values[k] = eigen.eigenvalues()[k] > floor ? 1.0 / eigen.eigenvalues()[k] : 0.0;
   return eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+}
+
+// An edge's measurement and covariance oriented from its lower pose index to its higher one:
+// Z^-1 with Z exp(d) -> Z^-1 exp(-Ad(Z) d), so Sigma' = Ad(Z) Sigma Ad(Z)^T.
+template <class Group>
+struct Oriented {
+  Group Z;
+  Eigen::Matrix<double, Group::kDoF, Group::kDoF> sigma;
+};
+
+template <class Group>
+Oriented<Group> oriented_forwards(const PoseEdge<Group>& edge) {
+  const Eigen::Matrix<double, Group::kDoF, Group::kDoF> sigma = covariance_of(edge);
+  if (edge.i <= edge.j) return {edge.T_i_j, sigma};
+  const Eigen::Matrix<double, Group::kDoF, Group::kDoF> Ad = edge.T_i_j.Adj();
+  return {edge.T_i_j.inverse(), Ad * sigma * Ad.transpose()};
 }
 
 // Median of chi-square with `dof` degrees of freedom, dof 1..12 (standard tables).
@@ -75,18 +83,12 @@ double short_loop_variance_factor(const PoseGraphProblem<Group>& problem, int wi
   std::vector<Group> Z_k(n);
   std::vector<Matrix> sigma_k(n);
   for (const auto& edge : problem.edges) {
-    if (edge.kind != EdgeKind::kOdometry) continue;
-    if (edge.j == edge.i + 1) {
-      Z_k[static_cast<std::size_t>(edge.i)] = edge.T_i_j;
-      sigma_k[static_cast<std::size_t>(edge.i)] = covariance_of(edge);
-    } else if (edge.i == edge.j + 1) {
-      const Matrix Ad = edge.T_i_j.Adj();
-      Z_k[static_cast<std::size_t>(edge.j)] = edge.T_i_j.inverse();
-      sigma_k[static_cast<std::size_t>(edge.j)] = Ad * covariance_of(edge) * Ad.transpose();
-    } else {
-      continue;
-    }
-    has_odometry[static_cast<std::size_t>(std::min(edge.i, edge.j))] = 1;
+    if (edge.kind != EdgeKind::kOdometry || std::abs(edge.j - edge.i) != 1) continue;
+    const auto k = static_cast<std::size_t>(std::min(edge.i, edge.j));
+    const Oriented<Group> forwards = oriented_forwards(edge);
+    Z_k[k] = forwards.Z;
+    sigma_k[k] = forwards.sigma;
+    has_odometry[k] = 1;
   }
   std::vector<double> d2;
   for (const auto& edge : problem.edges) {
@@ -105,15 +107,9 @@ double short_loop_variance_factor(const PoseGraphProblem<Group>& problem, int wi
       chain = chain * Z_k[kk];
     }
     if (!unbroken) continue;
-    Group Z = edge.T_i_j;
-    Matrix sigma_Z = covariance_of(edge);
-    if (edge.i > edge.j) {
-      const Matrix Ad = edge.T_i_j.Adj();
-      Z = edge.T_i_j.inverse();
-      sigma_Z = Ad * sigma_Z * Ad.transpose();
-    }
-    const typename Group::Tangent e = (Z.inverse() * chain).log();
-    const Eigen::LDLT<Matrix> ldlt(sigma_Z + sigma_chain);
+    const Oriented<Group> Z = oriented_forwards(edge);
+    const typename Group::Tangent e = (Z.Z.inverse() * chain).log();
+    const Eigen::LDLT<Matrix> ldlt(Z.sigma + sigma_chain);
     if (ldlt.info() != Eigen::Success) continue;
     const double value = e.dot(ldlt.solve(e));
     if (std::isfinite(value)) d2.push_back(value);
@@ -155,7 +151,11 @@ class Stages {
   const std::vector<char>& robust() const { return robust_; }
   Objective objective() const { return inner_.objective; }
 
-  double r2(std::size_t e) const { return squared_residual(problem_, problem_.edges[e], inner_.objective); }
+  double r2(std::size_t e) const {
+    const auto& edge = problem_.edges[e];
+    return squared_residual(problem_.T_world_pose[static_cast<std::size_t>(edge.i)],
+                            problem_.T_world_pose[static_cast<std::size_t>(edge.j)], edge, inner_.objective);
+  }
 
   OptimizerSummary solve(int max_iterations, double initial_radius) {
     inner_.max_iterations = max_iterations;
@@ -190,6 +190,9 @@ class Stages {
     double mu = c2 / (2.0 * max_r2 - c2);
     double radius = options_.inner.initial_trust_region_radius;
     bool binary = false;
+    // The graduation's weighted solves stop earlier (graduation_function_tolerance) and keep
+    // faded loop closures out of the factor (negligible_weight); the later stages do neither.
+    inner_.function_tolerance = std::max(options_.inner.function_tolerance, options_.graduation_function_tolerance);
     for (int outer = 1; outer <= options_.max_outer_iterations && !binary; ++outer) {
       ++summary_.outer_iterations;
       double non_binary = 0.0;
@@ -199,17 +202,16 @@ class Stages {
         weights()[e] = w;
         non_binary += w * (1.0 - w);
       }
-      inner_.function_tolerance = std::max(options_.inner.function_tolerance, options_.graduation_function_tolerance);
       inner_.coupling_weight_floor = options_.negligible_weight * tls_weight(c2, c2, mu);
       const OptimizerSummary s = solve(std::min(options_.inner.max_iterations, options_.iterations_per_outer), radius);
-      inner_.function_tolerance = options_.inner.function_tolerance;
-      inner_.coupling_weight_floor = options_.inner.coupling_weight_floor;
       // The next weighted solve starts with this one's damping: the weights change little
       // between outer iterations.
       if (options_.carry_damping && s.final_lambda > 0.0) radius = 1.0 / s.final_lambda;
       binary = non_binary < options_.binary_tolerance;
       if (!binary) mu *= options_.mu_factor;
     }
+    inner_.function_tolerance = options_.inner.function_tolerance;
+    inner_.coupling_weight_floor = options_.inner.coupling_weight_floor;
     summary_.final_mu = mu;
     summary_.graduation_converged = binary;
     for (std::size_t e = 0; e < m; ++e) {
@@ -261,13 +263,9 @@ class Stages {
     for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
       if (!robust_[e] || weights()[e] != 0.0) continue;
       const auto& edge = problem_.edges[e];
-      Candidate c{e, edge.i, edge.j, edge.T_i_j, covariance_of(edge)};
-      if (edge.i > edge.j) {
-        // Z^-1 with Z exp(d) -> Z^-1 exp(-Ad(Z) d): Sigma' = Ad(Z) Sigma Ad(Z)^T.
-        const Matrix Ad = edge.T_i_j.Adj();
-        c = Candidate{e, edge.j, edge.i, edge.T_i_j.inverse(), Ad * c.sigma * Ad.transpose()};
-      }
-      candidates.push_back(c);
+      const Oriented<Group> forwards = oriented_forwards(edge);
+      candidates.push_back(
+          Candidate{e, std::min(edge.i, edge.j), std::max(edge.i, edge.j), forwards.Z, forwards.sigma});
     }
     if (candidates.size() < 2) return 0;
     std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) { return x.a < y.a; });
@@ -326,8 +324,8 @@ class Stages {
   /// the odometry between their ends relaxes away from them. Readmits every such edge; the
   /// caller's reclassification then settles the set. Returns the number readmitted.
   std::size_t readmit_by_innovation(double c2) {
-    return inner_.objective == Objective::kChordal ? readmit_by_innovation_with<ChordalFactor<Group>>(c2)
-                                                   : readmit_by_innovation_with<GeodesicFactor<Group>>(c2);
+    return with_factor<Group>(inner_.objective,
+                              [&](auto factor) { return readmit_by_innovation_with<decltype(factor)>(c2); });
   }
 
   template <class Factor>

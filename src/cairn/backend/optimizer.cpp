@@ -79,6 +79,11 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+// OptimizerOptions::edge_weights[e], 1 when there are none.
+double edge_weight(const OptimizerOptions& options, std::size_t e) {
+  return options.edge_weights.empty() ? 1.0 : options.edge_weights[e];
+}
+
 template <class Group, class Factor>
 class Engine {
  public:
@@ -102,9 +107,7 @@ class Engine {
   BlockPattern& pattern() { return pattern_; }
   const Eigen::VectorXd& gradient() const { return gradient_; }
 
-  double weight_of(std::size_t e) const {
-    return options_.edge_weights.empty() ? 1.0 : options_.edge_weights[e];
-  }
+  double weight_of(std::size_t e) const { return edge_weight(options_, e); }
 
   double cost(const std::vector<Group>& poses) {
     return arena_.execute([&] {
@@ -300,18 +303,18 @@ OptimizerWorkspace::~OptimizerWorkspace() = default;
 
 namespace {
 
-// Brings `state` to a pattern (and symbolic analysis) that holds every edge with non-zero
-// weight: kept if it already does and few of its edges are inactive, else rebuilt without the
-// zero-weight edges (random false loop closures couple distant poses and fill the factor in).
+// Brings `state` to a pattern (and symbolic analysis) that holds every edge that couples its
+// poses (weight non-zero and at least coupling_weight_floor): kept if it already does and few of
+// its edges are inactive, else rebuilt without the others (random false loop closures couple
+// distant poses and fill the factor in).
 // Returns true when it analysed anew.
 template <class Group>
 bool prepare_pattern(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options,
                      double max_inactive_fraction, OptimizerWorkspace::State& state) {
   const std::size_t m = problem.edges.size();
-  auto weight_of = [&](std::size_t e) { return options.edge_weights.empty() ? 1.0 : options.edge_weights[e]; };
   // Edges whose off-diagonal blocks belong in the pattern (OptimizerOptions::coupling_weight_floor).
   auto couples = [&](std::size_t e) {
-    const double w = weight_of(e);
+    const double w = edge_weight(options, e);
     return w != 0.0 && w >= options.coupling_weight_floor;
   };
   std::vector<int> variable(static_cast<std::size_t>(problem.size()), -1);
@@ -644,8 +647,8 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
 template <class Group>
 OptimizerSummary optimize(PoseGraphProblem<Group>& problem, const OptimizerOptions& options,
                           OptimizerWorkspace* workspace) {
-  if (options.objective == Objective::kChordal) return run<Group, ChordalFactor<Group>>(problem, options, workspace);
-  return run<Group, GeodesicFactor<Group>>(problem, options, workspace);
+  return with_factor<Group>(options.objective,
+                            [&](auto factor) { return run<Group, decltype(factor)>(problem, options, workspace); });
 }
 
 template <class Group>
@@ -658,13 +661,9 @@ double evaluate_cost(const PoseGraphProblem<Group>& problem, const OptimizerOpti
   double sum = 0.0;
   for (std::size_t e = 0; e < problem.edges.size(); ++e) {
     const auto& edge = problem.edges[e];
-    const auto& Ti = problem.T_world_pose[static_cast<std::size_t>(edge.i)];
-    const auto& Tj = problem.T_world_pose[static_cast<std::size_t>(edge.j)];
-    const double s = options.objective == Objective::kChordal
-                         ? ChordalFactor<Group>::evaluate(Ti, Tj, edge, nullptr, nullptr).squaredNorm()
-                         : GeodesicFactor<Group>::evaluate(Ti, Tj, edge, nullptr, nullptr).squaredNorm();
-    const double w = options.edge_weights.empty() ? 1.0 : options.edge_weights[e];
-    sum += w * evaluate_kernel(options.kernel, options.kernel_scale, s).rho;
+    const double s = squared_residual(problem.T_world_pose[static_cast<std::size_t>(edge.i)],
+                                      problem.T_world_pose[static_cast<std::size_t>(edge.j)], edge, options.objective);
+    sum += edge_weight(options, e) * evaluate_kernel(options.kernel, options.kernel_scale, s).rho;
   }
   return sum;
 }

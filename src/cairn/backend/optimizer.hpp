@@ -13,16 +13,13 @@
 #include <string>
 #include <vector>
 
+#include "cairn/backend/factors.hpp"
 #include "cairn/backend/problem.hpp"
 #include "cairn/backend/robust_kernel.hpp"
 
 namespace cairn::backend {
 
 enum class Algorithm { kLevenbergMarquardt, kGaussNewton, kDogleg };
-enum class Objective {
-  kGeodesic,  ///< r = S log(Z^-1 T_i^-1 T_j): the maximum-likelihood cost g2o, GTSAM, Ceres use
-  kChordal,   ///< SE-Sync's f with isotropic weights kappa, tau (published certified optima)
-};
 std::string_view to_string(Algorithm algorithm);
 std::string_view to_string(Objective objective);
 
