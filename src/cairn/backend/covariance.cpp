@@ -27,6 +27,15 @@ bool factorize_with(const PoseGraphProblem<Group>& problem, const std::vector<do
     const int b = variable[static_cast<std::size_t>(e.j)];
     if (a >= 0 && b >= 0 && weight_of(k) != 0.0) pairs.emplace_back(a, b);
   }
+  // Variables numbered in elimination order (block AMD), so CHOLMOD factorises as stored.
+  const std::vector<int> label = block_amd_labels(n, pairs);
+  for (int& v : variable) {
+    if (v >= 0) v = label[static_cast<std::size_t>(v)];
+  }
+  for (auto& [a, b] : pairs) {
+    a = label[static_cast<std::size_t>(a)];
+    b = label[static_cast<std::size_t>(b)];
+  }
   BlockPattern pattern(n, D, pairs);
   for (std::size_t k = 0; k < problem.edges.size(); ++k) {
     const auto& e = problem.edges[k];
@@ -52,8 +61,7 @@ bool factorize_with(const PoseGraphProblem<Group>& problem, const std::vector<do
     }
   }
   if (n == 0) return true;
-  const std::vector<int> ordering = pattern.block_amd_ordering();
-  cholesky.analyze(pattern.matrix(), &ordering);
+  cholesky.analyze_in_stored_order(pattern.matrix());
   return cholesky.factorize(pattern.matrix()) == FactorizationStatus::kSuccess;
 }
 

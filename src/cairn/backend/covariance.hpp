@@ -25,7 +25,8 @@ struct MarginalCovariances {
 
 /// Factorises J^T J (whitened Jacobians of `objective`, each edge's block scaled by its weight;
 /// edges of weight 0 left out; `weights` empty = all 1) over the free poses, numbered in
-/// `variable` (pose index -> block, -1 for fixed poses). False when not positive definite.
+/// `variable` (pose index -> block, numbered in a fill-reducing elimination order; -1 for fixed
+/// poses). False when not positive definite.
 template <class Group>
 bool factorize_normal_equations(const PoseGraphProblem<Group>& problem, Objective objective,
                                 const std::vector<double>& weights, std::vector<int>& variable,

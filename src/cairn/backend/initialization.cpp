@@ -43,27 +43,50 @@ Group make_pose(const Eigen::Matrix<double, kD<Group>, kD<Group>>& R, const Eige
   }
 }
 
+// The unknowns of both linear systems: pose -> block, -1 for fixed poses, blocks numbered in a
+// fill-reducing elimination order (block_amd_labels) shared by the rotation and the
+// translation system, whose block graphs are the same.
+struct Unknowns {
+  std::vector<int> variable;
+  int count = 0;
+  std::vector<std::pair<int, int>> pairs;  // coupled blocks, one per edge between free poses
+};
+
+Unknowns number_unknowns(const std::vector<char>& fixed, const std::vector<std::pair<int, int>>& edges) {
+  Unknowns u;
+  u.variable.assign(fixed.size(), -1);
+  for (std::size_t p = 0; p < fixed.size(); ++p) {
+    if (!fixed[p]) u.variable[p] = u.count++;
+  }
+  for (const auto& [i, j] : edges) {
+    const int a = u.variable[static_cast<std::size_t>(i)];
+    const int b = u.variable[static_cast<std::size_t>(j)];
+    if (a >= 0 && b >= 0) u.pairs.emplace_back(a, b);
+  }
+  const std::vector<int> label = block_amd_labels(u.count, u.pairs);
+  for (int& v : u.variable) {
+    if (v >= 0) v = label[static_cast<std::size_t>(v)];
+  }
+  for (auto& [a, b] : u.pairs) {
+    a = label[static_cast<std::size_t>(a)];
+    b = label[static_cast<std::size_t>(b)];
+  }
+  return u;
+}
+
 // Solves the block-Laplacian-like system sum over edges of w ||x_j - A_ij x_i - c_ij||^2 with
 // x fixed at fixed poses, x in R^{d x m} per pose (m right-hand sides solved together).
 // For rotations: A_ij = R~^T, c = 0, m = d (row k of R is column k of x). For translations:
 // A_ij = I, c_ij = R_i t~, m = 1.
 template <int d>
-Eigen::MatrixXd solve_linear(int poses, const std::vector<char>& fixed, const std::vector<Eigen::MatrixXd>& known,
+Eigen::MatrixXd solve_linear(const Unknowns& unknowns, const std::vector<Eigen::MatrixXd>& known,
                              const std::vector<std::pair<int, int>>& edges,
                              const std::vector<Eigen::Matrix<double, d, d>>& A, const std::vector<Eigen::MatrixXd>& c,
                              const std::vector<double>& w, int m) {
-  std::vector<int> variable(static_cast<std::size_t>(poses), -1);
-  int n = 0;
-  for (int p = 0; p < poses; ++p) {
-    if (!fixed[static_cast<std::size_t>(p)]) variable[static_cast<std::size_t>(p)] = n++;
-  }
-  std::vector<std::pair<int, int>> pairs;
-  for (const auto& [i, j] : edges) {
-    const int a = variable[static_cast<std::size_t>(i)];
-    const int b = variable[static_cast<std::size_t>(j)];
-    if (a >= 0 && b >= 0) pairs.emplace_back(a, b);
-  }
-  BlockPattern pattern(n, d, pairs);
+  const std::vector<int>& variable = unknowns.variable;
+  const int n = unknowns.count;
+  const int poses = static_cast<int>(variable.size());
+  BlockPattern pattern(n, d, unknowns.pairs);
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n * d, m);
   using MatrixD = Eigen::Matrix<double, d, d, Eigen::RowMajor>;
   for (std::size_t e = 0; e < edges.size(); ++e) {
@@ -98,10 +121,9 @@ Eigen::MatrixXd solve_linear(int poses, const std::vector<char>& fixed, const st
     if (vj >= 0) rhs.block(vj * d, 0, d, m) -= w[e] * r0;
   }
   SparseCholesky cholesky;
-  // Block AMD, as the optimiser: CHOLMOD's own choice may also try METIS on these graphs,
-  // which costs more than the factorisation it saves.
-  const std::vector<int> ordering = pattern.block_amd_ordering();
-  cholesky.analyze(pattern.matrix(), &ordering);
+  // Block AMD, as the optimiser (CHOLMOD's own choice may also try METIS on these graphs, which
+  // costs more than the factorisation it saves), applied when the unknowns were numbered.
+  cholesky.analyze_in_stored_order(pattern.matrix());
   const FactorizationStatus status = cholesky.factorize(pattern.matrix());
   CAIRN_ASSERT(status == FactorizationStatus::kSuccess,
                "chordal initialisation: singular system (make_problem guarantees connectivity)");
@@ -191,7 +213,8 @@ InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
       known_R[static_cast<std::size_t>(p)] = rotation_of(problem.T_world_pose[static_cast<std::size_t>(p)]).transpose();
     }
   }
-  const Eigen::MatrixXd X = solve_linear<d>(n, problem.fixed, known_R, edges, A, c, kappa, d);
+  const Unknowns unknowns = number_unknowns(problem.fixed, edges);
+  const Eigen::MatrixXd X = solve_linear<d>(unknowns, known_R, edges, A, c, kappa, d);
   std::vector<MatrixD> R(static_cast<std::size_t>(n));
   for (int p = 0; p < n; ++p) {
     const MatrixD M = X.block(p * d, 0, d, d).transpose();
@@ -214,7 +237,7 @@ InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
   for (int p = 0; p < n; ++p) {
     if (problem.fixed[static_cast<std::size_t>(p)]) known_t[static_cast<std::size_t>(p)] = problem.T_world_pose[static_cast<std::size_t>(p)].translation().transpose();
   }
-  const Eigen::MatrixXd t = solve_linear<1>(n, problem.fixed, known_t, edges, identity, offsets, tau, d);
+  const Eigen::MatrixXd t = solve_linear<1>(unknowns, known_t, edges, identity, offsets, tau, d);
   for (int p = 0; p < n; ++p) {
     if (problem.fixed[static_cast<std::size_t>(p)]) continue;
     problem.T_world_pose[static_cast<std::size_t>(p)] = make_pose<Group>(R[static_cast<std::size_t>(p)], VectorD(t.row(p).transpose()));

@@ -291,7 +291,8 @@ PcgResult preconditioned_cg(const UpperCsc& H, const Eigen::VectorXd& damping, c
 }  // namespace
 
 struct OptimizerWorkspace::State {
-  std::vector<int> variable;     // pose -> variable index, -1 for fixed poses
+  std::vector<int> variable;     // pose -> variable index (elimination order), -1 for fixed poses
+  std::vector<char> fixed;       // the problem's fixed poses when `variable` was made
   std::vector<char> in_pattern;  // per edge: its blocks are in `pattern`
   std::size_t pattern_edges = 0;
   std::unique_ptr<BlockPattern> pattern;
@@ -322,7 +323,7 @@ bool prepare_pattern(const PoseGraphProblem<Group>& problem, const OptimizerOpti
   for (int p = 0; p < problem.size(); ++p) {
     if (!problem.fixed[static_cast<std::size_t>(p)]) variable[static_cast<std::size_t>(p)] = free_poses++;
   }
-  if (state.pattern && state.variable == variable && state.in_pattern.size() == m) {
+  if (state.pattern && state.fixed == problem.fixed && state.in_pattern.size() == m) {
     bool covered = true;
     std::size_t inactive = 0;
     for (std::size_t e = 0; e < m && covered; ++e) {
@@ -334,7 +335,6 @@ bool prepare_pattern(const PoseGraphProblem<Group>& problem, const OptimizerOpti
       return false;
     }
   }
-  state.variable = std::move(variable);
   state.in_pattern.assign(m, 0);
   state.pattern_edges = 0;
   std::vector<std::pair<int, int>> pairs;
@@ -342,16 +342,24 @@ bool prepare_pattern(const PoseGraphProblem<Group>& problem, const OptimizerOpti
     if (!couples(e)) continue;
     state.in_pattern[e] = 1;
     ++state.pattern_edges;
-    const int a = state.variable[static_cast<std::size_t>(problem.edges[e].i)];
-    const int b = state.variable[static_cast<std::size_t>(problem.edges[e].j)];
+    const int a = variable[static_cast<std::size_t>(problem.edges[e].i)];
+    const int b = variable[static_cast<std::size_t>(problem.edges[e].j)];
     if (a >= 0 && b >= 0) pairs.emplace_back(a, b);
   }
+  // Variables numbered in elimination order, so CHOLMOD factorises the matrix as stored.
+  const std::vector<int> label = block_amd_labels(free_poses, pairs);
+  for (int& v : variable) {
+    if (v >= 0) v = label[static_cast<std::size_t>(v)];
+  }
+  for (auto& [a, b] : pairs) {
+    a = label[static_cast<std::size_t>(a)];
+    b = label[static_cast<std::size_t>(b)];
+  }
+  state.variable = std::move(variable);
+  state.fixed = problem.fixed;
   state.pattern = std::make_unique<BlockPattern>(free_poses, Group::kDoF, pairs);
   state.cholesky = std::make_unique<SparseCholesky>();
-  if (free_poses > 0) {
-    const std::vector<int> ordering = state.pattern->block_amd_ordering();
-    state.cholesky->analyze(state.pattern->matrix(), &ordering);
-  }
+  if (free_poses > 0) state.cholesky->analyze_in_stored_order(state.pattern->matrix());
   return true;
 }
 

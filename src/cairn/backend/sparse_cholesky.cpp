@@ -98,6 +98,14 @@ std::vector<int> BlockPattern::block_amd_ordering() const {
   return order;
 }
 
+std::vector<int> block_amd_labels(int blocks, const std::vector<std::pair<int, int>>& pairs) {
+  std::vector<int> label(static_cast<std::size_t>(blocks));
+  if (blocks == 0) return label;
+  const std::vector<int> order = BlockPattern(blocks, 1, pairs).block_amd_ordering();
+  for (int k = 0; k < blocks; ++k) label[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
+  return label;
+}
+
 void BlockPattern::set_zero() { std::fill(csc_.value.begin(), csc_.value.end(), 0.0); }
 
 Eigen::VectorXd symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x) {
@@ -203,6 +211,23 @@ void SparseCholesky::analyze(const UpperCsc& A, const std::vector<int>* ordering
     impl_->common.nmethods = 0;
     impl_->factor = cholmod_analyze(&S, &impl_->common);
   }
+  impl_->size = A.size;
+  impl_->factorized = false;
+  CAIRN_ASSERT(impl_->factor != nullptr, "CHOLMOD analysis failed (out of memory?)");
+  impl_->flops = impl_->common.fl;
+}
+
+void SparseCholesky::analyze_in_stored_order(const UpperCsc& A) {
+  const SerialOpenMpRegions serial;
+  if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
+  cholmod_sparse S = Impl::view(A);
+  impl_->common.nmethods = 1;
+  impl_->common.method[0].ordering = CHOLMOD_NATURAL;
+  // No postorder: it would permute A again (cholmod_analyze.c turns a postordered natural
+  // ordering into a permutation). AMD's order is already a postorder of its assembly tree.
+  impl_->common.postorder = 0;
+  impl_->factor = cholmod_analyze(&S, &impl_->common);
+  impl_->common.postorder = 1;
   impl_->size = A.size;
   impl_->factorized = false;
   CAIRN_ASSERT(impl_->factor != nullptr, "CHOLMOD analysis failed (out of memory?)");

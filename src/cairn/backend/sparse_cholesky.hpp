@@ -57,6 +57,13 @@ class BlockPattern {
   int rank_of(int r, int c) const;
 };
 
+/// Fill-reducing relabelling of the blocks of a block graph with `blocks` blocks and couplings
+/// `pairs` (as BlockPattern's): label[b] is the position at which block b is eliminated under
+/// AMD on the block graph (Amestoy, Davis & Duff 1996). A BlockPattern built with the relabelled
+/// pairs is already in elimination order, so SparseCholesky::analyze_in_stored_order() factorises
+/// it without permuting it (see there).
+std::vector<int> block_amd_labels(int blocks, const std::vector<std::pair<int, int>>& pairs);
+
 enum class FactorizationStatus { kSuccess, kNotPositiveDefinite, kFailure };
 
 /// y = A x for a symmetric matrix stored as its upper triangle.
@@ -76,6 +83,11 @@ class SparseCholesky {
   /// With `ordering` (a permutation of the scalar variables), CHOLMOD uses it as given;
   /// otherwise it chooses (AMD, and METIS when AMD fills in badly).
   void analyze(const UpperCsc& A, const std::vector<int>* ordering = nullptr);
+  /// Symbolic analysis of `A` in the order it is stored (no fill-reducing permutation: the
+  /// caller has built A in one, block_amd_labels). CHOLMOD then factorises A itself instead of
+  /// a permuted copy PAP^T that it would assemble (two transposes per simplicial factorisation,
+  /// cholmod_factorize.c) at every numeric factorisation.
+  void analyze_in_stored_order(const UpperCsc& A);
   /// Numeric factorisation of A (same pattern as analyzed).
   FactorizationStatus factorize(const UpperCsc& A);
   /// Solves A x = b with the last successful factorisation.
