@@ -80,25 +80,11 @@ SE2::Tangent SE2::log() const {
   return {inv * (a * t_.x() + b * t_.y()), inv * (-b * t_.x() + a * t_.y()), theta};
 }
 
-SE2 SE2::inverse() const {
-  const SO2 R_inv = R_.inverse();
-  return SE2(R_inv, -(R_inv * t_));
-}
-
 Matrix3 SE2::matrix() const {
   Matrix3 T = Matrix3::Identity();
   T.topLeftCorner<2, 2>() = R_.matrix();
   T.topRightCorner<2, 1>() = t_;
   return T;
-}
-
-Matrix3 SE2::Adj() const {
-  // Sola eq. 159 with translation-first ordering: [[R, -[1]x t], [0, 1]], [1]x t = (-t_y, t_x).
-  Matrix3 A = Matrix3::Identity();
-  A.topLeftCorner<2, 2>() = R_.matrix();
-  A(0, 2) = t_.y();
-  A(1, 2) = -t_.x();
-  return A;
 }
 
 Matrix3 SE2::hat(const Tangent& xi) {

@@ -30,7 +30,10 @@ class SE2 {
   static SE2 exp(const Tangent& xi);
   Tangent log() const;
 
-  SE2 inverse() const;
+  SE2 inverse() const {
+    const SO2 R_inv = R_.inverse();
+    return SE2(R_inv, -(R_inv * t_));
+  }
   SE2 operator*(const SE2& other) const { return SE2(R_ * other.R_, R_ * other.t_ + t_); }
   Vector2 operator*(const Vector2& p) const { return R_ * p + t_; }
 
@@ -41,8 +44,13 @@ class SE2 {
   double angle() const { return R_.angle(); }
   Matrix3 matrix() const;
 
-  /// Adj such that T * exp(xi) * T^-1 = exp(Adj * xi).
-  Jacobian Adj() const;
+  /// Adj such that T * exp(xi) * T^-1 = exp(Adj * xi): Sola eq. 159 with translation-first
+  /// ordering, [[R, -[1]x t], [0, 1]] with [1]x t = (-t_y, t_x).
+  Jacobian Adj() const {
+    Jacobian A;
+    A << R_.cos(), -R_.sin(), t_.y(), R_.sin(), R_.cos(), -t_.x(), 0.0, 0.0, 1.0;
+    return A;
+  }
 
   static Matrix3 hat(const Tangent& xi);
   static Tangent vee(const Matrix3& Xi);

@@ -9,14 +9,26 @@
 /// stored angle to a few ulps.
 /// Lie algebra so(2) = R; exp(theta) is the rotation by theta; Adj = 1; all Jacobians = 1.
 
+#include <numbers>
+
 #include "cairn/core/types.hpp"
 
 namespace cairn::core {
 
 class SE2;
 
+namespace detail {
+double wrap_angle_out_of_range(double angle_rad);
+}  // namespace detail
+
 /// Wraps an angle into (-pi, pi]. Idempotent: an angle already in range is returned unchanged.
-double wrap_angle(double angle_rad);
+/// (The products and inverses below are inline: out of line they took about a third of a 2D
+/// pose-graph linearisation in calls, measured on intel.)
+inline double wrap_angle(double angle_rad) {
+  constexpr double kPi = std::numbers::pi;
+  if (angle_rad > -kPi && angle_rad <= kPi) return angle_rad;  // idempotence: keep every bit
+  return detail::wrap_angle_out_of_range(angle_rad);
+}
 
 class SO2 {
  public:
@@ -35,8 +47,17 @@ class SO2 {
   /// log in (-pi, pi].
   double log() const { return theta_; }
 
-  SO2 inverse() const;
-  SO2 operator*(const SO2& other) const;
+  SO2 inverse() const {
+    if (theta_ == std::numbers::pi) return *this;  // pi is its own inverse in (-pi, pi]
+    return SO2(-theta_, c_, -s_);
+  }
+  SO2 operator*(const SO2& other) const {
+    const double c = c_ * other.c_ - s_ * other.s_;
+    const double s = s_ * other.c_ + c_ * other.s_;
+    // One Newton step towards unit norm keeps long products on the circle.
+    const double scale = 1.5 - 0.5 * (c * c + s * s);
+    return SO2(wrap_angle(theta_ + other.theta_), scale * c, scale * s);
+  }
   Vector2 operator*(const Vector2& p) const { return {c_ * p.x() - s_ * p.y(), s_ * p.x() + c_ * p.y()}; }
 
   double angle() const { return theta_; }
