@@ -76,49 +76,52 @@ Unknowns number_unknowns(const std::vector<char>& fixed, const std::vector<std::
 
 // Solves the block-Laplacian-like system sum over edges of w ||x_j - A_ij x_i - c_ij||^2 with
 // x fixed at fixed poses, x in R^{d x m} per pose (m right-hand sides solved together).
-// For rotations: A_ij = R~^T, c = 0, m = d (row k of R is column k of x). For translations:
-// A_ij = I, c_ij = R_i t~, m = 1.
-template <int d>
-Eigen::MatrixXd solve_linear(const Unknowns& unknowns, const std::vector<Eigen::MatrixXd>& known,
+// For rotations: A_ij = R~^T, c = 0 (`c` empty), m = d (row k of R is column k of x). For
+// translations: A_ij = I (`A` empty), c_ij = R_i t~, m = d, d = 1 (a scalar Laplacian).
+// Returns x of every pose, stacked (pose p in rows p d .. p d + d - 1).
+template <int d, int m>
+Eigen::MatrixXd solve_linear(const Unknowns& unknowns, const std::vector<Eigen::Matrix<double, d, m>>& known,
                              const std::vector<std::pair<int, int>>& edges,
-                             const std::vector<Eigen::Matrix<double, d, d>>& A, const std::vector<Eigen::MatrixXd>& c,
-                             const std::vector<double>& w, int m) {
+                             const std::vector<Eigen::Matrix<double, d, d>>& A,
+                             const std::vector<Eigen::Matrix<double, d, m>>& c, const std::vector<double>& w) {
+  using MatrixD = Eigen::Matrix<double, d, d>;
+  using RowMajorD = Eigen::Matrix<double, d, d, Eigen::RowMajor>;
+  using Block = Eigen::Matrix<double, d, m>;
   const std::vector<int>& variable = unknowns.variable;
   const int n = unknowns.count;
   const int poses = static_cast<int>(variable.size());
   BlockPattern pattern(n, d, unknowns.pairs);
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n * d, m);
-  using MatrixD = Eigen::Matrix<double, d, d, Eigen::RowMajor>;
   for (std::size_t e = 0; e < edges.size(); ++e) {
     const auto [i, j] = edges[e];
     const int vi = variable[static_cast<std::size_t>(i)];
     const int vj = variable[static_cast<std::size_t>(j)];
     // residual r = x_j - A x_i - c ; J_i = -A, J_j = I.
-    const Eigen::Matrix<double, d, d>& Ae = A[e];
+    const MatrixD Ae = A.empty() ? MatrixD::Identity() : A[e];
     if (vi >= 0) {
-      const MatrixD Hii = w[e] * Ae.transpose() * Ae;
+      const RowMajorD Hii = w[e] * Ae.transpose() * Ae;
       pattern.add_diagonal(vi, Hii.data());
     }
     if (vj >= 0) {
-      const MatrixD Hjj = w[e] * Eigen::Matrix<double, d, d>::Identity();
+      const RowMajorD Hjj = w[e] * MatrixD::Identity();
       pattern.add_diagonal(vj, Hjj.data());
     }
     if (vi >= 0 && vj >= 0) {
       // H_ij = J_i^T J_j = -w A^T.
       if (vi < vj) {
-        const MatrixD Hij = -w[e] * Ae.transpose();
+        const RowMajorD Hij = -w[e] * Ae.transpose();
         pattern.add_off_diagonal(vi, vj, Hij.data());
       } else {
-        const MatrixD Hji = -w[e] * Ae;
+        const RowMajorD Hji = -w[e] * Ae;
         pattern.add_off_diagonal(vj, vi, Hji.data());
       }
     }
     // Right-hand side -J^T r0 with r0 the residual at x_free = 0 (known poses inserted).
-    Eigen::MatrixXd r0 = -c[e];
+    Block r0 = c.empty() ? Block::Zero() : Block(-c[e]);
     if (vj < 0) r0 += known[static_cast<std::size_t>(j)];
     if (vi < 0) r0 -= Ae * known[static_cast<std::size_t>(i)];
-    if (vi >= 0) rhs.block(vi * d, 0, d, m) += w[e] * Ae.transpose() * r0;
-    if (vj >= 0) rhs.block(vj * d, 0, d, m) -= w[e] * r0;
+    if (vi >= 0) rhs.template block<d, m>(vi * d, 0) += w[e] * Ae.transpose() * r0;
+    if (vj >= 0) rhs.template block<d, m>(vj * d, 0) -= w[e] * r0;
   }
   SparseCholesky cholesky;
   // Block AMD, as the optimiser (CHOLMOD's own choice may also try METIS on these graphs, which
@@ -131,9 +134,31 @@ Eigen::MatrixXd solve_linear(const Unknowns& unknowns, const std::vector<Eigen::
   Eigen::MatrixXd result(poses * d, m);
   for (int p = 0; p < poses; ++p) {
     const int v = variable[static_cast<std::size_t>(p)];
-    result.block(p * d, 0, d, m) = v >= 0 ? Eigen::MatrixXd(x.block(v * d, 0, d, m)) : known[static_cast<std::size_t>(p)];
+    result.template block<d, m>(p * d, 0) = v >= 0 ? Block(x.template block<d, m>(v * d, 0)) : known[static_cast<std::size_t>(p)];
   }
   return result;
+}
+
+// The rotation nearest to M in the Frobenius norm (polar projection): U diag(1, .., det(U V^T))
+// V^T from M's SVD; for d = 2 in closed form, the normalised [[a, -b], [b, a]] with
+// a = M00 + M11, b = M10 - M01 (SO2::from_matrix's angle).
+template <int d>
+Eigen::Matrix<double, d, d> project_to_rotation(const Eigen::Matrix<double, d, d>& M) {
+  using MatrixD = Eigen::Matrix<double, d, d>;
+  if constexpr (d == 2) {
+    const double a = M(0, 0) + M(1, 1);
+    const double b = M(1, 0) - M(0, 1);
+    const double norm = std::hypot(a, b);
+    if (norm == 0.0) return MatrixD::Identity();  // every rotation is equally near
+    MatrixD R;
+    R << a / norm, -b / norm, b / norm, a / norm;
+    return R;
+  } else {
+    Eigen::JacobiSVD<MatrixD> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    MatrixD S = MatrixD::Identity();
+    S(d - 1, d - 1) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+    return svd.matrixU() * S * svd.matrixV().transpose();
+  }
 }
 
 }  // namespace
@@ -195,49 +220,45 @@ InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
   const int n = problem.size();
   std::vector<std::pair<int, int>> edges;
   std::vector<MatrixD> A;
-  std::vector<Eigen::MatrixXd> c;
   std::vector<double> kappa;
   std::vector<double> tau;
+  edges.reserve(problem.edges.size());
+  A.reserve(problem.edges.size());
   for (const auto& edge : problem.edges) {
     edges.emplace_back(edge.i, edge.j);
     // Row k of R_j equals row k of R_i times R~: as columns, x_j = R~^T x_i with x = R^T.
     A.push_back(rotation_of(edge.T_i_j).transpose());
-    c.push_back(Eigen::MatrixXd::Zero(d, d));
     kappa.push_back(edge.kappa);
     tau.push_back(edge.tau);
   }
   // (1) Rotations: unknown X_i = R_i^T (d x d), all d columns at once.
-  std::vector<Eigen::MatrixXd> known_R(static_cast<std::size_t>(n), Eigen::MatrixXd::Zero(d, d));
+  std::vector<MatrixD> known_R(static_cast<std::size_t>(n), MatrixD::Zero());
   for (int p = 0; p < n; ++p) {
     if (problem.fixed[static_cast<std::size_t>(p)]) {
       known_R[static_cast<std::size_t>(p)] = rotation_of(problem.T_world_pose[static_cast<std::size_t>(p)]).transpose();
     }
   }
   const Unknowns unknowns = number_unknowns(problem.fixed, edges);
-  const Eigen::MatrixXd X = solve_linear<d>(unknowns, known_R, edges, A, c, kappa, d);
+  const Eigen::MatrixXd X = solve_linear<d, d>(unknowns, known_R, edges, A, {}, kappa);
   std::vector<MatrixD> R(static_cast<std::size_t>(n));
   for (int p = 0; p < n; ++p) {
-    const MatrixD M = X.block(p * d, 0, d, d).transpose();
-    // Projection onto SO(d): U diag(1, .., det(U V^T)) V^T.
-    Eigen::JacobiSVD<MatrixD> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    MatrixD S = MatrixD::Identity();
-    S(d - 1, d - 1) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
-    R[static_cast<std::size_t>(p)] = svd.matrixU() * S * svd.matrixV().transpose();
+    R[static_cast<std::size_t>(p)] = project_to_rotation<d>(X.template block<d, d>(p * d, 0).transpose());
   }
   // (2) Translations with the rotations fixed: sum tau ||t_j - t_i - R_i t~||^2 is the weighted
   // graph Laplacian times I_d, so the d coordinates are d right-hand sides of one scalar
   // Laplacian system (unknown x_i = t_i^T, 1 x d), d^3 times fewer factorisation flops than
   // the d x d block system.
-  std::vector<Eigen::Matrix<double, 1, 1>> identity(edges.size(), Eigen::Matrix<double, 1, 1>::Identity());
-  std::vector<Eigen::MatrixXd> offsets;
+  using RowD = Eigen::Matrix<double, 1, d>;
+  std::vector<RowD> offsets;
+  offsets.reserve(problem.edges.size());
   for (const auto& edge : problem.edges) {
     offsets.push_back((R[static_cast<std::size_t>(edge.i)] * VectorD(edge.T_i_j.translation())).transpose());
   }
-  std::vector<Eigen::MatrixXd> known_t(static_cast<std::size_t>(n), Eigen::MatrixXd::Zero(1, d));
+  std::vector<RowD> known_t(static_cast<std::size_t>(n), RowD::Zero());
   for (int p = 0; p < n; ++p) {
     if (problem.fixed[static_cast<std::size_t>(p)]) known_t[static_cast<std::size_t>(p)] = problem.T_world_pose[static_cast<std::size_t>(p)].translation().transpose();
   }
-  const Eigen::MatrixXd t = solve_linear<1>(unknowns, known_t, edges, identity, offsets, tau, d);
+  const Eigen::MatrixXd t = solve_linear<1, d>(unknowns, known_t, edges, {}, offsets, tau);
   for (int p = 0; p < n; ++p) {
     if (problem.fixed[static_cast<std::size_t>(p)]) continue;
     problem.T_world_pose[static_cast<std::size_t>(p)] = make_pose<Group>(R[static_cast<std::size_t>(p)], VectorD(t.row(p).transpose()));
