@@ -144,6 +144,7 @@ class Stages {
     }
     inner_.kernel = RobustKernel::kNone;
     inner_.reuse_max_cg_iterations = options.reuse_max_cg_iterations;
+    inner_.reuse_step_fraction = options.reuse_step_fraction;
     inner_.edge_weights.assign(m, 1.0);
   }
 

@@ -54,6 +54,7 @@ bool OptimizerOptions::is_valid(std::string* error) const {
   check(threads >= 0, "threads must be >= 0");
   check(reuse_cg_tolerance > 0.0 && reuse_cg_tolerance < 1.0, "reuse_cg_tolerance must be in (0, 1)");
   check(reuse_max_cg_iterations >= 0, "reuse_max_cg_iterations must be >= 0");
+  check(reuse_step_fraction > 0.0 && reuse_step_fraction <= 1.0, "reuse_step_fraction must be in (0, 1]");
   check(coupling_weight_floor >= 0.0, "coupling_weight_floor must be >= 0");
   if (error != nullptr) *error = problems;
   return problems.empty();
@@ -411,6 +412,8 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     cg_budget = static_cast<int>(std::clamp(0.25 * cholesky.factor_flops() / per_iteration, 8.0, 30.0));
   }
   bool force_factorization = false;  // after a rejected inexact step
+  double last_step = 0.0;            // norm of the last accepted step
+  double largest_step = 0.0;         // largest accepted step norm so far
   double previous_gradient_max_norm = 1.0;  // at the last accepted point before this one
   double lambda = 1.0 / options.initial_trust_region_radius;
   double nu = 2.0;
@@ -463,7 +466,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       damping.resize(A.size);
       for (int k = 0; k < A.size; ++k) damping[k] = lambda * std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
     }
-    if (reuse && cholesky.has_factor() && !force_factorization) {
+    if (reuse && cholesky.has_factor() && !force_factorization && last_step <= options.reuse_step_fraction * largest_step) {
       // Inexact LM step: PCG on the current damped system, the last factorisation as preconditioner.
       const auto t2 = Clock::now();
       // Forcing term (Eisenstat & Walker 1996, choice 1 in spirit): the gradient's reduction
@@ -585,6 +588,8 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       cost = new_cost;
       need_linearization = true;
       previous_gradient_max_norm = it.gradient_max_norm;
+      last_step = it.step_norm;
+      largest_step = std::max(largest_step, it.step_norm);
       ++summary.successful_iterations;
       it.step_accepted = true;
       if (lm) {

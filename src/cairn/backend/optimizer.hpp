@@ -91,6 +91,16 @@ struct OptimizerOptions {
   /// repeatable. PCG also gives up early when its residual reduction so far projects past the
   /// budget. >= 0.
   int reuse_max_cg_iterations = 6;
+  /// PCG is tried only once the last accepted step is at most this fraction of the largest
+  /// accepted step of the solve: after a large step H has moved too far from the factorised
+  /// one for it to precondition well. Measured from chordal starts on the 14 SE-Sync graphs
+  /// (2026-11-24): the attempt right after the first step failed on 10 of them, costing a
+  /// budget of PCG iterations on top of the factorisation (cubicle 22 ms, torus3D 18 ms); with
+  /// 0.25 those attempts are skipped, while the later ones (steps 4-1000x smaller than the
+  /// first) mostly converge in 1-5 iterations (0.1 also skipped a converging attempt on
+  /// sphere_bignoise, whose second step is 0.16 of its first). 1 = try whenever a
+  /// factorisation exists. In (0, 1].
+  double reuse_step_fraction = 0.25;
   /// Threads for linearisation; 0 = all cores.
   int threads = 0;
   /// Called after every iteration (the CLI prints progress); may be empty.
