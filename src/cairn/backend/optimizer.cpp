@@ -239,6 +239,7 @@ class Engine {
 // residual reduction so far would need more than `max_iterations` in all.
 struct PcgResult {
   Eigen::VectorXd x;
+  Eigen::VectorXd residual;  // b - (H + diag(damping)) x, as CG updates it
   int iterations = 0;
   bool converged = false;
 };
@@ -256,6 +257,7 @@ PcgResult preconditioned_cg(const UpperCsc& H, const Eigen::VectorXd& damping, c
   Eigen::VectorXd r = b;
   Eigen::VectorXd z(n);
   Eigen::VectorXd p(n);
+  Eigen::VectorXd Ap(n);
   double rz_previous = 0.0;
   for (int i = 1; i <= max_iterations; ++i) {
     preconditioner.solve_in_place(r, z);
@@ -267,7 +269,8 @@ PcgResult preconditioned_cg(const UpperCsc& H, const Eigen::VectorXd& damping, c
       p = z + (rz / rz_previous) * p;
     }
     rz_previous = rz;
-    const Eigen::VectorXd Ap = symmetric_multiply(H, p) + damping.cwiseProduct(p);
+    symmetric_multiply(H, p, Ap);
+    Ap += damping.cwiseProduct(p);
     const double pAp = p.dot(Ap);
     if (!std::isfinite(pAp) || pAp <= 0.0) break;  // not positive definite along p
     const double alpha = rz / pAp;
@@ -277,6 +280,7 @@ PcgResult preconditioned_cg(const UpperCsc& H, const Eigen::VectorXd& damping, c
     const double relative = r.norm() / b_norm;
     if (relative <= forcing) {
       result.converged = true;
+      result.residual = std::move(r);
       break;
     }
     if (i >= 3 && relative < 1.0) {
@@ -457,6 +461,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
 
     // Solve for the step.
     Eigen::VectorXd step;
+    Eigen::VectorXd pcg_residual;  // of a PCG step
     auto& A = engine.pattern().matrix();
     bool solved = false;
     // LM's damping lambda D, D = diag(J^T J) clamped as Ceres does; used by PCG and added to the
@@ -479,6 +484,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       it.cg_iterations = pcg.iterations;
       if (pcg.converged && pcg.x.allFinite()) {
         step = std::move(pcg.x);
+        pcg_residual = std::move(pcg.residual);
         solved = true;
         it.reused_factorization = true;
       }
@@ -544,9 +550,10 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       predicted = -2.0 * g.dot(step) - step.dot(Hs);
       it.lambda = radius;
     } else if (it.reused_factorization) {
-      // An inexact step: the decrease of ||r + J step||^2 from the model itself.
-      const Eigen::VectorXd Hs = symmetric_multiply(A, step);
-      predicted = -2.0 * g.dot(step) - step.dot(Hs);
+      // An inexact step, with PCG's residual rho = -g - (H + lambda D) step: step^T H step =
+      // -g^T step - step^T rho - lambda step^T D step, so the decrease of ||r + J step||^2 is
+      // -g^T step + step^T rho + lambda step^T D step (no product with H).
+      predicted = -g.dot(step) + step.dot(pcg_residual) + step.dot(damping.cwiseProduct(step));
       it.lambda = lambda;
     } else {
       // (H + lambda D) step = -g  =>  step^T H step = -g^T step - lambda step^T D step, so the

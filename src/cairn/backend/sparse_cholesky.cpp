@@ -108,16 +108,34 @@ std::vector<int> block_amd_labels(int blocks, const std::vector<std::pair<int, i
 
 void BlockPattern::set_zero() { std::fill(csc_.value.begin(), csc_.value.end(), 0.0); }
 
-Eigen::VectorXd symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x) {
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(A.size);
+void symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+  CAIRN_ASSERT(x.size() == A.size && &x != &y, "symmetric_multiply: x must have A's size and differ from y");
+  y.setZero(A.size);
+  const int* row = A.row.data();
+  const double* value = A.value.data();
   for (int c = 0; c < A.size; ++c) {
-    for (int p = A.column_start[static_cast<std::size_t>(c)]; p < A.column_start[static_cast<std::size_t>(c) + 1]; ++p) {
-      const int r = A.row[static_cast<std::size_t>(p)];
-      const double v = A.value[static_cast<std::size_t>(p)];
-      y[r] += v * x[c];
-      if (r != c) y[c] += v * x[r];
+    int p = A.column_start[static_cast<std::size_t>(c)];
+    int end = A.column_start[static_cast<std::size_t>(c) + 1];
+    const double xc = x[c];
+    double yc = 0.0;
+    // Rows are sorted, so a stored diagonal entry is the column's last: the loop over the strict
+    // upper part needs no test per entry.
+    if (end > p && row[end - 1] == c) {
+      --end;
+      yc = value[end] * xc;
     }
+    for (; p < end; ++p) {
+      const int r = row[p];
+      y[r] += value[p] * xc;
+      yc += value[p] * x[r];
+    }
+    y[c] += yc;
   }
+}
+
+Eigen::VectorXd symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x) {
+  Eigen::VectorXd y;
+  symmetric_multiply(A, x, y);
   return y;
 }
 

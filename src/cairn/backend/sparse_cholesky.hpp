@@ -68,6 +68,8 @@ enum class FactorizationStatus { kSuccess, kNotPositiveDefinite, kFailure };
 
 /// y = A x for a symmetric matrix stored as its upper triangle.
 Eigen::VectorXd symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x);
+/// Same into `y` (resized; its storage reused when it has A's size already; not x itself).
+void symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x, Eigen::VectorXd& y);
 
 /// Sparse Cholesky factorisation through CHOLMOD (supernodal, OpenBLAS for the dense blocks).
 /// CHOLMOD's own OpenMP regions run on the calling thread (why: sparse_cholesky.cpp); the
