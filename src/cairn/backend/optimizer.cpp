@@ -87,6 +87,10 @@ double edge_weight(const OptimizerOptions& options, std::size_t e) {
 
 template <class Group, class Factor>
 class Engine {
+  // Edges per task of the parallel cost and linearisation.
+  static constexpr std::size_t kCostGrain = 256;
+  static constexpr std::size_t kLinearizeGrain = 128;
+
  public:
   static constexpr int D = Group::kDoF;
   using BlockVector = Eigen::Matrix<double, D, 1>;
@@ -111,32 +115,33 @@ class Engine {
   double weight_of(std::size_t e) const { return edge_weight(options_, e); }
 
   double cost(const std::vector<Group>& poses) {
-    return arena_.execute([&] {
-      return tbb::parallel_reduce(
-          tbb::blocked_range<std::size_t>(0, problem_.edges.size(), 256), 0.0,
-          [&](const tbb::blocked_range<std::size_t>& range, double sum) {
-            for (std::size_t e = range.begin(); e != range.end(); ++e) {
-              const auto& edge = problem_.edges[e];
-              const auto r = Factor::evaluate(poses[static_cast<std::size_t>(edge.i)], poses[static_cast<std::size_t>(edge.j)],
-                                              edge, nullptr, nullptr);
-              sum += weight_of(e) * evaluate_kernel(options_.kernel, options_.kernel_scale, r.squaredNorm()).rho;
-            }
-            return sum;
-          },
-          [](double a, double b) { return a + b; });
-    });
+    auto sum_over = [&](const tbb::blocked_range<std::size_t>& range, double sum) {
+      for (std::size_t e = range.begin(); e != range.end(); ++e) {
+        const auto& edge = problem_.edges[e];
+        const auto r = Factor::evaluate(poses[static_cast<std::size_t>(edge.i)], poses[static_cast<std::size_t>(edge.j)],
+                                        edge, nullptr, nullptr);
+        sum += weight_of(e) * evaluate_kernel(options_.kernel, options_.kernel_scale, r.squaredNorm()).rho;
+      }
+      return sum;
+    };
+    const tbb::blocked_range<std::size_t> all(0, problem_.edges.size(), kCostGrain);
+    if (!all.is_divisible() || options_.threads == 1) return sum_over(all, 0.0);  // no task machinery
+    return arena_.execute([&] { return tbb::parallel_reduce(all, 0.0, sum_over, [](double a, double b) { return a + b; }); });
   }
 
   /// Fills the pattern's values with J^T J and gradient_ with J^T r at the current poses (edges
   /// outside the pattern, below coupling_weight_floor, in the gradient only).
   void linearize() {
     const auto& poses = problem_.T_world_pose;
-    arena_.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, problem_.edges.size(), 128),
-                        [&](const tbb::blocked_range<std::size_t>& range) {
-                          for (std::size_t e = range.begin(); e != range.end(); ++e) linearize_edge(e, poses);
-                        });
-    });
+    auto linearize_range = [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t e = range.begin(); e != range.end(); ++e) linearize_edge(e, poses);
+    };
+    const tbb::blocked_range<std::size_t> all(0, problem_.edges.size(), kLinearizeGrain);
+    if (!all.is_divisible() || options_.threads == 1) {
+      linearize_range(all);  // no task machinery
+    } else {
+      arena_.execute([&] { tbb::parallel_for(all, linearize_range); });
+    }
     pattern_.set_zero();
     gradient_.setZero();
     for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
