@@ -358,6 +358,16 @@ TEST(SparseCholesky, StoredOrderAnalysisOfAmdRelabelledBlocksKeepsTheFillAndTheS
   std::vector<int> sorted = label;
   std::sort(sorted.begin(), sorted.end());
   ASSERT_EQ(sorted, identity) << "labels must be a permutation of the blocks";
+  // Through a cache: the same labels, computed again only for another block graph.
+  BlockOrderCache cache;
+  EXPECT_EQ(block_amd_labels(blocks, pairs, cache), label);
+  const std::uint64_t digest = cache.digest;
+  cache.label[0] = -7;  // a reused entry shows through
+  EXPECT_EQ(block_amd_labels(blocks, pairs, cache)[0], -7);
+  auto fewer = pairs;
+  fewer.pop_back();
+  EXPECT_EQ(block_amd_labels(blocks, fewer, cache), block_amd_labels(blocks, fewer));
+  EXPECT_NE(cache.digest, digest);
 
   const BlockPattern original = pattern_of(identity);
   SparseCholesky given;

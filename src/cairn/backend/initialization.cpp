@@ -52,7 +52,8 @@ struct Unknowns {
   std::vector<std::pair<int, int>> pairs;  // coupled blocks, one per edge between free poses
 };
 
-Unknowns number_unknowns(const std::vector<char>& fixed, const std::vector<std::pair<int, int>>& edges) {
+Unknowns number_unknowns(const std::vector<char>& fixed, const std::vector<std::pair<int, int>>& edges,
+                         BlockOrderCache& order) {
   Unknowns u;
   u.variable.assign(fixed.size(), -1);
   for (std::size_t p = 0; p < fixed.size(); ++p) {
@@ -63,7 +64,7 @@ Unknowns number_unknowns(const std::vector<char>& fixed, const std::vector<std::
     const int b = u.variable[static_cast<std::size_t>(j)];
     if (a >= 0 && b >= 0) u.pairs.emplace_back(a, b);
   }
-  const std::vector<int> label = block_amd_labels(u.count, u.pairs);
+  const std::vector<int>& label = block_amd_labels(u.count, u.pairs, order);
   for (int& v : u.variable) {
     if (v >= 0) v = label[static_cast<std::size_t>(v)];
   }
@@ -238,7 +239,7 @@ InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
       known_R[static_cast<std::size_t>(p)] = rotation_of(problem.T_world_pose[static_cast<std::size_t>(p)]).transpose();
     }
   }
-  const Unknowns unknowns = number_unknowns(problem.fixed, edges);
+  const Unknowns unknowns = number_unknowns(problem.fixed, edges, problem.elimination_order);
   const Eigen::MatrixXd X = solve_linear<d, d>(unknowns, known_R, edges, A, {}, kappa);
   std::vector<MatrixD> R(static_cast<std::size_t>(n));
   for (int p = 0; p < n; ++p) {

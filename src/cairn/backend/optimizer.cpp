@@ -320,7 +320,7 @@ namespace {
 // distant poses and fill the factor in).
 // Returns true when it analysed anew.
 template <class Group>
-bool prepare_pattern(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options,
+bool prepare_pattern(PoseGraphProblem<Group>& problem, const OptimizerOptions& options,
                      double max_inactive_fraction, OptimizerWorkspace::State& state) {
   const std::size_t m = problem.edges.size();
   // Edges whose off-diagonal blocks belong in the pattern (OptimizerOptions::coupling_weight_floor).
@@ -357,7 +357,7 @@ bool prepare_pattern(const PoseGraphProblem<Group>& problem, const OptimizerOpti
     if (a >= 0 && b >= 0) pairs.emplace_back(a, b);
   }
   // Variables numbered in elimination order, so CHOLMOD factorises the matrix as stored.
-  const std::vector<int> label = block_amd_labels(free_poses, pairs);
+  const std::vector<int>& label = block_amd_labels(free_poses, pairs, problem.elimination_order);
   for (int& v : variable) {
     if (v >= 0) v = label[static_cast<std::size_t>(v)];
   }

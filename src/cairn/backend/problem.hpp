@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/core/se2.hpp"
 #include "cairn/core/se3.hpp"
 #include "cairn/io/pose_graph.hpp"
@@ -46,6 +47,10 @@ struct PoseGraphProblem {
   std::vector<char> fixed;         ///< 1 = held constant (gauge)
   std::vector<PoseEdge<Group>> edges;
   bool has_initial_guess = false;  ///< T_world_pose came from the file's VERTEX lines
+  /// Fill-reducing order of the free poses for these edges, shared by initialize_chordal and
+  /// optimize (ordering twice took 0.37 ms more of intel's 6 ms); each refreshes it when the
+  /// fixed poses or the coupled pairs are not the ones it was computed for.
+  BlockOrderCache elimination_order;
 
   int size() const { return static_cast<int>(ids.size()); }
   int index_of(std::int64_t id) const;

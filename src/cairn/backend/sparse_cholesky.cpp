@@ -106,6 +106,26 @@ std::vector<int> block_amd_labels(int blocks, const std::vector<std::pair<int, i
   return label;
 }
 
+const std::vector<int>& block_amd_labels(int blocks, const std::vector<std::pair<int, int>>& pairs,
+                                         BlockOrderCache& cache) {
+  // splitmix64's finaliser (Steele, Lea & Flood 2014) folded over the block count and the pairs.
+  auto mix = [](std::uint64_t h, std::uint64_t v) {
+    h ^= v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
+    h ^= h >> 30;
+    h *= 0xbf58476d1ce4e5b9ULL;
+    h ^= h >> 27;
+    h *= 0x94d049bb133111ebULL;
+    return h ^ (h >> 31);
+  };
+  std::uint64_t digest = mix(0, static_cast<std::uint64_t>(blocks));
+  for (const auto& [a, b] : pairs) digest = mix(digest, (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b));
+  if (digest != cache.digest || cache.label.size() != static_cast<std::size_t>(blocks)) {
+    cache.label = block_amd_labels(blocks, pairs);
+    cache.digest = digest;
+  }
+  return cache.label;
+}
+
 void BlockPattern::set_zero() { std::fill(csc_.value.begin(), csc_.value.end(), 0.0); }
 
 void symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x, Eigen::VectorXd& y) {

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -63,6 +64,20 @@ class BlockPattern {
 /// pairs is already in elimination order, so SparseCholesky::analyze_in_stored_order() factorises
 /// it without permuting it (see there).
 std::vector<int> block_amd_labels(int blocks, const std::vector<std::pair<int, int>>& pairs);
+
+/// A block_amd_labels result kept with a digest (64 bits) of the block graph it was computed
+/// for, so that solves of one structure (the chordal initialisation and the optimiser, on the
+/// same edges) order it once.
+struct BlockOrderCache {
+  std::uint64_t digest = 0;
+  std::vector<int> label;
+};
+
+/// block_amd_labels through `cache`: computed only when the digest of (blocks, pairs in order)
+/// differs from the cached one. A digest collision could only cost fill, never correctness: any
+/// permutation of the blocks is a valid elimination order.
+const std::vector<int>& block_amd_labels(int blocks, const std::vector<std::pair<int, int>>& pairs,
+                                         BlockOrderCache& cache);
 
 enum class FactorizationStatus { kSuccess, kNotPositiveDefinite, kFailure };
 
