@@ -87,9 +87,8 @@ double edge_weight(const OptimizerOptions& options, std::size_t e) {
 
 template <class Group, class Factor>
 class Engine {
-  // Edges per task of the parallel cost and linearisation.
-  static constexpr std::size_t kCostGrain = 256;
-  static constexpr std::size_t kLinearizeGrain = 128;
+  // Edges per task of the parallel evaluation.
+  static constexpr std::size_t kGrain = 128;
 
  public:
   static constexpr int D = Group::kDoF;
@@ -114,34 +113,23 @@ class Engine {
 
   double weight_of(std::size_t e) const { return edge_weight(options_, e); }
 
-  double cost(const std::vector<Group>& poses) {
+  /// Cost sum_e w_e rho(||r_e||^2) at `poses`, and each edge's J^T J and J^T r blocks there
+  /// for a later assemble(): a trial point is linearised as its cost is evaluated, so an
+  /// accepted step (most of them, from LM's undamped start) does not evaluate its residuals a
+  /// second time. A rejected step leaves blocks that are never assembled.
+  double evaluate(const std::vector<Group>& poses) {
     auto sum_over = [&](const tbb::blocked_range<std::size_t>& range, double sum) {
-      for (std::size_t e = range.begin(); e != range.end(); ++e) {
-        const auto& edge = problem_.edges[e];
-        const auto r = Factor::evaluate(poses[static_cast<std::size_t>(edge.i)], poses[static_cast<std::size_t>(edge.j)],
-                                        edge, nullptr, nullptr);
-        sum += weight_of(e) * evaluate_kernel(options_.kernel, options_.kernel_scale, r.squaredNorm()).rho;
-      }
+      for (std::size_t e = range.begin(); e != range.end(); ++e) sum += linearize_edge(e, poses);
       return sum;
     };
-    const tbb::blocked_range<std::size_t> all(0, problem_.edges.size(), kCostGrain);
+    const tbb::blocked_range<std::size_t> all(0, problem_.edges.size(), kGrain);
     if (!all.is_divisible() || options_.threads == 1) return sum_over(all, 0.0);  // no task machinery
-    return arena_.execute([&] { return tbb::parallel_reduce(all, 0.0, sum_over, [](double a, double b) { return a + b; }); });
+    return arena_.execute([&] { return tbb::parallel_reduce(all, 0.0, sum_over, [](double x, double y) { return x + y; }); });
   }
 
-  /// Fills the pattern's values with J^T J and gradient_ with J^T r at the current poses (edges
-  /// outside the pattern, below coupling_weight_floor, in the gradient only).
-  void linearize() {
-    const auto& poses = problem_.T_world_pose;
-    auto linearize_range = [&](const tbb::blocked_range<std::size_t>& range) {
-      for (std::size_t e = range.begin(); e != range.end(); ++e) linearize_edge(e, poses);
-    };
-    const tbb::blocked_range<std::size_t> all(0, problem_.edges.size(), kLinearizeGrain);
-    if (!all.is_divisible() || options_.threads == 1) {
-      linearize_range(all);  // no task machinery
-    } else {
-      arena_.execute([&] { tbb::parallel_for(all, linearize_range); });
-    }
+  /// Fills the pattern's values with J^T J and gradient_ with J^T r from the blocks of the last
+  /// evaluate() (edges outside the pattern, below coupling_weight_floor, in the gradient only).
+  void assemble() {
     pattern_.set_zero();
     gradient_.setZero();
     for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
@@ -204,14 +192,17 @@ class Engine {
     }
   }
 
-  void linearize_edge(std::size_t e, const std::vector<Group>& poses) {
+  // Fills blocks_[e] at `poses`; returns the edge's cost w rho(||r||^2).
+  double linearize_edge(std::size_t e, const std::vector<Group>& poses) {
     const auto& edge = problem_.edges[e];
     typename Factor::Jacobian Ji;
     typename Factor::Jacobian Jj;
     typename Factor::Residual r = Factor::evaluate(poses[static_cast<std::size_t>(edge.i)],
                                                    poses[static_cast<std::size_t>(edge.j)], edge, &Ji, &Jj);
+    const double w = weight_of(e);
+    const KernelValue kernel = evaluate_kernel(options_.kernel, options_.kernel_scale, r.squaredNorm());
     // IRLS: scale by sqrt(w rho'(s)) (robust_kernel.hpp).
-    const double scale = std::sqrt(weight_of(e) * evaluate_kernel(options_.kernel, options_.kernel_scale, r.squaredNorm()).weight);
+    const double scale = std::sqrt(w * kernel.weight);
     if (scale != 1.0) {
       r *= scale;
       Ji *= scale;
@@ -223,6 +214,7 @@ class Engine {
     b.Hij.noalias() = Ji.transpose() * Jj;
     b.gi.noalias() = Ji.transpose() * r;
     b.gj.noalias() = Jj.transpose() * r;
+    return w * kernel.rho;
   }
 
   PoseGraphProblem<Group>& problem_;
@@ -398,7 +390,9 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
   Engine<Group, Factor> engine(problem, options, state->variable, state->in_pattern, *state->pattern);
   summary.free_poses = engine.free_poses();
   summary.edges = static_cast<int>(problem.edges.size());
-  double cost = engine.cost(problem.T_world_pose);
+  const auto evaluate_start = Clock::now();
+  double cost = engine.evaluate(problem.T_world_pose);
+  double evaluate_s = seconds_since(evaluate_start);  // of the point to linearise next
   summary.initial_cost = cost;
   summary.final_cost = cost;
   if (engine.free_poses() == 0) {
@@ -447,8 +441,8 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     };
     if (need_linearization) {
       const auto t0 = Clock::now();
-      engine.linearize();
-      it.linearize_s = seconds_since(t0);
+      engine.assemble();
+      it.linearize_s = evaluate_s + seconds_since(t0);
       const auto& A = engine.pattern().matrix();
       diagonal.resize(static_cast<std::size_t>(A.size));
       for (int k = 0; k < A.size; ++k) diagonal[static_cast<std::size_t>(k)] = A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))];
@@ -578,7 +572,9 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       break;
     }
     std::vector<Group> candidate = engine.apply(step);
-    const double new_cost = engine.cost(candidate);
+    const auto candidate_start = Clock::now();
+    const double new_cost = engine.evaluate(candidate);
+    const double candidate_evaluate_s = seconds_since(candidate_start);
     it.cost_change = cost - new_cost;
     it.relative_decrease = predicted > 0.0 ? it.cost_change / predicted : -1.0;
     const bool accept = std::isfinite(new_cost) && (options.algorithm == Algorithm::kGaussNewton
@@ -599,6 +595,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       problem.T_world_pose = std::move(candidate);
       cost = new_cost;
       need_linearization = true;
+      evaluate_s = candidate_evaluate_s;
       previous_gradient_max_norm = it.gradient_max_norm;
       last_step = it.step_norm;
       largest_step = std::max(largest_step, it.step_norm);

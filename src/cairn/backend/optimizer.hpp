@@ -34,6 +34,8 @@ struct IterationSummary {
   bool step_accepted = false;
   bool reused_factorization = false;  ///< the step came from PCG on an earlier factorisation
   int cg_iterations = 0;              ///< PCG iterations of this step (0 = direct solve)
+  /// Residuals and Jacobians at this iteration's point (computed with its cost, when it was
+  /// the last iteration's trial point) and their assembly into J^T J and J^T r.
   double linearize_s = 0.0;
   double factorize_s = 0.0;
   double solve_s = 0.0;
