@@ -156,6 +156,32 @@ TEST(SO3Test, FromMatrixGivesTheNearestRotation) {
   EXPECT_EQ(not_nearest, 0);
 }
 
+// Far from any rotation too (Gaussian matrices, either sign of the determinant, as a chordal
+// relaxation may give): the same two characterisations of the nearest rotation as above.
+TEST(SO3Test, FromMatrixGivesTheNearestRotationOfArbitraryMatrices) {
+  Rng rng(408);
+  WorstCase orthonormal("from_matrix_orthonormality_arbitrary");
+  WorstCase symmetric("polar_factor_asymmetry_arbitrary");
+  int not_nearest = 0;
+  for (int i = 0; i < kRandomSamples; ++i) {
+    const Matrix3 M = random_matrix<3, 3>(rng, 1.0);
+    const Matrix3 R = SO3::from_matrix(M).matrix();
+    const auto d = [&] { return to_string(M); };
+    orthonormal.add(scaled_error(R.transpose() * R, Matrix3::Identity()) + std::abs(R.determinant() - 1.0), d);
+    const Matrix3 S = R.transpose() * M;
+    symmetric.add(scaled_error(S, S.transpose()), d);
+    const double best = (M - R).norm();
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const double step : {-1e-4, 1e-4}) {
+        not_nearest += (M - R * SO3::exp(step * Vector3::Unit(axis)).matrix()).norm() < best ? 1 : 0;
+      }
+    }
+  }
+  orthonormal.expect_at_most(2e-14, kRandomSamples);
+  symmetric.expect_at_most(1e-12, kRandomSamples);
+  EXPECT_EQ(not_nearest, 0);
+}
+
 TEST(SO3Test, FromMatrixWithNegativeDeterminantFlipsTheWeakestDirection) {
   // M = R diag(1, 0.5, -0.1): singular values 1, 0.5, 0.1 and det < 0. The nearest rotation
   // keeps the two strong directions and flips the weakest one, giving R back.

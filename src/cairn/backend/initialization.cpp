@@ -1,6 +1,5 @@
 #include "cairn/backend/initialization.hpp"
 
-#include <Eigen/SVD>
 #include <chrono>
 #include <deque>
 
@@ -140,9 +139,9 @@ Eigen::MatrixXd solve_linear(const Unknowns& unknowns, const std::vector<Eigen::
   return result;
 }
 
-// The rotation nearest to M in the Frobenius norm (polar projection): U diag(1, .., det(U V^T))
-// V^T from M's SVD; for d = 2 in closed form, the normalised [[a, -b], [b, a]] with
-// a = M00 + M11, b = M10 - M01 (SO2::from_matrix's angle).
+// The rotation nearest to M in the Frobenius norm (its orthonormal polar factor): for d = 2 in
+// closed form, the normalised [[a, -b], [b, a]] with a = M00 + M11, b = M10 - M01
+// (SO2::from_matrix's angle); for d = 3 SO3::from_matrix.
 template <int d>
 Eigen::Matrix<double, d, d> project_to_rotation(const Eigen::Matrix<double, d, d>& M) {
   using MatrixD = Eigen::Matrix<double, d, d>;
@@ -155,10 +154,7 @@ Eigen::Matrix<double, d, d> project_to_rotation(const Eigen::Matrix<double, d, d
     R << a / norm, -b / norm, b / norm, a / norm;
     return R;
   } else {
-    Eigen::JacobiSVD<MatrixD> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    MatrixD S = MatrixD::Identity();
-    S(d - 1, d - 1) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
-    return svd.matrixU() * S * svd.matrixV().transpose();
+    return core::SO3::from_matrix(M).matrix();
   }
 }
 
