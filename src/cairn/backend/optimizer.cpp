@@ -185,10 +185,13 @@ class Engine {
     BlockVector gi, gj;
   };
 
-  static void pack_upper(const Eigen::Matrix<double, D, D>& H, std::array<double, D*(D + 1) / 2>& packed) {
+  // The upper triangle of J^T J, packed column by column (only the D (D + 1) / 2 distinct
+  // column products; the full product computes the lower triangle again).
+  template <class JacobianT>
+  static void pack_upper_gram(const JacobianT& J, std::array<double, D*(D + 1) / 2>& packed) {
     std::size_t index = 0;
     for (int k = 0; k < D; ++k) {
-      for (int a = 0; a <= k; ++a) packed[index++] = H(a, k);
+      for (int a = 0; a <= k; ++a) packed[index++] = J.col(a).dot(J.col(k));
     }
   }
 
@@ -209,8 +212,8 @@ class Engine {
       Jj *= scale;
     }
     auto& b = blocks_[e];
-    pack_upper(Ji.transpose() * Ji, b.Hii);
-    pack_upper(Jj.transpose() * Jj, b.Hjj);
+    pack_upper_gram(Ji, b.Hii);
+    pack_upper_gram(Jj, b.Hjj);
     b.Hij.noalias() = Ji.transpose() * Jj;
     b.gi.noalias() = Ji.transpose() * r;
     b.gj.noalias() = Jj.transpose() * r;
