@@ -56,6 +56,23 @@ TEST(SE3Test, FromMatrixRoundTripAndProjection) {
   round_trip_3x4.expect_at_most(1e-14, kRandomSamples);
 }
 
+// log with Jr^-1 at the log (shared J^-1 of SO(3)) against log() and right_jacobian_inverse().
+TEST(SE3Test, LogWithRightJacobianInverseMatchesTheSeparateFunctions) {
+  Rng rng(409);
+  WorstCase log_error("log_with_jacobian_vs_log");
+  WorstCase jacobian_error("right_jacobian_inverse_at_log");
+  const std::vector<SE3> elements = test_elements<LieTraits<SE3>>(rng);
+  for (const SE3& T : elements) {
+    SE3::Jacobian J;
+    const SE3::Tangent xi = T.log(J);
+    const auto d = [&] { return to_string(T.matrix()); };
+    log_error.add(scaled_error(xi, T.log()), d);
+    jacobian_error.add(scaled_error(J, SE3::right_jacobian_inverse(T.log())), d);
+  }
+  log_error.expect_at_most(0.0, static_cast<int>(elements.size()));
+  jacobian_error.expect_at_most(1e-13, static_cast<int>(elements.size()));
+}
+
 TEST(SE3Test, TangentIsTranslationFirst) {
   Vector6 xi;
   xi << 1.0, 2.0, 3.0, 0.0, 0.0, 0.0;

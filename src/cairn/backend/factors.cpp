@@ -51,12 +51,14 @@ typename GeodesicFactor<Group>::Residual GeodesicFactor<Group>::evaluate(const G
                                                                          const PoseEdge<Group>& edge,
                                                                          Jacobian* J_r_i, Jacobian* J_r_j) {
   const Group T_i_j = T_world_i.inverse() * T_world_j;
-  const typename Group::Tangent e = (edge.T_i_j.inverse() * T_i_j).log();
-  if (J_r_i != nullptr || J_r_j != nullptr) {
-    const Jacobian J_e_j = Group::right_jacobian_inverse(e);
-    if (J_r_j != nullptr) *J_r_j = edge.sqrt_information * J_e_j;
-    if (J_r_i != nullptr) *J_r_i = -edge.sqrt_information * J_e_j * T_i_j.inverse().Adj();
-  }
+  const Group E = edge.T_i_j.inverse() * T_i_j;
+  if (J_r_i == nullptr && J_r_j == nullptr) return edge.sqrt_information * E.log();
+  Jacobian J_e_j;  // Jr^-1(e)
+  const typename Group::Tangent e = E.log(J_e_j);
+  const Jacobian J_r_j_value = edge.sqrt_information * J_e_j;
+  // dr/d(delta_i) = -(dr/d(delta_j)) Adj(T_j^-1 T_i): the product S Jr^-1 once for both.
+  if (J_r_i != nullptr) J_r_i->noalias() = -J_r_j_value * T_i_j.inverse().Adj();
+  if (J_r_j != nullptr) *J_r_j = J_r_j_value;
   return edge.sqrt_information * e;
 }
 

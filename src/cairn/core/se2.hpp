@@ -29,6 +29,12 @@ class SE2 {
 
   static SE2 exp(const Tangent& xi);
   Tangent log() const;
+  /// log() and Jr^-1 at it (the same interface as SE3's).
+  Tangent log(Jacobian& right_jacobian_inverse_at_log) const {
+    const Tangent xi = log();
+    right_jacobian_inverse_at_log = right_jacobian_inverse(xi);
+    return xi;
+  }
 
   SE2 inverse() const {
     const SO2 R_inv = R_.inverse();

@@ -70,6 +70,23 @@ SE3::Tangent SE3::log() const {
   return xi;
 }
 
+SE3::Tangent SE3::log(Jacobian& right_jacobian_inverse_at_log) const {
+  const Vector3 phi = R_.log();
+  const Matrix3 K = SO3::left_jacobian_inverse(phi);
+  const Vector3 rho = K * t_;
+  // Jl^-1(-xi) = [[K^T, -K^T Q(-rho, -phi) K^T], [0, K^T]] (left_jacobian_inverse below).
+  const Matrix3 K_T = K.transpose();
+  Jacobian& J = right_jacobian_inverse_at_log;
+  J.setZero();
+  J.topLeftCorner<3, 3>() = K_T;
+  J.topRightCorner<3, 3>() = -K_T * barfoot_q(-rho, -phi) * K_T;
+  J.bottomRightCorner<3, 3>() = K_T;
+  Tangent xi;
+  xi.head<3>() = rho;
+  xi.tail<3>() = phi;
+  return xi;
+}
+
 SE3 SE3::inverse() const {
   const SO3 R_inv = R_.inverse();
   return SE3(R_inv, -(R_inv * t_));

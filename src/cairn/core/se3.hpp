@@ -32,6 +32,9 @@ class SE3 {
 
   static SE3 exp(const Tangent& xi);
   Tangent log() const;
+  /// log() and Jr^-1 at it, sharing SO(3)'s Jl^-1(phi): Jr^-1(xi) = Jl^-1(-xi), and
+  /// Jl^-1(-phi) = Jl^-1(phi)^T on SO(3) (Barfoot 2017, eqs. 7.87 and 7.95).
+  Tangent log(Jacobian& right_jacobian_inverse_at_log) const;
 
   SE3 inverse() const;
   SE3 operator*(const SE3& other) const { return SE3(R_ * other.R_, R_ * other.t_ + t_); }
