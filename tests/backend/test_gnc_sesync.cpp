@@ -119,6 +119,51 @@ TEST_P(GncOnSeSync, RejectsEveryFalseLoopClosureAndKeepsTheTrueOnes) {
       file.graph);
 }
 
+// Seeds other than 1 (measured on intel, 2026-11-24: seeds 2-5 each kept one false loop
+// closure, 0.2-0.7 m RMS off): GNC can bend the map around a false loop closure until it fits.
+// The leave-one-out test (GncOptions::reject_by_leave_one_out) finds those on seeds 2 and 3; on
+// 4 and 5 the false one raises the minimum by less than the threshold (readmitted by its
+// innovation, d^2 1.3 < c^2 2.6): TLS itself prefers it there, and no test is asserted.
+TEST(GncLeaveOneOut, RejectsFalseLoopClosuresTheMapWasBentAround) {
+  const std::string relative = "posegraph/se-sync/intel.g2o";
+  CAIRN_REQUIRE_DATA(relative);
+  const io::GraphFile file = io::read_graph(test::data_path(relative).string());
+  const auto& original = std::get<io::PoseGraph2D>(file.graph);
+  auto reference = make_problem(original, relative);
+  initialize_chordal(reference);
+  ASSERT_TRUE(optimize(reference, OptimizerOptions{}).is_solution_usable());
+  std::size_t true_loops = 0;
+  for (const auto& e : reference.edges) true_loops += e.kind == EdgeKind::kLoopClosure;
+  for (const std::uint64_t seed : {2u, 3u}) {
+    auto corrupted = original;
+    add_false_loop_closures(corrupted, OutlierOptions{static_cast<int>(true_loops), seed, 10.0});
+    std::size_t false_kept[2] = {0, 0};
+    std::size_t true_rejected[2] = {0, 0};
+    double rms[2] = {0.0, 0.0};
+    for (const bool leave_one_out : {false, true}) {
+      auto problem = make_problem(corrupted, relative);
+      initialize_odometry(problem);
+      GncOptions options;
+      options.reject_by_leave_one_out = leave_one_out;
+      const GncSummary summary = optimize_gnc(problem, options);
+      std::size_t false_rejected = 0;
+      for (const std::size_t e : summary.rejected_edges) (e >= original.edges.size() ? false_rejected : true_rejected[leave_one_out])++;
+      false_kept[leave_one_out] = true_loops - false_rejected;
+      rms[leave_one_out] = difference<core::SE2>(problem.T_world_pose, reference.T_world_pose).position_rms;
+      if (leave_one_out) {
+        EXPECT_GE(summary.rejected_by_leave_one_out, 1) << "seed " << seed;
+      }
+    }
+    EXPECT_GE(false_kept[0], 1u) << "seed " << seed << ": without the test GNC keeps a false loop closure";
+    EXPECT_GT(rms[0], 0.05) << "seed " << seed;
+    EXPECT_EQ(false_kept[1], 0u) << "seed " << seed;
+    EXPECT_LE(static_cast<double>(true_rejected[1]), 0.01 * static_cast<double>(true_loops)) << "seed " << seed;
+    EXPECT_LT(rms[1], 0.05) << "seed " << seed;
+    std::printf("intel seed %llu: without leave-one-out %zu false kept, RMS %.3g m; with it %zu false kept, %zu true rejected, RMS %.2e m\n",
+                static_cast<unsigned long long>(seed), false_kept[0], rms[0], false_kept[1], true_rejected[1], rms[1]);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(SeSync, GncOnSeSync,
                          ::testing::Values(Case{"intel.g2o", false}, Case{"manhattan.g2o", false},
                                            // city10000: about 2.5 minutes on two cores (GNC 51 s

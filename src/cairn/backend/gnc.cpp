@@ -323,7 +323,13 @@ class Stages {
   /// lowers the TLS cost exactly when d^2 < c^2, while its bare residual r^2 overstates that
   /// cost by the map's own uncertainty. Short true loop closures are the typical case: left out,
   /// the odometry between their ends relaxes away from them. Readmits every such edge; the
-  /// caller's reclassification then settles the set. Returns the number readmitted.
+  /// caller's reclassification then settles the set.
+  /// With GncOptions::reject_by_leave_one_out, the mirror move too: leaving out an accepted
+  /// edge lowers the minimum by d^2 = r^T (I - J H^-1 J^T)^-1 r (H with the edge; its
+  /// leave-one-out innovation, Sherman-Morrison-Woodbury), so rejecting it lowers the TLS cost
+  /// when d^2 > c^2. A false loop closure that GNC let bend the map around it fits that map
+  /// (small r) but carries it alone (J H^-1 J^T near I), and is caught here.
+  /// Returns the number of edges whose weight changed.
   std::size_t readmit_by_innovation(double c2) {
     return with_factor<Group>(inner_.objective,
                               [&](auto factor) { return readmit_by_innovation_with<decltype(factor)>(c2); });
@@ -335,7 +341,7 @@ class Stages {
     constexpr int R = Factor::kResidualDim;
     std::vector<std::size_t> candidates;
     for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
-      if (robust_[e] && weights()[e] == 0.0) candidates.push_back(e);
+      if (robust_[e] && (weights()[e] == 0.0 || options_.reject_by_leave_one_out)) candidates.push_back(e);
     }
     if (candidates.empty()) return 0;
     std::vector<int> variable;
@@ -347,6 +353,7 @@ class Stages {
     // Right-hand sides J^T of a batch of candidates, at most ~64 MB of them at once.
     const std::size_t batch = std::max<std::size_t>(1, static_cast<std::size_t>(8'000'000 / (n * R)));
     std::vector<std::size_t> accepted;
+    std::vector<std::size_t> removed;
     for (std::size_t first = 0; first < candidates.size(); first += batch) {
       const std::size_t count = std::min(batch, candidates.size() - first);
       Eigen::MatrixXd B = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(count) * R);
@@ -368,19 +375,29 @@ class Stages {
         const int vi = variable[static_cast<std::size_t>(edge.i)];
         const int vj = variable[static_cast<std::size_t>(edge.j)];
         const auto column = static_cast<Eigen::Index>(c) * R;
-        Eigen::Matrix<double, R, R> C = Eigen::Matrix<double, R, R>::Identity();
-        if (vi >= 0) C += Ji[c] * X.block(vi * D, column, D, R);
-        if (vj >= 0) C += Jj[c] * X.block(vj * D, column, D, R);
-        const Eigen::Matrix<double, R, R> S = 0.5 * (C + C.transpose());
+        // J H^-1 J^T: H holds the edge when it is accepted, not when it is rejected.
+        Eigen::Matrix<double, R, R> K = Eigen::Matrix<double, R, R>::Zero();
+        if (vi >= 0) K += Ji[c] * X.block(vi * D, column, D, R);
+        if (vj >= 0) K += Jj[c] * X.block(vj * D, column, D, R);
+        K = 0.5 * (K + K.transpose());
+        const bool in = weights()[candidates[first + c]] != 0.0;
+        const Eigen::Matrix<double, R, R> S = in ? Eigen::Matrix<double, R, R>(Eigen::Matrix<double, R, R>::Identity() - K)
+                                                 : Eigen::Matrix<double, R, R>(Eigen::Matrix<double, R, R>::Identity() + K);
         const Eigen::LDLT<Eigen::Matrix<double, R, R>> ldlt(S);
-        if (ldlt.info() != Eigen::Success) continue;
+        // An accepted edge that no other path constrains has leverage 1 (S singular): it
+        // cannot be judged by the others, and stays.
+        if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || ldlt.vectorD().minCoeff() <= 1e-9) continue;
         const double d2 = r[c].dot(ldlt.solve(r[c]));
-        if (std::isfinite(d2) && d2 <= c2) accepted.push_back(candidates[first + c]);
+        if (!std::isfinite(d2)) continue;
+        if (!in && d2 <= c2) accepted.push_back(candidates[first + c]);
+        if (in && d2 > c2) removed.push_back(candidates[first + c]);
       }
     }
     for (const std::size_t e : accepted) weights()[e] = 1.0;
+    for (const std::size_t e : removed) weights()[e] = 0.0;
     summary_.readmitted_by_innovation += static_cast<int>(accepted.size());
-    return accepted.size();
+    summary_.rejected_by_leave_one_out += static_cast<int>(removed.size());
+    return accepted.size() + removed.size();
   }
 
   /// Variance of unit weight (a posteriori variance factor, e.g. Foerstner & Wrobel,
@@ -522,3 +539,4 @@ template GncSummary optimize_gnc(Problem2D&, const GncOptions&);
 template GncSummary optimize_gnc(Problem3D&, const GncOptions&);
 
 }  // namespace cairn::backend
+

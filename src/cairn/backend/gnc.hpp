@@ -100,6 +100,9 @@ struct GncOptions {
   /// see gnc.cpp), then reclassify; repeated while it readmits any (at most
   /// max_reclassify_rounds times).
   bool readmit_by_innovation = true;
+  /// With readmit_by_innovation: also reject accepted loop closures whose leave-one-out
+  /// innovation exceeds the threshold (gnc.cpp, readmit_by_innovation).
+  bool reject_by_leave_one_out = true;
   /// Also apply TLS to odometry edges (consecutive ids). Default: odometry is trusted.
   bool robust_odometry = false;
   /// Inner weighted least-squares solves (objective, algorithm, tolerances, threads, progress).
@@ -138,6 +141,7 @@ struct GncSummary {
   int groups_tried = 0;
   int groups_readmitted = 0;
   int readmitted_by_innovation = 0;
+  int rejected_by_leave_one_out = 0;  ///< accepted loop closures the leave-one-out test rejected
   /// Truncated-least-squares cost of the result at threshold_chi2.
   double tls_cost = 0.0;
   /// Final weight per edge (1 = inlier, 0 = rejected), in problem.edges order.

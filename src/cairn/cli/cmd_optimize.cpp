@@ -151,8 +151,9 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
       std::printf("; %.3g x from the accepted edges%s", gnc.noise_variance_factor,
                   gnc.regraduated ? ", graduated again" : "");
     }
-    std::printf("; %d of %d consistent groups and %d edges by their innovation readmitted)\n", gnc.groups_readmitted,
-                gnc.groups_tried, gnc.readmitted_by_innovation);
+    std::printf("; %d of %d consistent groups and %d edges by their innovation readmitted; %d rejected by their "
+                "leave-one-out innovation)\n",
+                gnc.groups_readmitted, gnc.groups_tried, gnc.readmitted_by_innovation, gnc.rejected_by_leave_one_out);
     std::printf("GNC time: graduation %.3f s, reclassification %.3f s, groups %.3f s, innovation test %.3f s\n",
                 gnc.graduation_s, gnc.reclassify_s, gnc.groups_s, gnc.innovation_s);
   } else {
@@ -237,6 +238,7 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                   {"reclassify_rounds", gnc.reclassify_rounds},
                   {"groups_tried", gnc.groups_tried},         {"groups_readmitted", gnc.groups_readmitted},
                   {"readmitted_by_innovation", gnc.readmitted_by_innovation},
+                  {"rejected_by_leave_one_out", gnc.rejected_by_leave_one_out},
                   {"tls_cost", gnc.tls_cost},
                   {"message", gnc.message},                   {"time_s", gnc.total_s},
                   {"stage_time_s",
