@@ -539,4 +539,3 @@ template GncSummary optimize_gnc(Problem2D&, const GncOptions&);
 template GncSummary optimize_gnc(Problem3D&, const GncOptions&);
 
 }  // namespace cairn::backend
-
