@@ -243,6 +243,20 @@ TEST(Optimizer, ReusedFactorisationReachesTheSameOptimumAsExactSteps) {
   }
 }
 
+// Block couplings of a random sparse system: a chain through all blocks plus `extra` random
+// pairs (a != b; repeats possible).
+std::vector<std::pair<int, int>> chain_and_random_pairs(int blocks, int extra, std::mt19937& rng) {
+  std::uniform_int_distribution<int> pick(0, blocks - 1);
+  std::vector<std::pair<int, int>> pairs;
+  for (int k = 1; k < blocks; ++k) pairs.emplace_back(k - 1, k);
+  for (int k = 0; k < extra; ++k) {
+    const int a = pick(rng);
+    const int b = pick(rng);
+    if (a != b) pairs.emplace_back(a, b);
+  }
+  return pairs;
+}
+
 // A random sparse SPD system large enough for CHOLMOD's supernodal path and its OpenMP regions
 // (n > 128): the factorisation solves it as a dense Cholesky does, and the caller's OpenMP
 // setting, which SparseCholesky lowers around every CHOLMOD call, is back afterwards.
@@ -250,15 +264,8 @@ TEST(SparseCholesky, SolvesAsDenseCholeskyAndRestoresTheCallersOpenMpSetting) {
   const int blocks = 150;
   const int B = 3;
   std::mt19937 rng(7);
-  std::uniform_int_distribution<int> pick(0, blocks - 1);
   std::normal_distribution<double> normal;
-  std::vector<std::pair<int, int>> pairs;
-  for (int k = 1; k < blocks; ++k) pairs.emplace_back(k - 1, k);
-  for (int k = 0; k < 200; ++k) {
-    const int a = pick(rng);
-    const int b = pick(rng);
-    if (a != b) pairs.emplace_back(a, b);
-  }
+  const std::vector<std::pair<int, int>> pairs = chain_and_random_pairs(blocks, 200, rng);
   BlockPattern pattern(blocks, B, pairs);
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(blocks * B, blocks * B);
   // H = sum over pairs of J^T J with J = [A_a, A_b] random 3x6, plus a diagonal: SPD.
@@ -313,15 +320,9 @@ TEST(SparseCholesky, StoredOrderAnalysisOfAmdRelabelledBlocksKeepsTheFillAndTheS
   const int blocks = 150;
   const int B = 3;
   std::mt19937 rng(11);
-  std::uniform_int_distribution<int> pick(0, blocks - 1);
   std::normal_distribution<double> normal;
-  std::vector<std::pair<int, int>> pairs;
-  for (int k = 1; k < blocks; ++k) pairs.emplace_back(k - 1, k);
-  for (int k = 0; k < 60; ++k) {
-    const int a = pick(rng);
-    const int b = pick(rng);
-    if (std::abs(a - b) > 1) pairs.emplace_back(std::min(a, b), std::max(a, b));
-  }
+  std::vector<std::pair<int, int>> pairs = chain_and_random_pairs(blocks, 60, rng);
+  for (auto& [a, b] : pairs) std::tie(a, b) = std::pair(std::min(a, b), std::max(a, b));
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());  // one block per coupled pair
   Eigen::MatrixXd dense = Eigen::MatrixXd::Identity(blocks * B, blocks * B);
