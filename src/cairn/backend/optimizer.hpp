@@ -97,7 +97,7 @@ struct OptimizerOptions {
   /// accepted step of the solve: after a large step H has moved too far from the factorised
   /// one for it to precondition well. Measured from chordal starts on the 14 SE-Sync graphs
   /// (2026-11-24): the attempt right after the first step failed on 10 of them, costing a
-  /// budget of PCG iterations on top of the factorisation (cubicle 22 ms, torus3D 18 ms); with
+  /// budget of PCG iterations on top of the factorisation (cubicle 22 ms, torus3D 22 ms); with
   /// 0.25 those attempts are skipped, while the later ones (steps 4-1000x smaller than the
   /// first) mostly converge in 1-5 iterations (0.1 also skipped a converging attempt on
   /// sphere_bignoise, whose second step is 0.16 of its first). 1 = try whenever a
