@@ -29,13 +29,7 @@ bool factorize_with(const PoseGraphProblem<Group>& problem, const std::vector<do
   }
   // Variables numbered in elimination order (block AMD), so CHOLMOD factorises as stored.
   const std::vector<int> label = block_amd_labels(n, pairs);
-  for (int& v : variable) {
-    if (v >= 0) v = label[static_cast<std::size_t>(v)];
-  }
-  for (auto& [a, b] : pairs) {
-    a = label[static_cast<std::size_t>(a)];
-    b = label[static_cast<std::size_t>(b)];
-  }
+  apply_block_labels(label, variable, pairs);
   BlockPattern pattern(n, D, pairs);
   for (std::size_t k = 0; k < problem.edges.size(); ++k) {
     const auto& e = problem.edges[k];

@@ -381,8 +381,12 @@ class Stages {
         if (vj >= 0) K += Jj[c] * X.block(vj * D, column, D, R);
         K = 0.5 * (K + K.transpose());
         const bool in = weights()[candidates[first + c]] != 0.0;
-        const Eigen::Matrix<double, R, R> S = in ? Eigen::Matrix<double, R, R>(Eigen::Matrix<double, R, R>::Identity() - K)
-                                                 : Eigen::Matrix<double, R, R>(Eigen::Matrix<double, R, R>::Identity() + K);
+        Eigen::Matrix<double, R, R> S = Eigen::Matrix<double, R, R>::Identity();
+        if (in) {
+          S -= K;  // leaving the edge out
+        } else {
+          S += K;  // adding it
+        }
         const Eigen::LDLT<Eigen::Matrix<double, R, R>> ldlt(S);
         // An accepted edge that no other path constrains has leverage 1 (S singular): it
         // cannot be judged by the others, and stays.

@@ -64,13 +64,7 @@ Unknowns number_unknowns(const std::vector<char>& fixed, const std::vector<std::
     if (a >= 0 && b >= 0) u.pairs.emplace_back(a, b);
   }
   const std::vector<int>& label = block_amd_labels(u.count, u.pairs, order);
-  for (int& v : u.variable) {
-    if (v >= 0) v = label[static_cast<std::size_t>(v)];
-  }
-  for (auto& [a, b] : u.pairs) {
-    a = label[static_cast<std::size_t>(a)];
-    b = label[static_cast<std::size_t>(b)];
-  }
+  apply_block_labels(label, u.variable, u.pairs);
   return u;
 }
 

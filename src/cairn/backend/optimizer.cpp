@@ -365,13 +365,7 @@ bool prepare_pattern(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
   }
   // Variables numbered in elimination order, so CHOLMOD factorises the matrix as stored.
   const std::vector<int>& label = block_amd_labels(free_poses, pairs, problem.elimination_order);
-  for (int& v : variable) {
-    if (v >= 0) v = label[static_cast<std::size_t>(v)];
-  }
-  for (auto& [a, b] : pairs) {
-    a = label[static_cast<std::size_t>(a)];
-    b = label[static_cast<std::size_t>(b)];
-  }
+  apply_block_labels(label, variable, pairs);
   state.variable = std::move(variable);
   state.fixed = problem.fixed;
   state.pattern = std::make_unique<BlockPattern>(free_poses, Group::kDoF, pairs);

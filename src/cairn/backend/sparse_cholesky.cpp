@@ -126,6 +126,17 @@ const std::vector<int>& block_amd_labels(int blocks, const std::vector<std::pair
   return cache.label;
 }
 
+void apply_block_labels(const std::vector<int>& label, std::vector<int>& variable,
+                        std::vector<std::pair<int, int>>& pairs) {
+  for (int& v : variable) {
+    if (v >= 0) v = label[static_cast<std::size_t>(v)];
+  }
+  for (auto& [a, b] : pairs) {
+    a = label[static_cast<std::size_t>(a)];
+    b = label[static_cast<std::size_t>(b)];
+  }
+}
+
 void BlockPattern::set_zero() { std::fill(csc_.value.begin(), csc_.value.end(), 0.0); }
 
 void symmetric_multiply(const UpperCsc& A, const Eigen::VectorXd& x, Eigen::VectorXd& y) {

@@ -79,6 +79,12 @@ struct BlockOrderCache {
 const std::vector<int>& block_amd_labels(int blocks, const std::vector<std::pair<int, int>>& pairs,
                                          BlockOrderCache& cache);
 
+/// Renumbers blocks by `label` (block_amd_labels): each non-negative entry of `variable` (a
+/// pose -> block map, -1 for fixed poses) and both blocks of every pair, so that a BlockPattern
+/// of `pairs` is in elimination order.
+void apply_block_labels(const std::vector<int>& label, std::vector<int>& variable,
+                        std::vector<std::pair<int, int>>& pairs);
+
 enum class FactorizationStatus { kSuccess, kNotPositiveDefinite, kFailure };
 
 /// y = A x for a symmetric matrix stored as its upper triangle.
