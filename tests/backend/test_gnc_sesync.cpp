@@ -10,9 +10,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "cairn/backend/gnc.hpp"
 #include "cairn/backend/initialization.hpp"
@@ -57,6 +60,55 @@ Difference difference(const std::vector<Group>& a, const std::vector<Group>& b) 
   }
   const double n = static_cast<double>(a.size());
   return {std::sqrt(p / n), std::sqrt(r / n) * 180.0 / M_PI};
+}
+
+/// GNC from the odometry start on `original` plus as many false loop closures as it has true
+/// ones (seed `seed`), scored against `reference`.
+struct Outcome {
+  std::size_t false_kept = 0;
+  std::size_t true_rejected = 0;
+  std::size_t true_loops = 0;
+  Difference to_reference;
+  GncSummary summary;
+};
+
+template <class Group>
+Outcome run_corrupted(const io::PoseGraphT<Group>& original, const PoseGraphProblem<Group>& reference,
+                      const std::string& relative, std::uint64_t seed, const GncOptions& options) {
+  Outcome out;
+  for (const auto& e : reference.edges) out.true_loops += e.kind == EdgeKind::kLoopClosure;
+  auto corrupted = original;
+  add_false_loop_closures(corrupted, OutlierOptions{static_cast<int>(out.true_loops), seed, 10.0});
+  auto problem = make_problem(corrupted, relative);
+  initialize_odometry(problem);
+  out.summary = optimize_gnc(problem, options);
+  std::size_t false_rejected = 0;
+  for (const std::size_t e : out.summary.rejected_edges) (e >= original.edges.size() ? false_rejected : out.true_rejected)++;
+  out.false_kept = out.true_loops - false_rejected;
+  out.to_reference = difference<Group>(problem.T_world_pose, reference.T_world_pose);
+  return out;
+}
+
+/// The outlier-free optimum from the chordal start.
+template <class Group>
+PoseGraphProblem<Group> reference_optimum(const io::PoseGraphT<Group>& original, const std::string& relative) {
+  auto reference = make_problem(original, relative);
+  initialize_chordal(reference);
+  EXPECT_TRUE(optimize(reference, OptimizerOptions{}).is_solution_usable());
+  return reference;
+}
+
+/// Issue 3's criterion for one outcome.
+void expect_criterion(const Outcome& o, const std::string& what) {
+  EXPECT_EQ(o.false_kept, 0u) << what;
+  EXPECT_LE(static_cast<double>(o.true_rejected), 0.01 * static_cast<double>(o.true_loops))
+      << what << ": " << o.true_rejected << " of " << o.true_loops << " true loop closures rejected";
+  EXPECT_LT(o.to_reference.position_rms, 0.05) << what;
+  EXPECT_LT(o.to_reference.rotation_rms_deg, 0.5) << what;
+  std::printf("%s: %zu false kept, %zu of %zu true rejected, RMS %.2e m / %.2e deg, %.1f s%s\n", what.c_str(),
+              o.false_kept, o.true_rejected, o.true_loops, o.to_reference.position_rms,
+              o.to_reference.rotation_rms_deg, o.summary.total_s,
+              o.summary.restarted ? " (restarted from the chordal relaxation)" : "");
 }
 
 class GncOnSeSync : public ::testing::TestWithParam<Case> {};
@@ -119,49 +171,72 @@ TEST_P(GncOnSeSync, RejectsEveryFalseLoopClosureAndKeepsTheTrueOnes) {
       file.graph);
 }
 
-// Seeds other than 1 (measured on intel, 2026-11-24: seeds 2-5 each kept one false loop
-// closure, 0.2-0.7 m RMS off): GNC can bend the map around a false loop closure until it fits.
-// The leave-one-out test (GncOptions::reject_by_leave_one_out) finds those on seeds 2 and 3; on
-// 4 and 5 the false one raises the minimum by less than the threshold (readmitted by its
-// innovation, d^2 1.3 < c^2 2.6): TLS itself prefers it there, and no test is asserted.
+// Seeds other than 1 (measured on intel, 2026-11-24, with the final threshold then 4x the
+// graduation's: seeds 2-5 each kept one false loop closure, 0.2-0.7 m RMS off): GNC can bend the
+// map around a false loop closure until it fits. At that threshold the leave-one-out test
+// (GncOptions::reject_by_leave_one_out) is what rejects them on seeds 2 and 3.
 TEST(GncLeaveOneOut, RejectsFalseLoopClosuresTheMapWasBentAround) {
   const std::string relative = "posegraph/se-sync/intel.g2o";
   CAIRN_REQUIRE_DATA(relative);
   const io::GraphFile file = io::read_graph(test::data_path(relative).string());
   const auto& original = std::get<io::PoseGraph2D>(file.graph);
-  auto reference = make_problem(original, relative);
-  initialize_chordal(reference);
-  ASSERT_TRUE(optimize(reference, OptimizerOptions{}).is_solution_usable());
-  std::size_t true_loops = 0;
-  for (const auto& e : reference.edges) true_loops += e.kind == EdgeKind::kLoopClosure;
+  const auto reference = reference_optimum(original, relative);
   for (const std::uint64_t seed : {2u, 3u}) {
-    auto corrupted = original;
-    add_false_loop_closures(corrupted, OutlierOptions{static_cast<int>(true_loops), seed, 10.0});
-    std::size_t false_kept[2] = {0, 0};
-    std::size_t true_rejected[2] = {0, 0};
-    double rms[2] = {0.0, 0.0};
+    Outcome outcome[2];
     for (const bool leave_one_out : {false, true}) {
-      auto problem = make_problem(corrupted, relative);
-      initialize_odometry(problem);
       GncOptions options;
+      options.final_threshold_factor = 4.0;
       options.reject_by_leave_one_out = leave_one_out;
-      const GncSummary summary = optimize_gnc(problem, options);
-      std::size_t false_rejected = 0;
-      for (const std::size_t e : summary.rejected_edges) (e >= original.edges.size() ? false_rejected : true_rejected[leave_one_out])++;
-      false_kept[leave_one_out] = true_loops - false_rejected;
-      rms[leave_one_out] = difference<core::SE2>(problem.T_world_pose, reference.T_world_pose).position_rms;
-      if (leave_one_out) {
-        EXPECT_GE(summary.rejected_by_leave_one_out, 1) << "seed " << seed;
-      }
+      outcome[leave_one_out] = run_corrupted(original, reference, relative, seed, options);
     }
-    EXPECT_GE(false_kept[0], 1u) << "seed " << seed << ": without the test GNC keeps a false loop closure";
-    EXPECT_GT(rms[0], 0.05) << "seed " << seed;
-    EXPECT_EQ(false_kept[1], 0u) << "seed " << seed;
-    EXPECT_LE(static_cast<double>(true_rejected[1]), 0.01 * static_cast<double>(true_loops)) << "seed " << seed;
-    EXPECT_LT(rms[1], 0.05) << "seed " << seed;
-    std::printf("intel seed %llu: without leave-one-out %zu false kept, RMS %.3g m; with it %zu false kept, %zu true rejected, RMS %.2e m\n",
-                static_cast<unsigned long long>(seed), false_kept[0], rms[0], false_kept[1], true_rejected[1], rms[1]);
+    EXPECT_GE(outcome[0].false_kept, 1u) << "seed " << seed << ": without the test GNC keeps a false loop closure";
+    EXPECT_GT(outcome[0].to_reference.position_rms, 0.05) << "seed " << seed;
+    EXPECT_GE(outcome[1].summary.rejected_by_leave_one_out, 1) << "seed " << seed;
+    expect_criterion(outcome[1], "intel seed " + std::to_string(seed) + ", final threshold 4x, with leave-one-out");
   }
+}
+
+// The default final threshold (1.5x the graduation's): with 4x, intel seeds 4 and 5 kept one
+// false loop closure each (0.47 and 0.50 m RMS) that raised the least-squares minimum by less
+// than that threshold; with 1.5x none does, on these seeds and on manhattan's seed 4 (0.52 m RMS
+// with 4x and 2x). Seeds 6-10 were held out when 1.5 was chosen (docs/backend.md).
+TEST(GncFinalThreshold, OtherSeedsOfIntelAndManhattan) {
+  for (const char* name : {"intel.g2o", "manhattan.g2o"}) {
+    const std::string relative = std::string("posegraph/se-sync/") + name;
+    CAIRN_REQUIRE_DATA(relative);
+    const io::GraphFile file = io::read_graph(test::data_path(relative).string());
+    const auto& original = std::get<io::PoseGraph2D>(file.graph);
+    const auto reference = reference_optimum(original, relative);
+    const bool intel = std::string(name) == "intel.g2o";
+    const std::vector<std::uint64_t> seeds = intel ? std::vector<std::uint64_t>{4, 5, 6, 7, 8, 9, 10} : std::vector<std::uint64_t>{4};
+    for (const std::uint64_t seed : seeds) {
+      expect_criterion(run_corrupted(original, reference, relative, seed, GncOptions{}),
+                       std::string(name) + " seed " + std::to_string(seed));
+    }
+    if (intel) {
+      GncOptions loose;
+      loose.final_threshold_factor = 4.0;
+      const Outcome o = run_corrupted(original, reference, relative, 4, loose);
+      EXPECT_GE(o.false_kept, 1u) << "intel seed 4 with the final threshold 4x: a false loop closure stays";
+      EXPECT_GT(o.to_reference.position_rms, 0.05);
+    }
+  }
+}
+
+// city10000, seed 4: the graduation folded two stretches (poses 833-847 and 884-896, up to 9 m
+// off) while false loop closures still pulled on them; their true loop closures were then
+// rejected (72 of 10,688, 0.27 m RMS) and least squares over every true edge from there stays in
+// the fold (chi2 2274 against 512). The restart from the chordal relaxation of the accepted
+// edges undoes it. About 1.5 minutes on two cores.
+TEST(GncRestart, UndoesWhatTheGraduationFoldedOnCity10000) {
+  const std::string relative = "posegraph/se-sync/city10000.g2o";
+  CAIRN_REQUIRE_DATA(relative);
+  const io::GraphFile file = io::read_graph(test::data_path(relative).string());
+  const auto& original = std::get<io::PoseGraph2D>(file.graph);
+  const auto reference = reference_optimum(original, relative);
+  const Outcome o = run_corrupted(original, reference, relative, 4, GncOptions{});
+  EXPECT_TRUE(o.summary.restarted);
+  expect_criterion(o, "city10000 seed 4");
 }
 
 INSTANTIATE_TEST_SUITE_P(SeSync, GncOnSeSync,

@@ -9,6 +9,7 @@
 
 #include "cairn/backend/covariance.hpp"
 #include "cairn/backend/factors.hpp"
+#include "cairn/backend/initialization.hpp"
 #include "cairn/core/assert.hpp"
 
 namespace cairn::backend {
@@ -316,6 +317,53 @@ class Stages {
     return readmitted;
   }
 
+  /// Restart from the chordal relaxation of the accepted edges (Carlone et al., ICRA 2015; see
+  /// initialize_chordal), reclassify from there, and keep the result when the TLS cost falls.
+  /// While false loop closures still weigh, the graduation can fold a stretch of the trajectory
+  /// (a corner turned the wrong way); once they are rejected, the true loop closures to that
+  /// stretch no longer fit and are rejected too, and the fold is a local minimum of least
+  /// squares even with all of them back. Measured on city10000 with 10,688 false loop closures,
+  /// seed 4: 72 true loop closures rejected, 0.27 m RMS; least squares over exactly the true
+  /// edges from that result ended at chi2 2274 against the optimum's 512. The relaxation does not
+  /// depend on the current poses, so it undoes such folds. Returns whether it was kept; skipped
+  /// when the accepted edges leave a pose unconnected to a fixed one.
+  bool restart_from_chordal(double c2, OptimizerSummary& last) {
+    PoseGraphProblem<Group> accepted;
+    accepted.ids = problem_.ids;
+    accepted.T_world_pose = problem_.T_world_pose;
+    accepted.fixed = problem_.fixed;
+    accepted.has_initial_guess = problem_.has_initial_guess;
+    DisjointSets sets(problem_.T_world_pose.size());
+    for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
+      if (weights()[e] == 0.0) continue;
+      const auto& edge = problem_.edges[e];
+      accepted.edges.push_back(edge);
+      sets.unite(static_cast<std::size_t>(edge.i), static_cast<std::size_t>(edge.j));
+    }
+    std::vector<char> anchored(accepted.fixed.size(), 0);
+    for (std::size_t p = 0; p < accepted.fixed.size(); ++p) {
+      if (accepted.fixed[p]) anchored[sets.find(p)] = 1;
+    }
+    for (std::size_t p = 0; p < accepted.fixed.size(); ++p) {
+      if (!anchored[sets.find(p)]) return false;
+    }
+    const double cost_before = tls_cost(c2);
+    const std::vector<Group> poses_before = problem_.T_world_pose;
+    const std::vector<double> weights_before = weights();
+    const int rounds_before = summary_.reclassify_rounds;
+    initialize_chordal(accepted);
+    problem_.T_world_pose = accepted.T_world_pose;
+    const OptimizerSummary s = reclassify(c2);
+    if (tls_cost(c2) < cost_before * (1.0 - 1e-12)) {
+      last = s;
+      return true;
+    }
+    problem_.T_world_pose = poses_before;
+    weights() = weights_before;
+    summary_.reclassify_rounds = rounds_before;
+    return false;
+  }
+
   /// Rejected loop closures that the map predicts well enough: adding one measurement to a
   /// least-squares problem raises its minimum by the innovation's squared Mahalanobis norm
   /// d^2 = r^T (I + J H^-1 J^T)^-1 r (whitened residual r and Jacobian J at the current poses, H
@@ -499,12 +547,16 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   summary.graduation_threshold_chi2 = c2;
   // The stages after the graduation decide on a map that is right by now, so they can afford a
   // looser threshold for the heavy tails of real errors (intel's true loop closures reach 38x
-  // their median r^2 at the optimum; chi-square's 0.999 quantile is 7x its median).
+  // their median r^2 at the optimum, 44 noise units against the default final threshold's 68;
+  // chi-square's 0.999 quantile is 7x its median). Looser still lets false loop closures that
+  // bend a weakly held part of the map stay (GncOptions::final_threshold_factor).
   if (adaptive) c2 *= options.final_threshold_factor;
   summary.threshold_chi2 = c2;
   t = Clock::now();
   summary.final_solve = stages.reclassify(c2);
   t = lap(summary.reclassify_s, t);
+  if (options.restart_from_chordal) summary.restarted = stages.restart_from_chordal(c2, summary.final_solve);
+  t = lap(summary.restart_s, t);
   if (options.group_window > 0 && stages.readmit_groups(c2) > 0) summary.final_solve = stages.reclassify(c2);
   t = lap(summary.groups_s, t);
   for (int round = 0; options.readmit_by_innovation && round < options.max_reclassify_rounds; ++round) {
