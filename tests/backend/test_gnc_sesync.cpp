@@ -227,7 +227,7 @@ TEST(GncFinalThreshold, OtherSeedsOfIntelAndManhattan) {
 // off) while false loop closures still pulled on them; their true loop closures were then
 // rejected (72 of 10,688, 0.27 m RMS) and least squares over every true edge from there stays in
 // the fold (chi2 2274 against 512). The restart from the chordal relaxation of the accepted
-// edges undoes it. About 1.5 minutes on two cores.
+// edges undoes it. GNC about 25 s alone, 50 s under ctest -j2 (2026-11-24).
 TEST(GncRestart, UndoesWhatTheGraduationFoldedOnCity10000) {
   const std::string relative = "posegraph/se-sync/city10000.g2o";
   CAIRN_REQUIRE_DATA(relative);
@@ -241,10 +241,9 @@ TEST(GncRestart, UndoesWhatTheGraduationFoldedOnCity10000) {
 
 INSTANTIATE_TEST_SUITE_P(SeSync, GncOnSeSync,
                          ::testing::Values(Case{"intel.g2o", false}, Case{"manhattan.g2o", false},
-                                           // city10000: about 2.5 minutes on two cores (GNC 51 s
-                                           // of it, least squares on the corrupted graph most of
-                                           // the rest), since GNC keeps fading false loop closures
-                                           // out of the factor; it took 6 minutes before.
+                                           // city10000: about 2 minutes under ctest -j2 (GNC
+                                           // 20 s of it alone, least squares on the corrupted
+                                           // graph most of the rest; 2026-11-24).
                                            Case{"sphere2500.g2o", false}, Case{"city10000.g2o", false}),
                          [](const ::testing::TestParamInfo<Case>& param_info) {
                            std::string name = param_info.param.file;

@@ -393,6 +393,84 @@ TEST(SparseCholesky, StoredOrderAnalysisOfAmdRelabelledBlocksKeepsTheFillAndTheS
   EXPECT_LT((x - expected).norm(), 1e-9 * expected.norm());
 }
 
+// J A^-1 J^T from forward solves along elimination-tree paths (SparseCholesky::
+// solve_lower_sparse, GNC's innovation test) equals the dense inverse's, for Jacobians on two
+// random blocks of a random block-sparse SPD matrix; solve() still works after the conversion
+// to a simplicial LL^T, and the reach is smaller than the matrix.
+TEST(SparseCholesky, SparseForwardSolvesGiveSelectedBlocksOfTheInverse) {
+  const int blocks = 200;
+  constexpr int B = 3;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal;
+  std::vector<std::pair<int, int>> pairs = chain_and_random_pairs(blocks, 80, rng);
+  for (auto& [a, b] : pairs) std::tie(a, b) = std::pair(std::min(a, b), std::max(a, b));
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  const std::vector<int> label = block_amd_labels(blocks, pairs);
+  std::vector<int> variable(static_cast<std::size_t>(blocks));
+  for (int b = 0; b < blocks; ++b) variable[static_cast<std::size_t>(b)] = b;
+  apply_block_labels(label, variable, pairs);  // blocks now in elimination order
+  for (auto& [a, b] : pairs) std::tie(a, b) = std::pair(std::min(a, b), std::max(a, b));
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Identity(blocks * B, blocks * B);
+  BlockPattern pattern(blocks, B, pairs);
+  for (int b = 0; b < blocks; ++b) {
+    const Eigen::Matrix<double, B, B, Eigen::RowMajor> I = Eigen::Matrix<double, B, B>::Identity();
+    pattern.add_diagonal(b, I.data());
+  }
+  for (const auto& [a, b] : pairs) {
+    const Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::NullaryExpr([&] { return normal(rng); });
+    const Eigen::Matrix<double, 6, 6> H = J.transpose() * J;
+    dense.block<B, B>(a * B, a * B) += H.block<B, B>(0, 0);
+    dense.block<B, B>(b * B, b * B) += H.block<B, B>(3, 3);
+    dense.block<B, B>(a * B, b * B) += H.block<B, B>(0, 3);
+    dense.block<B, B>(b * B, a * B) += H.block<B, B>(3, 0);
+    const Eigen::Matrix<double, B, B, Eigen::RowMajor> Haa = H.block<B, B>(0, 0);
+    const Eigen::Matrix<double, B, B, Eigen::RowMajor> Hbb = H.block<B, B>(3, 3);
+    const Eigen::Matrix<double, B, B, Eigen::RowMajor> Hab = H.block<B, B>(0, 3);
+    pattern.add_diagonal(a, Haa.data());
+    pattern.add_diagonal(b, Hbb.data());
+    pattern.add_off_diagonal(a, b, Hab.data());
+  }
+  SparseCholesky cholesky;
+  cholesky.analyze_in_stored_order(pattern.matrix());
+  ASSERT_EQ(cholesky.factorize(pattern.matrix()), FactorizationStatus::kSuccess);
+  const Eigen::MatrixXd inverse = dense.inverse();
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(blocks * B);
+  std::vector<int> reach;
+  std::uniform_int_distribution<int> pick(0, blocks - 1);
+  std::size_t largest_reach = 0;
+  for (int trial = 0; trial < 50; ++trial) {
+    const int a = pick(rng);
+    int b = pick(rng);
+    if (b == a) b = (a + 1) % blocks;
+    const Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::NullaryExpr([&] { return normal(rng); });
+    std::vector<int> rows;
+    for (int d = 0; d < B; ++d) rows.push_back(a * B + d);
+    for (int d = 0; d < B; ++d) rows.push_back(b * B + d);
+    Eigen::MatrixXd Y;
+    for (int k = 0; k < 3; ++k) {
+      rhs.segment<B>(a * B) = J.block<1, B>(k, 0).transpose();
+      rhs.segment<B>(b * B) = J.block<1, B>(k, B).transpose();
+      const double* y = cholesky.solve_lower_sparse(rows, rhs, reach);
+      if (k == 0) Y.resize(static_cast<Eigen::Index>(reach.size()), 3);
+      ASSERT_EQ(static_cast<Eigen::Index>(reach.size()), Y.rows());
+      for (std::size_t q = 0; q < reach.size(); ++q) Y(static_cast<Eigen::Index>(q), k) = y[reach[q]];
+    }
+    largest_reach = std::max(largest_reach, reach.size());
+    Eigen::MatrixXd expected(3, 3);
+    Eigen::MatrixXd Jfull = Eigen::MatrixXd::Zero(3, blocks * B);
+    Jfull.block<3, B>(0, a * B) = J.leftCols<B>();
+    Jfull.block<3, B>(0, b * B) = J.rightCols<B>();
+    expected = Jfull * inverse * Jfull.transpose();
+    const Eigen::MatrixXd K = Y.transpose() * Y;
+    EXPECT_LT((K - expected).norm(), 1e-9 * expected.norm()) << "blocks " << a << ", " << b;
+  }
+  EXPECT_LT(largest_reach, static_cast<std::size_t>(blocks * B));
+  const Eigen::VectorXd x_expected = Eigen::VectorXd::NullaryExpr(blocks * B, [&] { return normal(rng); });
+  const Eigen::VectorXd x = cholesky.solve(Eigen::VectorXd(dense * x_expected));
+  EXPECT_LT((x - x_expected).norm(), 1e-9 * x_expected.norm());
+}
+
 // Edges below OptimizerOptions::coupling_weight_floor enter the cost and the gradient exactly but
 // not the Hessian (GNC's fading false loop closures): the minimum stays where it is, and the
 // factor is smaller, since those edges join distant poses.

@@ -210,6 +210,7 @@ struct SparseCholesky::Impl {
   cholmod_dense* solve_x = nullptr;
   cholmod_dense* solve_y = nullptr;
   cholmod_dense* solve_e = nullptr;
+  cholmod_sparse* solve_xset = nullptr;  // solve_lower_sparse's reach
 
   Impl() {
     cholmod_start(&common);
@@ -220,8 +221,22 @@ struct SparseCholesky::Impl {
     cholmod_free_dense(&solve_x, &common);
     cholmod_free_dense(&solve_y, &common);
     cholmod_free_dense(&solve_e, &common);
+    cholmod_free_sparse(&solve_xset, &common);
     if (factor != nullptr) cholmod_free_factor(&factor, &common);
     cholmod_finish(&common);
+  }
+
+  // A view of a vector as a one-column cholmod_dense (no copy).
+  static cholmod_dense view(const Eigen::VectorXd& b) {
+    cholmod_dense B{};
+    B.nrow = static_cast<std::size_t>(b.size());
+    B.ncol = 1;
+    B.nzmax = B.nrow;
+    B.d = B.nrow;
+    B.x = const_cast<double*>(b.data());
+    B.xtype = CHOLMOD_REAL;
+    B.dtype = CHOLMOD_DOUBLE;
+    return B;
   }
 
   // A view of our arrays as a cholmod_sparse (no copy).
@@ -325,19 +340,47 @@ Eigen::MatrixXd SparseCholesky::inverse_columns(const std::vector<int>& columns)
 void SparseCholesky::solve_in_place(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   const SerialOpenMpRegions serial;
   CAIRN_ASSERT(impl_->factorized && b.size() == impl_->size, "solve_in_place() needs a factorisation of the right size");
-  cholmod_dense B{};
-  B.nrow = static_cast<std::size_t>(b.size());
-  B.ncol = 1;
-  B.nzmax = B.nrow;
-  B.d = B.nrow;
-  B.x = const_cast<double*>(b.data());
-  B.xtype = CHOLMOD_REAL;
-  B.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense B = Impl::view(b);
   const int ok = cholmod_solve2(CHOLMOD_A, impl_->factor, &B, nullptr, &impl_->solve_x, nullptr, &impl_->solve_y,
                                 &impl_->solve_e, &impl_->common);
   CAIRN_ASSERT(ok != 0 && impl_->solve_x != nullptr, "CHOLMOD solve failed");
   x.resize(b.size());
   std::memcpy(x.data(), impl_->solve_x->x, sizeof(double) * static_cast<std::size_t>(b.size()));
+}
+
+const double* SparseCholesky::solve_lower_sparse(const std::vector<int>& rows, const Eigen::VectorXd& b,
+                                                 std::vector<int>& y_rows) {
+  const SerialOpenMpRegions serial;
+  CAIRN_ASSERT(impl_->factorized && b.size() == impl_->size, "solve_lower_sparse() needs a factorisation of the right size");
+  cholmod_factor* L = impl_->factor;
+  CAIRN_ASSERT(L->ordering == CHOLMOD_NATURAL, "solve_lower_sparse() needs analyze_in_stored_order()");
+  if (L->is_super || !L->is_ll) {
+    // Bset solves run on a simplicial factor; LL^T so that L^-1 b needs no D.
+    const int changed = cholmod_change_factor(CHOLMOD_REAL, /*to_ll=*/1, /*to_super=*/0, /*to_packed=*/1,
+                                              /*to_monotonic=*/1, L, &impl_->common);
+    CAIRN_ASSERT(changed != 0, "CHOLMOD could not convert the factor to a simplicial LL^T");
+  }
+  int set_start[2] = {0, static_cast<int>(rows.size())};
+  cholmod_sparse Bset{};
+  Bset.nrow = static_cast<std::size_t>(impl_->size);
+  Bset.ncol = 1;
+  Bset.nzmax = std::max<std::size_t>(rows.size(), 1);
+  Bset.p = set_start;
+  Bset.i = const_cast<int*>(rows.data());
+  Bset.stype = 0;
+  Bset.itype = CHOLMOD_INT;
+  Bset.xtype = CHOLMOD_PATTERN;
+  Bset.dtype = CHOLMOD_DOUBLE;
+  Bset.sorted = 0;
+  Bset.packed = 1;
+  cholmod_dense B = Impl::view(b);
+  const int ok = cholmod_solve2(CHOLMOD_L, L, &B, &Bset, &impl_->solve_x, &impl_->solve_xset, &impl_->solve_y,
+                                &impl_->solve_e, &impl_->common);
+  CAIRN_ASSERT(ok != 0 && impl_->solve_x != nullptr && impl_->solve_xset != nullptr, "CHOLMOD sparse solve failed");
+  const cholmod_sparse* X_set = impl_->solve_xset;
+  const int* set_rows = static_cast<const int*>(X_set->i);
+  y_rows.assign(set_rows, set_rows + static_cast<const int*>(X_set->p)[1]);
+  return static_cast<const double*>(impl_->solve_x->x);
 }
 
 bool SparseCholesky::has_factor() const { return impl_->factorized; }

@@ -122,6 +122,16 @@ class SparseCholesky {
   /// Solves A x = b into `x` (size n) reusing CHOLMOD's workspace between calls (cholmod_solve2),
   /// for iterative methods that solve with the same factor many times.
   void solve_in_place(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  /// Forward substitution for a sparse right-hand side: y = L^-1 b with A = L L^T, where b is
+  /// non-zero only in the rows `rows` (b, of full length, is read only there). Only the rows of y
+  /// that can be non-zero are computed, those reachable from `rows` in the elimination tree
+  /// (Gilbert & Peierls 1988; CHOLMOD's cholmod_solve2 with Bset), and returned in `y_rows`; the
+  /// result (full length, defined at y_rows only) lives until the next call. Then
+  /// b^T A^-1 c = y_b^T y_c: selected entries of the inverse, such as J A^-1 J^T for a
+  /// measurement Jacobian J, at the cost of a few elimination-tree paths instead of full solves.
+  /// Needs analyze_in_stored_order(). The first call turns the factor into a simplicial LL^T
+  /// (solve() still works; a later factorize() is then simplicial too).
+  const double* solve_lower_sparse(const std::vector<int>& rows, const Eigen::VectorXd& b, std::vector<int>& y_rows);
   /// True when the last factorize() succeeded (solves are valid).
   bool has_factor() const;
   /// Non-zeros of the factor L (fill-in), after analyze.
