@@ -354,6 +354,7 @@ const double* SparseCholesky::solve_lower_sparse(const std::vector<int>& rows, c
   CAIRN_ASSERT(impl_->factorized && b.size() == impl_->size, "solve_lower_sparse() needs a factorisation of the right size");
   cholmod_factor* L = impl_->factor;
   CAIRN_ASSERT(L->ordering == CHOLMOD_NATURAL, "solve_lower_sparse() needs analyze_in_stored_order()");
+  for (const int row : rows) CAIRN_ASSERT(row >= 0 && row < impl_->size, "solve_lower_sparse(): row out of range");
   if (L->is_super || !L->is_ll) {
     // Bset solves run on a simplicial factor; LL^T so that L^-1 b needs no D.
     const int changed = cholmod_change_factor(CHOLMOD_REAL, /*to_ll=*/1, /*to_super=*/0, /*to_packed=*/1,
