@@ -171,10 +171,10 @@ TEST_P(GncOnSeSync, RejectsEveryFalseLoopClosureAndKeepsTheTrueOnes) {
       file.graph);
 }
 
-// Seeds other than 1 (measured on intel, 2026-11-24, with the final threshold then 4x the
-// graduation's: seeds 2-5 each kept one false loop closure, 0.2-0.7 m RMS off): GNC can bend the
-// map around a false loop closure until it fits. At that threshold the leave-one-out test
-// (GncOptions::reject_by_leave_one_out) is what rejects them on seeds 2 and 3.
+// Seeds other than 1 (measured on intel, 2026-11-24: seeds 2-5 each kept one false loop
+// closure, 0.2-0.7 m RMS off, before the leave-one-out test): GNC can bend the map around a
+// false loop closure until it fits. The leave-one-out test (GncOptions::reject_by_leave_one_out)
+// is what rejects them on seeds 2 and 3.
 TEST(GncLeaveOneOut, RejectsFalseLoopClosuresTheMapWasBentAround) {
   const std::string relative = "posegraph/se-sync/intel.g2o";
   CAIRN_REQUIRE_DATA(relative);
@@ -185,22 +185,22 @@ TEST(GncLeaveOneOut, RejectsFalseLoopClosuresTheMapWasBentAround) {
     Outcome outcome[2];
     for (const bool leave_one_out : {false, true}) {
       GncOptions options;
-      options.final_threshold_factor = 4.0;
       options.reject_by_leave_one_out = leave_one_out;
       outcome[leave_one_out] = run_corrupted(original, reference, relative, seed, options);
     }
     EXPECT_GE(outcome[0].false_kept, 1u) << "seed " << seed << ": without the test GNC keeps a false loop closure";
     EXPECT_GT(outcome[0].to_reference.position_rms, 0.05) << "seed " << seed;
     EXPECT_GE(outcome[1].summary.rejected_by_leave_one_out, 1) << "seed " << seed;
-    expect_criterion(outcome[1], "intel seed " + std::to_string(seed) + ", final threshold 4x, with leave-one-out");
+    expect_criterion(outcome[1], "intel seed " + std::to_string(seed) + ", with leave-one-out");
   }
 }
 
-// The default final threshold (1.5x the graduation's): with 4x, intel seeds 4 and 5 kept one
-// false loop closure each (0.47 and 0.50 m RMS) that raised the least-squares minimum by less
-// than that threshold; with 1.5x none does, on these seeds and on manhattan's seed 4 (0.52 m RMS
-// with 4x and 2x). Seeds 6-10 were held out when 1.5 was chosen (docs/backend.md).
-TEST(GncFinalThreshold, OtherSeedsOfIntelAndManhattan) {
+// GncOptions::final_threshold_factor is a trade-off (docs/backend.md): at the default 4x, intel
+// seed 4 keeps one false loop closure (0.47 m RMS off), which raises the least-squares minimum
+// by less than that threshold; at 1.5x it and the other seeds that failed (intel 5, manhattan 4)
+// are rejected, at the price of true loop closures on graphs without false ones (8 of intel's
+// 785; 49 of sphere_bignoise's, 5.9 m off), which is why 1.5 is not the default.
+TEST(GncFinalThreshold, TighterThresholdRejectsWhatTheDefaultKeeps) {
   for (const char* name : {"intel.g2o", "manhattan.g2o"}) {
     const std::string relative = std::string("posegraph/se-sync/") + name;
     CAIRN_REQUIRE_DATA(relative);
@@ -208,16 +208,16 @@ TEST(GncFinalThreshold, OtherSeedsOfIntelAndManhattan) {
     const auto& original = std::get<io::PoseGraph2D>(file.graph);
     const auto reference = reference_optimum(original, relative);
     const bool intel = std::string(name) == "intel.g2o";
-    const std::vector<std::uint64_t> seeds = intel ? std::vector<std::uint64_t>{4, 5, 6, 7, 8, 9, 10} : std::vector<std::uint64_t>{4};
+    GncOptions tight;
+    tight.final_threshold_factor = 1.5;
+    const std::vector<std::uint64_t> seeds = intel ? std::vector<std::uint64_t>{4, 5} : std::vector<std::uint64_t>{4};
     for (const std::uint64_t seed : seeds) {
-      expect_criterion(run_corrupted(original, reference, relative, seed, GncOptions{}),
-                       std::string(name) + " seed " + std::to_string(seed));
+      expect_criterion(run_corrupted(original, reference, relative, seed, tight),
+                       std::string(name) + " seed " + std::to_string(seed) + ", final threshold 1.5x");
     }
     if (intel) {
-      GncOptions loose;
-      loose.final_threshold_factor = 4.0;
-      const Outcome o = run_corrupted(original, reference, relative, 4, loose);
-      EXPECT_GE(o.false_kept, 1u) << "intel seed 4 with the final threshold 4x: a false loop closure stays";
+      const Outcome o = run_corrupted(original, reference, relative, 4, GncOptions{});
+      EXPECT_GE(o.false_kept, 1u) << "intel seed 4 with the default final threshold: a false loop closure stays";
       EXPECT_GT(o.to_reference.position_rms, 0.05);
     }
   }

@@ -552,9 +552,9 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   summary.graduation_threshold_chi2 = c2;
   // The stages after the graduation decide on a map that is right by now, so they can afford a
   // looser threshold for the heavy tails of real errors (intel's true loop closures reach 38x
-  // their median r^2 at the optimum, 44 noise units against the default final threshold's 68;
-  // chi-square's 0.999 quantile is 7x its median). Looser still lets false loop closures that
-  // bend a weakly held part of the map stay (GncOptions::final_threshold_factor).
+  // their median r^2 at the optimum; chi-square's 0.999 quantile is 7x its median). The price:
+  // false loop closures that bend a weakly held part of the map can stay
+  // (GncOptions::final_threshold_factor).
   if (adaptive) c2 *= options.final_threshold_factor;
   summary.threshold_chi2 = c2;
   t = Clock::now();
