@@ -173,8 +173,9 @@ TEST_P(GncOnSeSync, RejectsEveryFalseLoopClosureAndKeepsTheTrueOnes) {
 
 // Seeds other than 1 (measured on intel, 2026-11-24: seeds 2-5 each kept one false loop
 // closure, 0.2-0.7 m RMS off, before the leave-one-out test): GNC can bend the map around a
-// false loop closure until it fits. The leave-one-out test (GncOptions::reject_by_leave_one_out)
-// is what rejects them on seeds 2 and 3.
+// false loop closure until it fits. With readmission at the full threshold (readmission_factor
+// 1; the default's stricter readmission keeps these out before), the leave-one-out test
+// (GncOptions::reject_by_leave_one_out) is what rejects them on seeds 2 and 3.
 TEST(GncLeaveOneOut, RejectsFalseLoopClosuresTheMapWasBentAround) {
   const std::string relative = "posegraph/se-sync/intel.g2o";
   CAIRN_REQUIRE_DATA(relative);
@@ -185,6 +186,7 @@ TEST(GncLeaveOneOut, RejectsFalseLoopClosuresTheMapWasBentAround) {
     Outcome outcome[2];
     for (const bool leave_one_out : {false, true}) {
       GncOptions options;
+      options.readmission_factor = 1.0;
       options.reject_by_leave_one_out = leave_one_out;
       outcome[leave_one_out] = run_corrupted(original, reference, relative, seed, options);
     }
@@ -195,12 +197,11 @@ TEST(GncLeaveOneOut, RejectsFalseLoopClosuresTheMapWasBentAround) {
   }
 }
 
-// GncOptions::final_threshold_factor is a trade-off (docs/backend.md): at the default 4x, intel
-// seed 4 keeps one false loop closure (0.47 m RMS off), which raises the least-squares minimum
-// by less than that threshold; at 1.5x it and the other seeds that failed (intel 5, manhattan 4)
-// are rejected, at the price of true loop closures on graphs without false ones (8 of intel's
-// 785; 49 of sphere_bignoise's, 5.9 m off), which is why 1.5 is not the default.
-TEST(GncFinalThreshold, TighterThresholdRejectsWhatTheDefaultKeeps) {
+// A rejected loop closure needs a smaller innovation to come back than an accepted one needs to
+// stay (GncOptions::readmission_factor, docs/backend.md). With the readmission at the full
+// threshold, intel seed 4 readmits a false loop closure that bends a weakly held part of the map
+// (0.47 m RMS off); so do intel 5 and manhattan 4 and 8. With the default none do.
+TEST(GncReadmission, StricterReadmissionKeepsOutWhatBendsTheMap) {
   for (const char* name : {"intel.g2o", "manhattan.g2o"}) {
     const std::string relative = std::string("posegraph/se-sync/") + name;
     CAIRN_REQUIRE_DATA(relative);
@@ -208,16 +209,16 @@ TEST(GncFinalThreshold, TighterThresholdRejectsWhatTheDefaultKeeps) {
     const auto& original = std::get<io::PoseGraph2D>(file.graph);
     const auto reference = reference_optimum(original, relative);
     const bool intel = std::string(name) == "intel.g2o";
-    GncOptions tight;
-    tight.final_threshold_factor = 1.5;
-    const std::vector<std::uint64_t> seeds = intel ? std::vector<std::uint64_t>{4, 5} : std::vector<std::uint64_t>{4};
+    const std::vector<std::uint64_t> seeds = intel ? std::vector<std::uint64_t>{4, 5} : std::vector<std::uint64_t>{4, 8};
     for (const std::uint64_t seed : seeds) {
-      expect_criterion(run_corrupted(original, reference, relative, seed, tight),
-                       std::string(name) + " seed " + std::to_string(seed) + ", final threshold 1.5x");
+      expect_criterion(run_corrupted(original, reference, relative, seed, GncOptions{}),
+                       std::string(name) + " seed " + std::to_string(seed));
     }
     if (intel) {
-      const Outcome o = run_corrupted(original, reference, relative, 4, GncOptions{});
-      EXPECT_GE(o.false_kept, 1u) << "intel seed 4 with the default final threshold: a false loop closure stays";
+      GncOptions full;
+      full.readmission_factor = 1.0;
+      const Outcome o = run_corrupted(original, reference, relative, 4, full);
+      EXPECT_GE(o.false_kept, 1u) << "intel seed 4, readmission at the full threshold: a false loop closure comes back";
       EXPECT_GT(o.to_reference.position_rms, 0.05);
     }
   }

@@ -447,7 +447,7 @@ class Stages {
       if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || ldlt.vectorD().minCoeff() <= 1e-9) continue;
       const double d2 = r.dot(ldlt.solve(r));
       if (!std::isfinite(d2)) continue;
-      if (!in && d2 <= c2) accepted.push_back(e);
+      if (!in && d2 <= options_.readmission_factor * c2) accepted.push_back(e);
       if (in && d2 > c2) removed.push_back(e);
     }
     for (const std::size_t e : accepted) weights()[e] = 1.0;
@@ -493,7 +493,8 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
                    options.iterations_per_outer >= 1 && options.max_reclassify_rounds >= 0 &&
                    options.group_window >= 0 && options.scaled_threshold_multiplier > 0.0 &&
                    options.short_loop_window >= 1 && options.regraduation_ratio > 1.0 &&
-                   options.final_threshold_factor >= 1.0,
+                   options.final_threshold_factor >= 1.0 && options.readmission_factor > 0.0 &&
+                   options.readmission_factor <= 1.0,
                "invalid GncOptions");
   GncSummary summary;
   Stages<Group> stages(problem, options, summary);
@@ -553,8 +554,8 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   // The stages after the graduation decide on a map that is right by now, so they can afford a
   // looser threshold for the heavy tails of real errors (intel's true loop closures reach 38x
   // their median r^2 at the optimum; chi-square's 0.999 quantile is 7x its median). The price:
-  // false loop closures that bend a weakly held part of the map can stay
-  // (GncOptions::final_threshold_factor).
+  // a false loop closure that bends a weakly held part of the map can lower the TLS cost at this
+  // threshold; GncOptions::readmission_factor keeps such edges from being readmitted.
   if (adaptive) c2 *= options.final_threshold_factor;
   summary.threshold_chi2 = c2;
   t = Clock::now();

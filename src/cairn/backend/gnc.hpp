@@ -62,12 +62,10 @@ struct GncOptions {
   double regraduation_ratio = 2.0;
   /// With the adaptive threshold, the reclassification and readmission after the graduation use
   /// this many times the graduation's threshold (with the default multiplier, 16x the chi-square
-  /// 0.99 quantile in estimated noise units). A trade-off, measured 2026-11-24 (docs/backend.md):
-  /// with 4, some random false loop closures that bend a weakly held part of the map stay (intel
-  /// seeds 4 and 5, manhattan seeds 4 and 8 of 1-10 with as many false loop closures as true
-  /// ones; 0.47-3.5 m RMS off); with 1.5, none of those do, but on graphs without any false loop
-  /// closure GNC then rejects true ones: 8 of intel's 785 (2.7 cm RMS) and 49 of
-  /// sphere_bignoise's, which moves that map 5.9 m. >= 1.
+  /// 0.99 quantile in estimated noise units; readmission by innovation uses readmission_factor
+  /// of it). Measured 2026-11-24 (docs/backend.md): 1.5 also keeps out the false loop closures
+  /// that readmission_factor does, but rejects true ones on graphs without false loop closures
+  /// (49 of sphere_bignoise's, which moves that map 5.9 m; 8 of intel's 785). >= 1.
   double final_threshold_factor = 4.0;
   /// Growth of mu per outer iteration (the paper uses 1.4). > 1.
   double mu_factor = 1.4;
@@ -111,6 +109,15 @@ struct GncOptions {
   /// see gnc.cpp), then reclassify; repeated while it readmits any (at most
   /// max_reclassify_rounds times).
   bool readmit_by_innovation = true;
+  /// A rejected loop closure is readmitted by its innovation only when d^2 <= this times c^2:
+  /// the graduation rejected it, so it needs stronger evidence to come back than an accepted
+  /// edge needs to stay ("miss a loop rather than accept a wrong one"). 0.375 = 1.5x the
+  /// graduation's threshold under the default final_threshold_factor. Measured 2026-11-24
+  /// (docs/backend.md): with 1, random false loop closures that bend a weakly held part of the
+  /// map came back on intel seeds 4 and 5 and manhattan seeds 4 and 8 (0.47-3.5 m RMS); with
+  /// 0.375 they stay out, at the price of 1 of intel's 785 true loop closures there and 4 on
+  /// the uncorrupted intel (2.1 cm RMS). (0, 1].
+  double readmission_factor = 0.375;
   /// With readmit_by_innovation: also reject accepted loop closures whose leave-one-out
   /// innovation exceeds the threshold (gnc.cpp, readmit_by_innovation).
   bool reject_by_leave_one_out = true;
