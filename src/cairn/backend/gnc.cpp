@@ -378,13 +378,15 @@ class Stages {
   /// when d^2 > c^2. A false loop closure that GNC let bend the map around it fits that map
   /// (small r) but carries it alone (J H^-1 J^T near I), and is caught here.
   /// Returns the number of edges whose weight changed.
-  std::size_t readmit_by_innovation(double c2) {
-    return with_factor<Group>(inner_.objective,
-                              [&](auto factor) { return readmit_by_innovation_with<decltype(factor)>(c2); });
+  /// `readmit_c2` (at most c2) is the bound for readmission, c2 the one for keeping an edge.
+  std::size_t readmit_by_innovation(double c2, double readmit_c2) {
+    return with_factor<Group>(inner_.objective, [&](auto factor) {
+      return readmit_by_innovation_with<decltype(factor)>(c2, readmit_c2);
+    });
   }
 
   template <class Factor>
-  std::size_t readmit_by_innovation_with(double c2) {
+  std::size_t readmit_by_innovation_with(double c2, double readmit_c2) {
     constexpr int D = Group::kDoF;
     constexpr int R = Factor::kResidualDim;
     std::vector<std::size_t> candidates;
@@ -447,7 +449,7 @@ class Stages {
       if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || ldlt.vectorD().minCoeff() <= 1e-9) continue;
       const double d2 = r.dot(ldlt.solve(r));
       if (!std::isfinite(d2)) continue;
-      if (!in && d2 <= options_.readmission_factor * c2) accepted.push_back(e);
+      if (!in && d2 <= readmit_c2) accepted.push_back(e);
       if (in && d2 > c2) removed.push_back(e);
     }
     for (const std::size_t e : accepted) weights()[e] = 1.0;
@@ -561,6 +563,9 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   t = Clock::now();
   summary.final_solve = stages.reclassify(c2);
   t = lap(summary.reclassify_s, t);
+  // A rejected loop closure needs a smaller innovation to come back than an accepted one needs
+  // to stay (GncOptions::readmission_factor; with a fixed threshold, the threshold itself).
+  const double readmit_c2 = adaptive ? options.readmission_factor * c2 : c2;
   if (options.restart_from_chordal) summary.restarted = stages.restart_from_chordal(c2, summary.final_solve);
   t = lap(summary.restart_s, t);
   if (options.group_window > 0 && stages.readmit_groups(c2) > 0) summary.final_solve = stages.reclassify(c2);
@@ -574,7 +579,7 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
     const std::vector<double> weights_before = stages.weights();
     const OptimizerSummary solve_before = summary.final_solve;
     const int readmitted_before = summary.readmitted_by_innovation;
-    if (stages.readmit_by_innovation(c2) == 0) break;
+    if (stages.readmit_by_innovation(c2, readmit_c2) == 0) break;
     summary.final_solve = stages.reclassify(c2);
     if (!(stages.tls_cost(c2) < cost_before * (1.0 - 1e-12))) {
       problem.T_world_pose = poses_before;

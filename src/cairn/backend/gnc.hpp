@@ -109,7 +109,8 @@ struct GncOptions {
   /// see gnc.cpp), then reclassify; repeated while it readmits any (at most
   /// max_reclassify_rounds times).
   bool readmit_by_innovation = true;
-  /// A rejected loop closure is readmitted by its innovation only when d^2 <= this times c^2:
+  /// With the adaptive threshold, a rejected loop closure is readmitted by its innovation only
+  /// when d^2 <= this times c^2 (with a fixed threshold, c^2 itself):
   /// the graduation rejected it, so it needs stronger evidence to come back than an accepted
   /// edge needs to stay ("miss a loop rather than accept a wrong one"). 0.375 = 1.5x the
   /// graduation's threshold under the default final_threshold_factor. Measured 2026-11-24
