@@ -115,7 +115,7 @@ struct GncOptions {
   /// edge needs to stay ("miss a loop rather than accept a wrong one"). 0.375 = 1.5x the
   /// graduation's threshold under the default final_threshold_factor. Measured 2026-11-24
   /// (docs/backend.md): with 1, random false loop closures that bend a weakly held part of the
-  /// map came back on intel seeds 4 and 5 and manhattan seeds 4 and 8 (0.47-3.5 m RMS); with
+  /// map stayed on intel seeds 4 and 5 and manhattan seeds 4 and 8 (0.47-3.5 m RMS); with
   /// 0.375 they stay out, at the price of 1 of intel's 785 true loop closures there and 4 on
   /// the uncorrupted intel (2.1 cm RMS). (0, 1].
   double readmission_factor = 0.375;
