@@ -333,20 +333,10 @@ class Stages {
     accepted.T_world_pose = problem_.T_world_pose;
     accepted.fixed = problem_.fixed;
     accepted.has_initial_guess = problem_.has_initial_guess;
-    DisjointSets sets(problem_.T_world_pose.size());
     for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
-      if (weights()[e] == 0.0) continue;
-      const auto& edge = problem_.edges[e];
-      accepted.edges.push_back(edge);
-      sets.unite(static_cast<std::size_t>(edge.i), static_cast<std::size_t>(edge.j));
+      if (weights()[e] != 0.0) accepted.edges.push_back(problem_.edges[e]);
     }
-    std::vector<char> anchored(accepted.fixed.size(), 0);
-    for (std::size_t p = 0; p < accepted.fixed.size(); ++p) {
-      if (accepted.fixed[p]) anchored[sets.find(p)] = 1;
-    }
-    for (std::size_t p = 0; p < accepted.fixed.size(); ++p) {
-      if (!anchored[sets.find(p)]) return false;
-    }
+    if (check_anchoring(accepted).unanchored > 0) return false;
     const double cost_before = tls_cost(c2);
     const std::vector<Group> poses_before = problem_.T_world_pose;
     const std::vector<double> weights_before = weights();

@@ -17,6 +17,32 @@ int PoseGraphProblem<Group>::index_of(std::int64_t id) const {
   return linear == ids.end() ? -1 : static_cast<int>(linear - ids.begin());
 }
 
+template <class Group>
+Anchoring check_anchoring(const PoseGraphProblem<Group>& problem) {
+  // Union-find over poses, joined by the edges.
+  std::vector<int> parent(static_cast<std::size_t>(problem.size()));
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[static_cast<std::size_t>(x)] != x) {
+      parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+      x = parent[static_cast<std::size_t>(x)];
+    }
+    return x;
+  };
+  for (const auto& edge : problem.edges) parent[static_cast<std::size_t>(find(edge.i))] = find(edge.j);
+  std::vector<char> anchored(static_cast<std::size_t>(problem.size()), 0);
+  for (int p = 0; p < problem.size(); ++p) {
+    if (problem.fixed[static_cast<std::size_t>(p)]) anchored[static_cast<std::size_t>(find(p))] = 1;
+  }
+  Anchoring result;
+  for (int p = 0; p < problem.size(); ++p) {
+    if (find(p) != p) continue;
+    ++result.components;
+    if (!anchored[static_cast<std::size_t>(p)] && result.unanchored++ == 0) result.example = p;
+  }
+  return result;
+}
+
 namespace {
 
 template <int N>
@@ -74,16 +100,6 @@ PoseGraphProblem<Group> make_problem(const io::PoseGraphT<Group>& graph, const s
   for (const auto id : graph.fixed) problem.fixed[static_cast<std::size_t>(index.at(id))] = 1;
   if (graph.fixed.empty()) problem.fixed[0] = 1;
 
-  // Union-find over poses to check that every component is anchored.
-  std::vector<int> parent(static_cast<std::size_t>(problem.size()));
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[static_cast<std::size_t>(x)] != x) {
-      parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
-      x = parent[static_cast<std::size_t>(x)];
-    }
-    return x;
-  };
   for (const auto& e : graph.edges) {
     PoseEdge<Group> edge;
     edge.i = index.at(e.from);
@@ -99,26 +115,13 @@ PoseGraphProblem<Group> make_problem(const io::PoseGraphT<Group>& graph, const s
                            "expected positive definite diagonal blocks (SE-Sync weights)");
     }
     problem.edges.push_back(edge);
-    parent[static_cast<std::size_t>(find(edge.i))] = find(edge.j);
   }
-  std::vector<char> anchored(static_cast<std::size_t>(problem.size()), 0);
-  for (int p = 0; p < problem.size(); ++p) {
-    if (problem.fixed[static_cast<std::size_t>(p)]) anchored[static_cast<std::size_t>(find(p))] = 1;
-  }
-  std::size_t components = 0;
-  std::size_t unanchored = 0;
-  std::int64_t example = 0;
-  for (int p = 0; p < problem.size(); ++p) {
-    if (find(p) != p) continue;
-    ++components;
-    if (!anchored[static_cast<std::size_t>(p)]) {
-      if (unanchored++ == 0) example = problem.ids[static_cast<std::size_t>(p)];
-    }
-  }
-  if (unanchored > 0) {
+  const Anchoring anchoring = check_anchoring(problem);
+  if (anchoring.unanchored > 0) {
+    const std::int64_t example = problem.ids[static_cast<std::size_t>(anchoring.example)];
     throw io::ParseError(path, 0,
-                         "the graph has " + std::to_string(components) + " connected components and " +
-                             std::to_string(unanchored) + " of them (one contains pose " + std::to_string(example) +
+                         "the graph has " + std::to_string(anchoring.components) + " connected components and " +
+                             std::to_string(anchoring.unanchored) + " of them (one contains pose " + std::to_string(example) +
                              ") have no fixed pose: expected a connected graph, or a FIX pose in every component");
   }
   return problem;
@@ -137,6 +140,8 @@ io::PoseGraphT<Group> to_graph(const PoseGraphProblem<Group>& problem, const io:
 
 template struct PoseGraphProblem<core::SE2>;
 template struct PoseGraphProblem<core::SE3>;
+template Anchoring check_anchoring(const Problem2D&);
+template Anchoring check_anchoring(const Problem3D&);
 template Problem2D make_problem(const io::PoseGraph2D&, const std::string&);
 template Problem3D make_problem(const io::PoseGraph3D&, const std::string&);
 template io::PoseGraph2D to_graph(const Problem2D&, const io::PoseGraph2D&);

@@ -59,6 +59,17 @@ struct PoseGraphProblem {
 using Problem2D = PoseGraphProblem<core::SE2>;
 using Problem3D = PoseGraphProblem<core::SE3>;
 
+/// Connected components of the poses joined by `problem.edges`, and those without a fixed pose
+/// (example: a pose index in the first of them). A problem has a unique solution only when
+/// `unanchored` is 0.
+struct Anchoring {
+  std::size_t components = 0;
+  std::size_t unanchored = 0;
+  int example = -1;
+};
+template <class Group>
+Anchoring check_anchoring(const PoseGraphProblem<Group>& problem);
+
 /// Builds the problem. Poses are the file's vertices (in file order) or, without vertices, the
 /// ids the edges name (sorted; identity as placeholder guess). FIX poses are held; without any,
 /// the first pose is held (gauge). Throws io::ParseError naming `path` when a connected component
