@@ -642,6 +642,70 @@ TEST(Gnc, RejectsEveryFalseLoopClosureAndKeepsTheTrueOnes) {
   }
 }
 
+// OptimizerOptions::should_stop (SIGINT in the CLI) ends the solve before the next iteration,
+// at the last accepted point: a usable, consistent estimate whose cost is the summary's.
+TEST(Optimizer, ShouldStopEndsAtTheLastAcceptedStep) {
+  CAIRN_REQUIRE_DATA("posegraph/se-sync/intel.g2o");
+  const io::GraphFile file = io::read_graph(test::data_path("posegraph/se-sync/intel.g2o").string());
+  const auto& graph = std::get<io::PoseGraph2D>(file.graph);
+  auto full = make_problem(graph, "intel");
+  const OptimizerSummary complete = optimize(full, OptimizerOptions{});
+  ASSERT_GT(complete.iterations, 3);
+
+  auto problem = make_problem(graph, "intel");
+  OptimizerOptions options;
+  int polls = 0;
+  options.should_stop = [&] { return ++polls > 2; };
+  const OptimizerSummary stopped = optimize(problem, options);
+  EXPECT_EQ(stopped.termination, TerminationType::kInterrupted);
+  EXPECT_TRUE(stopped.is_solution_usable());
+  EXPECT_EQ(stopped.iterations, 2);
+  EXPECT_EQ(to_string(stopped.termination), "interrupted");
+  EXPECT_LT(stopped.final_cost, stopped.initial_cost);
+  EXPECT_GT(stopped.final_cost, complete.final_cost);
+  EXPECT_NEAR(evaluate_cost(problem, options), stopped.final_cost, 1e-9 * stopped.final_cost);
+
+  // Stopped before the first iteration: the start, untouched.
+  auto untouched = make_problem(graph, "intel");
+  const auto start = untouched.T_world_pose;
+  options.should_stop = [] { return true; };
+  const OptimizerSummary at_once = optimize(untouched, options);
+  EXPECT_EQ(at_once.termination, TerminationType::kInterrupted);
+  EXPECT_EQ(at_once.iterations, 0);
+  for (std::size_t k = 0; k < start.size(); ++k) {
+    EXPECT_EQ(start[k].translation(), untouched.T_world_pose[k].translation()) << k;
+  }
+}
+
+// GNC stopped mid-graduation skips its later stages and says so; its weights stay binary and
+// its rejected edges are those with weight 0.
+TEST(Gnc, ShouldStopSkipsTheRemainingStages) {
+  std::vector<core::SE2> truth;
+  auto graph = square_world<core::SE2>(4, truth);
+  add_false_loop_closures(graph, OutlierOptions{20, 7, 10.0});
+  auto problem = make_problem(graph, "square+outliers");
+  initialize_odometry(problem);
+  GncOptions options;
+  int polls = 0;
+  options.inner.should_stop = [&] { return ++polls > 3; };
+  const GncSummary summary = optimize_gnc(problem, options);
+  EXPECT_TRUE(summary.interrupted);
+  EXPECT_NE(summary.message.find("interrupted"), std::string::npos) << summary.message;
+  EXPECT_FALSE(summary.restarted);
+  EXPECT_EQ(summary.readmitted_by_innovation, 0);
+  ASSERT_EQ(summary.weights.size(), problem.edges.size());
+  std::size_t zero = 0;
+  for (const double w : summary.weights) {
+    EXPECT_TRUE(w == 0.0 || w == 1.0) << w;
+    zero += w == 0.0;
+  }
+  EXPECT_EQ(zero, summary.rejected_edges.size());
+
+  auto uninterrupted = make_problem(graph, "square+outliers");
+  initialize_odometry(uninterrupted);
+  EXPECT_FALSE(optimize_gnc(uninterrupted, GncOptions{}).interrupted);
+}
+
 }  // namespace
 }  // namespace cairn::backend
 

@@ -170,6 +170,9 @@ class Stages {
     return s;
   }
 
+  /// True once options.inner.should_stop says stop (SIGINT in the CLI): the stages then end early.
+  bool stopped() const { return options_.inner.should_stop && options_.inner.should_stop(); }
+
   /// Truncated least squares at the current poses: trusted edges r^2, robust ones min(r^2, c^2).
   double tls_cost(double c2) const {
     double sum = 0.0;
@@ -195,7 +198,7 @@ class Stages {
     // The graduation's weighted solves stop earlier (graduation_function_tolerance) and keep
     // faded loop closures out of the factor (negligible_weight); the later stages do neither.
     inner_.function_tolerance = std::max(options_.inner.function_tolerance, options_.graduation_function_tolerance);
-    for (int outer = 1; outer <= options_.max_outer_iterations && !binary; ++outer) {
+    for (int outer = 1; outer <= options_.max_outer_iterations && !binary && !stopped(); ++outer) {
       ++summary_.outer_iterations;
       double non_binary = 0.0;
       for (std::size_t e = 0; e < m; ++e) {
@@ -227,7 +230,7 @@ class Stages {
   /// rises. Returns the last solve.
   OptimizerSummary reclassify(double c2) {
     OptimizerSummary last = solve(options_.inner.max_iterations, options_.inner.initial_trust_region_radius);
-    for (int round = 0; round < options_.max_reclassify_rounds; ++round) {
+    for (int round = 0; round < options_.max_reclassify_rounds && !stopped(); ++round) {
       int changed = 0;
       for (std::size_t e = 0; e < problem_.edges.size(); ++e) {
         if (!robust_[e]) continue;
@@ -518,76 +521,88 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
     return now;
   };
   Clock::time_point t = Clock::now();
-  if (options.start_from_least_squares) stages.solve(options.inner.max_iterations, options.inner.initial_trust_region_radius);
-  stages.graduate(c2);
-  t = lap(summary.graduation_s, t);
-  if (adaptive) {
-    // The stated information matrices may be off by a common factor (intel's overstate its
-    // errors some 50 times in variance): estimate it again on the accepted edges and measure
-    // the threshold in it.
+  // Each stage may be cut short by options.inner.should_stop; the rest are then skipped and the
+  // result is the current poses with the current (binary) classification, marked interrupted.
+  [&] {
+    if (options.start_from_least_squares) stages.solve(options.inner.max_iterations, options.inner.initial_trust_region_radius);
+    stages.graduate(c2);
+    t = lap(summary.graduation_s, t);
+    if (stages.stopped()) return;
+    if (adaptive) {
+      // The stated information matrices may be off by a common factor (intel's overstate its
+      // errors some 50 times in variance): estimate it again on the accepted edges and measure
+      // the threshold in it.
+      summary.final_solve = stages.reclassify(c2);
+      t = lap(summary.reclassify_s, t);
+      summary.noise_variance_factor = stages.variance_of_unit_weight();
+      if (summary.noise_variance_factor > 0.0) {
+        const double scaled = scaled_threshold(summary.noise_variance_factor);
+        if (scaled < c2 / options.regraduation_ratio) {
+          // Much tighter: the first graduation may have bent the map around false loop closures
+          // that its loose threshold let in, so graduate again from the initial guess.
+          problem.T_world_pose = initial_poses;
+          summary.regraduated = true;
+          t = Clock::now();
+          stages.graduate(scaled);
+          t = lap(summary.graduation_s, t);
+        }
+        c2 = scaled;
+      }
+    }
+    summary.graduation_threshold_chi2 = c2;
+    // The stages after the graduation decide on a map that is right by now, so they can afford a
+    // looser threshold for the heavy tails of real errors (intel's true loop closures reach 38x
+    // their median r^2 at the optimum; chi-square's 0.999 quantile is 7x its median). The price:
+    // a false loop closure that bends a weakly held part of the map can lower the TLS cost at this
+    // threshold; GncOptions::readmission_factor keeps such edges from being readmitted.
+    if (stages.stopped()) return;
+    if (adaptive) c2 *= options.final_threshold_factor;
+    summary.threshold_chi2 = c2;
+    t = Clock::now();
     summary.final_solve = stages.reclassify(c2);
     t = lap(summary.reclassify_s, t);
-    summary.noise_variance_factor = stages.variance_of_unit_weight();
-    if (summary.noise_variance_factor > 0.0) {
-      const double scaled = scaled_threshold(summary.noise_variance_factor);
-      if (scaled < c2 / options.regraduation_ratio) {
-        // Much tighter: the first graduation may have bent the map around false loop closures
-        // that its loose threshold let in, so graduate again from the initial guess.
-        problem.T_world_pose = initial_poses;
-        summary.regraduated = true;
-        t = Clock::now();
-        stages.graduate(scaled);
-        t = lap(summary.graduation_s, t);
+    if (stages.stopped()) return;
+    // A rejected loop closure needs a smaller innovation to come back than an accepted one needs
+    // to stay (GncOptions::readmission_factor; with a fixed threshold, the threshold itself).
+    const double readmit_c2 = adaptive ? options.readmission_factor * c2 : c2;
+    if (options.restart_from_chordal) summary.restarted = stages.restart_from_chordal(c2, summary.final_solve);
+    t = lap(summary.restart_s, t);
+    if (stages.stopped()) return;
+    if (options.group_window > 0 && stages.readmit_groups(c2) > 0) summary.final_solve = stages.reclassify(c2);
+    t = lap(summary.groups_s, t);
+    for (int round = 0; options.readmit_by_innovation && round < options.max_reclassify_rounds && !stages.stopped();
+         ++round) {
+      // Each readmitted edge alone lowers the TLS cost; several that contradict each other need
+      // not, and the reclassification may then reject them again: keep a round only if the cost
+      // fell, else undo it and stop (no cycling).
+      const double cost_before = stages.tls_cost(c2);
+      const std::vector<Group> poses_before = problem.T_world_pose;
+      const std::vector<double> weights_before = stages.weights();
+      const OptimizerSummary solve_before = summary.final_solve;
+      const int readmitted_before = summary.readmitted_by_innovation;
+      if (stages.readmit_by_innovation(c2, readmit_c2) == 0) break;
+      summary.final_solve = stages.reclassify(c2);
+      if (!(stages.tls_cost(c2) < cost_before * (1.0 - 1e-12))) {
+        problem.T_world_pose = poses_before;
+        stages.weights() = weights_before;
+        summary.final_solve = solve_before;
+        summary.readmitted_by_innovation = readmitted_before;
+        break;
       }
-      c2 = scaled;
     }
-  }
-  summary.graduation_threshold_chi2 = c2;
-  // The stages after the graduation decide on a map that is right by now, so they can afford a
-  // looser threshold for the heavy tails of real errors (intel's true loop closures reach 38x
-  // their median r^2 at the optimum; chi-square's 0.999 quantile is 7x its median). The price:
-  // a false loop closure that bends a weakly held part of the map can lower the TLS cost at this
-  // threshold; GncOptions::readmission_factor keeps such edges from being readmitted.
-  if (adaptive) c2 *= options.final_threshold_factor;
-  summary.threshold_chi2 = c2;
-  t = Clock::now();
-  summary.final_solve = stages.reclassify(c2);
-  t = lap(summary.reclassify_s, t);
-  // A rejected loop closure needs a smaller innovation to come back than an accepted one needs
-  // to stay (GncOptions::readmission_factor; with a fixed threshold, the threshold itself).
-  const double readmit_c2 = adaptive ? options.readmission_factor * c2 : c2;
-  if (options.restart_from_chordal) summary.restarted = stages.restart_from_chordal(c2, summary.final_solve);
-  t = lap(summary.restart_s, t);
-  if (options.group_window > 0 && stages.readmit_groups(c2) > 0) summary.final_solve = stages.reclassify(c2);
-  t = lap(summary.groups_s, t);
-  for (int round = 0; options.readmit_by_innovation && round < options.max_reclassify_rounds; ++round) {
-    // Each readmitted edge alone lowers the TLS cost; several that contradict each other need
-    // not, and the reclassification may then reject them again: keep a round only if the cost
-    // fell, else undo it and stop (no cycling).
-    const double cost_before = stages.tls_cost(c2);
-    const std::vector<Group> poses_before = problem.T_world_pose;
-    const std::vector<double> weights_before = stages.weights();
-    const OptimizerSummary solve_before = summary.final_solve;
-    const int readmitted_before = summary.readmitted_by_innovation;
-    if (stages.readmit_by_innovation(c2, readmit_c2) == 0) break;
-    summary.final_solve = stages.reclassify(c2);
-    if (!(stages.tls_cost(c2) < cost_before * (1.0 - 1e-12))) {
-      problem.T_world_pose = poses_before;
-      stages.weights() = weights_before;
-      summary.final_solve = solve_before;
-      summary.readmitted_by_innovation = readmitted_before;
-      break;
-    }
-  }
-  t = lap(summary.innovation_s, t);
+    t = lap(summary.innovation_s, t);
+  }();
+  summary.interrupted = stages.stopped();
+  if (summary.threshold_chi2 == 0.0) summary.threshold_chi2 = c2;
   summary.tls_cost = stages.tls_cost(c2);
 
   summary.weights = stages.weights();
   for (std::size_t e = 0; e < problem.edges.size(); ++e) {
     if (stages.robust()[e] && summary.weights[e] == 0.0) summary.rejected_edges.push_back(e);
   }
-  summary.message = summary.graduation_converged ? "weights converged to 0 or 1"
-                                                 : "maximum number of outer iterations reached before the weights were binary";
+  summary.message = summary.interrupted          ? "interrupted (the classification so far)"
+                    : summary.graduation_converged ? "weights converged to 0 or 1"
+                                                   : "maximum number of outer iterations reached before the weights were binary";
   summary.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

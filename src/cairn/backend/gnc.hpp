@@ -186,6 +186,8 @@ struct GncSummary {
   double groups_s = 0.0;
   double innovation_s = 0.0;
   double total_s = 0.0;
+  /// GncOptions::inner.should_stop stopped it: the stages after the one running were skipped.
+  bool interrupted = false;
   std::string message;
 };
 

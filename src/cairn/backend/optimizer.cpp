@@ -36,6 +36,7 @@ std::string_view to_string(TerminationType termination) {
     case TerminationType::kConvergence: return "convergence";
     case TerminationType::kNoConvergence: return "no_convergence";
     case TerminationType::kFailure: return "failure";
+    case TerminationType::kInterrupted: return "interrupted";
   }
   return "?";
 }
@@ -438,6 +439,11 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
   summary.message = "maximum number of iterations reached";
 
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    if (options.should_stop && options.should_stop()) {
+      summary.termination = TerminationType::kInterrupted;
+      summary.message = "interrupted before iteration " + std::to_string(iteration);
+      break;
+    }
     const auto iteration_start = Clock::now();
     IterationSummary it;
     it.iteration = iteration;

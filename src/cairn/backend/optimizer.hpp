@@ -107,6 +107,10 @@ struct OptimizerOptions {
   int threads = 0;
   /// Called after every iteration (the CLI prints progress); may be empty.
   std::function<void(const IterationSummary&)> progress;
+  /// Polled before every iteration; true stops the solve there with TerminationType::kInterrupted
+  /// and the poses of the last accepted step (Ceres' SOLVER_TERMINATE_SUCCESSFULLY from an
+  /// IterationCallback). The CLI stops on SIGINT/SIGTERM this way. May be empty.
+  std::function<bool()> should_stop;
   /// Optional per-edge weights multiplying rho (GNC's weights); empty = all 1.
   std::vector<double> edge_weights;
   /// Edges with 0 < weight < coupling_weight_floor enter the cost and the gradient exactly but
@@ -126,6 +130,7 @@ enum class TerminationType {
   kConvergence,    ///< a tolerance was met
   kNoConvergence,  ///< max_iterations reached; the result is usable but may not be optimal
   kFailure,        ///< numerical failure (e.g. Gauss-Newton on an indefinite system)
+  kInterrupted,    ///< OptimizerOptions::should_stop said stop; usable, at the last accepted point
 };
 std::string_view to_string(TerminationType termination);
 

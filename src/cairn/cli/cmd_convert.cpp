@@ -3,7 +3,9 @@
 #include <iostream>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/trajectory_files.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::cli {
@@ -20,6 +22,11 @@ struct ConvertFlags {
 };
 
 int convert(const ConvertFlags& flags) {
+  claim_standard_output(flags.output);
+  claim_standard_output(flags.out_times);
+  if (!flags.out_times.empty() && io::is_standard_output(flags.output) && io::is_standard_output(flags.out_times)) {
+    throw io::ParseError(flags.out_times, 0, "the poses already go to standard output: give --out-times a file");
+  }
   const io::FileFormat from = resolve_format(flags.input, flags.from, "--from");
   io::FileFormat to{};
   if (!flags.to.empty()) {
@@ -29,7 +36,7 @@ int convert(const ConvertFlags& flags) {
   } else {
     throw io::ParseError(flags.output, 0,
                          "cannot tell the output format from the name: expected .g2o, .graph, .tum, "
-                         ".kitti or .csv, or name it with --to");
+                         ".kitti or .csv, or name it with --to (needed for '-', standard output)");
   }
   if (io::kind_of(from) == io::FileKind::kSensorLog || io::kind_of(to) == io::FileKind::kSensorLog) {
     throw io::ParseError(flags.input, 0, "convert handles pose graphs and trajectories, not CARMEN sensor logs");
@@ -52,7 +59,7 @@ int convert(const ConvertFlags& flags) {
     for (const auto& w : warnings) warn(w);
     const std::size_t edges = std::visit([](const auto& g) { return g.edges.size(); }, file.graph);
     const std::size_t vertices = std::visit([](const auto& g) { return g.vertices.size(); }, file.graph);
-    std::cout << "wrote " << flags.output << " (" << io::to_string(to) << ", " << io::dimension(file.graph)
+    std::cout << "wrote " << io::output_display_name(flags.output) << " (" << io::to_string(to) << ", " << io::dimension(file.graph)
               << "D, " << vertices << " vertices, " << edges << " edges)\n";
     return 0;
   }
@@ -65,9 +72,9 @@ int convert(const ConvertFlags& flags) {
                              " needs them: pass the KITTI times file with --times");
   }
   write_trajectory(flags.output, trajectory, to, flags.out_times);
-  std::cout << "wrote " << flags.output << " (" << io::to_string(to) << ", " << trajectory.poses.size()
+  std::cout << "wrote " << io::output_display_name(flags.output) << " (" << io::to_string(to) << ", " << trajectory.poses.size()
             << " poses)";
-  if (!flags.out_times.empty()) std::cout << " and " << flags.out_times;
+  if (!flags.out_times.empty()) std::cout << " and " << io::output_display_name(flags.out_times);
   std::cout << '\n';
   return 0;
 }

@@ -22,12 +22,13 @@
 #include <vector>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/trajectory_files.hpp"
 #include "cairn/eval/ape.hpp"
 #include "cairn/eval/kitti_metric.hpp"
 #include "cairn/eval/relations.hpp"
 #include "cairn/eval/rpe.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/carmen_log.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/viz/render.hpp"
@@ -180,12 +181,8 @@ nlohmann::json alignment_json(const eval::Alignment& a) {
 
 void emit_json(const std::string& destination, const nlohmann::json& j) {
   if (destination.empty()) return;
-  if (destination == "-") {
-    std::cout << j.dump(2) << '\n';
-    return;
-  }
-  io::write_file_atomically(destination, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
-  std::cout << "wrote " << destination << '\n';
+  io::write_output(destination, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+  if (!io::is_standard_output(destination)) std::cout << "wrote " << destination << '\n';
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -212,7 +209,7 @@ void save_plot(const PlotTarget& target, const std::string& name, const viz::Fig
   const std::string path = target.prefix + "_" + name + std::string(viz::extension(target.format));
   const viz::RenderResult image = viz::render(figure, target.format);
   if (!image.ok) throw io::ParseError(path, 0, "cannot draw the plot: " + image.message);
-  io::write_file_atomically(path, [&](std::ostream& out) { out << image.bytes; });
+  io::write_output(path, [&](std::ostream& out) { out << image.bytes; });
   std::cout << "wrote " << path << '\n';
 }
 
@@ -713,6 +710,11 @@ Runner register_eval(CLI::App& app) {
   add_common(*relations, *flags, true);
 
   return [flags, ape, rpe, kitti, relations]() {
+    // With --json - the results table goes to stderr and standard output carries the JSON alone.
+    claim_standard_output(flags->json);
+    if (!flags->plot.empty() && (flags->plot == "-" || io::is_standard_output(flags->plot))) {
+      throw io::ParseError(flags->plot, 0, "--plot writes several files (PREFIX_<name>.png): give a prefix, not standard output");
+    }
     if (ape->parsed()) return run_ape(*flags);
     if (rpe->parsed()) return run_rpe(*flags);
     if (kitti->parsed()) return run_kitti(*flags);

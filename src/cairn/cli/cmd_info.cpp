@@ -10,8 +10,9 @@
 #include <sstream>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/trajectory_files.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/carmen_log.hpp"
 #include "cairn/io/graph_statistics.hpp"
 
@@ -28,11 +29,7 @@ struct InfoFlags {
 
 void emit_json(const std::string& destination, const nlohmann::json& j) {
   if (destination.empty()) return;
-  if (destination == "-") {
-    std::cout << j.dump(2) << '\n';
-    return;
-  }
-  io::write_file_atomically(destination, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+  io::write_output(destination, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
 }
 
 int info_graph(const InfoFlags& flags, io::FileFormat format) {
@@ -82,7 +79,7 @@ int info_graph(const InfoFlags& flags, io::FileFormat format) {
   if (!r.toro_information_order.empty()) j["toro_information_order"] = r.toro_information_order;
   j["warnings"] = r.warnings;
 
-  if (flags.json != "-") {
+  if (!io::is_standard_output(flags.json)) {
     std::ostringstream o;
     o << "file              " << flags.path << '\n';
     o << "format            " << io::to_string(r.format) << ", " << s.dimension << "D pose graph\n";
@@ -166,7 +163,7 @@ int info_trajectory(const InfoFlags& flags, io::FileFormat format) {
   j["max_rotation_orthonormality_error"] = report.max_rotation_orthonormality_error;
   j["warnings"] = report.warnings;
 
-  if (flags.json != "-") {
+  if (!io::is_standard_output(flags.json)) {
     std::ostringstream o;
     o << std::fixed;
     o << "file              " << flags.path << '\n';
@@ -225,7 +222,7 @@ int info_carmen(const InfoFlags& flags) {
     j["last_scan_time_s"] = log.scans.back().time.to_seconds_string();
   }
   j["warnings"] = report.warnings;
-  if (flags.json != "-") {
+  if (!io::is_standard_output(flags.json)) {
     std::ostringstream o;
     o << std::fixed << std::setprecision(3);
     o << "file              " << flags.path << '\n';
@@ -261,6 +258,7 @@ Runner register_info(CLI::App& app) {
   app.add_option("--json", flags->json, "Also write the facts as JSON to this file ('-' for stdout only)");
   flags->graph.add_to(app);
   return [flags]() {
+    claim_standard_output(flags->json);
     const io::FileFormat format = resolve_format(flags->path, flags->format, "--format");
     if (io::kind_of(format) == io::FileKind::kPoseGraph) return info_graph(*flags, format);
     if (io::kind_of(format) == io::FileKind::kSensorLog) return info_carmen(*flags);

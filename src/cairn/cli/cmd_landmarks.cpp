@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/landmarks/clutter.hpp"
 #include "cairn/landmarks/landmark_run.hpp"
 #include "cairn/landmarks/landmark_slam.hpp"
@@ -30,6 +31,7 @@ struct LandmarksFlags {
   int nees_checkpoints = 8;
   int graph_solve_every = 100;
   bool quiet = false;
+  bool overwrite = false;
 };
 
 int landmarks_command(const LandmarksFlags& flags) {
@@ -47,17 +49,17 @@ int landmarks_command(const LandmarksFlags& flags) {
   clutter.seed = flags.clutter_seed;
   if (!clutter.is_valid(&why)) throw std::invalid_argument("invalid --spurious-fraction: " + why);
 
+  // Refuse a directory of another run before the work; files appear together at the end.
+  io::OutputDirectory directory(flags.out, flags.overwrite);
   landmarks::LandmarkRun run = landmarks::read_landmark_run(flags.log);
   const std::size_t added = landmarks::add_spurious_observations(&run.observations, clutter);
   const landmarks::LandmarkSlamResult result = landmarks::run_landmark_slam(run, options);
 
-  namespace fs = std::filesystem;
-  fs::create_directories(flags.out);
-  const fs::path out(flags.out);
-  landmarks::write_trajectory_tum((out / "trajectory.tum").string(), result.trajectory);
-  landmarks::write_landmark_estimates_csv((out / "landmarks.csv").string(), result.landmarks);
-  landmarks::write_report_json((out / "report.json").string(), result.report);
-  landmarks::write_landmarks_png((out / "landmarks.png").string(), run, result);
+  landmarks::write_trajectory_tum(directory.staging_path("trajectory.tum"), result.trajectory);
+  landmarks::write_landmark_estimates_csv(directory.staging_path("landmarks.csv"), result.landmarks);
+  landmarks::write_report_json(directory.staging_path("report.json"), result.report);
+  landmarks::write_landmarks_png(directory.staging_path("landmarks.png"), run, result);
+  directory.commit();
 
   if (flags.quiet) return 0;
   const landmarks::LandmarkSlamReport& r = result.report;
@@ -97,6 +99,8 @@ Runner register_landmarks(CLI::App& app) {
       ->required();
   app.add_option("--out", flags->out, "Output directory: trajectory.tum, landmarks.csv, report.json, landmarks.png")
       ->required();
+  app.add_flag("--overwrite", flags->overwrite,
+               "Write into an --out directory that already holds files (those of the same names are replaced)");
   app.add_option("--method", flags->method, "ekf (EKF-SLAM) or graph (graph SLAM, Levenberg-Marquardt)")
       ->check(CLI::IsMember({"ekf", "graph"}))
       ->capture_default_str();

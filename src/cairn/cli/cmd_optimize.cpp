@@ -1,7 +1,9 @@
 // `cairn optimize IN -o OUT`: pose-graph optimisation with a chosen initialisation, solver,
 // objective and robust cost; progress per iteration on stderr; a JSON report on request.
 
+#include <csignal>
 #include <cstdio>
+#include <optional>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -11,7 +13,8 @@
 #include "cairn/backend/outliers.hpp"
 #include "cairn/backend/optimizer.hpp"
 #include "cairn/cli/commands.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/cli/interrupt.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/file_format.hpp"
 #include "cairn/io/parse_error.hpp"
 
@@ -109,6 +112,7 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
   options.max_iterations = flags.max_iterations;
   options.initial_trust_region_radius = flags.initial_radius;
   options.reuse_factorization = !flags.exact_steps;
+  options.should_stop = stop_on_signal();
   std::string invalid;
   if (!options.is_valid(&invalid)) throw io::ParseError("cairn optimize", 0, invalid);
   if (!flags.quiet) {
@@ -164,8 +168,19 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     summary = backend::optimize(problem, options);
   }
 
+  // Stopped by SIGINT/SIGTERM (between iterations, or before the first): the poses of the last
+  // accepted step are a complete, consistent graph; it is written and marked interrupted.
+  const bool stopped = interrupted() || summary.termination == backend::TerminationType::kInterrupted ||
+                       (use_gnc && gnc.interrupted);
+  if (stopped) {
+    std::fprintf(stderr, "cairn optimize: interrupted by %s after %d iterations: writing the current estimate\n",
+                 interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT", summary.iterations);
+  }
   const auto optimized = backend::to_graph(problem, graph);
-  const auto warnings = io::write_graph(flags.output, io::PoseGraph(optimized), out_format);
+  // The graph and the report form one set: both are produced before either replaces a file.
+  io::OutputFile graph_file(flags.output);
+  std::vector<std::string> warnings;
+  graph_file.write([&](std::ostream& out) { warnings = io::write_graph(out, io::PoseGraph(optimized), out_format); });
   for (const auto& w : warnings) warn(w);
 
   backend::OptimizerOptions geodesic = options;
@@ -181,8 +196,8 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
               summary.total_s + init_summary.total_s, init_summary.total_s, summary.analyze_s, summary.linearize_s,
               summary.factorize_s, summary.solve_s);
   std::printf("final chi2 (geodesic) %.10g, SE-Sync objective f (chordal) %.10g\n", final_geodesic, final_chordal);
-  std::printf("wrote %s\n", flags.output.c_str());
 
+  std::optional<io::OutputFile> report_file;
   if (!flags.report.empty()) {
     nlohmann::json j;
     j["input"] = flags.input;
@@ -198,6 +213,8 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     j["final_chi2_geodesic"] = final_geodesic;
     j["final_f_chordal"] = final_chordal;
     j["read_warnings"] = file.report.warnings;
+    j["interrupted"] = stopped;
+    if (stopped) j["interruption"] = {{"signal", interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT"}};
     if (!flags.covariance_ids.empty()) {
       std::vector<int> poses;
       for (const auto id : flags.covariance_ids) {
@@ -246,6 +263,7 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                   {"rejected_by_leave_one_out", gnc.rejected_by_leave_one_out},
                   {"tls_cost", gnc.tls_cost},
                   {"message", gnc.message},                   {"time_s", gnc.total_s},
+                  {"interrupted", gnc.interrupted},
                   {"stage_time_s",
                    {{"graduation", gnc.graduation_s},
                     {"reclassification", gnc.reclassify_s},
@@ -254,12 +272,21 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                     {"innovation_readmission", gnc.innovation_s}}},
                   {"rejected", rejected}};
     }
-    io::write_file_atomically(flags.report, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+    report_file.emplace(flags.report);
+    report_file->write([&](std::ostream& out) { out << j.dump(2) << '\n'; });
   }
+  graph_file.commit();
+  if (report_file) report_file->commit();
+  std::printf("wrote %s%s%s\n", io::output_display_name(flags.output).c_str(),
+              flags.report.empty() ? "" : (" and " + io::output_display_name(flags.report)).c_str(),
+              stopped ? " (interrupted: the estimate so far)" : "");
+  if (stopped) return interrupted_exit_status();
   return summary.is_solution_usable() ? 0 : 1;
 }
 
 int optimize_command(const OptimizeFlags& flags) {
+  claim_standard_output(flags.output);
+  claim_standard_output(flags.report);
   io::GraphReadOptions options = flags.graph.options();
   if (!flags.format.empty()) {
     const auto format = io::graph_format_from_name(flags.format);
@@ -290,6 +317,7 @@ struct CorruptFlags {
 };
 
 int corrupt_command(const CorruptFlags& flags) {
+  claim_standard_output(flags.output);
   const io::GraphFile file = io::read_graph(flags.input, flags.graph.options());
   for (const auto& w : file.report.warnings) warn(w);
   backend::OutlierOptions options;
@@ -301,7 +329,7 @@ int corrupt_command(const CorruptFlags& flags) {
   const auto out_format = io::format_from_extension(flags.output) == io::FileFormat::kToro ? io::GraphFormat::kToro
                                                                                               : io::GraphFormat::kG2o;
   for (const auto& w : io::write_graph(flags.output, graph, out_format)) warn(w);
-  std::printf("wrote %s: %d false loop closures appended (seed %llu)\n", flags.output.c_str(), flags.outliers,
+  std::printf("wrote %s: %d false loop closures appended (seed %llu)\n", io::output_display_name(flags.output).c_str(), flags.outliers,
               static_cast<unsigned long long>(flags.seed));
   return 0;
 }

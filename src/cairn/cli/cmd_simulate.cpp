@@ -12,7 +12,7 @@
 #include <optional>
 
 #include "cairn/cli/commands.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/sim/scenario.hpp"
 
@@ -28,6 +28,7 @@ struct SimulateFlags {
   std::vector<std::string> set;
   bool list = false;
   bool quiet = false;
+  bool overwrite = false;
 };
 
 /// FNV-1a, 64 bit (Fowler, Noll, Vo): a cheap fingerprint so two runs can be compared from
@@ -134,16 +135,13 @@ int simulate_command(const SimulateFlags& flags) {
     return usage_error(message);
   }
 
-  std::error_code ec;
-  fs::create_directories(flags.out, ec);
-  if (ec || !fs::is_directory(flags.out)) {
-    throw io::ParseError(flags.out, 0, "cannot create the output directory: " + (ec ? ec.message() : "not a directory"));
-  }
+  // Files go to a staging directory beside --out and appear together at the end (io/output_file.hpp).
+  io::OutputDirectory out(flags.out, flags.overwrite);
 
   const auto start = std::chrono::steady_clock::now();
   const sim::SimulationResult result = sim::simulate(scenario, flags.seed);
   const auto simulated = std::chrono::steady_clock::now();
-  const std::vector<std::string> files = sim::write_outputs(result, scenario, flags.seed, flags.out);
+  const std::vector<std::string> files = sim::write_outputs(result, scenario, flags.seed, out.staging());
   const auto written = std::chrono::steady_clock::now();
   const double simulate_s = std::chrono::duration<double>(simulated - start).count();
   const double write_s = std::chrono::duration<double>(written - simulated).count();
@@ -187,12 +185,12 @@ int simulate_command(const SimulateFlags& flags) {
   // Timings are not part of the manifest: they would make two identical runs differ.
   nlohmann::json file_list = nlohmann::json::array();
   for (const auto& name : files) {
-    const std::string path = (fs::path(flags.out) / name).string();
+    const std::string path = out.staging_path(name);
     file_list.push_back({{"name", name}, {"bytes", fs::file_size(path)}, {"fnv1a64", hex(fnv1a64(path))}});
   }
   manifest["files"] = file_list;
-  io::write_file_atomically((fs::path(flags.out) / "manifest.json").string(),
-                            [&](std::ostream& out) { out << manifest.dump(2) << '\n'; });
+  io::write_output(out.staging_path("manifest.json"), [&](std::ostream& o) { o << manifest.dump(2) << '\n'; });
+  out.commit();
 
   if (result.min_clearance_m < 0.2) {
     warn("the ground-truth path passes " + std::to_string(result.min_clearance_m) +
@@ -227,7 +225,9 @@ Runner register_simulate(CLI::App& app) {
   app.add_option("SCENARIO", flags->scenario, "office, office-people, corridor-aliasing, open-hall, loop-building, landmarks or street-3d");
   app.add_option("--seed", flags->seed, "Seed of every random draw; the same seed gives the same bytes")
       ->capture_default_str();
-  app.add_option("--out", flags->out, "Output directory (created if missing; files in it are replaced)");
+  app.add_option("--out", flags->out, "Output directory (created if missing; must be empty unless --overwrite)");
+  app.add_flag("--overwrite", flags->overwrite,
+               "Write into an --out directory that already holds files (those of the same names are replaced)");
   app.add_option("--set", flags->set, "Change a parameter: NAME=VALUE (repeatable; see --list)");
   app.add_flag("--list", flags->list, "List the scenarios (or the named one) with their parameters and exit");
   app.add_flag("-q,--quiet", flags->quiet, "Print nothing on success");

@@ -12,9 +12,12 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include <csignal>
+
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/interrupt.hpp"
 #include "cairn/eval/relations.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/carmen_log.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/trajectory.hpp"
@@ -25,7 +28,6 @@
 namespace cairn::cli {
 namespace {
 
-namespace fs = std::filesystem;
 
 struct Slam2dFlags {
   std::string log;
@@ -37,6 +39,8 @@ struct Slam2dFlags {
   long max_scans = 0;
   bool lenient = false;
   bool quiet = false;
+  bool progress = false;
+  bool overwrite = false;
   bool print_config = false;
 };
 
@@ -61,6 +65,10 @@ int slam2d_command(const Slam2dFlags& flags) {
   std::string error;
   if (!options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
 
+  // Refuse a directory of another run before the work, not after it.
+  io::OutputDirectory out(flags.out, flags.overwrite);
+  options.should_stop = stop_on_signal();
+
   const auto start = std::chrono::steady_clock::now();
   io::CarmenReadReport read_report;
   io::CarmenReadOptions read_options;
@@ -71,38 +79,56 @@ int slam2d_command(const Slam2dFlags& flags) {
   std::vector<eval::Relation> relations;
   if (!flags.relations.empty()) relations = eval::read_relations(flags.relations);
 
-  fs::create_directories(flags.out);
   slam2d::Slam2d slam(options);
-  const bool progress = !flags.quiet && isatty(fileno(stderr));
+  // On a terminal: one line rewritten in place. With --progress: a line every 200 scans, for
+  // logs and for programs that watch the run.
+  const bool tty_progress = !flags.quiet && !flags.progress && isatty(fileno(stderr));
   std::size_t n = log.scans.size();
   if (flags.max_scans > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_scans));
   slam2d::Health last_health = slam2d::Health::kOk;
-  for (std::size_t k = 0; k < n; ++k) {
+  std::size_t used = 0;
+  for (std::size_t k = 0; k < n && !interrupted(); ++k) {
     const slam2d::ScanResult result = slam.add_scan(log.scans[k]);
+    used = k + 1;
     if (result.health != last_health && !flags.quiet) {
-      std::fprintf(stderr, "%s[scan %zu, t = %s] %s\n", progress ? "\r" : "", k, log.scans[k].time.to_seconds_string().c_str(),
-                   std::string(slam2d::to_string(result.health)).c_str());
+      std::fprintf(stderr, "%s[scan %zu, t = %s] %s\n", tty_progress ? "\r" : "", k,
+                   log.scans[k].time.to_seconds_string().c_str(), std::string(slam2d::to_string(result.health)).c_str());
       last_health = result.health;
     }
-    if (progress && (k % 200 == 0 || k + 1 == n)) {
+    if ((tty_progress || flags.progress) && (k % 200 == 0 || k + 1 == n)) {
       const auto& s = slam.summary();
-      std::fprintf(stderr, "\rscan %zu / %zu  keyframes %zu  loops %zu  %s   ", k + 1, n, s.keyframes, s.loops_accepted,
-                   std::string(slam2d::to_string(result.health)).c_str());
+      std::fprintf(stderr, "%sscan %zu / %zu  keyframes %zu  loops %zu  %s%s", tty_progress ? "\r" : "", k + 1, n,
+                   s.keyframes, s.loops_accepted, std::string(slam2d::to_string(result.health)).c_str(),
+                   tty_progress ? "   " : "\n");
+      std::fflush(stderr);
     }
   }
-  slam.finish();
-  if (progress) std::fprintf(stderr, "\n");
+  slam.finish();  // after an interrupt: no final optimisation (Slam2dOptions::should_stop)
+  if (tty_progress) std::fprintf(stderr, "\n");
+  const bool stopped = interrupted();
+  if (stopped) {
+    std::fprintf(stderr, "cairn slam2d: interrupted by %s after scan %zu of %zu: writing the result so far\n",
+                 interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT", used, n);
+  }
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  const slam2d::OutputFiles files = slam2d::write_outputs(slam, log, n, flags.out, options);
+  const slam2d::OutputFiles files = slam2d::write_outputs(slam, log, used, out.staging(), options);
   const auto& summary = slam.summary();
   nlohmann::json report = slam2d::report_json(slam, options);
-  report["input"] = {{"log", flags.log}, {"scans", n}, {"read_s", read_s}, {"records", read_report.records}};
+  report["input"] = {{"log", flags.log}, {"scans", used}, {"scans_in_log", log.scans.size()}, {"read_s", read_s},
+                     {"records", read_report.records}};
+  report["interrupted"] = stopped;
+  if (stopped) {
+    report["interruption"] = {{"signal", interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT"},
+                              {"scans_processed", used},
+                              {"scans_requested", n},
+                              {"final_optimization", "skipped"}};
+  }
   report["wall_time_s"] = total_s;
-  const double data_s = n > 1 ? log.scans[n - 1].time.seconds() - log.scans[0].time.seconds() : 0.0;
+  const double data_s = used > 1 ? log.scans[used - 1].time.seconds() - log.scans[0].time.seconds() : 0.0;
   report["data_duration_s"] = data_s;
-  report["scans_per_second"] = total_s > 0 ? static_cast<double>(n) / total_s : 0.0;
-  if (!relations.empty()) {
+  report["scans_per_second"] = total_s > 0 ? static_cast<double>(used) / total_s : 0.0;
+  if (!relations.empty() && !stopped) {
     const eval::RelationsResult r = eval::evaluate_relations(relations, slam2d::to_matrix_trajectory(slam));
     if (!r.outcome.ok()) throw std::runtime_error("relations metric: " + r.outcome.message);
     report["relations"] = {{"file", flags.relations},
@@ -113,9 +139,10 @@ int slam2d_command(const Slam2dFlags& flags) {
                            {"rotation_squared_deg2", {{"mean", r.rotation_squared_deg2.mean}, {"std", r.rotation_squared_deg2.std}}}};
     if (!flags.quiet) print_relations(r, relations.size());
   }
-  io::write_file_atomically(files.report, [&](std::ostream& out) { out << report.dump(2) << '\n'; });
+  io::write_output(files.report, [&](std::ostream& o) { o << report.dump(2) << '\n'; });
+  out.commit();
   if (!flags.quiet) {
-    std::printf("%zu scans (%.0f s of data) in %.1f s: %.0f scans/s; %zu keyframes, %zu submaps\n", n, data_s, total_s,
+    std::printf("%zu scans (%.0f s of data) in %.1f s: %.0f scans/s; %zu keyframes, %zu submaps\n", used, data_s, total_s,
                 report["scans_per_second"].get<double>(), summary.keyframes, summary.submaps);
     std::printf("loop closures: %zu searches, %zu candidates, %zu accepted, %zu rejected by the back end (GNC)\n",
                 summary.loop_searches, summary.candidates.size(), summary.loops_accepted, summary.loops_rejected_by_gnc);
@@ -124,8 +151,12 @@ int slam2d_command(const Slam2dFlags& flags) {
     std::printf("time: match %.1f s, local map %.1f s, submaps %.1f s, loop search %.1f s, optimisation %.1f s\n",
                 summary.times.local_match_s, summary.times.local_map_s, summary.times.submap_s,
                 summary.times.loop_search_s, summary.times.optimize_s);
-    std::printf("wrote %s, %s, %s, %s, %s, %s\n", files.map_png.c_str(), files.map_pgm.c_str(), files.trajectory.c_str(),
-                files.graph.c_str(), files.corrected_log.c_str(), files.report.c_str());
+    std::printf("wrote map.png, map.pgm, map.yaml, trajectory.tum, scans.csv, graph.g2o, corrected.clf, report.json to %s%s\n",
+                flags.out.c_str(), stopped ? " (interrupted: the result so far)" : "");
+  }
+  if (stopped) {
+    if (flags.quiet) std::fprintf(stderr, "cairn slam2d: wrote the result so far to %s\n", flags.out.c_str());
+    return interrupted_exit_status();
   }
   return 0;
 }
@@ -145,6 +176,10 @@ Runner register_slam2d(CLI::App& app) {
   app.add_flag("--lenient", flags->lenient, "Skip malformed log records (counted) instead of stopping");
   app.add_flag("--print-config", flags->print_config, "Print the configuration in effect (YAML) and exit unless LOG is given");
   app.add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
+  app.add_flag("--progress", flags->progress,
+               "Progress as a line every 200 scans on stderr, also when stderr is not a terminal");
+  app.add_flag("--overwrite", flags->overwrite,
+               "Write into an --out directory that already holds files (those of the same names are replaced)");
   return [flags]() { return slam2d_command(*flags); };
 }
 

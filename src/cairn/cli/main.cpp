@@ -2,11 +2,15 @@
 // and the commands are where results and errors meet the terminal.
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <map>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/interrupt.hpp"
 #include "cairn/io/parse_error.hpp"
 
 int main(int argc, char** argv) {
@@ -44,16 +48,31 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  cairn::cli::install_signal_handlers();
+  int status = 1;
   try {
     for (const auto& [command, run] : runners) {
-      if (command->parsed()) return run();
+      if (command->parsed()) {
+        status = run();
+        break;
+      }
     }
   } catch (const cairn::io::ParseError& e) {
     std::cerr << "cairn: error: " << e.what() << '\n';
-    return 1;
+    status = 1;
   } catch (const std::exception& e) {
     std::cerr << "cairn: error: " << e.what() << '\n';
-    return 1;
+    status = 1;
   }
-  return 1;
+  // What went to standard output through stdio or iostreams is checked too (a full disk or a
+  // closed pipe behind `> file` or `| head`).
+  std::cout.flush();
+  errno = 0;
+  if (std::fflush(stdout) != 0 || std::ferror(stdout) || !std::cout) {
+    const int error = errno;
+    std::cerr << "cairn: error: cannot write standard output" << (error != 0 ? std::string(": ") + std::strerror(error) : "")
+              << '\n';
+    if (status == 0) status = 1;
+  }
+  return status;
 }

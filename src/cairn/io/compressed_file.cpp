@@ -9,6 +9,7 @@
 #include <fstream>
 #include <memory>
 
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::io {
@@ -94,6 +95,14 @@ std::string bunzip2(const std::string& path, std::size_t max_bytes) {
 }  // namespace
 
 std::string read_maybe_compressed(const std::string& path, std::size_t max_bytes) {
+  if (path == "-") {
+    const std::string& in = standard_input(max_bytes);
+    if ((in.size() >= 2 && static_cast<unsigned char>(in[0]) == 0x1f && static_cast<unsigned char>(in[1]) == 0x8b) ||
+        in.compare(0, 3, "BZh") == 0) {
+      throw ParseError("standard input", 0, "compressed data on standard input: decompress it first (zcat, bzcat)");
+    }
+    return in;
+  }
   char magic[3] = {0, 0, 0};
   {
     std::ifstream in(path, std::ios::binary);

@@ -48,7 +48,7 @@ std::optional<FileFormat> format_from_extension(const std::string& path) {
 std::optional<FileFormat> detect_file_format(const std::string& path) {
   if (auto by_extension = format_from_extension(path)) return by_extension;
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
+  if (path != "-" && !std::filesystem::is_regular_file(path, ec)) return std::nullopt;  // "-": standard input
   TextReader reader(path);
   while (reader.next_line()) {
     if (is_blank_or_comment(reader.line())) continue;

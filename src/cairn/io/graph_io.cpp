@@ -7,7 +7,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/text_reader.hpp"
@@ -544,7 +544,7 @@ std::vector<std::string> write_graph(std::ostream& out, const PoseGraph& graph, 
 
 std::vector<std::string> write_graph(const std::string& path, const PoseGraph& graph, GraphFormat format) {
   std::vector<std::string> warnings;
-  write_file_atomically(path, [&](std::ostream& out) { warnings = write_graph(out, graph, format); });
+  write_output(path, [&](std::ostream& out) { warnings = write_graph(out, graph, format); });
   return warnings;
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::io {
@@ -12,9 +13,14 @@ TextReader::TextReader(std::string path, std::string contents)
     : path_(std::move(path)), stream_(std::make_unique<std::istringstream>(std::move(contents))), in_(stream_.get()) {}
 
 TextReader::TextReader(std::string path) : path_(std::move(path)) {
-  auto file = std::make_unique<std::ifstream>(path_, std::ios::binary);
-  if (!*file) throw ParseError(path_, 0, std::string("cannot open file: ") + std::strerror(errno));
-  stream_ = std::move(file);
+  if (path_ == "-") {  // standard input, read whole once (io/output_file.hpp)
+    path_ = "standard input";
+    stream_ = std::make_unique<std::istringstream>(standard_input());
+  } else {
+    auto file = std::make_unique<std::ifstream>(path_, std::ios::binary);
+    if (!*file) throw ParseError(path_, 0, std::string("cannot open file: ") + std::strerror(errno));
+    stream_ = std::move(file);
+  }
   in_ = stream_.get();
   char magic[3] = {0, 0, 0};
   in_->read(magic, 3);

@@ -21,7 +21,8 @@ inline constexpr std::size_t kMaxLineBytes = 1 << 20;
 
 class TextReader {
  public:
-  /// Opens `path`; throws ParseError(path, 0, ...) when it cannot be opened or is compressed.
+  /// Opens `path` ("-" = standard input, read whole once and named "standard input" in errors);
+  /// throws ParseError(path, 0, ...) when it cannot be opened or is compressed.
   explicit TextReader(std::string path);
   /// Reads `contents` (for example a decompressed file) as if it were the file `path`.
   TextReader(std::string path, std::string contents);

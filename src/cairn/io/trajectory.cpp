@@ -17,7 +17,7 @@
 
 #include "cairn/core/assert.hpp"
 #include "cairn/io/parse_error.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/text_reader.hpp"
 
@@ -475,7 +475,7 @@ void write_euroc(std::ostream& out, const Trajectory& trajectory) {
 
 void write_tum(const std::string& path, const Trajectory& trajectory) {
   check_writable(trajectory, path, true, "TUM");
-  AtomicFile file(path);
+  OutputFile file(path);
   file.write([&](std::ostream& out) { emit_tum(out, trajectory); });
   file.commit();
 }
@@ -483,7 +483,7 @@ void write_tum(const std::string& path, const Trajectory& trajectory) {
 void write_kitti(const std::string& path, const Trajectory& trajectory, const std::string& times_path) {
   check_writable(trajectory, path, false, "KITTI");
   if (!times_path.empty()) check_writable(trajectory, times_path, true, "KITTI times");
-  AtomicFile poses_file(path);
+  OutputFile poses_file(path);
   poses_file.write([&](std::ostream& out) { emit_kitti(out, trajectory); });
   if (times_path.empty()) {
     poses_file.commit();
@@ -491,7 +491,7 @@ void write_kitti(const std::string& path, const Trajectory& trajectory, const st
   }
   // Both temporaries exist before either rename, so a failure writing the times leaves the old
   // pair of files untouched.
-  AtomicFile times_file(times_path);
+  OutputFile times_file(times_path);
   times_file.write([&](std::ostream& out) { emit_kitti_times(out, trajectory); });
   poses_file.commit();
   times_file.commit();
@@ -499,7 +499,7 @@ void write_kitti(const std::string& path, const Trajectory& trajectory, const st
 
 void write_euroc(const std::string& path, const Trajectory& trajectory) {
   check_writable(trajectory, path, true, "EuRoC");
-  AtomicFile file(path);
+  OutputFile file(path);
   file.write([&](std::ostream& out) { emit_euroc(out, trajectory); });
   file.commit();
 }

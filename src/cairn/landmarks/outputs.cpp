@@ -13,7 +13,7 @@
 #include "cairn/core/se3.hpp"
 #include "cairn/core/so3.hpp"
 #include "cairn/filter/chi_square.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/trajectory.hpp"
 
@@ -47,7 +47,7 @@ void write_trajectory_tum(const std::string& path, const std::vector<TimedPose>&
 }
 
 void write_landmark_estimates_csv(const std::string& path, const std::vector<LandmarkEstimate>& landmarks) {
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     out << "index,id,x_m,y_m,cov_xx_m2,cov_xy_m2,cov_yy_m2,observations\n";
     for (std::size_t l = 0; l < landmarks.size(); ++l) {
       const LandmarkEstimate& e = landmarks[l];
@@ -137,7 +137,7 @@ std::string report_json(const LandmarkSlamReport& r) {
 }
 
 void write_report_json(const std::string& path, const LandmarkSlamReport& report) {
-  io::write_file_atomically(path, [&](std::ostream& out) { out << report_json(report); });
+  io::write_output(path, [&](std::ostream& out) { out << report_json(report); });
 }
 
 void write_landmarks_png(const std::string& path, const LandmarkRun& run, const LandmarkSlamResult& result) {
@@ -243,7 +243,7 @@ void write_landmarks_png(const std::string& path, const LandmarkRun& run, const 
   cairo_line_to(cr, margin + scale, y0 + 30);
   cairo_stroke(cr);
   cairo_surface_flush(surface.get());
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS) {
       out.setstate(std::ios::badbit);
     }

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// The files `cairn landmarks` writes, each atomically (io::AtomicFile):
+/// The files `cairn landmarks` writes, each atomically (io::OutputFile):
 ///
 ///   trajectory.tum   T_world_body at every step (z = 0, rotation about z), TUM
 ///   landmarks.csv    index,id,x_m,y_m,cov_xx_m2,cov_xy_m2,cov_yy_m2,observations

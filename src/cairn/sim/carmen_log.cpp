@@ -4,7 +4,7 @@
 #include <numbers>
 
 #include "cairn/core/assert.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 
 namespace cairn::sim {
@@ -61,7 +61,7 @@ void write_carmen(const std::string& path, const CarmenLog& log) {
     if (!have_first || s.stamp < first) first = s.stamp;
     have_first = true;
   }
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     out << kHeader;
     for (const auto& comment : log.comments) out << "# " << comment << '\n';
     std::string line;

@@ -1,13 +1,13 @@
 #include "cairn/sim/landmark_files.hpp"
 
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/sim/carmen_log.hpp"
 
 namespace cairn::sim {
 
 void write_landmark_map(const std::string& path, const std::vector<Landmark>& landmarks) {
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     out << "id,x_m,y_m\n";
     std::string line;
     for (const auto& landmark : landmarks) {
@@ -23,7 +23,7 @@ void write_landmark_map(const std::string& path, const std::vector<Landmark>& la
 }
 
 void write_landmark_observations(const std::string& path, const std::vector<LandmarkObservation>& observations) {
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     out << "time_s,landmark_id,range_m,bearing_rad\n";
     std::string line;
     for (const auto& o : observations) {

@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "cairn/core/assert.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/sim/carmen_log.hpp"
 #include "cairn/sim/random.hpp"
@@ -77,7 +77,7 @@ std::vector<Relation> make_relations(const std::vector<TrajectorySample>& truth,
 }
 
 void write_relations(const std::string& path, const std::vector<Relation>& relations) {
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     std::string line;
     for (const auto& r : relations) {
       line.clear();

@@ -8,7 +8,7 @@
 #include <numbers>
 #include <ostream>
 
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::sim {
@@ -151,7 +151,7 @@ void render_png(const std::string& path, const World& world, const std::vector<V
   cairo_show_text(cr, "5 m");
 
   cairo_surface_flush(surface.get());
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS) {
       throw io::ParseError(path, 0, "cannot write: cairo failed to encode the PNG");
     }

@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "cairn/core/assert.hpp"
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/graph_io.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/trajectory.hpp"
@@ -587,7 +587,7 @@ std::vector<std::string> write_outputs(const SimulationResult& result, const Sce
   std::vector<core::Timestamp> node_stamps;
   for (std::size_t scan : result.graph.node_scans) node_stamps.push_back(result.truth[result.scan_samples[scan]].stamp);
   write_tum_file(path_of("graph_nodes.tum"), node_stamps, result.graph.truth);
-  io::write_file_atomically(path_of("loop_closures.csv"), [&](std::ostream& out) {
+  io::write_output(path_of("loop_closures.csv"), [&](std::ostream& out) {
     out << "from,to,kind\n";
     for (const auto& loop : result.graph.loops) out << loop.from << ',' << loop.to << ',' << (loop.is_false ? "false" : "true") << '\n';
   });

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/trajectory.hpp"
 #include "cairn/sim/carmen_log.hpp"
@@ -41,7 +41,7 @@ std::string indexed(const char* folder, std::size_t i) {
 }
 
 void write_floats(const std::string& path, const std::vector<float>& values) {
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float)));
   });
 }
@@ -125,7 +125,7 @@ std::vector<std::string> write_street_outputs(const SimulationResult& result, co
   const std::string poses_path = path_of("poses.txt");
   io::write_kitti(poses_path, kitti, path_of("times.txt"));
 
-  io::write_file_atomically(path_of("camera_observations.csv"), [&](std::ostream& out) {
+  io::write_output(path_of("camera_observations.csv"), [&](std::ostream& out) {
     out << "time_s,landmark_id,u_px,v_px\n";
     std::string line;
     for (const auto& o : result.camera_observations) {
@@ -137,7 +137,7 @@ std::vector<std::string> write_street_outputs(const SimulationResult& result, co
       out << line;
     }
   });
-  io::write_file_atomically(path_of("world_3d.txt"), [&](std::ostream& out) {
+  io::write_output(path_of("world_3d.txt"), [&](std::ostream& out) {
     out << "# cairn world '" << result.world_3d.name << "': GROUND z=0 | BOX min_x min_y min_z max_x max_y max_z | "
         << "CYLINDER cx cy radius z_min z_max (vertical) | LANDMARK id x y z (metres, world frame, z up)\n";
     if (result.world_3d.ground) out << "GROUND\n";

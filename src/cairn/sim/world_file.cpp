@@ -2,13 +2,13 @@
 
 #include <initializer_list>
 
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 
 namespace cairn::sim {
 
 void write_world_file(const std::string& path, const World& world) {
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     out << "# cairn world '" << world.name << "': WALL ax ay bx by | CIRCLE cx cy radius | LANDMARK id x y | "
         << "WALKER from_x from_y to_x to_y speed_mps radius_m phase_s (metres, seconds, world frame)\n";
     std::string line;

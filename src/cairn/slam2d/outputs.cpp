@@ -10,7 +10,7 @@
 #include <numeric>
 #include <ostream>
 
-#include "cairn/io/atomic_write.hpp"
+#include "cairn/io/output_file.hpp"
 #include "cairn/io/graph_io.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -96,7 +96,7 @@ eval::MatrixTrajectory to_matrix_trajectory(const Slam2d& slam) { return eval::M
 void write_map_pgm(const ProbabilityGrid& grid, const std::string& pgm_path, const std::string& yaml_path) {
   const Crop crop = known_crop(grid, 10);
   const int width = crop.width, height = crop.height;
-  io::write_file_atomically(pgm_path, [&](std::ostream& out) {
+  io::write_output(pgm_path, [&](std::ostream& out) {
     out << "P5\n# cairn slam2d occupancy grid, resolution " << grid.resolution() << " m\n"
         << width << ' ' << height << "\n255\n";
     std::string row(static_cast<std::size_t>(width), '\0');
@@ -108,7 +108,7 @@ void write_map_pgm(const ProbabilityGrid& grid, const std::string& pgm_path, con
       out.write(row.data(), static_cast<std::streamsize>(row.size()));
     }
   });
-  io::write_file_atomically(yaml_path, [&](std::ostream& out) {
+  io::write_output(yaml_path, [&](std::ostream& out) {
     std::string x, y, r;
     io::append_number(x, grid.origin().x() + crop.i0 * grid.resolution());
     io::append_number(y, grid.origin().y() + crop.j0 * grid.resolution());
@@ -206,7 +206,7 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
   cairo_move_to(cr, x + bar_m / r + 6.0, y - 3.0);
   cairo_show_text(cr, (std::to_string(static_cast<int>(bar_m)) + " m").c_str());
   cairo_surface_flush(surface.get());
-  io::write_file_atomically(path, [&](std::ostream& out) {
+  io::write_output(path, [&](std::ostream& out) {
     if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS)
       throw io::ParseError(path, 0, "cairo could not encode the PNG");
   });
@@ -239,7 +239,7 @@ OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::siz
   }
   write_map_png(grid, trajectory, loops, files.map_png);
   io::write_tum(files.trajectory, to_trajectory(slam));
-  io::write_file_atomically(files.scans, [&](std::ostream& out) {
+  io::write_output(files.scans, [&](std::ostream& out) {
     out << "time_s,x_m,y_m,theta_rad,health,inlier_fraction,degeneracy,sigma_x_m,sigma_y_m,sigma_theta_rad,keyframe\n";
     std::string line;
     for (const ScanResult& s : trajectory) {
@@ -260,7 +260,7 @@ OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::siz
     }
   });
   io::write_graph(files.graph, io::PoseGraph(graph), io::GraphFormat::kG2o);
-  io::write_file_atomically(files.corrected_log, [&](std::ostream& out) {
+  io::write_output(files.corrected_log, [&](std::ostream& out) {
     out << "# cairn slam2d: FLASER x y theta = corrected laser pose, odom_x odom_y odom_theta = odometry\n";
     std::string line;
     for (std::size_t k = 0; k < scans_used && k < trajectory.size(); ++k) {

@@ -314,16 +314,20 @@ struct Slam2d::Impl {
 
   void optimize(bool gnc, Slam2dSummary& summary) {
     if (keyframes.size() < 2) return;
+    if (options.should_stop && options.should_stop()) return;
     const auto start = Clock::now();
     backend::Problem2D problem = make_graph_problem();
     backend::OptimizerOptions solver;
     solver.max_iterations = 30;
     solver.function_tolerance = 1e-9;
     solver.threads = 1;
+    solver.should_stop = options.should_stop;
     if (gnc) {
       backend::GncOptions gnc_options;
       gnc_options.inner = solver;
       const backend::GncSummary result = backend::optimize_gnc(problem, gnc_options);
+      // Cut short, its weights are not a classification to act on: keep the graph as it was.
+      if (result.interrupted) return;
       for (const std::size_t index : result.rejected_edges) {
         Edge& edge = edges[index];
         if (edge.candidate >= 0) summary.candidates[static_cast<std::size_t>(edge.candidate)].rejected_by_gnc = true;

@@ -105,6 +105,11 @@ struct Slam2dOptions {
   int lost_after_scans = 5;            ///< consecutive matches below lost_inlier_fraction
   double lost_inlier_fraction = 0.25;
 
+  /// Polled before every pose-graph optimisation and by its solver (not a configuration key):
+  /// true skips the optimisation, or ends it at its last accepted step; a GNC solve cut short
+  /// changes nothing. The CLI stops on SIGINT/SIGTERM this way. May be empty.
+  std::function<bool()> should_stop;
+
   /// False with the reason when an option is out of range.
   bool is_valid(std::string* error) const;
 };
