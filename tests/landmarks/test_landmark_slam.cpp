@@ -352,5 +352,43 @@ TEST(LandmarkSlam, PeriodicGraphSolvesSurviveVeryLargeHeadingNoise) {
   // The failure the periodic solves remove is real (if this changes, re-measure the docs).
   EXPECT_GE(checkpoint_only_failures, 1);
 }
+
+// LandmarkSlamOptions::should_stop (SIGINT in the CLI) ends the run after a step: the result is
+// the run up to there, complete (one pose per step processed, landmarks, NEES at the steps
+// reached) and marked interrupted; an uninterrupted run is not marked.
+TEST(LandmarkSlam, ShouldStopGivesTheResultSoFarMarkedInterrupted) {
+  const LandmarkRun run = simulated_run(1);
+  for (const auto& [method, association] :
+       {std::pair{Method::kEkf, Association::kKnown}, std::pair{Method::kGraph, Association::kKnown},
+        std::pair{Method::kGraph, Association::kJcbb}}) {
+    LandmarkSlamOptions options = options_for(method, association);
+    const LandmarkSlamResult full = run_landmark_slam(run, options);
+    EXPECT_FALSE(full.report.interrupted);
+    EXPECT_EQ(full.report.steps, full.report.steps_in_run);
+    ASSERT_GT(full.report.steps, 400u);
+
+    int polls = 0;
+    options.should_stop = [&] { return ++polls > 300; };
+    const LandmarkSlamResult part = run_landmark_slam(run, options);
+    const std::string name = std::string(to_string(method)) + "/" + std::string(to_string(association));
+    EXPECT_TRUE(part.report.interrupted) << name;
+    EXPECT_EQ(part.report.steps_in_run, full.report.steps);
+    EXPECT_GT(part.report.steps, 200u) << name;
+    EXPECT_LE(part.report.steps, 301u) << name;
+    ASSERT_EQ(part.trajectory.size(), part.report.steps) << name;
+    EXPECT_EQ(part.trajectory.back().time, full.trajectory[part.report.steps - 1].time) << name;
+    EXPECT_GT(part.landmarks.size(), 0u) << name;
+    EXPECT_LE(part.landmarks.size(), full.landmarks.size()) << name;
+    // NEES at the checkpoints reached (graph SLAM: also at the last step, where it solved).
+    for (const NeesPoint& p : part.report.nees) EXPECT_LT(p.step, part.report.steps) << name;
+    if (method == Method::kGraph) {
+      ASSERT_FALSE(part.report.nees.empty()) << name;
+      EXPECT_EQ(part.report.nees.back().step, part.report.steps - 1) << name;
+    }
+    EXPECT_TRUE(std::isfinite(part.report.ate_rmse_m)) << name;
+    EXPECT_LT(part.report.ate_rmse_m, 1.0) << name;  // the estimate so far is still an estimate
+  }
+}
+
 }  // namespace
 }  // namespace cairn::landmarks

@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/interrupt.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/landmarks/clutter.hpp"
 #include "cairn/landmarks/landmark_run.hpp"
@@ -42,6 +43,7 @@ int landmarks_command(const LandmarksFlags& flags) {
   options.gating.gate_probability = flags.gate_probability;
   options.nees_checkpoints = flags.nees_checkpoints;
   options.graph_solve_every_steps = flags.graph_solve_every;
+  options.should_stop = stop_on_signal();
   std::string why;
   if (!options.is_valid(&why)) throw std::invalid_argument("invalid options: " + why);
   landmarks::ClutterOptions clutter;
@@ -60,6 +62,11 @@ int landmarks_command(const LandmarksFlags& flags) {
   landmarks::write_report_json(directory.staging_path("report.json"), result.report);
   landmarks::write_landmarks_png(directory.staging_path("landmarks.png"), run, result);
   directory.commit();
+  if (result.report.interrupted || interrupted()) {
+    std::fprintf(stderr, "cairn landmarks: interrupted after step %zu of %zu: wrote the result so far to %s\n",
+                 result.report.steps, result.report.steps_in_run, flags.out.c_str());
+    return interrupted_exit_status();
+  }
 
   if (flags.quiet) return 0;
   const landmarks::LandmarkSlamReport& r = result.report;

@@ -150,6 +150,7 @@ struct EkfPass {
   double time_s = 0.0;
   double mean_step_s = 0.0;
   double max_step_s = 0.0;
+  std::size_t steps_done = 0;  // < steps.size() when should_stop ended the pass
 };
 
 EkfPass run_ekf(const LandmarkRun& run, const std::vector<Step>& steps, const LandmarkSlamOptions& options,
@@ -174,7 +175,12 @@ EkfPass run_ekf(const LandmarkRun& run, const std::vector<Step>& steps, const La
     ++pass.counts.landmarks_created;
   };
 
+  pass.steps_done = steps.size();
   for (std::size_t k = 0; k < steps.size(); ++k) {
+    if (k > 0 && options.should_stop && options.should_stop()) {
+      pass.steps_done = k;
+      break;
+    }
     const Step& step = steps[k];
     const auto step_start = Clock::now();
     if (k > 0) {
@@ -314,7 +320,7 @@ EkfPass run_ekf(const LandmarkRun& run, const std::vector<Step>& steps, const La
     }
   }
   pass.time_s = seconds_since(run_start);
-  pass.mean_step_s = pass.time_s / static_cast<double>(steps.size());
+  pass.mean_step_s = pass.time_s / static_cast<double>(pass.steps_done);
   pass.mean_pose_nees = nees_count == 0 ? kNaN : nees_sum / static_cast<double>(nees_count);
   pass.counters = ekf.counters();
   if (options.association != Association::kKnown) {
@@ -374,6 +380,7 @@ struct GraphPass {
   double time_s = 0.0;
   double final_solve_s = 0.0;
   std::size_t solves = 0;  // every optimize() call: checkpoints and graph_solve_every_steps
+  std::size_t steps_done = 0;  // < steps.size() when should_stop ended the pass
 };
 
 // Graph SLAM over growing prefixes of the run, warm-started from the previous prefix.
@@ -390,8 +397,15 @@ GraphPass run_graph(const LandmarkRun& run, const std::vector<Step>& steps, cons
   const Matrix2 R_information = R.inverse();
   std::size_t built = 0;  // steps already in the graph
   const auto start = Clock::now();
-  for (const std::size_t checkpoint : checkpoints) {
+  bool stopping = false;
+  for (std::size_t checkpoint : checkpoints) {
     for (; built <= checkpoint; ++built) {
+      if (built > 0 && options.should_stop && options.should_stop()) {
+        // Interrupted: the graph built so far is solved as the last checkpoint.
+        stopping = true;
+        checkpoint = built - 1;
+        break;
+      }
       const Step& step = steps[built];
       if (built == 0) {
         graph.poses.push_back(step.odometry);
@@ -450,14 +464,17 @@ GraphPass run_graph(const LandmarkRun& run, const std::vector<Step>& steps, cons
     });
     point.landmark_nees_mean = marginals.ok ? mean : kNaN;
     point.landmarks_evaluated = marginals.ok ? count : 0;
+    if (stopping && !pass.nees.empty() && pass.nees.back().step == checkpoint) pass.nees.pop_back();  // solved again
     pass.nees.push_back(point);
-    if (checkpoint == checkpoints.back()) {
+    if (checkpoint == checkpoints.back() || stopping) {
       for (std::size_t l = 0; l < graph.landmarks.size(); ++l) {
         pass.landmarks.push_back({variable_labels[l], graph.landmarks[l], marginals.landmarks[l], variable_observations[l]});
       }
     }
+    if (stopping) break;
   }
   pass.poses = graph.poses;
+  pass.steps_done = graph.poses.size();
   pass.time_s = seconds_since(start);
   return pass;
 }
@@ -541,22 +558,30 @@ LandmarkSlamResult run_landmark_slam(const LandmarkRun& run, const LandmarkSlamO
   CAIRN_ASSERT(options.is_valid(nullptr), "run_landmark_slam: invalid options (check LandmarkSlamOptions::is_valid)");
   CAIRN_ASSERT(!run.odometry.empty(), "run_landmark_slam: the run has no odometry");
   const auto start = Clock::now();
-  const std::vector<Step> steps = make_steps(run, options.odometry);
+  std::vector<Step> steps = make_steps(run, options.odometry);
   const Truth truth(run);
-  const std::vector<std::size_t> checkpoints = checkpoint_steps(steps.size(), options.nees_checkpoints);
+  std::vector<std::size_t> checkpoints = checkpoint_steps(steps.size(), options.nees_checkpoints);
+  const std::size_t steps_in_run = steps.size();
+  // Interrupted (options.should_stop): what follows sees the run up to the last step processed.
+  auto truncate = [&](std::size_t done) {
+    if (done >= steps.size()) return;
+    steps.resize(done);
+    while (!checkpoints.empty() && checkpoints.back() >= done) checkpoints.pop_back();
+    if (checkpoints.empty() || checkpoints.back() != done - 1) checkpoints.push_back(done - 1);
+  };
 
   LandmarkSlamResult result;
   LandmarkSlamReport& report = result.report;
   report.method = std::string(to_string(options.method));
   report.association = std::string(to_string(options.association));
   report.source = run.source;
-  report.steps = steps.size();
 
   std::vector<Vector3> poses;
   // The EKF runs for the EKF method, and as the association front end for graph SLAM with
   // unknown association.
   if (options.method == Method::kEkf || options.association != Association::kKnown) {
     EkfPass ekf = run_ekf(run, steps, options, truth, checkpoints);
+    truncate(ekf.steps_done);
     report.association_counts = ekf.counts;
     report.ekf_counters = ekf.counters;
     report.ekf_time_s = ekf.time_s;
@@ -568,8 +593,13 @@ LandmarkSlamResult run_landmark_slam(const LandmarkRun& run, const LandmarkSlamO
       report.nees = ekf.nees;
       report.mean_pose_nees_all_steps = ekf.mean_pose_nees;
     } else {
-      const GraphPass graph = run_graph(run, steps, options, truth, checkpoints, ekf.landmark_of_observation, ekf.labels);
+      // The EKF (the association front end) already stopped: the graph takes all it associated.
+      LandmarkSlamOptions graph_options = options;
+      if (steps.size() < steps_in_run) graph_options.should_stop = nullptr;
+      const GraphPass graph =
+          run_graph(run, steps, graph_options, truth, checkpoints, ekf.landmark_of_observation, ekf.labels);
       poses = graph.poses;
+      truncate(graph.steps_done);
       result.landmarks = graph.landmarks;
       report.nees = graph.nees;
       report.graph_summary = graph.summary;
@@ -607,6 +637,7 @@ LandmarkSlamResult run_landmark_slam(const LandmarkRun& run, const LandmarkSlamO
     }
     const GraphPass graph = run_graph(run, steps, options, truth, checkpoints, key_of_observation, labels);
     poses = graph.poses;
+    truncate(graph.steps_done);
     result.landmarks = graph.landmarks;
     report.nees = graph.nees;
     report.graph_summary = graph.summary;
@@ -616,6 +647,9 @@ LandmarkSlamResult run_landmark_slam(const LandmarkRun& run, const LandmarkSlamO
     report.mean_pose_nees_all_steps = kNaN;
   }
 
+  report.steps = steps.size();
+  report.steps_in_run = steps_in_run;
+  report.interrupted = steps.size() < steps_in_run;
   for (std::size_t k = 0; k < steps.size(); ++k) result.trajectory.push_back({steps[k].time, poses[k]});
   report.landmarks = result.landmarks.size();
 

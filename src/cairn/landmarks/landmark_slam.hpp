@@ -17,6 +17,7 @@
 /// candidates that expire are counted as rejected. Graph SLAM with unknown association uses the
 /// associations the EKF front end made (the graph itself does not re-associate).
 
+#include <functional>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -86,6 +87,11 @@ struct LandmarkSlamOptions {
   /// 100 steps (10 s at the simulator's 10 Hz), removes the wrong minima that solving only at
   /// 8 checkpoints reached with very large heading noise (test PeriodicGraphSolves*).
   int graph_solve_every_steps = 100;
+  /// Polled once per step (not a setting of the estimate): true ends the run after the step
+  /// before; the result is that of the run up to there (graph SLAM: solved once more on the
+  /// graph built so far) and LandmarkSlamReport::interrupted says so. The CLI stops on
+  /// SIGINT/SIGTERM this way. May be empty.
+  std::function<bool()> should_stop;
 
   /// Every problem, "; "-separated.
   bool is_valid(std::string* why) const;
@@ -136,7 +142,9 @@ struct LandmarkSlamReport {
   std::string method;
   std::string association;
   std::string source;
-  std::size_t steps = 0;
+  std::size_t steps = 0;        ///< steps processed (all of the run unless interrupted)
+  std::size_t steps_in_run = 0;
+  bool interrupted = false;     ///< LandmarkSlamOptions::should_stop ended it early
   std::size_t landmarks = 0;
   /// Position error of the trajectory against ground truth at matching times, no alignment
   /// (both in the world frame); EKF: the filtered estimate at each step; graph: the smoothed one.

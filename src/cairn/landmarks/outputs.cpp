@@ -68,6 +68,8 @@ std::string report_json(const LandmarkSlamReport& r) {
   j["association"] = r.association;
   j["source"] = r.source;
   j["steps"] = r.steps;
+  j["steps_in_run"] = r.steps_in_run;
+  j["interrupted"] = r.interrupted;
   j["landmarks"] = r.landmarks;
   j["ate"] = {{"rmse_m", number_or_null(r.ate_rmse_m)},
               {"max_m", number_or_null(r.ate_max_m)},
