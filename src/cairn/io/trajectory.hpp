@@ -100,8 +100,9 @@ Trajectory read_kitti(const std::string& path, const std::string& times_path = "
 /// are skipped. Timestamps are integer nanoseconds and must strictly increase.
 Trajectory read_euroc(const std::string& path, TrajectoryReadReport* report = nullptr);
 
-/// Writers replace `path` atomically (write `path.tmp.<pid>`, then rename), so a crash never
-/// leaves half a file. Numbers are written as the shortest text that parses back to the same
+/// Writers go through io::OutputFile: a regular file is replaced atomically (a hidden temporary,
+/// then rename, through symlinks), so a crash never leaves half a file; "-", FIFOs and devices
+/// are written in place (docs/conventions.md, "Outputs"). Numbers are written as the shortest text that parses back to the same
 /// double, stamps exactly (seconds with 9 decimals; EuRoC integer ns), so reading the file back
 /// gives bit-identical stamps, translations and (unit) quaternions. KITTI stores the matrix,
 /// which is rebuilt from the quaternion and re-projected on reading: equal to ~1e-15, not bits.
