@@ -81,7 +81,7 @@ int info_graph(const InfoFlags& flags, io::FileFormat format) {
 
   if (!io::is_standard_output(flags.json)) {
     std::ostringstream o;
-    o << "file              " << flags.path << '\n';
+    o << "file              " << (flags.path == "-" ? "standard input" : flags.path) << '\n';
     o << "format            " << io::to_string(r.format) << ", " << s.dimension << "D pose graph\n";
     o << "poses             " << s.poses << "  (ids " << s.min_id << ".." << s.max_id
       << (s.contiguous_ids ? ", contiguous" : ", with gaps") << ")\n";
@@ -166,7 +166,7 @@ int info_trajectory(const InfoFlags& flags, io::FileFormat format) {
   if (!io::is_standard_output(flags.json)) {
     std::ostringstream o;
     o << std::fixed;
-    o << "file              " << flags.path << '\n';
+    o << "file              " << (flags.path == "-" ? "standard input" : flags.path) << '\n';
     o << "format            " << io::to_string(format) << " trajectory\n";
     o << "poses             " << trajectory.poses.size() << '\n';
     if (trajectory.has_stamps()) {
@@ -225,7 +225,7 @@ int info_carmen(const InfoFlags& flags) {
   if (!io::is_standard_output(flags.json)) {
     std::ostringstream o;
     o << std::fixed << std::setprecision(3);
-    o << "file              " << flags.path << '\n';
+    o << "file              " << (flags.path == "-" ? "standard input" : flags.path) << '\n';
     o << "format            CARMEN log\n";
     o << "records          ";
     for (const auto& [tag, count] : report.records) o << ' ' << tag << ' ' << count;

@@ -285,6 +285,9 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
 }
 
 int optimize_command(const OptimizeFlags& flags) {
+  if (io::is_standard_output(flags.output) && !flags.report.empty() && io::is_standard_output(flags.report)) {
+    throw io::ParseError(flags.report, 0, "the graph already goes to standard output: give --report a file");
+  }
   claim_standard_output(flags.output);
   claim_standard_output(flags.report);
   io::GraphReadOptions options = flags.graph.options();
