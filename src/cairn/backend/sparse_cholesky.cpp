@@ -298,6 +298,11 @@ void SparseCholesky::analyze_in_stored_order(const UpperCsc& A) {
   impl_->flops = impl_->common.fl;
 }
 
+void SparseCholesky::require_ll() {
+  impl_->common.supernodal = CHOLMOD_SUPERNODAL;
+  impl_->common.final_ll = 1;
+}
+
 FactorizationStatus SparseCholesky::factorize(const UpperCsc& A) {
   const SerialOpenMpRegions serial;
   CAIRN_ASSERT(impl_->factor != nullptr && A.size == impl_->size, "factorize() before analyze()");

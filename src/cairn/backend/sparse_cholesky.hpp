@@ -102,6 +102,11 @@ class SparseCholesky {
   SparseCholesky(const SparseCholesky&) = delete;
   SparseCholesky& operator=(const SparseCholesky&) = delete;
 
+  /// Always an LL^T factorisation (supernodal), so that factorize() reports
+  /// kNotPositiveDefinite for every matrix that is not positive definite: CHOLMOD's simplicial
+  /// LDL^T, which it picks for small or very sparse matrices, factorises indefinite ones too.
+  /// For positive-definiteness tests (the certificate). Call before analyze().
+  void require_ll();
   /// Symbolic analysis of the pattern of `A` (values ignored). Call again when the pattern changes.
   /// With `ordering` (a permutation of the scalar variables), CHOLMOD uses it as given;
   /// otherwise it chooses (AMD, and METIS when AMD fills in badly).

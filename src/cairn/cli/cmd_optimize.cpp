@@ -1,12 +1,14 @@
 // `cairn optimize IN -o OUT`: pose-graph optimisation with a chosen initialisation, solver,
 // objective and robust cost; progress per iteration on stderr; a JSON report on request.
 
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <optional>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "cairn/backend/certificate.hpp"
 #include "cairn/backend/covariance.hpp"
 #include "cairn/backend/gnc.hpp"
 #include "cairn/backend/initialization.hpp"
@@ -39,6 +41,8 @@ struct OptimizeFlags {
   int max_iterations = 100;
   double initial_radius = backend::OptimizerOptions{}.initial_trust_region_radius;
   bool exact_steps = false;
+  bool certify = false;
+  double certify_tolerance = backend::CertificateOptions{}.eigenvalue_tolerance;
   std::string report;
   bool quiet = false;
   GraphReadFlags graph;
@@ -196,6 +200,18 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
               summary.total_s + init_summary.total_s, init_summary.total_s, summary.analyze_s, summary.linearize_s,
               summary.factorize_s, summary.solve_s);
   std::printf("final chi2 (geodesic) %.10g, SE-Sync objective f (chordal) %.10g\n", final_geodesic, final_chordal);
+  std::optional<backend::CertificateSummary> certificate;
+  if (flags.certify) {
+    if (options.objective != backend::Objective::kChordal) {
+      warn("--certify proves optimality for SE-Sync's chordal objective; this solve minimised the geodesic one, "
+           "whose minimiser is not the chordal one's (use --objective chordal)");
+    }
+    backend::CertificateOptions certificate_options;
+    certificate_options.eigenvalue_tolerance = flags.certify_tolerance;
+    certificate = backend::certify_chordal(problem, certificate_options);
+    std::printf("certificate (%.3f s, %d factorisations): %s\n", certificate->time_s, certificate->factorizations,
+                certificate->message.c_str());
+  }
 
   std::optional<io::OutputFile> report_file;
   if (!flags.report.empty()) {
@@ -213,6 +229,22 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     j["final_chi2_geodesic"] = final_geodesic;
     j["final_f_chordal"] = final_chordal;
     j["read_warnings"] = file.report.warnings;
+    if (certificate) {
+      // JSON has no infinity: an unknown end of the bracket is null.
+      auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+      j["certificate"] = {{"certified", certificate->certified},
+                          {"f", certificate->f},
+                          {"lambda_min_lower", finite_or_null(certificate->lambda_min_lower)},
+                          {"lambda_min_upper", finite_or_null(certificate->lambda_min_upper)},
+                          {"eigenvalue_tolerance", flags.certify_tolerance},
+                          {"suboptimality_bound", finite_or_null(certificate->suboptimality_bound)},
+                          {"relative_suboptimality_bound", finite_or_null(certificate->relative_suboptimality_bound)},
+                          {"rank", certificate->d},
+                          {"factorizations", certificate->factorizations},
+                          {"factor_nonzeros", certificate->factor_nonzeros},
+                          {"time_s", certificate->time_s},
+                          {"message", certificate->message}};
+    }
     j["interrupted"] = stopped;
     if (stopped) j["interruption"] = {{"signal", interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT"}};
     if (!flags.covariance_ids.empty()) {
@@ -412,6 +444,13 @@ Runner register_optimize(CLI::App& app) {
       ->capture_default_str();
   app.add_flag("--exact-steps", flags->exact_steps,
                "LM: factorise every iteration instead of solving by PCG on the last factorisation");
+  app.add_flag("--certify", flags->certify,
+               "After the solve, the dual certificate of SE-Sync's chordal problem (Rosen et al. 2019): certified "
+               "globally optimal or not, lambda_min and a suboptimality bound (docs/backend.md)");
+  app.add_option("--certify-tolerance", flags->certify_tolerance,
+                 "Certified when lambda_min(S) >= -this (absolute; SE-Sync's min_eig_num_tol)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--report", flags->report, "Write a JSON report (summary, per-iteration log, timings)");
   app.add_option("--covariance", flags->covariance_ids,
                  "Pose ids whose marginal covariance goes into the report (comma separated)")
