@@ -79,6 +79,56 @@ TEST(GeodesicFactor, JacobiansMatchCentralDifferencesSE3) { check_jacobians<Geod
 TEST(ChordalFactor, JacobiansMatchCentralDifferencesSE2) { check_jacobians<ChordalFactor<core::SE2>, core::SE2>(3); }
 TEST(ChordalFactor, JacobiansMatchCentralDifferencesSE3) { check_jacobians<ChordalFactor<core::SE3>, core::SE3>(4); }
 
+// The exact Hessian of ||r||^2 / 2 pulled back through T exp(delta), J^T J + S, against central
+// second differences of that scalar, on 1,000 random pose pairs per group.
+template <class Group>
+void check_chordal_hessian(std::uint64_t seed) {
+  using Factor = ChordalFactor<Group>;
+  constexpr int D = Group::kDoF;
+  std::mt19937_64 rng(seed);
+  double worst = 0.0;
+  for (int sample = 0; sample < 1000; ++sample) {
+    const PoseEdge<Group> edge = random_edge<Group>(rng);
+    const Group Ti = random_pose<Group>(rng, 2.0);
+    const Group Tj = sample % 2 == 0 ? Ti * edge.T_i_j * random_pose<Group>(rng, 0.1) : Ti * random_pose<Group>(rng, 0.5);
+    typename Factor::Jacobian Ji;
+    typename Factor::Jacobian Jj;
+    const typename Factor::Residual r = Factor::evaluate(Ti, Tj, edge, &Ji, &Jj);
+    typename Factor::Hessian Sii;
+    typename Factor::Hessian Sjj;
+    Factor::second_order(Ti, Tj, edge, r, &Sii, &Sjj);
+    for (const bool wrt_i : {true, false}) {
+      const Eigen::Matrix<double, D, D> H = wrt_i ? Eigen::Matrix<double, D, D>(Ji.transpose() * Ji + Sii)
+                                                  : Eigen::Matrix<double, D, D>(Jj.transpose() * Jj + Sjj);
+      auto cost = [&](const typename Group::Tangent& delta) {
+        const Group a = wrt_i ? Ti * Group::exp(delta) : Ti;
+        const Group b = wrt_i ? Tj : Tj * Group::exp(delta);
+        return 0.5 * Factor::evaluate(a, b, edge, nullptr, nullptr).squaredNorm();
+      };
+      constexpr double h = 1e-4;
+      Eigen::Matrix<double, D, D> N;
+      for (int p = 0; p < D; ++p) {
+        for (int q = 0; q < D; ++q) {
+          typename Group::Tangent ep = Group::Tangent::Zero();
+          typename Group::Tangent eq = Group::Tangent::Zero();
+          ep[p] = h;
+          eq[q] = h;
+          N(p, q) = (cost(ep + eq) - cost(ep - eq) - cost(eq - ep) + cost(-ep - eq)) / (4 * h * h);
+        }
+      }
+      const double scale = std::max(1.0, N.cwiseAbs().maxCoeff());
+      const double error = (H - N).cwiseAbs().maxCoeff() / scale;
+      worst = std::max(worst, error);
+      ASSERT_LT(error, 1e-5) << "sample " << sample << (wrt_i ? " pose i" : " pose j") << "\nexact\n" << H
+                             << "\nnumeric\n" << N;
+    }
+  }
+  ::testing::Test::RecordProperty("worst_relative_error", std::to_string(worst));
+}
+
+TEST(ChordalFactor, ExactHessianMatchesSecondDifferencesSE2) { check_chordal_hessian<core::SE2>(5); }
+TEST(ChordalFactor, ExactHessianMatchesSecondDifferencesSE3) { check_chordal_hessian<core::SE3>(6); }
+
 TEST(GeodesicFactor, ZeroAtTheMeasurement) {
   std::mt19937_64 rng(5);
   const PoseEdge<core::SE3> edge = random_edge<core::SE3>(rng);

@@ -1,5 +1,8 @@
 #include "cairn/backend/factors.hpp"
 
+#include <array>
+#include <cmath>
+
 namespace cairn::backend {
 namespace {
 
@@ -97,6 +100,43 @@ typename ChordalFactor<Group>::Residual ChordalFactor<Group>::evaluate(const Gro
     J_r_j->template block<d, d>(d * d, 0) = st * R_j;
   }
   return r;
+}
+
+template <class Group>
+void ChordalFactor<Group>::second_order(const Group& T_world_i, const Group& T_world_j, const PoseEdge<Group>& edge,
+                                        const Residual& r, Hessian* S_ii, Hessian* S_jj) {
+  using MatrixD = Eigen::Matrix<double, d, d>;
+  using VectorD = Eigen::Matrix<double, d, 1>;
+  constexpr int kRot = kDoF - d;  // rotation parameters
+  const MatrixD R_i = rotation(T_world_i);
+  const MatrixD R_j = rotation(T_world_j);
+  const MatrixD R_ij = rotation(edge.T_i_j);
+  const VectorD t_ij = edge.T_i_j.translation();
+  const double sk = std::sqrt(edge.kappa);
+  const double st = std::sqrt(edge.tau);
+  const Eigen::Map<const MatrixD> r_R(r.data());  // vec() is column-major, as in evaluate()
+  const VectorD r_t = r.template tail<d>();
+  S_ii->setZero();
+  S_jj->setZero();
+  std::array<MatrixD, kRot> G;
+  for (int a = 0; a < kRot; ++a) G[static_cast<std::size_t>(a)] = generator<d>(a);
+  for (int a = 0; a < kRot; ++a) {
+    for (int b = a; b < kRot; ++b) {
+      const MatrixD sym = 0.5 * (G[static_cast<std::size_t>(a)] * G[static_cast<std::size_t>(b)] +
+                                 G[static_cast<std::size_t>(b)] * G[static_cast<std::size_t>(a)]);
+      const double ii = -sk * r_R.cwiseProduct(R_i * sym * R_ij).sum() - st * r_t.dot(R_i * sym * t_ij);
+      const double jj = sk * r_R.cwiseProduct(R_j * sym).sum();
+      (*S_ii)(d + a, d + b) = (*S_ii)(d + b, d + a) = ii;
+      (*S_jj)(d + a, d + b) = (*S_jj)(d + b, d + a) = jj;
+    }
+  }
+  for (int a = 0; a < d; ++a) {
+    for (int b = 0; b < kRot; ++b) {
+      const VectorD Ge = G[static_cast<std::size_t>(b)].col(a);  // G_b e_a
+      (*S_ii)(a, d + b) = (*S_ii)(d + b, a) = -0.5 * st * r_t.dot(R_i * Ge);
+      (*S_jj)(a, d + b) = (*S_jj)(d + b, a) = 0.5 * st * r_t.dot(R_j * Ge);
+    }
+  }
 }
 
 template struct GeodesicFactor<core::SE2>;

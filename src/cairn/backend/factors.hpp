@@ -47,6 +47,18 @@ struct ChordalFactor {
 
   static Residual evaluate(const Group& T_world_i, const Group& T_world_j, const PoseEdge<Group>& edge,
                            Jacobian* J_r_i, Jacobian* J_r_j);
+
+  using Hessian = Eigen::Matrix<double, kDoF, kDoF>;
+  /// The second-order part of the Hessian of ||r||^2 / 2 under the perturbations T <- T exp(delta):
+  /// S_ii = sum_k r_k d^2 r_k / d delta_i^2 and S_jj likewise (r is linear in each pose's R and t,
+  /// so there is no i-j term). With T exp(delta) = (R exp(phi), t + R V(phi) rho), V = I + [phi]/2
+  /// + O(phi^2):
+  ///   d^2 R / d phi_a d phi_b = R Sym(G_a G_b),   d^2 t / d rho_a d phi_b = R G_b e_a / 2,
+  /// the other second derivatives 0. J^T J + S is the exact Hessian of the pulled-back cost, whose
+  /// Newton steps converge quadratically where Gauss-Newton's converge linearly (the chordal
+  /// residuals do not vanish at the optimum). `r` is the residual evaluate() returned.
+  static void second_order(const Group& T_world_i, const Group& T_world_j, const PoseEdge<Group>& edge,
+                           const Residual& r, Hessian* S_ii, Hessian* S_jj);
 };
 
 /// Calls `f` with a value of the factor type of `objective` (GeodesicFactor<Group>{} or

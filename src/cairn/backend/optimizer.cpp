@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <type_traits>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -218,6 +219,19 @@ class Engine {
     const KernelValue kernel = evaluate_kernel(options_.kernel, options_.kernel_scale, r.squaredNorm());
     // IRLS: scale by sqrt(w rho'(s)) (robust_kernel.hpp).
     const double scale = std::sqrt(w * kernel.weight);
+    Eigen::Matrix<double, D, D> S_ii;
+    Eigen::Matrix<double, D, D> S_jj;
+    bool second_order = false;
+    if constexpr (std::is_same_v<Factor, ChordalFactor<Group>>) {
+      if (options_.exact_chordal_hessian) {
+        // The exact Hessian J^T J + S (ChordalFactor::second_order), weighted as J^T J is.
+        Factor::second_order(poses[static_cast<std::size_t>(edge.i)], poses[static_cast<std::size_t>(edge.j)], edge, r,
+                             &S_ii, &S_jj);
+        S_ii *= scale * scale;
+        S_jj *= scale * scale;
+        second_order = true;
+      }
+    }
     if (scale != 1.0) {
       r *= scale;
       Ji *= scale;
@@ -226,6 +240,15 @@ class Engine {
     auto& b = blocks_[e];
     pack_upper_gram(Ji, b.Hii);
     pack_upper_gram(Jj, b.Hjj);
+    if (second_order) {
+      std::size_t index = 0;
+      for (int k = 0; k < D; ++k) {
+        for (int a = 0; a <= k; ++a, ++index) {
+          b.Hii[index] += S_ii(a, k);
+          b.Hjj[index] += S_jj(a, k);
+        }
+      }
+    }
     b.Hij.noalias() = Ji.transpose() * Jj;
     b.gi.noalias() = Ji.transpose() * r;
     b.gj.noalias() = Jj.transpose() * r;

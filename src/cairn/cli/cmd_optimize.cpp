@@ -41,6 +41,7 @@ struct OptimizeFlags {
   int max_iterations = 100;
   double initial_radius = backend::OptimizerOptions{}.initial_trust_region_radius;
   bool exact_steps = false;
+  bool gauss_newton_hessian = false;
   bool certify = false;
   double certify_tolerance = backend::CertificateOptions{}.eigenvalue_tolerance;
   std::string report;
@@ -117,6 +118,7 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
   options.initial_trust_region_radius = flags.initial_radius;
   options.reuse_factorization = !flags.exact_steps;
   options.should_stop = stop_on_signal();
+  options.exact_chordal_hessian = !flags.gauss_newton_hessian;
   std::string invalid;
   if (!options.is_valid(&invalid)) throw io::ParseError("cairn optimize", 0, invalid);
   if (!flags.quiet) {
@@ -444,6 +446,9 @@ Runner register_optimize(CLI::App& app) {
       ->capture_default_str();
   app.add_flag("--exact-steps", flags->exact_steps,
                "LM: factorise every iteration instead of solving by PCG on the last factorisation");
+  app.add_flag("--gauss-newton-hessian", flags->gauss_newton_hessian,
+               "Chordal objective: Gauss-Newton's J^T J instead of the exact Hessian J^T J + S (converges only "
+               "linearly there; for comparison)");
   app.add_flag("--certify", flags->certify,
                "After the solve, the dual certificate of SE-Sync's chordal problem (Rosen et al. 2019): certified "
                "globally optimal or not, lambda_min and a suboptimality bound (docs/backend.md)");
