@@ -19,15 +19,11 @@ namespace cairn::backend {
 namespace {
 
 template <class Group>
-constexpr int kD = Group::kDoF == 3 ? 2 : 3;
+constexpr int kD = kRotationDim<Group>;
 
 template <class Group>
 Eigen::MatrixXd rotation_of(const Group& T) {
-  if constexpr (Group::kDoF == 3) {
-    return T.so2().matrix();
-  } else {
-    return T.rotation_matrix();
-  }
+  return rotation_matrix_of(T);
 }
 
 /// SE-Sync's f for arbitrary (unconstrained) d x d blocks R_i and vectors t_i, the columns of

@@ -14,18 +14,6 @@
 namespace cairn::backend {
 namespace {
 
-template <class Group>
-constexpr int kD = Group::kDoF == 3 ? 2 : 3;
-
-template <class Group>
-Eigen::Matrix<double, kD<Group>, kD<Group>> rotation_of(const Group& T) {
-  if constexpr (Group::kDoF == 3) {
-    return T.so2().matrix();
-  } else {
-    return T.rotation_matrix();
-  }
-}
-
 using Triplets = std::vector<Eigen::Triplet<double>>;
 
 /// Adds w v v^T for a sparse vector v given as (index, value) pairs.
@@ -49,7 +37,7 @@ bool CertificateOptions::is_valid(std::string* error) const {
 
 template <class Group>
 CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const CertificateOptions& options) {
-  constexpr int d = kD<Group>;
+  constexpr int d = kRotationDim<Group>;
   using MatrixD = Eigen::Matrix<double, d, d>;
   using VectorD = Eigen::Matrix<double, d, 1>;
   const auto start = std::chrono::steady_clock::now();
@@ -78,7 +66,7 @@ CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const
   Triplets triplets;
   triplets.reserve(problem.edges.size() * static_cast<std::size_t>((2 + d) * (2 + d) + d * (1 + d) * (1 + d)));
   for (const auto& edge : problem.edges) {
-    const MatrixD R_ij = rotation_of(edge.T_i_j);
+    const MatrixD R_ij = rotation_matrix_of(edge.T_i_j);
     const VectorD t_ij = edge.T_i_j.translation();
     std::array<std::pair<int, double>, 2 + d> a;
     a[0] = {edge.j, 1.0};
@@ -108,7 +96,7 @@ CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const
 
   // Optimal translations for the given rotations: M_tt,red t_red = -(M_tR R^T)_red.
   Eigen::MatrixXd R(d, n * d);
-  for (int p = 0; p < n; ++p) R.block<d, d>(0, p * d) = rotation_of(problem.T_world_pose[static_cast<std::size_t>(p)]);
+  for (int p = 0; p < n; ++p) R.block<d, d>(0, p * d) = rotation_matrix_of(problem.T_world_pose[static_cast<std::size_t>(p)]);
   Triplets tt;
   for (int c = 0; c < n; ++c) {
     for (Eigen::SparseMatrix<double>::InnerIterator it(M, c); it; ++it) {

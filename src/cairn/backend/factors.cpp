@@ -6,16 +6,6 @@
 namespace cairn::backend {
 namespace {
 
-// Rotation block R and translation t of either group, as fixed-size matrices.
-template <class Group>
-auto rotation(const Group& T) {
-  if constexpr (Group::kDoF == 3) {
-    return T.so2().matrix();
-  } else {
-    return T.rotation_matrix();
-  }
-}
-
 // Generators of so(2) / so(3).
 template <int d>
 Eigen::Matrix<double, d, d> generator(int k) {
@@ -40,6 +30,22 @@ Eigen::Matrix<double, d, d == 2 ? 1 : 3> rotate_derivative(const Eigen::Matrix<d
     return -R * core::SO3::hat(v);
   }
 }
+
+// What the chordal residual and its derivatives read of an edge and its two poses.
+template <class Group>
+struct ChordalTerms {
+  static constexpr int d = kRotationDim<Group>;
+  Eigen::Matrix<double, d, d> R_i, R_j, R_ij;
+  Eigen::Matrix<double, d, 1> t_ij;
+  double sqrt_kappa, sqrt_tau;
+  ChordalTerms(const Group& T_world_i, const Group& T_world_j, const PoseEdge<Group>& edge)
+      : R_i(rotation_matrix_of(T_world_i)),
+        R_j(rotation_matrix_of(T_world_j)),
+        R_ij(rotation_matrix_of(edge.T_i_j)),
+        t_ij(edge.T_i_j.translation()),
+        sqrt_kappa(std::sqrt(edge.kappa)),
+        sqrt_tau(std::sqrt(edge.tau)) {}
+};
 
 }  // namespace
 
@@ -72,12 +78,13 @@ typename ChordalFactor<Group>::Residual ChordalFactor<Group>::evaluate(const Gro
                                                                        Jacobian* J_r_i, Jacobian* J_r_j) {
   using MatrixD = Eigen::Matrix<double, d, d>;
   using VectorD = Eigen::Matrix<double, d, 1>;
-  const MatrixD R_i = rotation(T_world_i);
-  const MatrixD R_j = rotation(T_world_j);
-  const MatrixD R_ij = rotation(edge.T_i_j);
-  const VectorD t_ij = edge.T_i_j.translation();
-  const double sk = std::sqrt(edge.kappa);
-  const double st = std::sqrt(edge.tau);
+  const ChordalTerms<Group> terms(T_world_i, T_world_j, edge);
+  const MatrixD& R_i = terms.R_i;
+  const MatrixD& R_j = terms.R_j;
+  const MatrixD& R_ij = terms.R_ij;
+  const VectorD& t_ij = terms.t_ij;
+  const double sk = terms.sqrt_kappa;
+  const double st = terms.sqrt_tau;
   Residual r;
   const MatrixD rotation_error = R_j - R_i * R_ij;
   r.template head<d * d>() = sk * Eigen::Map<const Eigen::Matrix<double, d * d, 1>>(rotation_error.data());
@@ -108,12 +115,13 @@ void ChordalFactor<Group>::second_order(const Group& T_world_i, const Group& T_w
   using MatrixD = Eigen::Matrix<double, d, d>;
   using VectorD = Eigen::Matrix<double, d, 1>;
   constexpr int kRot = kDoF - d;  // rotation parameters
-  const MatrixD R_i = rotation(T_world_i);
-  const MatrixD R_j = rotation(T_world_j);
-  const MatrixD R_ij = rotation(edge.T_i_j);
-  const VectorD t_ij = edge.T_i_j.translation();
-  const double sk = std::sqrt(edge.kappa);
-  const double st = std::sqrt(edge.tau);
+  const ChordalTerms<Group> terms(T_world_i, T_world_j, edge);
+  const MatrixD& R_i = terms.R_i;
+  const MatrixD& R_j = terms.R_j;
+  const MatrixD& R_ij = terms.R_ij;
+  const VectorD& t_ij = terms.t_ij;
+  const double sk = terms.sqrt_kappa;
+  const double st = terms.sqrt_tau;
   const Eigen::Map<const MatrixD> r_R(r.data());  // vec() is column-major, as in evaluate()
   const VectorD r_t = r.template tail<d>();
   S_ii->setZero();

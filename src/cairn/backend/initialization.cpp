@@ -22,19 +22,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 template <class Group>
-constexpr int kD = Group::kDoF == 3 ? 2 : 3;
-
-template <class Group>
-Eigen::Matrix<double, kD<Group>, kD<Group>> rotation_of(const Group& T) {
-  if constexpr (Group::kDoF == 3) {
-    return T.so2().matrix();
-  } else {
-    return T.rotation_matrix();
-  }
-}
-
-template <class Group>
-Group make_pose(const Eigen::Matrix<double, kD<Group>, kD<Group>>& R, const Eigen::Matrix<double, kD<Group>, 1>& t) {
+Group make_pose(const Eigen::Matrix<double, kRotationDim<Group>, kRotationDim<Group>>& R, const Eigen::Matrix<double, kRotationDim<Group>, 1>& t) {
   if constexpr (Group::kDoF == 3) {
     return Group(core::SO2::from_matrix(R), t);
   } else {
@@ -203,7 +191,7 @@ InitializationSummary initialize_odometry(PoseGraphProblem<Group>& problem) {
 
 template <class Group>
 InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
-  constexpr int d = kD<Group>;
+  constexpr int d = kRotationDim<Group>;
   using MatrixD = Eigen::Matrix<double, d, d>;
   using VectorD = Eigen::Matrix<double, d, 1>;
   const auto start = Clock::now();
@@ -218,7 +206,7 @@ InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
   for (const auto& edge : problem.edges) {
     edges.emplace_back(edge.i, edge.j);
     // Row k of R_j equals row k of R_i times R~: as columns, x_j = R~^T x_i with x = R^T.
-    A.push_back(rotation_of(edge.T_i_j).transpose());
+    A.push_back(rotation_matrix_of(edge.T_i_j).transpose());
     kappa.push_back(edge.kappa);
     tau.push_back(edge.tau);
   }
@@ -226,7 +214,7 @@ InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
   std::vector<MatrixD> known_R(static_cast<std::size_t>(n), MatrixD::Zero());
   for (int p = 0; p < n; ++p) {
     if (problem.fixed[static_cast<std::size_t>(p)]) {
-      known_R[static_cast<std::size_t>(p)] = rotation_of(problem.T_world_pose[static_cast<std::size_t>(p)]).transpose();
+      known_R[static_cast<std::size_t>(p)] = rotation_matrix_of(problem.T_world_pose[static_cast<std::size_t>(p)]).transpose();
     }
   }
   const Unknowns unknowns = number_unknowns(problem.fixed, edges, problem.elimination_order);

@@ -39,6 +39,20 @@ struct PoseEdge {
   std::size_t line = 0;  ///< line in the file (0 if none)
 };
 
+/// d of SE(d): 2 for SE(2), 3 for SE(3).
+template <class Group>
+inline constexpr int kRotationDim = Group::kDoF == 3 ? 2 : 3;
+
+/// The rotation of a pose as a d x d matrix.
+template <class Group>
+Eigen::Matrix<double, kRotationDim<Group>, kRotationDim<Group>> rotation_matrix_of(const Group& T) {
+  if constexpr (Group::kDoF == 3) {
+    return T.so2().matrix();
+  } else {
+    return T.rotation_matrix();
+  }
+}
+
 template <class Group>
 struct PoseGraphProblem {
   static constexpr int kDoF = Group::kDoF;
