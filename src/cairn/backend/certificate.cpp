@@ -8,7 +8,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <random>
 
+#include "cairn/backend/chordal_relaxation.hpp"
 #include "cairn/backend/sparse_cholesky.hpp"
 
 namespace cairn::backend {
@@ -35,33 +37,23 @@ bool CertificateOptions::is_valid(std::string* error) const {
   return why.empty();
 }
 
+struct ChordalRelaxation::TranslationSolver {
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  bool ok = false;
+};
+
 template <class Group>
-CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const CertificateOptions& options) {
+ChordalRelaxation make_chordal_relaxation(const PoseGraphProblem<Group>& problem) {
   constexpr int d = kRotationDim<Group>;
   using MatrixD = Eigen::Matrix<double, d, d>;
   using VectorD = Eigen::Matrix<double, d, 1>;
-  const auto start = std::chrono::steady_clock::now();
-  CertificateSummary summary;
-  summary.d = d;
+  ChordalRelaxation relaxation;
   const int n = problem.size();
-  summary.poses = n;
-  std::string invalid;
-  if (!options.is_valid(&invalid)) {
-    summary.message = "invalid options: " + invalid;
-    return summary;
-  }
-  if (n < 2) {
-    summary.certified = true;
-    summary.lambda_min_upper = std::numeric_limits<double>::infinity();
-    summary.message = "fewer than two poses: trivially optimal";
-    return summary;
-  }
-
-  // The translation-explicit data matrix M of SE-Sync (eq. 13-16), in a row formulation: row k
-  // of X = [t_1 .. t_n | R_1 .. R_n] (d x n(d+1)) is x, and f = sum_k x^T M x. Index of t_p is
-  // p, of column m of R_p is n + p d + m. Per edge, with residual rows written as a^T x:
-  //   translation row k:  t_j[k] - t_i[k] - sum_m R_i[k, m] t~[m]   (weight tau)
-  //   rotation row k, column c:  R_j[k, c] - sum_m R_i[k, m] R~[m, c]   (weight kappa)
+  relaxation.n = n;
+  relaxation.d = d;
+  // Per edge, with residual rows written as a^T y for a row y of Y:
+  //   translation row k:  t_j[k] - t_i[k] - sum_m Y_i[k, m] t~[m]   (weight tau)
+  //   rotation row k, column c:  Y_j[k, c] - sum_m Y_i[k, m] R~[m, c]   (weight kappa)
   const int full = n * (d + 1);
   Triplets triplets;
   triplets.reserve(problem.edges.size() * static_cast<std::size_t>((2 + d) * (2 + d) + d * (1 + d) * (1 + d)));
@@ -80,67 +72,113 @@ CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const
       add_outer(triplets, edge.kappa, b);
     }
   }
-  Eigen::SparseMatrix<double> M(full, full);
-  M.setFromTriplets(triplets.begin(), triplets.end());
-
-  // Gauge: the translation of one pose (the first fixed one) is held; its row and column go.
-  int anchor = 0;
-  int fixed_count = 0;
+  relaxation.M.resize(full, full);
+  relaxation.M.setFromTriplets(triplets.begin(), triplets.end());
   for (int p = 0; p < n; ++p) {
     if (problem.fixed[static_cast<std::size_t>(p)]) {
-      if (fixed_count == 0) anchor = p;
-      ++fixed_count;
+      if (relaxation.fixed_count == 0) relaxation.anchor = p;
+      ++relaxation.fixed_count;
     }
   }
-  auto reduced = [&](int index) { return index < n ? (index == anchor ? -1 : index - (index > anchor)) : index - 1; };
-
-  // Optimal translations for the given rotations: M_tt,red t_red = -(M_tR R^T)_red.
-  Eigen::MatrixXd R(d, n * d);
-  for (int p = 0; p < n; ++p) R.block<d, d>(0, p * d) = rotation_matrix_of(problem.T_world_pose[static_cast<std::size_t>(p)]);
+  // The anchored translational Laplacian M_tt, factorised once.
   Triplets tt;
   for (int c = 0; c < n; ++c) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(M, c); it; ++it) {
-      if (it.row() < n && c != anchor && it.row() != anchor) tt.emplace_back(reduced(static_cast<int>(it.row())), reduced(c), it.value());
+    for (Eigen::SparseMatrix<double>::InnerIterator it(relaxation.M, c); it; ++it) {
+      const int r = static_cast<int>(it.row());
+      if (r < n && c != relaxation.anchor && r != relaxation.anchor) {
+        tt.emplace_back(relaxation.reduced(r), relaxation.reduced(c), it.value());
+      }
     }
   }
-  Eigen::SparseMatrix<double> Mtt(n - 1, n - 1);
+  Eigen::SparseMatrix<double> Mtt(std::max(n - 1, 0), std::max(n - 1, 0));
   Mtt.setFromTriplets(tt.begin(), tt.end());
+  relaxation.translations = std::make_shared<ChordalRelaxation::TranslationSolver>();
+  relaxation.translations->ldlt.compute(Mtt);
+  relaxation.translations->ok = relaxation.translations->ldlt.info() == Eigen::Success;
+  return relaxation;
+}
+
+template <class Group>
+Eigen::MatrixXd rotation_blocks(const PoseGraphProblem<Group>& problem) {
+  constexpr int d = kRotationDim<Group>;
+  Eigen::MatrixXd R(d, problem.size() * d);
+  for (int p = 0; p < problem.size(); ++p) {
+    R.block<d, d>(0, p * d) = rotation_matrix_of(problem.T_world_pose[static_cast<std::size_t>(p)]);
+  }
+  return R;
+}
+
+bool ChordalRelaxation::with_optimal_translations(const Eigen::MatrixXd& R, Eigen::MatrixXd* Y) const {
+  if (!translations || !translations->ok) return false;
+  const int r = static_cast<int>(R.rows());
+  // M_tt,red t_red = -(M_tR R^T)_red, one right-hand side per row of Y.
   const Eigen::SparseMatrix<double> MtR = M.block(0, n, n, n * d);
-  const Eigen::MatrixXd B = MtR * R.transpose();  // n x d
-  Eigen::MatrixXd B_reduced(n - 1, d);
+  const Eigen::MatrixXd B = MtR * R.transpose();  // n x r
+  Eigen::MatrixXd B_reduced(n - 1, r);
   for (int p = 0; p < n; ++p) {
     if (p != anchor) B_reduced.row(reduced(p)) = B.row(p);
   }
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> translations(Mtt);
-  if (translations.info() != Eigen::Success) {
+  const Eigen::MatrixXd t_reduced = translations->ldlt.solve(-B_reduced);
+  Y->setZero(r, columns());
+  for (int p = 0; p < n; ++p) {
+    if (p != anchor) Y->col(p) = t_reduced.row(reduced(p)).transpose();
+  }
+  Y->rightCols(n * d) = R;
+  return true;
+}
+
+double ChordalRelaxation::f(const Eigen::MatrixXd& Y) const {
+  const Eigen::MatrixXd G = M * Y.transpose();
+  return Y.transpose().cwiseProduct(G).sum();
+}
+
+CertificateSummary certify_relaxation(const ChordalRelaxation& relaxation, const Eigen::MatrixXd& R,
+                                      const CertificateOptions& options, Eigen::RowVectorXd* escape) {
+  const auto start = std::chrono::steady_clock::now();
+  CertificateSummary summary;
+  const int n = relaxation.n;
+  const int d = relaxation.d;
+  const int r = static_cast<int>(R.rows());
+  summary.d = d;
+  summary.rank = r;
+  summary.poses = n;
+  std::string invalid;
+  if (!options.is_valid(&invalid)) {
+    summary.message = "invalid options: " + invalid;
+    return summary;
+  }
+  if (n < 2) {
+    summary.certified = true;
+    summary.lambda_min_upper = std::numeric_limits<double>::infinity();
+    summary.message = "fewer than two poses: trivially optimal";
+    return summary;
+  }
+  Eigen::MatrixXd Y;
+  if (!relaxation.with_optimal_translations(R, &Y)) {
     summary.message = "the translational Laplacian is singular: is the graph connected?";
     return summary;
   }
-  const Eigen::MatrixXd t_reduced = translations.solve(-B_reduced);
-  Eigen::MatrixXd X = Eigen::MatrixXd::Zero(d, full);
-  for (int p = 0; p < n; ++p) {
-    if (p != anchor) X.col(p) = t_reduced.row(reduced(p)).transpose();
-  }
-  X.rightCols(n * d) = R;
-  const Eigen::MatrixXd G = M * X.transpose();  // full x d; its rotation rows are Q R^T
-  summary.f = X.transpose().cwiseProduct(G).sum();
+  const Eigen::SparseMatrix<double>& M = relaxation.M;
+  const Eigen::MatrixXd G = M * Y.transpose();  // n(d+1) x r; its rotation rows are Q Y^T
+  summary.f = Y.transpose().cwiseProduct(G).sum();
 
-  // Lambda_i = Sym((Q R^T)_i R_i), and K(eta) = M_anchored - diag(0, Lambda) + diag(0, eta I).
+  // Lambda_i = Sym((Q Y^T)_i Y_i), and K(eta) = M_anchored - diag(0, Lambda) + diag(0, eta I).
+  const int full = relaxation.columns();
   Triplets k;
-  k.reserve(M.nonZeros() + static_cast<std::size_t>(n * d * (d + 1)));
+  k.reserve(static_cast<std::size_t>(M.nonZeros()) + static_cast<std::size_t>(n * d * (d + 1)));
   for (int c = 0; c < full; ++c) {
-    const int rc = reduced(c);
+    const int rc = relaxation.reduced(c);
     if (rc < 0) continue;
     for (Eigen::SparseMatrix<double>::InnerIterator it(M, c); it; ++it) {
-      const int rr = reduced(static_cast<int>(it.row()));
+      const int rr = relaxation.reduced(static_cast<int>(it.row()));
       if (rr >= 0 && rr <= rc) k.emplace_back(rr, rc, it.value());
     }
   }
   for (int p = 0; p < n; ++p) {
-    const MatrixD P = G.block<d, d>(n + p * d, 0) * R.block<d, d>(0, p * d);
-    const MatrixD Lambda = 0.5 * (P + P.transpose());
+    const Eigen::MatrixXd P = G.block(n + p * d, 0, d, r) * R.block(0, p * d, r, d);
+    const Eigen::MatrixXd Lambda = 0.5 * (P + P.transpose());
     for (int c = 0; c < d; ++c) {
-      for (int r = 0; r <= c; ++r) k.emplace_back(n - 1 + p * d + r, n - 1 + p * d + c, -Lambda(r, c));
+      for (int q = 0; q <= c; ++q) k.emplace_back(n - 1 + p * d + q, n - 1 + p * d + c, -Lambda(q, c));
     }
   }
   const int N = full - 1;
@@ -206,6 +244,32 @@ CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const
       }
     }
   }
+  if (escape != nullptr && !summary.certified && !failed && positive(eta_hi)) {
+    // Inverse iteration with S + eta_hi I, positive definite with its smallest eigenvalue
+    // lambda_min + eta_hi close to 0, through K(eta_hi): K [z_t; z_R] = [0; x] gives
+    // z_R = (S + eta_hi I)^-1 x and z_t = -M_tt^-1 M_tR z_R, the translations that go with it.
+    std::mt19937 rng(1);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    Eigen::VectorXd x(n * d);
+    for (int i = 0; i < x.size(); ++i) x(i) = normal(rng);
+    x.normalize();
+    Eigen::VectorXd z;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(N);
+      rhs.tail(n * d) = x;
+      z = cholesky.solve(rhs);
+      const double norm = z.tail(n * d).norm();
+      z /= norm;
+      const double change = (z.tail(n * d) - x).norm();
+      x = z.tail(n * d);
+      if (change < 1e-10) break;
+    }
+    escape->setZero(full);
+    for (int p = 0; p < n; ++p) {
+      if (p != relaxation.anchor) (*escape)(p) = z(relaxation.reduced(p));
+    }
+    escape->tail(n * d) = x.transpose();
+  }
   if (failed) {
     summary.certified = false;
     summary.message = "CHOLMOD failed to factorise the certificate matrix (out of memory?)";
@@ -224,8 +288,8 @@ CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const
                   summary.lambda_min_lower, summary.lambda_min_upper, summary.suboptimality_bound,
                   summary.relative_suboptimality_bound);
     summary.message = text;
-    if (fixed_count > 1) {
-      summary.message += "; the graph fixes " + std::to_string(fixed_count) +
+    if (relaxation.fixed_count > 1) {
+      summary.message += "; the graph fixes " + std::to_string(relaxation.fixed_count) +
                          " poses: the certificate speaks of the problem with one (the gauge)";
     }
   }
@@ -233,6 +297,19 @@ CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const
   return summary;
 }
 
+template <class Group>
+CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const CertificateOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const ChordalRelaxation relaxation = make_chordal_relaxation(problem);
+  CertificateSummary summary = certify_relaxation(relaxation, rotation_blocks(problem), options);
+  summary.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+template ChordalRelaxation make_chordal_relaxation(const Problem2D&);
+template ChordalRelaxation make_chordal_relaxation(const Problem3D&);
+template Eigen::MatrixXd rotation_blocks(const Problem2D&);
+template Eigen::MatrixXd rotation_blocks(const Problem3D&);
 template CertificateSummary certify_chordal(const Problem2D&, const CertificateOptions&);
 template CertificateSummary certify_chordal(const Problem3D&, const CertificateOptions&);
 

@@ -54,6 +54,7 @@ struct CertificateOptions {
 struct CertificateSummary {
   bool certified = false;
   int d = 0;                       ///< dimension of the rotations (2 or 3)
+  int rank = 0;                    ///< rows of the point certified (d, or more in the staircase)
   int poses = 0;
   /// SE-Sync's f at the given rotations with their optimal translations.
   double f = 0.0;
