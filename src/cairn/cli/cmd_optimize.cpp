@@ -13,6 +13,7 @@
 #include "cairn/backend/gnc.hpp"
 #include "cairn/backend/initialization.hpp"
 #include "cairn/backend/outliers.hpp"
+#include "cairn/backend/staircase.hpp"
 #include "cairn/backend/optimizer.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
@@ -182,6 +183,26 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     std::fprintf(stderr, "cairn optimize: interrupted by %s after %d iterations: writing the current estimate\n",
                  interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT", summary.iterations);
   }
+  // The certificate, and the Riemannian staircase when it fails (which may replace the poses by
+  // a better, certified set): before the graph is written.
+  std::optional<backend::StaircaseSummary> staircase;
+  if (flags.certify && !stopped) {
+    if (options.objective != backend::Objective::kChordal) {
+      warn("--certify proves optimality for SE-Sync's chordal objective; this solve minimised the geodesic one, "
+           "whose minimiser is not the chordal one's (use --objective chordal)");
+    }
+    backend::StaircaseOptions staircase_options;
+    staircase_options.certificate.eigenvalue_tolerance = flags.certify_tolerance;
+    staircase_options.polish = options;
+    staircase_options.polish.progress = nullptr;
+    staircase_options.climb = options.objective == backend::Objective::kChordal;
+    staircase = backend::riemannian_staircase(problem, staircase_options);
+    for (const auto& level : staircase->levels) {
+      std::printf("certificate at rank %d (%d iterations, %.3f s, %d factorisations): %s\n", level.rank, level.iterations,
+                  level.certificate.time_s, level.certificate.factorizations, level.certificate.message.c_str());
+    }
+    if (staircase->levels.size() > 1) std::printf("staircase (%.3f s): %s\n", staircase->time_s, staircase->message.c_str());
+  }
   const auto optimized = backend::to_graph(problem, graph);
   // The graph and the report form one set: both are produced before either replaces a file.
   io::OutputFile graph_file(flags.output);
@@ -202,18 +223,6 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
               summary.total_s + init_summary.total_s, init_summary.total_s, summary.analyze_s, summary.linearize_s,
               summary.factorize_s, summary.solve_s);
   std::printf("final chi2 (geodesic) %.10g, SE-Sync objective f (chordal) %.10g\n", final_geodesic, final_chordal);
-  std::optional<backend::CertificateSummary> certificate;
-  if (flags.certify) {
-    if (options.objective != backend::Objective::kChordal) {
-      warn("--certify proves optimality for SE-Sync's chordal objective; this solve minimised the geodesic one, "
-           "whose minimiser is not the chordal one's (use --objective chordal)");
-    }
-    backend::CertificateOptions certificate_options;
-    certificate_options.eigenvalue_tolerance = flags.certify_tolerance;
-    certificate = backend::certify_chordal(problem, certificate_options);
-    std::printf("certificate (%.3f s, %d factorisations): %s\n", certificate->time_s, certificate->factorizations,
-                certificate->message.c_str());
-  }
 
   std::optional<io::OutputFile> report_file;
   if (!flags.report.empty()) {
@@ -231,7 +240,8 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     j["final_chi2_geodesic"] = final_geodesic;
     j["final_f_chordal"] = final_chordal;
     j["read_warnings"] = file.report.warnings;
-    if (certificate) {
+    if (staircase) {
+      const backend::CertificateSummary* certificate = &staircase->certificate;
       // JSON has no infinity: an unknown end of the bracket is null.
       auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
       j["certificate"] = {{"certified", certificate->certified},
@@ -241,11 +251,26 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                           {"eigenvalue_tolerance", flags.certify_tolerance},
                           {"suboptimality_bound", finite_or_null(certificate->suboptimality_bound)},
                           {"relative_suboptimality_bound", finite_or_null(certificate->relative_suboptimality_bound)},
-                          {"rank", certificate->d},
+                          {"rank", certificate->rank},
                           {"factorizations", certificate->factorizations},
                           {"factor_nonzeros", certificate->factor_nonzeros},
                           {"time_s", certificate->time_s},
                           {"message", certificate->message}};
+      nlohmann::json levels = nlohmann::json::array();
+      for (const auto& level : staircase->levels) {
+        levels.push_back({{"rank", level.rank},
+                          {"iterations", level.iterations},
+                          {"f", level.f},
+                          {"certified", level.certificate.certified},
+                          {"lambda_min_lower", finite_or_null(level.certificate.lambda_min_lower)},
+                          {"lambda_min_upper", finite_or_null(level.certificate.lambda_min_upper)},
+                          {"time_s", level.certificate.time_s}});
+      }
+      j["staircase"] = {{"levels", levels},
+                        {"f_initial", staircase->f_initial},
+                        {"f_final", staircase->f_final},
+                        {"time_s", staircase->time_s},
+                        {"message", staircase->message}};
     }
     j["interrupted"] = stopped;
     if (stopped) j["interruption"] = {{"signal", interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT"}};
@@ -450,7 +475,8 @@ Runner register_optimize(CLI::App& app) {
                "Chordal objective: Gauss-Newton's J^T J instead of the exact Hessian J^T J + S (converges only "
                "linearly there; for comparison)");
   app.add_flag("--certify", flags->certify,
-               "After the solve, the dual certificate of SE-Sync's chordal problem (Rosen et al. 2019): certified "
+               "After the solve, the dual certificate of SE-Sync's chordal problem (Rosen et al. 2019) and, when it "
+               "fails, the Riemannian staircase: certified "
                "globally optimal or not, lambda_min and a suboptimality bound (docs/backend.md)");
   app.add_option("--certify-tolerance", flags->certify_tolerance,
                  "Certified when lambda_min(S) >= -this (absolute; SE-Sync's min_eig_num_tol)")

@@ -1,0 +1,328 @@
+#include "cairn/backend/staircase.hpp"
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCore>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "cairn/backend/chordal_relaxation.hpp"
+#include "cairn/backend/sparse_cholesky.hpp"
+
+namespace cairn::backend {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+/// The polar factor U W^T of A (r x d, full column rank): the nearest matrix with orthonormal columns.
+Eigen::MatrixXd polar(const Eigen::MatrixXd& A) {
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  return svd.matrixU() * svd.matrixV().transpose();
+}
+
+/// Levenberg-Marquardt on St(d, r)^n x R^(r n) (see staircase.hpp). Y is r x n(d+1).
+class RankSolver {
+ public:
+  RankSolver(const ChordalRelaxation& relaxation, int r)
+      : x_(relaxation), n_(relaxation.n), d_(relaxation.d), r_(r), q_(r + d_ * (d_ - 1) / 2 + (r - d_) * d_) {}
+
+  /// Minimises f from Y; returns the iterations taken.
+  int solve(Eigen::MatrixXd& Y, const StaircaseOptions& options) {
+    double f = x_.f(Y);
+    double lambda = -1.0;
+    int iterations = 0;
+    SparseCholesky cholesky;
+    cholesky.require_ll();
+    bool analyzed = false;
+    for (; iterations < options.max_iterations; ++iterations) {
+      build_bases(Y);
+      const Eigen::MatrixXd G = 2.0 * (x_.M * Y.transpose()).transpose();  // Euclidean gradient, r x N
+      const Eigen::VectorXd g = gradient(G);
+      if (g.size() == 0 || g.cwiseAbs().maxCoeff() <= options.gradient_tolerance * std::max(1.0, f)) break;
+      const Eigen::SparseMatrix<double> H = hessian(Y, G);
+      if (lambda < 0.0) lambda = 1e-6 * H.diagonal().cwiseAbs().maxCoeff();
+      bool accepted = false;
+      for (int attempt = 0; attempt < 60 && !accepted; ++attempt) {
+        Eigen::SparseMatrix<double> A = H;
+        for (int k = 0; k < A.rows(); ++k) A.coeffRef(k, k) += lambda;
+        const Eigen::SparseMatrix<double> U = A.triangularView<Eigen::Upper>();
+        UpperCsc csc;
+        csc.size = static_cast<int>(U.rows());
+        csc.column_start.assign(U.outerIndexPtr(), U.outerIndexPtr() + U.cols() + 1);
+        csc.row.assign(U.innerIndexPtr(), U.innerIndexPtr() + U.nonZeros());
+        csc.value.assign(U.valuePtr(), U.valuePtr() + U.nonZeros());
+        if (!analyzed) {
+          cholesky.analyze(csc);
+          analyzed = true;
+        }
+        if (cholesky.factorize(csc) != FactorizationStatus::kSuccess) {
+          lambda *= 10.0;  // the Hessian is indefinite here: more damping
+          continue;
+        }
+        const Eigen::VectorXd step = cholesky.solve(Eigen::VectorXd(-g));
+        const double predicted = -(g.dot(step) + 0.5 * step.dot(H * step));
+        const Eigen::MatrixXd trial = retract(Y, step);
+        const double f_trial = x_.f(trial);
+        const double ratio = predicted > 0.0 ? (f - f_trial) / predicted : -1.0;
+        if (ratio > 1e-3) {
+          const bool negligible = f - f_trial <= 1e-15 * std::max(1.0, f);
+          Y = trial;
+          f = f_trial;
+          lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));  // Nielsen (1999)
+          accepted = true;
+          if (negligible) return iterations + 1;
+        } else {
+          lambda *= 4.0;
+        }
+      }
+      if (!accepted) break;
+    }
+    return iterations;
+  }
+
+ private:
+  int variable(int p) const { return p < x_.anchor ? p : p - 1; }
+
+  /// Orthonormal bases of each pose's tangent space as (r (1 + d)) x q matrices acting on
+  /// vec([t_p | Y_p]) (column-major).
+  void build_bases(const Eigen::MatrixXd& Y) {
+    bases_.assign(static_cast<std::size_t>(n_), Eigen::MatrixXd());
+    for (int p = 0; p < n_; ++p) {
+      Eigen::MatrixXd B = Eigen::MatrixXd::Zero(r_ * (1 + d_), q_);
+      B.topLeftCorner(r_, r_).setIdentity();
+      const Eigen::MatrixXd Yp = Y.block(0, n_ + p * d_, r_, d_);
+      int column = r_;
+      auto put = [&](const Eigen::MatrixXd& V) {
+        B.col(column++).tail(r_ * d_) = Eigen::Map<const Eigen::VectorXd>(V.data(), r_ * d_);
+      };
+      for (int k = 0; k < d_; ++k) {
+        for (int l = k + 1; l < d_; ++l) {
+          Eigen::MatrixXd Omega = Eigen::MatrixXd::Zero(d_, d_);
+          Omega(k, l) = -std::sqrt(0.5);
+          Omega(l, k) = std::sqrt(0.5);
+          put(Yp * Omega);
+        }
+      }
+      if (r_ > d_) {
+        const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Yp);
+        const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(r_, r_);
+        const Eigen::MatrixXd perp = Q.rightCols(r_ - d_);
+        for (int m = 0; m < r_ - d_; ++m) {
+          for (int c = 0; c < d_; ++c) {
+            Eigen::MatrixXd V = Eigen::MatrixXd::Zero(r_, d_);
+            V.col(c) = perp.col(m);
+            put(V);
+          }
+        }
+      }
+      bases_[static_cast<std::size_t>(p)] = std::move(B);
+    }
+  }
+
+  /// Column `column` of Y as (pose, local column: 0 = translation, 1 + c = column c of Y_p).
+  std::pair<int, int> local(int column) const {
+    if (column < n_) return {column, 0};
+    return {(column - n_) / d_, 1 + (column - n_) % d_};
+  }
+
+  Eigen::VectorXd gradient(const Eigen::MatrixXd& G) const {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero((n_ - 1) * q_);
+    for (int p = 0; p < n_; ++p) {
+      if (p == x_.anchor) continue;
+      Eigen::MatrixXd Z(r_, 1 + d_);
+      Z.col(0) = G.col(p);
+      Z.rightCols(d_) = G.block(0, n_ + p * d_, r_, d_);
+      g.segment(variable(p) * q_, q_) =
+          bases_[static_cast<std::size_t>(p)].transpose() * Eigen::Map<const Eigen::VectorXd>(Z.data(), Z.size());
+    }
+    return g;
+  }
+
+  Eigen::SparseMatrix<double> hessian(const Eigen::MatrixXd& Y, const Eigen::MatrixXd& G) const {
+    std::map<std::pair<int, int>, Eigen::MatrixXd> blocks;
+    auto block = [&](int a, int b) -> Eigen::MatrixXd& {
+      auto [it, inserted] = blocks.try_emplace({a, b});
+      if (inserted) it->second = Eigen::MatrixXd::Zero(q_, q_);
+      return it->second;
+    };
+    // Euclidean part: 2 M (x) I_r, projected by the bases.
+    for (int c = 0; c < x_.M.outerSize(); ++c) {
+      const auto [pc, lc] = local(c);
+      if (pc == x_.anchor) continue;
+      const Eigen::MatrixXd& Bc = bases_[static_cast<std::size_t>(pc)];
+      for (Eigen::SparseMatrix<double>::InnerIterator it(x_.M, c); it; ++it) {
+        const auto [pr, lr] = local(static_cast<int>(it.row()));
+        if (pr == x_.anchor) continue;
+        const Eigen::MatrixXd& Br = bases_[static_cast<std::size_t>(pr)];
+        block(pr, pc).noalias() += 2.0 * it.value() * Br.middleRows(lr * r_, r_).transpose() * Bc.middleRows(lc * r_, r_);
+      }
+    }
+    // Curvature of the Stiefel manifold: - V_p Sym(Y_p^T grad_p), i.e. -(S_p (x) I_r) on vec(V_p).
+    for (int p = 0; p < n_; ++p) {
+      if (p == x_.anchor) continue;
+      const Eigen::MatrixXd Yp = Y.block(0, n_ + p * d_, r_, d_);
+      const Eigen::MatrixXd Gp = G.block(0, n_ + p * d_, r_, d_);
+      const Eigen::MatrixXd P = Yp.transpose() * Gp;
+      const Eigen::MatrixXd S = 0.5 * (P + P.transpose());
+      const Eigen::MatrixXd BR = bases_[static_cast<std::size_t>(p)].bottomRows(r_ * d_);
+      Eigen::MatrixXd kron = Eigen::MatrixXd::Zero(r_ * d_, r_ * d_);
+      for (int a = 0; a < d_; ++a) {
+        for (int b = 0; b < d_; ++b) kron.block(a * r_, b * r_, r_, r_) = S(a, b) * Eigen::MatrixXd::Identity(r_, r_);
+      }
+      block(p, p).noalias() -= BR.transpose() * kron * BR;
+    }
+    std::vector<Eigen::Triplet<double>> triplets;
+    for (const auto& [key, value] : blocks) {
+      const int a = variable(key.first);
+      const int b = variable(key.second);
+      for (int i = 0; i < q_; ++i) {
+        for (int j = 0; j < q_; ++j) triplets.emplace_back(a * q_ + i, b * q_ + j, value(i, j));
+      }
+    }
+    Eigen::SparseMatrix<double> H((n_ - 1) * q_, (n_ - 1) * q_);
+    H.setFromTriplets(triplets.begin(), triplets.end());
+    return H;
+  }
+
+  Eigen::MatrixXd retract(const Eigen::MatrixXd& Y, const Eigen::VectorXd& step) const {
+    Eigen::MatrixXd out = Y;
+    for (int p = 0; p < n_; ++p) {
+      if (p == x_.anchor) continue;
+      const Eigen::VectorXd v = bases_[static_cast<std::size_t>(p)] * step.segment(variable(p) * q_, q_);
+      out.col(p) += v.head(r_);
+      const Eigen::Map<const Eigen::MatrixXd> V(v.data() + r_, r_, d_);
+      out.block(0, n_ + p * d_, r_, d_) = polar(Y.block(0, n_ + p * d_, r_, d_) + V);
+    }
+    return out;
+  }
+
+  const ChordalRelaxation& x_;
+  int n_, d_, r_, q_;
+  std::vector<Eigen::MatrixXd> bases_;
+};
+
+/// Y moved along the direction of negative curvature `escape` (a new last row, Y's others kept):
+/// the largest step of 1, 1/2, 1/4, ... times sqrt(n) that lowers f.
+bool escape_saddle(const ChordalRelaxation& x, const Eigen::RowVectorXd& escape, Eigen::MatrixXd& Y) {
+  const int r = static_cast<int>(Y.rows()) + 1;
+  Eigen::MatrixXd lifted = Eigen::MatrixXd::Zero(r, Y.cols());
+  lifted.topRows(r - 1) = Y;
+  const double f0 = x.f(lifted);
+  for (double alpha = std::sqrt(static_cast<double>(x.n)); alpha > 1e-8; alpha *= 0.5) {
+    Eigen::MatrixXd trial = lifted;
+    trial.row(r - 1) = alpha * escape;
+    for (int p = 0; p < x.n; ++p) trial.block(0, x.n + p * x.d, r, x.d) = polar(trial.block(0, x.n + p * x.d, r, x.d));
+    if (x.f(trial) < f0 - 1e-12 * std::max(1.0, std::abs(f0))) {
+      Y = trial;
+      return true;
+    }
+  }
+  return false;
+}
+
+/// Algorithm 2 of Rosen et al.: the d leading right singular directions of the rotation part,
+/// the sign giving most blocks det > 0, each block projected to SO(d).
+Eigen::MatrixXd round_to_rotations(const Eigen::MatrixXd& Yrot, int d) {
+  const int n = static_cast<int>(Yrot.cols()) / d;
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Yrot, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  Eigen::MatrixXd R = svd.matrixU().leftCols(d).transpose() * Yrot;  // Sigma_d V_d^T
+  int positive = 0;
+  for (int p = 0; p < n; ++p) positive += R.block(0, p * d, d, d).determinant() > 0.0;
+  if (positive < n - positive) R.row(d - 1) *= -1.0;
+  for (int p = 0; p < n; ++p) {
+    const Eigen::JacobiSVD<Eigen::MatrixXd> s(R.block(0, p * d, d, d), Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::MatrixXd U = s.matrixU();
+    if ((U * s.matrixV().transpose()).determinant() < 0.0) U.col(d - 1) *= -1.0;
+    R.block(0, p * d, d, d) = U * s.matrixV().transpose();
+  }
+  return R;
+}
+
+template <class Group>
+Group make_pose(const Eigen::MatrixXd& R, const Eigen::VectorXd& t) {
+  if constexpr (Group::kDoF == 3) {
+    return core::SE2(t(0), t(1), std::atan2(R(1, 0), R(0, 0)));
+  } else {
+    return core::SE3(core::SO3::from_matrix(R), t);
+  }
+}
+
+}  // namespace
+
+template <class Group>
+StaircaseSummary riemannian_staircase(PoseGraphProblem<Group>& problem, const StaircaseOptions& options) {
+  constexpr int d = kRotationDim<Group>;
+  const auto start = Clock::now();
+  StaircaseSummary summary;
+  const ChordalRelaxation x = make_chordal_relaxation(problem);
+  const Eigen::MatrixXd R0 = rotation_blocks(problem);
+  Eigen::RowVectorXd escape;
+  StaircaseLevel first;
+  first.rank = d;
+  first.certificate = certify_relaxation(x, R0, options.certificate, &escape);
+  first.f = first.certificate.f;
+  summary.levels.push_back(first);
+  summary.certificate = first.certificate;
+  summary.f_initial = summary.f_final = first.f;
+  auto finish = [&](const std::string& message) {
+    summary.message = message;
+    summary.time_s = std::chrono::duration<double>(Clock::now() - start).count();
+    return summary;
+  };
+  if (first.certificate.certified) {
+    summary.certified = true;
+    return finish("certified at rank " + std::to_string(d));
+  }
+  if (!options.climb) return finish("not certified at rank " + std::to_string(d) + " (the staircase was not asked for)");
+  if (x.fixed_count > 1) return finish("not certified; the staircase needs a graph with one fixed pose (the gauge)");
+  if (escape.size() == 0) return finish("not certified; " + first.certificate.message);
+
+  Eigen::MatrixXd Y;
+  x.with_optimal_translations(R0, &Y);
+  bool relaxation_certified = false;
+  for (int r = d + 1; r <= d + options.max_rank_increase; ++r) {
+    if (!escape_saddle(x, escape, Y)) return finish("no descent along the direction of negative curvature at rank " + std::to_string(r - 1));
+    StaircaseLevel level;
+    level.rank = r;
+    RankSolver solver(x, r);
+    level.iterations = solver.solve(Y, options);
+    level.certificate = certify_relaxation(x, Y.rightCols(x.n * d), options.certificate, &escape);
+    level.f = level.certificate.f;
+    summary.levels.push_back(level);
+    if (level.certificate.certified) {
+      relaxation_certified = true;
+      break;
+    }
+  }
+  if (!relaxation_certified) return finish("no rank up to " + std::to_string(d + options.max_rank_increase) + " certified");
+
+  // Round, place in the frame of the fixed pose, polish at rank d, certify.
+  const Eigen::MatrixXd R = round_to_rotations(Y.rightCols(x.n * d), d);
+  Eigen::MatrixXd Yd;
+  x.with_optimal_translations(R, &Yd);
+  PoseGraphProblem<Group> candidate = problem;
+  std::vector<Group> rounded(static_cast<std::size_t>(x.n));
+  for (int p = 0; p < x.n; ++p) rounded[static_cast<std::size_t>(p)] = make_pose<Group>(R.block(0, p * d, d, d), Yd.col(p));
+  const Group T_world_anchor = problem.T_world_pose[static_cast<std::size_t>(x.anchor)];
+  const Group T_fix = T_world_anchor * rounded[static_cast<std::size_t>(x.anchor)].inverse();
+  for (int p = 0; p < x.n; ++p) candidate.T_world_pose[static_cast<std::size_t>(p)] = T_fix * rounded[static_cast<std::size_t>(p)];
+  OptimizerOptions polish = options.polish;
+  polish.objective = Objective::kChordal;
+  optimize(candidate, polish);
+  const CertificateSummary final_certificate = certify_chordal(candidate, options.certificate);
+  if (final_certificate.f < first.f) {
+    problem.T_world_pose = candidate.T_world_pose;
+    summary.certificate = final_certificate;
+    summary.f_final = final_certificate.f;
+  }
+  summary.certified = summary.certificate.certified;
+  return finish(summary.certified ? "certified after the staircase (relaxation certified at rank " +
+                                        std::to_string(summary.levels.back().rank) + ", rounded and polished)"
+                                  : "the relaxation is certified at rank " + std::to_string(summary.levels.back().rank) +
+                                        " but its rounded point is not: the relaxation may not be exact here");
+}
+
+template StaircaseSummary riemannian_staircase(Problem2D&, const StaircaseOptions&);
+template StaircaseSummary riemannian_staircase(Problem3D&, const StaircaseOptions&);
+
+}  // namespace cairn::backend
