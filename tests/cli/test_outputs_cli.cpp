@@ -301,6 +301,19 @@ TEST_F(OutputsCli, OutputDirectoryOfAnotherRunIsRefusedAndAFailedRunLeavesNone) 
   EXPECT_EQ(slurp(out / "manifest.json"), manifest);
 }
 
+// --certify after a robust solve reports the certificate of least squares over all edges but
+// never replaces the robust poses by that problem's optimum (outliers included).
+TEST_F(OutputsCli, CertifyAfterGncDoesNotClimbTheStaircase) {
+  Result r = run(dir_, {"corrupt", kSquare, "--outliers", "4", "--seed", "2", "-o", path("c.g2o").string()});
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run(dir_, {"optimize", path("c.g2o").string(), "--robust", "gnc", "--objective", "chordal", "--certify", "-q",
+                 "-o", path("o.g2o").string(), "--report", path("r.json").string()});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("staircase is not climbed"), std::string::npos) << r.err;
+  const auto report = nlohmann::json::parse(slurp(path("r.json")));
+  EXPECT_EQ(report["staircase"]["levels"].size(), 1u);
+}
+
 /// The Intel log: the SLAM run SIGINT stops after its 401st scan.
 fs::path intel_log() { return cairn::test::data_path("laser2d/intel/intel.clf.bz2"); }
 

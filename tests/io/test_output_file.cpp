@@ -43,9 +43,10 @@ class OutputFileTest : public ::testing::Test {
 
   fs::path path(const std::string& name) const { return dir_ / name; }
   /// Every entry of the scratch directory (temporaries included: they are hidden files).
-  std::vector<std::string> entries() const {
+  std::vector<std::string> entries() const { return entries(dir_); }
+  static std::vector<std::string> entries(const fs::path& d) {
     std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename().string());
+    for (const auto& e : fs::directory_iterator(d)) names.push_back(e.path().filename().string());
     std::sort(names.begin(), names.end());
     return names;
   }
@@ -313,6 +314,40 @@ TEST_F(OutputFileTest, DirectoryBehindASymlinkKeepsTheLink) {
   EXPECT_TRUE(fs::is_symlink(path("latest")));
   EXPECT_EQ(slurp(path("run_0420") / "a.txt"), "a");
   EXPECT_EQ(entries(), (std::vector<std::string>{"latest", "run_0420"}));
+}
+
+// Files that appear in an (empty) DIR during the run are not overwritten without --overwrite:
+// the commit refuses before moving anything. With --overwrite, a symlink in DIR to a device is
+// written through (the node stays a node), a replaced file keeps its mode, and the staging
+// directory (inside an existing DIR) is gone.
+TEST_F(OutputFileTest, DirectoryCommitChecksEveryMoveFirst) {
+  fs::create_directory(path("run"));
+  {
+    OutputDirectory d(path("run").string(), false);
+    write_output(d.staging_path("a.txt"), text("ours"));
+    write_output(d.staging_path("b.txt"), text("ours"));
+    put(path("run") / "b.txt", "another run's");  // appears meanwhile
+    EXPECT_THROW(d.commit(), ParseError);
+  }
+  EXPECT_EQ(entries(path("run")), std::vector<std::string>{"b.txt"});
+  EXPECT_EQ(slurp(path("run") / "b.txt"), "another run's");
+
+  fs::create_symlink("/dev/null", path("run") / "null.txt");
+  ::chmod((path("run") / "b.txt").c_str(), 0640);
+  {
+    OutputDirectory d(path("run").string(), true);
+    write_output(d.staging_path("null.txt"), text("discarded"));
+    write_output(d.staging_path("b.txt"), text("ours"));
+    d.commit();
+  }
+  struct stat st {};
+  ASSERT_EQ(::lstat("/dev/null", &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode));
+  EXPECT_TRUE(fs::is_symlink(path("run") / "null.txt"));
+  EXPECT_EQ(slurp(path("run") / "b.txt"), "ours");
+  ASSERT_EQ(::stat((path("run") / "b.txt").c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0640u);
+  EXPECT_EQ(entries(path("run")), (std::vector<std::string>{"b.txt", "null.txt"}));
 }
 
 TEST_F(OutputFileTest, DirectoryCannotBeStandardOutputOrAFile) {

@@ -135,6 +135,7 @@ double ChordalRelaxation::f(const Eigen::MatrixXd& Y) const {
 CertificateSummary certify_relaxation(const ChordalRelaxation& relaxation, const Eigen::MatrixXd& R,
                                       const CertificateOptions& options, Eigen::RowVectorXd* escape) {
   const auto start = std::chrono::steady_clock::now();
+  if (escape != nullptr) escape->resize(0);  // set below only when a direction was found
   CertificateSummary summary;
   const int n = relaxation.n;
   const int d = relaxation.d;
@@ -234,7 +235,15 @@ CertificateSummary certify_relaxation(const ChordalRelaxation& relaxation, const
     eta_lo = tolerance;
     // Grow the shift until S + eta I is positive definite; |lambda_min(S)| is at most ||S||,
     // far below the cap.
-    for (eta_hi = 4.0 * tolerance; !positive(eta_hi) && !failed && eta_hi < 1e300; eta_hi *= 4.0) eta_lo = eta_hi;
+    bool found = false;
+    for (eta_hi = 4.0 * tolerance; !failed && eta_hi < 1e300; eta_hi *= 4.0) {
+      if (positive(eta_hi)) {
+        found = true;
+        break;
+      }
+      eta_lo = eta_hi;
+    }
+    if (!found) failed = true;  // no shift made K positive definite (non-finite entries?)
     for (int step = 0; step < options.bisection_steps && !failed; ++step) {
       const double mid = std::sqrt(eta_lo * eta_hi);
       if (positive(mid)) {
@@ -272,7 +281,7 @@ CertificateSummary certify_relaxation(const ChordalRelaxation& relaxation, const
   }
   if (failed) {
     summary.certified = false;
-    summary.message = "CHOLMOD failed to factorise the certificate matrix (out of memory?)";
+    summary.message = "the certificate matrix could not be factorised at any shift (CHOLMOD failed, or non-finite data)";
     summary.lambda_min_lower = -std::numeric_limits<double>::infinity();
     summary.lambda_min_upper = std::numeric_limits<double>::infinity();
     summary.suboptimality_bound = std::numeric_limits<double>::infinity();

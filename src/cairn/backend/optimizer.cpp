@@ -649,7 +649,8 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
       largest_step = std::max(largest_step, it.step_norm);
       ++summary.successful_iterations;
       it.step_accepted = true;
-      if (options.exact_chordal_hessian && options.objective == Objective::kChordal && !engine.second_order() &&
+      // Levenberg-Marquardt only: Gauss-Newton and dog-leg need a positive semidefinite model.
+      if (lm && options.exact_chordal_hessian && options.objective == Objective::kChordal && !engine.second_order() &&
           it.cost_change < kSecondOrderSwitch * old_cost) {
         engine.set_second_order(true);
         const auto relinearize_start = Clock::now();

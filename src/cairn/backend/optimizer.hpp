@@ -113,7 +113,8 @@ struct OptimizerOptions {
   /// big-noise sphere stopped at 100 iterations); with the exact Hessian LM's steps are Newton
   /// steps near the optimum. S may be indefinite away from it, where the exact Hessian can stall
   /// LM: it is switched on once an accepted Gauss-Newton step lowers the cost by less than 0.1 %
-  /// (optimizer.cpp, kSecondOrderSwitch). Ignored for the geodesic objective. Measured on the 14 SE-Sync graphs
+  /// (optimizer.cpp, kSecondOrderSwitch). Levenberg-Marquardt only (Gauss-Newton and dog-leg need
+  /// a positive semidefinite model); ignored for the geodesic objective. Measured on the 14 SE-Sync graphs
   /// (docs/backend.md): fewer iterations on every one (torus3D 100 -> 4, the big-noise sphere
   /// 100 -> 9, both now converged), never slower.
   bool exact_chordal_hessian = true;

@@ -35,6 +35,7 @@ class RankSolver {
     cholesky.require_ll();
     bool analyzed = false;
     for (; iterations < options.max_iterations; ++iterations) {
+      if (options.polish.should_stop && options.polish.should_stop()) break;
       build_bases(Y);
       const Eigen::MatrixXd G = 2.0 * (x_.M * Y.transpose()).transpose();  // Euclidean gradient, r x N
       const Eigen::VectorXd g = gradient(G);
@@ -280,7 +281,13 @@ StaircaseSummary riemannian_staircase(PoseGraphProblem<Group>& problem, const St
   Eigen::MatrixXd Y;
   x.with_optimal_translations(R0, &Y);
   bool relaxation_certified = false;
+  auto stopped = [&] { return options.polish.should_stop && options.polish.should_stop(); };
   for (int r = d + 1; r <= d + options.max_rank_increase; ++r) {
+    if (stopped()) {
+      summary.interrupted = true;
+      return finish("interrupted at rank " + std::to_string(r - 1) + ": the poses are as they were");
+    }
+    if (escape.size() == 0) return finish("no direction of negative curvature at rank " + std::to_string(r - 1));
     if (!escape_saddle(x, escape, Y)) return finish("no descent along the direction of negative curvature at rank " + std::to_string(r - 1));
     StaircaseLevel level;
     level.rank = r;
@@ -308,7 +315,13 @@ StaircaseSummary riemannian_staircase(PoseGraphProblem<Group>& problem, const St
   for (int p = 0; p < x.n; ++p) candidate.T_world_pose[static_cast<std::size_t>(p)] = T_fix * rounded[static_cast<std::size_t>(p)];
   OptimizerOptions polish = options.polish;
   polish.objective = Objective::kChordal;
+  polish.kernel = RobustKernel::kNone;
+  polish.edge_weights.clear();
   optimize(candidate, polish);
+  if (stopped()) {
+    summary.interrupted = true;
+    return finish("interrupted while polishing the rounded point: the poses are as they were");
+  }
   const CertificateSummary final_certificate = certify_chordal(candidate, options.certificate);
   if (final_certificate.f < first.f) {
     problem.T_world_pose = candidate.T_world_pose;

@@ -35,7 +35,8 @@ struct StaircaseOptions {
   /// Converged at a rank when max |grad| <= gradient_tolerance * max(1, f). > 0.
   double gradient_tolerance = 1e-10;
   CertificateOptions certificate;
-  /// The rank-d polish after rounding (its objective is set to chordal).
+  /// The rank-d polish after rounding (its objective is set to chordal). Its should_stop also
+  /// stops the climb (between iterations); the poses are then left as they were.
   OptimizerOptions polish;
 };
 
@@ -56,6 +57,8 @@ struct StaircaseSummary {
   double f_initial = 0.0;
   double f_final = 0.0;
   double time_s = 0.0;
+  /// polish.should_stop ended it; the poses were not changed.
+  bool interrupted = false;
   std::string message;
 };
 

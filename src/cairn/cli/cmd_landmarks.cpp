@@ -62,7 +62,7 @@ int landmarks_command(const LandmarksFlags& flags) {
   landmarks::write_report_json(directory.staging_path("report.json"), result.report);
   landmarks::write_landmarks_png(directory.staging_path("landmarks.png"), run, result);
   directory.commit();
-  if (result.report.interrupted || interrupted()) {
+  if (result.report.interrupted) {
     std::fprintf(stderr, "cairn landmarks: interrupted after step %zu of %zu: wrote the result so far to %s\n",
                  result.report.steps, result.report.steps_in_run, flags.out.c_str());
     return interrupted_exit_status();

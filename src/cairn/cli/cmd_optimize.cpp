@@ -195,7 +195,15 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     staircase_options.certificate.eigenvalue_tolerance = flags.certify_tolerance;
     staircase_options.polish = options;
     staircase_options.polish.progress = nullptr;
-    staircase_options.climb = options.objective == backend::Objective::kChordal;
+    // The certificate speaks of least squares over every edge: it may say whether a plain
+    // chordal solve is optimal, but must not replace a robust one (GNC, a kernel) by the
+    // least-squares optimum of all edges, outliers included.
+    const bool robust = use_gnc || options.kernel != backend::RobustKernel::kNone;
+    if (robust) {
+      warn("--certify with a robust cost: the certificate is that of least squares over all edges (the rejected "
+           "or down-weighted ones included), so it is reported but the staircase is not climbed");
+    }
+    staircase_options.climb = options.objective == backend::Objective::kChordal && !robust;
     staircase = backend::riemannian_staircase(problem, staircase_options);
     for (const auto& level : staircase->levels) {
       std::printf("certificate at rank %d (%d iterations, %.3f s, %d factorisations): %s\n", level.rank, level.iterations,
@@ -203,6 +211,8 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     }
     if (staircase->levels.size() > 1) std::printf("staircase (%.3f s): %s\n", staircase->time_s, staircase->message.c_str());
   }
+  // A signal during the certificate or the staircase: the poses were kept as they were.
+  const bool stopped_after = stopped || interrupted();
   const auto optimized = backend::to_graph(problem, graph);
   // The graph and the report form one set: both are produced before either replaces a file.
   io::OutputFile graph_file(flags.output);
@@ -270,10 +280,11 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                         {"f_initial", staircase->f_initial},
                         {"f_final", staircase->f_final},
                         {"time_s", staircase->time_s},
+                        {"interrupted", staircase->interrupted},
                         {"message", staircase->message}};
     }
-    j["interrupted"] = stopped;
-    if (stopped) j["interruption"] = {{"signal", interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT"}};
+    j["interrupted"] = stopped_after;
+    if (stopped_after) j["interruption"] = {{"signal", interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT"}};
     if (!flags.covariance_ids.empty()) {
       std::vector<int> poses;
       for (const auto id : flags.covariance_ids) {
@@ -338,8 +349,8 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
   if (report_file) report_file->commit();
   std::printf("wrote %s%s%s\n", io::output_display_name(flags.output).c_str(),
               flags.report.empty() ? "" : (" and " + io::output_display_name(flags.report)).c_str(),
-              stopped ? " (interrupted: the estimate so far)" : "");
-  if (stopped) return interrupted_exit_status();
+              stopped_after ? " (interrupted: the estimate so far)" : "");
+  if (stopped_after) return interrupted_exit_status();
   return summary.is_solution_usable() ? 0 : 1;
 }
 

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -13,23 +14,34 @@
 namespace cairn::cli {
 namespace {
 
-volatile std::sig_atomic_t g_signal = 0;
+std::atomic<int> g_signal{0};
+std::atomic<bool> g_stop_points{false};
+pid_t g_main_thread = 0;  // kernel thread id of the main thread
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free);
 
 extern "C" void on_signal(int signal) {
-  if (g_signal != 0) {
-    // Second signal: stop now, leaving no temporary behind, and end by the signal itself so the
-    // parent sees how the process ended.
+  // Handled on the main thread only (the one that commits outputs and blocks these signals
+  // while it does): a worker thread (TBB, OpenMP, CHOLMOD) that receives it passes it on.
+  // Only raw system calls here: all async-signal-safe.
+  if (static_cast<pid_t>(::syscall(SYS_gettid)) != g_main_thread) {
+    ::syscall(SYS_tgkill, ::getpid(), g_main_thread, signal);
+    return;
+  }
+  if (g_signal.load() != 0 || !g_stop_points.load()) {
+    // A second signal, or a command without safe points: stop now, leaving no temporary
+    // behind, and end by the signal itself so the parent sees how the process ended.
     cairn::io::remove_unfinished_outputs();
     ::signal(signal, SIG_DFL);
     ::raise(signal);
     return;
   }
-  g_signal = signal;
+  g_signal.store(signal);
 }
 
 }  // namespace
 
 void install_signal_handlers() {
+  g_main_thread = static_cast<pid_t>(::syscall(SYS_gettid));
   struct sigaction action {};
   action.sa_handler = on_signal;
   sigemptyset(&action.sa_mask);
@@ -40,9 +52,10 @@ void install_signal_handlers() {
   ::signal(SIGXFSZ, SIG_IGN);
 }
 
-bool interrupted() { return g_signal != 0; }
-int interrupt_signal() { return static_cast<int>(g_signal); }
-int interrupted_exit_status() { return 128 + static_cast<int>(g_signal); }
+void use_stop_points() { g_stop_points.store(true); }
+bool interrupted() { return g_signal.load() != 0; }
+int interrupt_signal() { return g_signal.load(); }
+int interrupted_exit_status() { return 128 + g_signal.load(); }
 std::function<bool()> stop_on_signal() {
   return [] { return interrupted(); };
 }
@@ -60,6 +73,8 @@ void claim_standard_output(const std::string& path) {
     return;
   }
   io::set_standard_output(data);
+  // Messages now reach stderr through stdout's buffer: line by line, in order with stderr's own.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
 }
 
 }  // namespace cairn::cli

@@ -17,6 +17,11 @@ namespace cairn::cli {
 /// limit surfaces as a write error (EPIPE, EFBIG) naming the output, not as a silent death.
 void install_signal_handlers();
 
+/// Called by the commands that poll interrupted() (slam2d, optimize, landmarks): without it the
+/// first signal ends the process at once, as the second does (removing temporaries), since a
+/// command without safe points would otherwise ignore it until its end.
+void use_stop_points();
+
 /// True once SIGINT or SIGTERM arrived.
 bool interrupted();
 /// The signal that arrived (0 if none).

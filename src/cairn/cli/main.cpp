@@ -8,6 +8,7 @@
 #include <exception>
 #include <iostream>
 #include <map>
+#include <string>
 
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
@@ -48,6 +49,13 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  // The commands with safe points stop at the first SIGINT/SIGTERM; the others end at once.
+  for (const auto& [command, run] : runners) {
+    const std::string name = command->get_name();
+    if (command->parsed() && (name == "slam2d" || name == "optimize" || name == "landmarks")) {
+      cairn::cli::use_stop_points();
+    }
+  }
   cairn::cli::install_signal_handlers();
   int status = 1;
   try {

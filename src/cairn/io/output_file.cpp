@@ -2,6 +2,8 @@
 
 #include <dirent.h>
 #include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -13,6 +15,7 @@
 #include <climits>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <sstream>
 #include <streambuf>
@@ -60,12 +63,14 @@ void unregister_unfinished(int slot) {
 }
 
 // Removes a directory tree with async-signal-safe calls only (open, getdents64, unlinkat,
-// close). Depth-limited: cairn's output directories are at most two levels deep.
-void remove_tree_signal_safe(int parent_fd, const char* name, int depth) noexcept {
-  if (::unlinkat(parent_fd, name, 0) == 0) return;
-  if (depth > 4) return;
+// close); true when `name` is gone. Depth-limited: cairn's output directories are at most two
+// levels deep. A listing is read again only after a pass that removed something, so an entry
+// that cannot be removed ends the loop instead of spinning in the signal handler.
+bool remove_tree_signal_safe(int parent_fd, const char* name, int depth) noexcept {
+  if (::unlinkat(parent_fd, name, 0) == 0) return true;
+  if (depth > 4) return false;
   const int fd = ::openat(parent_fd, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
-  if (fd < 0) return;
+  if (fd < 0) return false;
   alignas(8) char buffer[4096];
   while (true) {
     const long n = ::syscall(SYS_getdents64, fd, buffer, sizeof buffer);
@@ -82,14 +87,13 @@ void remove_tree_signal_safe(int parent_fd, const char* name, int depth) noexcep
       const auto* e = reinterpret_cast<const Entry*>(buffer + offset);
       offset += e->reclen;
       if (std::strcmp(e->name, ".") == 0 || std::strcmp(e->name, "..") == 0) continue;
-      remove_tree_signal_safe(fd, e->name, depth + 1);
-      removed_any = true;
+      removed_any = remove_tree_signal_safe(fd, e->name, depth + 1) || removed_any;
     }
     if (!removed_any) break;
     ::lseek(fd, 0, SEEK_SET);  // the listing changed under us: read it again
   }
   ::close(fd);
-  ::unlinkat(parent_fd, name, AT_REMOVEDIR);
+  return ::unlinkat(parent_fd, name, AT_REMOVEDIR) == 0;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -415,11 +419,16 @@ OutputDirectory::OutputDirectory(std::string dir, bool overwrite) : dir_(std::mo
     fs::create_directories(fs::path(resolved_).parent_path(), ec);
     if (ec) throw ParseError(dir_, 0, "cannot create the parent directory: " + ec.message());
   }
-  std::string templ = parent_of(resolved_) + "/." + base_of(resolved_) + ".cairn-partial-XXXXXX";
+  // Staging on the file system of DIR: inside it when it exists (a mount point, a parent that is
+  // not writable, the user's working directory: DIR itself is never replaced), beside it when not.
+  existed_ = exists;
+  overwrite_ = overwrite;
+  const std::string where = existed_ ? resolved_ : parent_of(resolved_);
+  std::string templ = where + "/." + (existed_ ? std::string("cairn") : base_of(resolved_)) + ".cairn-partial-XXXXXX";
   std::vector<char> name(templ.begin(), templ.end());
   name.push_back('\0');
   if (::mkdtemp(name.data()) == nullptr) {
-    throw ParseError(dir_, 0, "cannot create a directory in " + parent_of(resolved_) + ": " + errno_text(errno));
+    throw ParseError(dir_, 0, "cannot create a directory in " + where + ": " + errno_text(errno));
   }
   staging_ = name.data();
   registry_slot_ = register_unfinished(staging_, true);
@@ -438,44 +447,113 @@ std::string OutputDirectory::final_path(const std::string& name) const { return 
 
 namespace {
 
-/// Moves the entries of `from` into the existing directory `to`, replacing files of the same
-/// name and merging subdirectories.
-void merge_into(const fs::path& from, const fs::path& to, const std::string& dir_name) {
+/// The moves that put the entries of `from` into the existing directory `to` (files of the same
+/// name replaced, subdirectories merged), all checked before anything moves: a file where a
+/// directory is, or an existing file without `overwrite`, is an error.
+struct Move {
+  fs::path from;
+  fs::path to;
+  bool copy = false;  // the destination is a link to a device, FIFO or stream: written, not renamed over
+};
+
+void plan_merge(const fs::path& from, const fs::path& to, bool overwrite, const std::string& dir_name,
+                std::vector<Move>& moves) {
   for (const auto& entry : fs::directory_iterator(from)) {
     const fs::path target = to / entry.path().filename();
     std::error_code ec;
     const auto target_status = fs::symlink_status(target, ec);
+    const bool target_exists =
+        target_status.type() != fs::file_type::not_found && target_status.type() != fs::file_type::none;
     if (entry.is_directory() && fs::is_directory(target, ec)) {
-      merge_into(entry.path(), fs::canonical(target), dir_name);
+      plan_merge(entry.path(), fs::canonical(target), overwrite, dir_name, moves);
       continue;
+    }
+    if (target_exists && !overwrite) {
+      throw ParseError(dir_name, 0, target.filename().string() +
+                                        " appeared in the output directory during the run: nothing was moved in "
+                                        "(pass --overwrite to replace files)");
     }
     if (target_status.type() == fs::file_type::directory) {
       throw ParseError(dir_name, 0, "cannot replace the directory " + target.string() + " with a file");
     }
-    // A symlink in DIR is written through, like any output.
-    const fs::path destination = fs::is_symlink(target_status) ? fs::path(resolve_output(target.string()).resolved)
-                                                                : target;
-    if (::rename(entry.path().c_str(), destination.c_str()) != 0) {
-      throw ParseError(dir_name, 0, "cannot move " + entry.path().string() + " to " + destination.string() + ": " +
-                                        errno_text(errno));
+    Move move{entry.path(), target, false};
+    if (fs::is_symlink(target_status)) {
+      // Written through, like any output: a regular target is renamed over, a node is written.
+      const OutputTarget resolved = resolve_output(target.string());
+      move.to = resolved.resolved;
+      move.copy = resolved.kind == OutputKind::kDirect;
+      if (move.copy && entry.is_directory()) {
+        throw ParseError(dir_name, 0, "cannot write the directory " + entry.path().filename().string() + " to " +
+                                          target.string());
+      }
     }
+    moves.push_back(move);
   }
 }
 
 }  // namespace
 
+namespace {
+/// Defers SIGINT and SIGTERM on this thread while it lives: a signal handler that removes
+/// unfinished outputs must not run between the moves of a commit.
+class DeferInterrupts {
+ public:
+  DeferInterrupts() {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &set, &old_);
+  }
+  ~DeferInterrupts() { pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
+  DeferInterrupts(const DeferInterrupts&) = delete;
+  DeferInterrupts& operator=(const DeferInterrupts&) = delete;
+
+ private:
+  sigset_t old_;
+};
+}  // namespace
+
 void OutputDirectory::commit() {
   if (committed_) return;
-  ::chmod(staging_.c_str(), 0777 & ~process_umask());  // mkdtemp made it 0700
-  // A missing or empty DIR is replaced in one rename: the whole set appears at once.
-  if (::rename(staging_.c_str(), resolved_.c_str()) != 0) {
+  const DeferInterrupts defer;
+  std::error_code ignored;
+  if (!existed_) {
+    // DIR did not exist: the whole set appears in one rename.
+    ::chmod(staging_.c_str(), 0777 & ~process_umask());  // mkdtemp made it 0700
+    if (::rename(staging_.c_str(), resolved_.c_str()) == 0) {
+      unregister_unfinished(registry_slot_);
+      registry_slot_ = -1;
+      committed_ = true;
+      return;
+    }
     if (errno != ENOTEMPTY && errno != EEXIST) {
       throw ParseError(dir_, 0, "cannot move the outputs into place: " + errno_text(errno));
     }
-    merge_into(staging_, resolved_, dir_);
-    std::error_code ignored;
-    fs::remove_all(staging_, ignored);
+    if (!overwrite_) {
+      throw ParseError(dir_, 0,
+                       "the output directory appeared during the run: nothing was moved in (pass --overwrite to "
+                       "write into it)");
+    }
+    // Created meanwhile by someone else, and --overwrite: merged below like an existing DIR.
   }
+  std::vector<Move> moves;
+  plan_merge(staging_, resolved_, overwrite_, dir_, moves);
+  for (const Move& move : moves) {
+    if (move.copy) {
+      std::ifstream in(move.from, std::ios::binary);
+      write_output(move.to.string(), [&](std::ostream& out) { out << in.rdbuf(); });
+      continue;
+    }
+    // A file replaced keeps its permission bits, as OutputFile does.
+    struct stat st {};
+    if (::stat(move.to.c_str(), &st) == 0 && S_ISREG(st.st_mode)) ::chmod(move.from.c_str(), st.st_mode & 07777);
+    if (::rename(move.from.c_str(), move.to.c_str()) != 0) {
+      throw ParseError(dir_, 0,
+                       "cannot move " + move.from.string() + " to " + move.to.string() + ": " + errno_text(errno));
+    }
+  }
+  fs::remove_all(staging_, ignored);
   unregister_unfinished(registry_slot_);
   registry_slot_ = -1;
   committed_ = true;
@@ -503,11 +581,14 @@ const std::string& standard_input(std::size_t max_bytes) {
     const ssize_t n = ::read(0, buffer.data(), buffer.size());
     if (n < 0) {
       if (errno == EINTR) continue;
-      throw ParseError("standard input", 0, "read error: " + errno_text(errno));
+      const int error = errno;
+      contents.clear();
+      throw ParseError("standard input", 0, "read error: " + errno_text(error));
     }
     if (n == 0) break;
     contents.append(buffer.data(), static_cast<std::size_t>(n));
     if (contents.size() > max_bytes) {
+      contents.clear();
       throw ParseError("standard input", 0, "more than " + std::to_string(max_bytes) + " bytes: refusing to read it");
     }
   }

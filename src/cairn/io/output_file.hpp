@@ -94,11 +94,14 @@ void write_output(const std::string& path, const std::function<void(std::ostream
 /// A directory of outputs (`--out DIR`) that appears whole or not at all. The constructor
 /// checks the rule: DIR may be missing or empty; a DIR that already holds entries is refused
 /// (ParseError naming DIR and an entry) unless `overwrite`, in which case the files this run
-/// writes replace those of the same name and other entries are left alone. Files are written
-/// into a hidden staging directory beside DIR (`.<name>.cairn-partial-XXXXXX`, on the same file
-/// system); commit() moves them in (one rename for a missing or empty DIR, one rename per file
-/// otherwise). Destroyed without commit(), it removes the staging directory: a run that fails
-/// leaves DIR as it was. A symlink DIR is followed: the link stays.
+/// writes replace those of the same name (keeping their permission bits; a symlink in DIR is
+/// written through) and other entries are left alone. Files are written into a hidden staging
+/// directory on DIR's file system: beside a missing DIR (`.<name>.cairn-partial-XXXXXX`), then
+/// renamed to DIR in one step; inside an existing DIR (`.cairn.cairn-partial-XXXXXX`), then
+/// moved in file by file after every move was checked (DIR itself is never replaced). Files
+/// that appear in DIR during the run are not overwritten without `overwrite`. Destroyed without
+/// commit(), it removes the staging directory: a run that fails leaves DIR as it was. A symlink
+/// DIR is followed: the link stays.
 class OutputDirectory {
  public:
   OutputDirectory(std::string dir, bool overwrite);
@@ -121,6 +124,8 @@ class OutputDirectory {
   std::string resolved_;
   std::string staging_;
   int registry_slot_ = -1;
+  bool existed_ = false;
+  bool overwrite_ = false;
   bool committed_ = false;
 };
 
