@@ -135,7 +135,7 @@ int simulate_command(const SimulateFlags& flags) {
     return usage_error(message);
   }
 
-  // Files go to a staging directory beside --out and appear together at the end (io/output_file.hpp).
+  // Files go to a staging directory on --out's file system and appear together at the end (io/output_file.hpp).
   io::OutputDirectory out(flags.out, flags.overwrite);
 
   const auto start = std::chrono::steady_clock::now();
