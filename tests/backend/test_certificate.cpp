@@ -19,23 +19,15 @@
 namespace cairn::backend {
 namespace {
 
-template <class Group>
-constexpr int kD = kRotationDim<Group>;
-
-template <class Group>
-Eigen::MatrixXd rotation_of(const Group& T) {
-  return rotation_matrix_of(T);
-}
-
 /// SE-Sync's f for arbitrary (unconstrained) d x d blocks R_i and vectors t_i, the columns of
 /// X = [t_1 .. t_n | R_1 .. R_n] (only row `row` of X is used: f is a sum over rows).
 template <class Group>
 double f_of_row(const PoseGraphProblem<Group>& problem, const Eigen::VectorXd& x) {
-  constexpr int d = kD<Group>;
+  constexpr int d = kRotationDim<Group>;
   const int n = problem.size();
   double f = 0.0;
   for (const auto& e : problem.edges) {
-    const Eigen::MatrixXd R_ij = rotation_of(e.T_i_j);
+    const Eigen::MatrixXd R_ij = rotation_matrix_of(e.T_i_j);
     const Eigen::VectorXd t_ij = e.T_i_j.translation();
     const Eigen::RowVectorXd Ri = x.segment(n + e.i * d, d).transpose();
     const Eigen::RowVectorXd Rj = x.segment(n + e.j * d, d).transpose();
@@ -50,7 +42,7 @@ double f_of_row(const PoseGraphProblem<Group>& problem, const Eigen::VectorXd& x
 /// pseudo-inverse of the translational block, Lambda = SymBlockDiag(Q R^T R).
 template <class Group>
 double dense_lambda_min(const PoseGraphProblem<Group>& problem, double* f_out) {
-  constexpr int d = kD<Group>;
+  constexpr int d = kRotationDim<Group>;
   const int n = problem.size();
   const int full = n * (d + 1);
   Eigen::MatrixXd M(full, full);
@@ -67,7 +59,7 @@ double dense_lambda_min(const PoseGraphProblem<Group>& problem, double* f_out) {
   const Eigen::MatrixXd MRR = M.bottomRightCorner(n * d, n * d);
   const Eigen::MatrixXd Q = MRR - MtR.transpose() * Mtt.completeOrthogonalDecomposition().pseudoInverse() * MtR;
   Eigen::MatrixXd R(d, n * d);
-  for (int p = 0; p < n; ++p) R.block(0, p * d, d, d) = rotation_of(problem.T_world_pose[static_cast<std::size_t>(p)]);
+  for (int p = 0; p < n; ++p) R.block(0, p * d, d, d) = rotation_matrix_of(problem.T_world_pose[static_cast<std::size_t>(p)]);
   const Eigen::MatrixXd QRt = Q * R.transpose();
   Eigen::MatrixXd S = Q;
   for (int p = 0; p < n; ++p) {

@@ -77,14 +77,8 @@ typename ChordalFactor<Group>::Residual ChordalFactor<Group>::evaluate(const Gro
                                                                        const PoseEdge<Group>& edge,
                                                                        Jacobian* J_r_i, Jacobian* J_r_j) {
   using MatrixD = Eigen::Matrix<double, d, d>;
-  using VectorD = Eigen::Matrix<double, d, 1>;
   const ChordalTerms<Group> terms(T_world_i, T_world_j, edge);
-  const MatrixD& R_i = terms.R_i;
-  const MatrixD& R_j = terms.R_j;
-  const MatrixD& R_ij = terms.R_ij;
-  const VectorD& t_ij = terms.t_ij;
-  const double sk = terms.sqrt_kappa;
-  const double st = terms.sqrt_tau;
+  const auto& [R_i, R_j, R_ij, t_ij, sk, st] = terms;
   Residual r;
   const MatrixD rotation_error = R_j - R_i * R_ij;
   r.template head<d * d>() = sk * Eigen::Map<const Eigen::Matrix<double, d * d, 1>>(rotation_error.data());
@@ -116,12 +110,7 @@ void ChordalFactor<Group>::second_order(const Group& T_world_i, const Group& T_w
   using VectorD = Eigen::Matrix<double, d, 1>;
   constexpr int kRot = kDoF - d;  // rotation parameters
   const ChordalTerms<Group> terms(T_world_i, T_world_j, edge);
-  const MatrixD& R_i = terms.R_i;
-  const MatrixD& R_j = terms.R_j;
-  const MatrixD& R_ij = terms.R_ij;
-  const VectorD& t_ij = terms.t_ij;
-  const double sk = terms.sqrt_kappa;
-  const double st = terms.sqrt_tau;
+  const auto& [R_i, R_j, R_ij, t_ij, sk, st] = terms;
   const Eigen::Map<const MatrixD> r_R(r.data());  // vec() is column-major, as in evaluate()
   const VectorD r_t = r.template tail<d>();
   S_ii->setZero();

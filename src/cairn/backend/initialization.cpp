@@ -21,15 +21,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-template <class Group>
-Group make_pose(const Eigen::Matrix<double, kRotationDim<Group>, kRotationDim<Group>>& R, const Eigen::Matrix<double, kRotationDim<Group>, 1>& t) {
-  if constexpr (Group::kDoF == 3) {
-    return Group(core::SO2::from_matrix(R), t);
-  } else {
-    return Group(core::SO3::from_matrix(R), t);
-  }
-}
-
 // The unknowns of both linear systems: pose -> block, -1 for fixed poses, blocks numbered in a
 // fill-reducing elimination order (block_amd_labels) shared by the rotation and the
 // translation system, whose block graphs are the same.
@@ -240,7 +231,7 @@ InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
   const Eigen::MatrixXd t = solve_linear<1, d>(unknowns, known_t, edges, {}, offsets, tau);
   for (int p = 0; p < n; ++p) {
     if (problem.fixed[static_cast<std::size_t>(p)]) continue;
-    problem.T_world_pose[static_cast<std::size_t>(p)] = make_pose<Group>(R[static_cast<std::size_t>(p)], VectorD(t.row(p).transpose()));
+    problem.T_world_pose[static_cast<std::size_t>(p)] = pose_from<Group>(R[static_cast<std::size_t>(p)], VectorD(t.row(p).transpose()));
   }
   summary.poses_reached = n;
   summary.total_s = std::chrono::duration<double>(Clock::now() - start).count();

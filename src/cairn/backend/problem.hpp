@@ -53,6 +53,17 @@ Eigen::Matrix<double, kRotationDim<Group>, kRotationDim<Group>> rotation_matrix_
   }
 }
 
+/// The pose with the rotation nearest to R (SO2/SO3::from_matrix project it) and translation t.
+template <class Group>
+Group pose_from(const Eigen::Matrix<double, kRotationDim<Group>, kRotationDim<Group>>& R,
+                const Eigen::Matrix<double, kRotationDim<Group>, 1>& t) {
+  if constexpr (Group::kDoF == 3) {
+    return Group(core::SO2::from_matrix(R), t);
+  } else {
+    return Group(core::SO3::from_matrix(R), t);
+  }
+}
+
 template <class Group>
 struct PoseGraphProblem {
   static constexpr int kDoF = Group::kDoF;

@@ -221,31 +221,17 @@ bool escape_saddle(const ChordalRelaxation& x, const Eigen::RowVectorXd& escape,
   return false;
 }
 
-/// Algorithm 2 of Rosen et al.: the d leading right singular directions of the rotation part,
-/// the sign giving most blocks det > 0, each block projected to SO(d).
-Eigen::MatrixXd round_to_rotations(const Eigen::MatrixXd& Yrot, int d) {
+/// Algorithm 2 of Rosen et al.: the d leading right singular directions of the rotation part
+/// (Sigma_d V_d^T), the sign giving most blocks det > 0; each block is projected to SO(d) by
+/// pose_from.
+Eigen::MatrixXd leading_directions(const Eigen::MatrixXd& Yrot, int d) {
   const int n = static_cast<int>(Yrot.cols()) / d;
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Yrot, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  Eigen::MatrixXd R = svd.matrixU().leftCols(d).transpose() * Yrot;  // Sigma_d V_d^T
+  Eigen::MatrixXd R = svd.matrixU().leftCols(d).transpose() * Yrot;
   int positive = 0;
   for (int p = 0; p < n; ++p) positive += R.block(0, p * d, d, d).determinant() > 0.0;
   if (positive < n - positive) R.row(d - 1) *= -1.0;
-  for (int p = 0; p < n; ++p) {
-    const Eigen::JacobiSVD<Eigen::MatrixXd> s(R.block(0, p * d, d, d), Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::MatrixXd U = s.matrixU();
-    if ((U * s.matrixV().transpose()).determinant() < 0.0) U.col(d - 1) *= -1.0;
-    R.block(0, p * d, d, d) = U * s.matrixV().transpose();
-  }
   return R;
-}
-
-template <class Group>
-Group make_pose(const Eigen::MatrixXd& R, const Eigen::VectorXd& t) {
-  if constexpr (Group::kDoF == 3) {
-    return core::SE2(t(0), t(1), std::atan2(R(1, 0), R(0, 0)));
-  } else {
-    return core::SE3(core::SO3::from_matrix(R), t);
-  }
 }
 
 }  // namespace
@@ -304,12 +290,20 @@ StaircaseSummary riemannian_staircase(PoseGraphProblem<Group>& problem, const St
   if (!relaxation_certified) return finish("no rank up to " + std::to_string(d + options.max_rank_increase) + " certified");
 
   // Round, place in the frame of the fixed pose, polish at rank d, certify.
-  const Eigen::MatrixXd R = round_to_rotations(Y.rightCols(x.n * d), d);
+  using MatrixD = Eigen::Matrix<double, d, d>;
+  using VectorD = Eigen::Matrix<double, d, 1>;
+  Eigen::MatrixXd R = leading_directions(Y.rightCols(x.n * d), d);
+  std::vector<Group> rounded(static_cast<std::size_t>(x.n));
+  for (int p = 0; p < x.n; ++p) {
+    rounded[static_cast<std::size_t>(p)] = pose_from<Group>(MatrixD(R.block(0, p * d, d, d)), VectorD::Zero());
+    R.block(0, p * d, d, d) = rotation_matrix_of(rounded[static_cast<std::size_t>(p)]);
+  }
   Eigen::MatrixXd Yd;
   x.with_optimal_translations(R, &Yd);
   PoseGraphProblem<Group> candidate = problem;
-  std::vector<Group> rounded(static_cast<std::size_t>(x.n));
-  for (int p = 0; p < x.n; ++p) rounded[static_cast<std::size_t>(p)] = make_pose<Group>(R.block(0, p * d, d, d), Yd.col(p));
+  for (int p = 0; p < x.n; ++p) {
+    rounded[static_cast<std::size_t>(p)] = pose_from<Group>(MatrixD(R.block(0, p * d, d, d)), VectorD(Yd.col(p)));
+  }
   const Group T_world_anchor = problem.T_world_pose[static_cast<std::size_t>(x.anchor)];
   const Group T_fix = T_world_anchor * rounded[static_cast<std::size_t>(x.anchor)].inverse();
   for (int p = 0; p < x.n; ++p) candidate.T_world_pose[static_cast<std::size_t>(p)] = T_fix * rounded[static_cast<std::size_t>(p)];
@@ -322,7 +316,8 @@ StaircaseSummary riemannian_staircase(PoseGraphProblem<Group>& problem, const St
     summary.interrupted = true;
     return finish("interrupted while polishing the rounded point: the poses are as they were");
   }
-  const CertificateSummary final_certificate = certify_chordal(candidate, options.certificate);
+  // The candidate has the problem's edges and fixed poses: the same relaxation.
+  const CertificateSummary final_certificate = certify_relaxation(x, rotation_blocks(candidate), options.certificate);
   if (final_certificate.f < first.f) {
     problem.T_world_pose = candidate.T_world_pose;
     summary.certificate = final_certificate;

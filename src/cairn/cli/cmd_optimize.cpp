@@ -2,7 +2,6 @@
 // objective and robust cost; progress per iteration on stderr; a JSON report on request.
 
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <optional>
 #include <iostream>
@@ -181,7 +180,7 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                        (use_gnc && gnc.interrupted);
   if (stopped) {
     std::fprintf(stderr, "cairn optimize: interrupted by %s after %d iterations: writing the current estimate\n",
-                 interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT", summary.iterations);
+                 interrupt_signal_name(), summary.iterations);
   }
   // The certificate, and the Riemannian staircase when it fails (which may replace the poses by
   // a better, certified set): before the graph is written.
@@ -284,7 +283,7 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                         {"message", staircase->message}};
     }
     j["interrupted"] = stopped_after;
-    if (stopped_after) j["interruption"] = {{"signal", interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT"}};
+    if (stopped_after) j["interruption"] = {{"signal", interrupt_signal_name()}};
     if (!flags.covariance_ids.empty()) {
       std::vector<int> poses;
       for (const auto id : flags.covariance_ids) {

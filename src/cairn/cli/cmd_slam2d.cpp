@@ -12,7 +12,6 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
-#include <csignal>
 
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
@@ -108,7 +107,7 @@ int slam2d_command(const Slam2dFlags& flags) {
   const bool stopped = interrupted();
   if (stopped) {
     std::fprintf(stderr, "cairn slam2d: interrupted by %s after scan %zu of %zu: writing the result so far\n",
-                 interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT", used, n);
+                 interrupt_signal_name(), used, n);
   }
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -119,7 +118,7 @@ int slam2d_command(const Slam2dFlags& flags) {
                      {"records", read_report.records}};
   report["interrupted"] = stopped;
   if (stopped) {
-    report["interruption"] = {{"signal", interrupt_signal() == SIGTERM ? "SIGTERM" : "SIGINT"},
+    report["interruption"] = {{"signal", interrupt_signal_name()},
                               {"scans_processed", used},
                               {"scans_requested", n},
                               {"final_optimization", "skipped"}};

@@ -55,6 +55,7 @@ void install_signal_handlers() {
 void use_stop_points() { g_stop_points.store(true); }
 bool interrupted() { return g_signal.load() != 0; }
 int interrupt_signal() { return g_signal.load(); }
+const char* interrupt_signal_name() { return g_signal.load() == SIGTERM ? "SIGTERM" : "SIGINT"; }
 int interrupted_exit_status() { return 128 + g_signal.load(); }
 std::function<bool()> stop_on_signal() {
   return [] { return interrupted(); };

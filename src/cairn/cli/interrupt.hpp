@@ -26,6 +26,8 @@ void use_stop_points();
 bool interrupted();
 /// The signal that arrived (0 if none).
 int interrupt_signal();
+/// "SIGINT" or "SIGTERM" (for messages and reports).
+const char* interrupt_signal_name();
 /// 128 + interrupt_signal().
 int interrupted_exit_status();
 /// A should_stop callback for library options: returns interrupted().
