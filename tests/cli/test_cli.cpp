@@ -293,4 +293,34 @@ TEST(Cli, CorruptThenGncReportsRejectedEdgesByIdAndLine) {
   }
 }
 
+TEST(Cli, BundleAdjustmentRefinesABalProblemAndWritesItBack) {
+  CAIRN_REQUIRE_DATA("bal/dubrovnik-3-7-pre.txt");
+  const std::string input = cairn::test::data_path("bal/dubrovnik-3-7-pre.txt").string();
+  const auto out = scratch() / "ba_out.txt";
+  const auto report = scratch() / "ba_report.json";
+  const Result result = run("ba " + quoted(std::filesystem::path(input)) + " -o " + quoted(out) + " --report " + quoted(report) + " -q");
+  ASSERT_EQ(result.status, 0) << result.err;
+  EXPECT_NE(result.out.find("3 cameras, 7 points, 19 observations"), std::string::npos) << result.out;
+  const nlohmann::json j = nlohmann::json::parse(slurp(report));
+  // SOURCE.txt: initial cost 2.764220e+03 for this file.
+  EXPECT_NEAR(j["initial_cost"].get<double>(), 2.764220e+03, 0.01);
+  EXPECT_LT(j["final_cost"].get<double>(), 1e-2 * j["initial_cost"].get<double>());
+  EXPECT_EQ(j["cameras"], 3);
+  // The written problem reads back with the same counts, and starting from it the solve has
+  // nothing left to gain.
+  const auto again = scratch() / "ba_report_again.json";
+  ASSERT_EQ(run("ba " + quoted(out) + " --report " + quoted(again) + " -q").status, 0);
+  const nlohmann::json k = nlohmann::json::parse(slurp(again));
+  EXPECT_NEAR(k["initial_cost"].get<double>(), j["final_cost"].get<double>(), 1e-9 * (1.0 + j["final_cost"].get<double>()));
+}
+
+TEST(Cli, BundleAdjustmentRejectsBadInputWithFileAndLine) {
+  const std::string bad = write_file("bad.bal", "1 1 1\n0 3 1.5 -2.5\n0.1\n0.2\n0.3\n1\n2\n-5\n500\n0\n0\n1\n2\n3\n");
+  const Result result = run("ba " + quoted(std::filesystem::path(bad)));
+  EXPECT_EQ(result.status, 1);
+  EXPECT_NE(result.err.find("bad.bal:2: the point index of observation 1 of 1 3 is out of range"), std::string::npos)
+      << result.err;
+  EXPECT_EQ(run("ba " + quoted(std::filesystem::path(bad)) + " --linear-solver qr").status, 2);
+}
+
 }  // namespace

@@ -1,5 +1,7 @@
 #include "cairn/backend/sparse_cholesky.hpp"
 
+#include <dlfcn.h>
+
 #include <amd.h>
 #include <cholmod.h>
 #include <omp.h>
@@ -398,5 +400,13 @@ std::size_t SparseCholesky::factor_nonzeros() const {
 }
 
 std::size_t SparseCholesky::peak_memory_bytes() const { return impl_->common.memory_usage; }
+
+bool set_blas_threads(int threads) {
+  using SetThreads = void (*)(int);
+  static const auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+  if (set == nullptr) return false;
+  set(threads > 0 ? threads : 1);
+  return true;
+}
 
 }  // namespace cairn::backend

@@ -85,6 +85,14 @@ const std::vector<int>& block_amd_labels(int blocks, const std::vector<std::pair
 void apply_block_labels(const std::vector<int>& label, std::vector<int>& variable,
                         std::vector<std::pair<int, int>>& pairs);
 
+/// Limits the threads of the BLAS that CHOLMOD's supernodal factorisation calls, when that BLAS
+/// is OpenBLAS (found at run time with dlsym; other BLAS libraries are left alone). Debian's
+/// OpenBLAS starts one thread per core and its idle threads spin in sched_yield after each
+/// call: with a single-threaded solve they took 37 % of the samples on the second core while
+/// bundle-adjusting problem-16-22106 (perf, 2026-11-24). Process-wide. Returns false when no
+/// OpenBLAS is loaded.
+bool set_blas_threads(int threads);
+
 enum class FactorizationStatus { kSuccess, kNotPositiveDefinite, kFailure };
 
 /// y = A x for a symmetric matrix stored as its upper triangle.

@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   add(cairn::cli::register_slam2d, "slam2d", "2D LiDAR SLAM on a CARMEN log: map, trajectory, pose graph, report");
   add(cairn::cli::register_eval, "eval", "Evaluate a trajectory: APE, RPE, KITTI t_err/r_err, relations metric; tables, JSON, plots");
   add(cairn::cli::register_landmarks, "landmarks", "Landmark SLAM (EKF or graph; known, NN or JCBB association) on a simulated landmark run");
+  add(cairn::cli::register_ba, "ba", "Bundle adjustment of a BAL problem (points eliminated by Schur complement)");
   add(cairn::cli::register_simulate, "simulate", "Simulate a world, a trajectory and sensor logs (CARMEN, TUM, g2o, relations, PNG)");
 
   try {
@@ -52,7 +53,7 @@ int main(int argc, char** argv) {
   // The commands with safe points stop at the first SIGINT/SIGTERM; the others end at once.
   for (const auto& [command, run] : runners) {
     const std::string name = command->get_name();
-    if (command->parsed() && (name == "slam2d" || name == "optimize" || name == "landmarks")) {
+    if (command->parsed() && (name == "slam2d" || name == "optimize" || name == "landmarks" || name == "ba")) {
       cairn::cli::use_stop_points();
     }
   }

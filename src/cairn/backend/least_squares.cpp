@@ -1,0 +1,1364 @@
+// The least-squares engine of least_squares.hpp: problem storage, parallel evaluation, the
+// reduced (Schur) normal equations, and Levenberg-Marquardt as Ceres' TrustRegionMinimizer with
+// its LevenbergMarquardtStrategy (internal/ceres/trust_region_minimizer.cc,
+// levenberg_marquardt_strategy.cc): same damping, same radius updates, same stopping rules.
+
+#include "cairn/backend/least_squares.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <sstream>
+
+#include "cairn/backend/sparse_cholesky.hpp"
+#include "cairn/core/assert.hpp"
+
+namespace cairn::backend {
+
+// ---------------------------------------------------------------------------------------------
+// Problem storage
+
+struct VariableEntry {
+  double* values = nullptr;
+  const Manifold* manifold = nullptr;
+  VariableGroup group = VariableGroup::kReduced;
+  bool constant = false;
+};
+
+struct FactorEntry {
+  std::unique_ptr<Factor> factor;
+  std::vector<int> variables;
+  FactorLoss loss;
+  int residual_size = 0;
+};
+
+struct LeastSquaresProblem::Impl {
+  std::vector<VariableEntry> variables;
+  std::vector<FactorEntry> factors;
+  int residuals = 0;
+};
+
+LeastSquaresProblem::LeastSquaresProblem() : impl_(std::make_unique<Impl>()) {}
+LeastSquaresProblem::~LeastSquaresProblem() = default;
+LeastSquaresProblem::LeastSquaresProblem(LeastSquaresProblem&&) noexcept = default;
+LeastSquaresProblem& LeastSquaresProblem::operator=(LeastSquaresProblem&&) noexcept = default;
+
+int LeastSquaresProblem::add_variable(double* values, const Manifold& manifold, VariableGroup group) {
+  CAIRN_ASSERT(values != nullptr, "add_variable: null storage");
+  impl_->variables.push_back({values, &manifold, group, false});
+  return static_cast<int>(impl_->variables.size()) - 1;
+}
+
+void LeastSquaresProblem::set_constant(int variable, bool constant) {
+  CAIRN_ASSERT(variable >= 0 && variable < num_variables(), "set_constant: no such variable");
+  impl_->variables[variable].constant = constant;
+}
+
+bool LeastSquaresProblem::is_constant(int variable) const { return impl_->variables.at(variable).constant; }
+
+int LeastSquaresProblem::add_factor(std::unique_ptr<Factor> factor, std::vector<int> variables, FactorLoss loss) {
+  CAIRN_ASSERT(factor != nullptr, "add_factor: null factor");
+  CAIRN_ASSERT(!variables.empty(), "add_factor: a factor needs at least one variable");
+  for (std::size_t k = 0; k < variables.size(); ++k) {
+    CAIRN_ASSERT(variables[k] >= 0 && variables[k] < num_variables(), "add_factor: no such variable");
+    for (std::size_t m = 0; m < k; ++m) {
+      CAIRN_ASSERT(variables[m] != variables[k], "add_factor: a variable appears twice in one factor");
+    }
+  }
+  CAIRN_ASSERT(loss.kernel == RobustKernel::kNone || loss.scale > 0.0, "add_factor: kernel scale must be > 0");
+  const int residual_size = factor->residual_size();
+  CAIRN_ASSERT(residual_size >= 1, "add_factor: residual size must be >= 1");
+  impl_->residuals += residual_size;
+  impl_->factors.push_back({std::move(factor), std::move(variables), loss, residual_size});
+  return static_cast<int>(impl_->factors.size()) - 1;
+}
+
+int LeastSquaresProblem::num_variables() const { return static_cast<int>(impl_->variables.size()); }
+int LeastSquaresProblem::num_factors() const { return static_cast<int>(impl_->factors.size()); }
+int LeastSquaresProblem::num_residuals() const { return impl_->residuals; }
+const Manifold& LeastSquaresProblem::manifold(int variable) const { return *impl_->variables.at(variable).manifold; }
+VariableGroup LeastSquaresProblem::group(int variable) const { return impl_->variables.at(variable).group; }
+double* LeastSquaresProblem::values(int variable) const { return impl_->variables.at(variable).values; }
+const Factor& LeastSquaresProblem::factor(int index) const { return *impl_->factors.at(index).factor; }
+const std::vector<int>& LeastSquaresProblem::factor_variables(int index) const { return impl_->factors.at(index).variables; }
+const FactorLoss& LeastSquaresProblem::factor_loss(int index) const { return impl_->factors.at(index).loss; }
+
+std::string_view to_string(LinearSolverType type) {
+  switch (type) {
+    case LinearSolverType::kSparseNormalCholesky: return "sparse_normal_cholesky";
+    case LinearSolverType::kSparseSchur: return "sparse_schur";
+    case LinearSolverType::kIterativeSchur: return "iterative_schur";
+  }
+  return "?";
+}
+
+std::string_view to_string(LeastSquaresTermination termination) {
+  switch (termination) {
+    case LeastSquaresTermination::kConvergence: return "convergence";
+    case LeastSquaresTermination::kNoConvergence: return "no_convergence";
+    case LeastSquaresTermination::kFailure: return "failure";
+    case LeastSquaresTermination::kInterrupted: return "interrupted";
+  }
+  return "?";
+}
+
+bool LeastSquaresOptions::is_valid(std::string* error) const {
+  std::ostringstream problems;
+  if (max_iterations < 1) problems << "max_iterations must be >= 1; ";
+  if (!(function_tolerance >= 0.0)) problems << "function_tolerance must be >= 0; ";
+  if (!(gradient_tolerance >= 0.0)) problems << "gradient_tolerance must be >= 0; ";
+  if (!(parameter_tolerance >= 0.0)) problems << "parameter_tolerance must be >= 0; ";
+  if (!(initial_trust_region_radius > 0.0)) problems << "initial_trust_region_radius must be > 0; ";
+  if (!(max_trust_region_radius >= initial_trust_region_radius)) {
+    problems << "max_trust_region_radius must be >= initial_trust_region_radius; ";
+  }
+  if (!(min_diagonal > 0.0 && max_diagonal >= min_diagonal)) problems << "need 0 < min_diagonal <= max_diagonal; ";
+  if (!(cg_tolerance > 0.0 && cg_tolerance < 1.0)) problems << "cg_tolerance must be in (0, 1); ";
+  if (max_cg_iterations < 1 || min_cg_iterations < 0 || min_cg_iterations > max_cg_iterations) {
+    problems << "need 0 <= min_cg_iterations <= max_cg_iterations, max_cg_iterations >= 1; ";
+  }
+  if (threads < 0) problems << "threads must be >= 0; ";
+  std::string text = problems.str();
+  if (text.empty()) return true;
+  if (error != nullptr) *error = text.substr(0, text.size() - 2);
+  return false;
+}
+
+std::string LeastSquaresSummary::brief_report() const {
+  char buffer[256];
+  std::snprintf(buffer, sizeof(buffer), "LM (%s): cost %.6e -> %.6e in %d iterations (%.3f s): %s",
+                std::string(to_string(linear_solver)).c_str(), initial_cost, final_cost, iterations, total_s,
+                message.c_str());
+  return buffer;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// Row-major matrix type that stays valid for one column (Eigen forbids row-major column vectors;
+/// their memory layout is the same).
+template <int Rows, int Cols>
+using RowMajor = Eigen::Matrix<double, Rows, Cols, (Cols == 1 && Rows != 1) ? Eigen::ColMajor : Eigen::RowMajor>;
+template <int Rows, int Cols>
+using ConstMap = Eigen::Map<const RowMajor<Rows, Cols>>;
+template <int Rows>
+using VectorMap = Eigen::Map<Eigen::Matrix<double, Rows, 1>>;
+template <int Rows>
+using ConstVectorMap = Eigen::Map<const Eigen::Matrix<double, Rows, 1>>;
+
+// ---------------------------------------------------------------------------------------------
+// The layout of one solve: which variables are free, where their blocks sit in the reduced and
+// eliminated unknowns, where each factor's residual and Jacobians are stored.
+
+struct Layout {
+  int reduced_dim = 0;
+  int eliminated_dim = 0;
+  std::vector<int> block_of;           ///< variable -> reduced block or eliminated block, -1 if constant
+  std::vector<char> eliminated;        ///< variable -> 1 when in the eliminated group (and free)
+  std::vector<int> reduced_variable;   ///< reduced block -> variable
+  std::vector<int> reduced_offset;     ///< reduced block -> offset in the reduced vector
+  std::vector<int> eliminated_variable;
+  std::vector<int> eliminated_offset;
+  std::vector<int> residual_offset;    ///< factor -> offset in the residual buffer
+  std::vector<int> slot_start;         ///< factor -> first slot (one slot per factor variable)
+  std::vector<int> jacobian_offset;    ///< slot -> offset in the Jacobian buffer, -1 if constant
+  std::vector<int> factor_eliminated;  ///< factor -> eliminated block or -1
+  std::vector<int> eliminated_factor_start;  ///< CSR: eliminated block -> its factors
+  std::vector<int> eliminated_factors;
+  std::vector<int> plain_factors;      ///< factors with no eliminated variable
+  std::size_t jacobian_size = 0;
+  int residual_size = 0;
+  int ambient_free = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// The reduced matrix: upper triangle of a symmetric block matrix with blocks of any sizes, in
+// CHOLMOD's compressed-column form, with direct block addressing.
+
+class ReducedMatrix {
+ public:
+  /// `pairs`: coupled blocks (r, c), any order, duplicates allowed; the diagonal is always present.
+  ReducedMatrix(const std::vector<int>& block_size, std::vector<std::pair<int, int>> pairs) {
+    const int blocks = static_cast<int>(block_size.size());
+    offset_.assign(blocks + 1, 0);
+    for (int b = 0; b < blocks; ++b) offset_[b + 1] = offset_[b] + block_size[b];
+    for (auto& [r, c] : pairs) {
+      if (r > c) std::swap(r, c);
+    }
+    for (int b = 0; b < blocks; ++b) pairs.emplace_back(b, b);
+    std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
+      return a.second != b.second ? a.second < b.second : a.first < b.first;
+    });
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    column_rows_.assign(blocks, {});
+    column_prefix_.assign(blocks, {});
+    for (const auto& [r, c] : pairs) column_rows_[c].push_back(r);
+    const int n = offset_[blocks];
+    csc_.size = n;
+    csc_.column_start.assign(n + 1, 0);
+    for (int c = 0; c < blocks; ++c) {
+      int prefix = 0;
+      for (const int r : column_rows_[c]) {
+        column_prefix_[c].push_back(prefix);
+        prefix += block_size[r];
+      }
+      // Column j of block c holds every row of the blocks above c, then rows 0..j of block c.
+      const int above = prefix - block_size[c];
+      for (int j = 0; j < block_size[c]; ++j) {
+        const int column = offset_[c] + j;
+        csc_.column_start[column + 1] = csc_.column_start[column] + above + j + 1;
+      }
+    }
+    csc_.row.resize(csc_.column_start[n]);
+    csc_.value.assign(csc_.column_start[n], 0.0);
+    // Dense column-major storage of every stored block (r <= c; diagonal blocks whole).
+    column_block_offset_.assign(blocks, {});
+    std::size_t block_values = 0;
+    for (int c = 0; c < blocks; ++c) {
+      for (const int r : column_rows_[c]) {
+        column_block_offset_[c].push_back(block_values);
+        block_values += static_cast<std::size_t>(block_size[r]) * block_size[c];
+      }
+    }
+    block_values_ = block_values;
+    for (int c = 0; c < blocks; ++c) {
+      for (int j = 0; j < block_size[c]; ++j) {
+        int k = csc_.column_start[offset_[c] + j];
+        for (const int r : column_rows_[c]) {
+          const int rows = r == c ? j + 1 : block_size[r];
+          for (int i = 0; i < rows; ++i) csc_.row[k++] = offset_[r] + i;
+        }
+      }
+    }
+  }
+
+  const UpperCsc& matrix() const { return csc_; }
+  UpperCsc& matrix() { return csc_; }
+  int offset(int block) const { return offset_[block]; }
+  int size(int block) const { return offset_[block + 1] - offset_[block]; }
+  std::size_t nonzeros() const { return csc_.value.size(); }
+
+  /// Values of the block storage (blocks_size() doubles) that add() accumulates into:
+  /// every stored block (r, c), r <= c, dense and column-major, so that one update touches
+  /// contiguous memory (Ceres' BlockRandomAccessSparseMatrix keeps its cells dense likewise).
+  std::size_t blocks_size() const { return block_values_; }
+
+  /// blocks += M at block (r, c), M size(r) x size(c). For r > c, M^T is added at (c, r).
+  /// Diagonal blocks are accumulated whole (to_csc reads their upper triangle).
+  template <class Matrix>
+  void add(int r, int c, const Matrix& M, double* blocks) const {
+    if (r > c) {
+      add_upper(c, r, M.transpose(), blocks);
+    } else {
+      add_upper(r, c, M, blocks);
+    }
+  }
+
+  /// Writes the upper triangle of the block storage into the CSC values (same pattern).
+  void to_csc(const double* blocks, double* values) const {
+    const int block_count = static_cast<int>(column_rows_.size());
+    for (int c = 0; c < block_count; ++c) {
+      const int columns = size(c);
+      for (int j = 0; j < columns; ++j) {
+        double* out = values + csc_.column_start[offset_[c] + j];
+        for (std::size_t k = 0; k < column_rows_[c].size(); ++k) {
+          const int r = column_rows_[c][k];
+          const int rows = r == c ? j + 1 : size(r);
+          const double* in = blocks + column_block_offset_[c][k] + static_cast<std::size_t>(j) * size(r);
+          out = std::copy(in, in + rows, out);
+        }
+      }
+    }
+  }
+
+  /// Adds `amount` to the diagonal entry of scalar column `column`.
+  void add_diagonal(int column, double amount, double* values) const {
+    values[csc_.column_start[column + 1] - 1] += amount;
+  }
+  double diagonal(int column, const double* values) const { return values[csc_.column_start[column + 1] - 1]; }
+
+ private:
+  template <class Matrix>
+  void add_upper(int r, int c, const Matrix& M, double* blocks) const {
+    const auto& rows = column_rows_[c];
+    const auto it = std::lower_bound(rows.begin(), rows.end(), r);
+    CAIRN_ASSERT(it != rows.end() && *it == r, "ReducedMatrix: block outside the pattern");
+    double* block = blocks + column_block_offset_[c][it - rows.begin()];
+    const int block_rows = size(r);
+    const int columns = size(c);
+    for (int j = 0; j < columns; ++j) {
+      for (int i = 0; i < block_rows; ++i) block[i + j * block_rows] += M(i, j);
+    }
+  }
+
+  std::vector<int> offset_;
+  std::vector<std::vector<int>> column_rows_;
+  std::vector<std::vector<int>> column_prefix_;
+  std::vector<std::vector<std::size_t>> column_block_offset_;
+  std::size_t block_values_ = 0;
+  UpperCsc csc_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// The solver state of one solve().
+
+class Engine {
+ public:
+  Engine(LeastSquaresProblem& problem, const LeastSquaresOptions& options)
+      : problem_(problem.impl()),
+        options_(options),
+        arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {}
+
+  LeastSquaresSummary run();
+
+ private:
+  // Setup
+  bool build_layout(std::string* error);
+  void choose_kernels();
+  // Evaluation. Returns false when a factor could not be evaluated or gave a non-finite value.
+  bool evaluate(bool jacobians, double& cost);
+  // Gradient g = J^T r over the free variables (reduced part, eliminated part).
+  void compute_gradient();
+  // Builds and solves the damped system for the step; false on a numerical failure.
+  bool compute_step(double radius, int& cg_iterations);
+  double model_cost_change() const;
+  void save_values();
+  void restore_values();
+  void apply_step();
+  double values_norm() const;
+  double gradient_max_norm();
+
+  template <int R, int E, int F>
+  void eliminate(int e, double mu_inverse, double* matrix_values, double* rhs, double* diagonal, bool diagonal_only);
+  template <int R, int F>
+  void add_plain_factor(int f, double* matrix_values, double* rhs, double* diagonal, bool diagonal_only);
+  template <int R, int E, int F>
+  void back_substitute(int e);
+  template <int R, int E, int F>
+  void schur_product_block(int e, const double* x, double* y) const;
+  template <int R, int F>
+  void plain_product(int f, const double* x, double* y) const;
+  void schur_product(const Eigen::VectorXd& x, Eigen::VectorXd& y);
+  bool solve_iterative(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, int& cg_iterations);
+
+  template <class Body>
+  void parallel(int n, int grain, const Body& body) {
+    arena_.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<int>(0, n, grain), [&](const tbb::blocked_range<int>& range) {
+        for (int i = range.begin(); i < range.end(); ++i) body(i);
+      });
+    });
+  }
+
+  const double* jacobian(int f, int k) const {
+    const int offset = layout_.jacobian_offset[layout_.slot_start[f] + k];
+    return offset < 0 ? nullptr : jacobians_.data() + offset;
+  }
+  /// The Jacobian of a slot known to hold a free variable.
+  const double* free_jacobian(int f, int k) const {
+    return jacobians_.data() + layout_.jacobian_offset[layout_.slot_start[f] + k];
+  }
+
+  LeastSquaresProblem::Impl& problem_;
+  const LeastSquaresOptions& options_;
+  tbb::task_arena arena_;
+  Layout layout_;
+  std::unique_ptr<ReducedMatrix> reduced_;
+  SparseCholesky cholesky_;
+  bool analyzed_ = false;
+
+  // Kernel selection: fixed sizes when every factor on an eliminated block has R residuals, the
+  // eliminated blocks E and every reduced block F tangent dimensions (bundle adjustment).
+  int fixed_r_ = 0, fixed_e_ = 0, fixed_f_ = 0;
+
+  std::vector<double> residuals_;
+  std::vector<double> jacobians_;
+  std::vector<double> saved_values_;
+  Eigen::VectorXd gradient_reduced_;
+  Eigen::VectorXd gradient_eliminated_;
+  Eigen::VectorXd step_reduced_;
+  Eigen::VectorXd step_eliminated_;
+  std::vector<double> v_inverse_;        ///< per eliminated block, (V + D/mu)^-1, row-major
+  std::vector<int> v_inverse_offset_;
+  std::vector<double> block_values_;  ///< S in ReducedMatrix's block storage
+  /// Eliminated blocks in the order the Schur complement visits them: by the first reduced
+  /// block they touch, so that consecutive blocks update nearby parts of S (cache locality).
+  std::vector<int> elimination_order_;
+  std::vector<double> damping_reduced_;  ///< D / mu on the reduced unknowns for this step
+  // Iterative Schur: the block-diagonal preconditioner's inverse blocks.
+  std::vector<Eigen::MatrixXd> preconditioner_;
+  LeastSquaresSummary* summary_ = nullptr;
+};
+
+bool Engine::build_layout(std::string* error) {
+  Layout& L = layout_;
+  const int variables = static_cast<int>(problem_.variables.size());
+  const bool schur = options_.linear_solver != LinearSolverType::kSparseNormalCholesky;
+  L.block_of.assign(variables, -1);
+  L.eliminated.assign(variables, 0);
+  for (int v = 0; v < variables; ++v) {
+    const VariableEntry& variable = problem_.variables[v];
+    if (variable.constant) continue;
+    const int tangent = variable.manifold->tangent_size();
+    L.ambient_free += variable.manifold->ambient_size();
+    if (schur && variable.group == VariableGroup::kEliminate) {
+      L.eliminated[v] = 1;
+      L.block_of[v] = static_cast<int>(L.eliminated_variable.size());
+      L.eliminated_variable.push_back(v);
+      L.eliminated_offset.push_back(L.eliminated_dim);
+      L.eliminated_dim += tangent;
+    } else {
+      L.block_of[v] = static_cast<int>(L.reduced_variable.size());
+      L.reduced_variable.push_back(v);
+      L.reduced_offset.push_back(L.reduced_dim);
+      L.reduced_dim += tangent;
+    }
+  }
+  const int factors = static_cast<int>(problem_.factors.size());
+  L.residual_offset.resize(factors);
+  L.slot_start.resize(factors + 1);
+  L.factor_eliminated.assign(factors, -1);
+  std::vector<int> eliminated_count(L.eliminated_variable.size(), 0);
+  std::size_t jacobian_size = 0;
+  int residual_size = 0;
+  for (int f = 0; f < factors; ++f) {
+    const FactorEntry& factor = problem_.factors[f];
+    L.residual_offset[f] = residual_size;
+    residual_size += factor.residual_size;
+    L.slot_start[f] = static_cast<int>(L.jacobian_offset.size());
+    for (const int v : factor.variables) {
+      if (L.block_of[v] < 0) {
+        L.jacobian_offset.push_back(-1);
+        continue;
+      }
+      L.jacobian_offset.push_back(static_cast<int>(jacobian_size));
+      jacobian_size += static_cast<std::size_t>(factor.residual_size) * problem_.variables[v].manifold->tangent_size();
+      if (L.eliminated[v]) {
+        if (L.factor_eliminated[f] >= 0) {
+          if (error) *error = "factor " + std::to_string(f) + " touches two eliminated variables (Schur solvers allow one)";
+          return false;
+        }
+        L.factor_eliminated[f] = L.block_of[v];
+        ++eliminated_count[L.block_of[v]];
+      }
+    }
+    if (L.factor_eliminated[f] < 0) L.plain_factors.push_back(f);
+  }
+  L.slot_start[factors] = static_cast<int>(L.jacobian_offset.size());
+  if (jacobian_size > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    if (error) *error = "the Jacobian has more than 2^31 entries";
+    return false;
+  }
+  L.jacobian_size = jacobian_size;
+  L.residual_size = residual_size;
+  L.eliminated_factor_start.assign(L.eliminated_variable.size() + 1, 0);
+  for (std::size_t e = 0; e < eliminated_count.size(); ++e) {
+    L.eliminated_factor_start[e + 1] = L.eliminated_factor_start[e] + eliminated_count[e];
+  }
+  L.eliminated_factors.resize(L.eliminated_factor_start.back());
+  std::vector<int> fill(L.eliminated_factor_start.begin(), L.eliminated_factor_start.end() - 1);
+  for (int f = 0; f < factors; ++f) {
+    if (L.factor_eliminated[f] >= 0) L.eliminated_factors[fill[L.factor_eliminated[f]]++] = f;
+  }
+  if (L.reduced_dim == 0 && L.eliminated_dim == 0) {
+    if (error) *error = "no free variables";
+    return false;
+  }
+  return true;
+}
+
+void Engine::choose_kernels() {
+  // One (R, E, F) for the whole problem when the sizes allow it: BAL (2, 3, 9), pinhole
+  // monocular (2, 3, 6), stereo (3, 3, 6).
+  int r = 0, e = 0, f = 0;
+  bool uniform = true;
+  for (const int v : layout_.reduced_variable) {
+    const int size = problem_.variables[v].manifold->tangent_size();
+    if (f == 0) f = size;
+    uniform = uniform && size == f;
+  }
+  for (const int v : layout_.eliminated_variable) {
+    const int size = problem_.variables[v].manifold->tangent_size();
+    if (e == 0) e = size;
+    uniform = uniform && size == e;
+  }
+  for (const int factor : layout_.eliminated_factors) {
+    const int size = problem_.factors[factor].residual_size;
+    if (r == 0) r = size;
+    uniform = uniform && size == r;
+  }
+  if (!uniform) return;
+  const auto is = [&](int rr, int ee, int ff) { return r == rr && e == ee && f == ff; };
+  if (is(2, 3, 9) || is(2, 3, 6) || is(3, 3, 6) || is(2, 2, 3)) {
+    fixed_r_ = r;
+    fixed_e_ = e;
+    fixed_f_ = f;
+  }
+}
+
+bool Engine::evaluate(bool with_jacobians, double& cost) {
+  const int factors = static_cast<int>(problem_.factors.size());
+  tbb::enumerable_thread_specific<double> partial(0.0);
+  std::atomic<bool> ok{true};
+  tbb::enumerable_thread_specific<std::vector<const double*>> value_pointers;
+  tbb::enumerable_thread_specific<std::vector<double*>> jacobian_pointers;
+  parallel(factors, 256, [&](int f) {
+    const FactorEntry& factor = problem_.factors[f];
+    auto& values = value_pointers.local();
+    auto& jacobians = jacobian_pointers.local();
+    const std::size_t n = factor.variables.size();
+    values.resize(n);
+    jacobians.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      values[k] = problem_.variables[factor.variables[k]].values;
+      const int offset = layout_.jacobian_offset[layout_.slot_start[f] + static_cast<int>(k)];
+      jacobians[k] = offset < 0 ? nullptr : jacobians_.data() + offset;
+    }
+    double* residual = residuals_.data() + layout_.residual_offset[f];
+    const int m = factor.residual_size;
+    if (!factor.factor->evaluate(values.data(), residual, with_jacobians ? jacobians.data() : nullptr)) {
+      ok = false;
+      return;
+    }
+    double squared = 0.0;
+    for (int i = 0; i < m; ++i) squared += residual[i] * residual[i];
+    if (!std::isfinite(squared)) {
+      ok = false;
+      return;
+    }
+    if (factor.loss.kernel == RobustKernel::kNone) {
+      partial.local() += 0.5 * squared;
+    } else {
+      // Ceres' Corrector (internal/ceres/corrector.cc) with rho'' <= 0 (Huber outside its core,
+      // Cauchy, Geman-McClure): r and J scaled by sqrt(rho'); our kernels never have rho'' > 0.
+      const KernelValue kernel = evaluate_kernel(factor.loss.kernel, factor.loss.scale, squared);
+      partial.local() += 0.5 * kernel.rho;
+      const double scale = std::sqrt(kernel.weight);
+      if (scale != 1.0) {
+        for (int i = 0; i < m; ++i) residual[i] *= scale;
+        if (with_jacobians) {
+          for (std::size_t k = 0; k < n; ++k) {
+            if (jacobians[k] == nullptr) continue;
+            const int size = m * problem_.variables[factor.variables[k]].manifold->tangent_size();
+            for (int i = 0; i < size; ++i) jacobians[k][i] *= scale;
+          }
+        }
+      }
+    }
+    if (with_jacobians) {
+      for (std::size_t k = 0; k < n; ++k) {
+        if (jacobians[k] == nullptr) continue;
+        const int size = m * problem_.variables[factor.variables[k]].manifold->tangent_size();
+        for (int i = 0; i < size; ++i) {
+          if (!std::isfinite(jacobians[k][i])) {
+            ok = false;
+            return;
+          }
+        }
+      }
+    }
+  });
+  cost = partial.combine(std::plus<>());
+  return ok.load() && std::isfinite(cost);
+}
+
+void Engine::compute_gradient() {
+  gradient_eliminated_.setZero(layout_.eliminated_dim);
+  const int n = layout_.reduced_dim;
+  tbb::enumerable_thread_specific<Eigen::VectorXd> partial([n] { return Eigen::VectorXd::Zero(n); });
+  // g += J_k^T r for factor f's free variables: eliminated parts in place (one task owns each
+  // eliminated block), reduced parts into the task's partial sum.
+  const auto add_factor = [&](int f, double* reduced) {
+    const FactorEntry& factor = problem_.factors[f];
+    const int m = factor.residual_size;
+    const double* r = residuals_.data() + layout_.residual_offset[f];
+    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+      const double* J = jacobian(f, static_cast<int>(k));
+      if (J == nullptr) continue;
+      const int v = factor.variables[k];
+      const int size = problem_.variables[v].manifold->tangent_size();
+      double* g = layout_.eliminated[v] ? gradient_eliminated_.data() + layout_.eliminated_offset[layout_.block_of[v]]
+                                        : reduced + layout_.reduced_offset[layout_.block_of[v]];
+      for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < size; ++j) g[j] += J[i * size + j] * r[i];
+      }
+    }
+  };
+  parallel(static_cast<int>(layout_.eliminated_variable.size()), 256, [&](int e) {
+    double* reduced = partial.local().data();
+    for (int index = layout_.eliminated_factor_start[e]; index < layout_.eliminated_factor_start[e + 1]; ++index) {
+      add_factor(layout_.eliminated_factors[index], reduced);
+    }
+  });
+  gradient_reduced_.setZero(n);
+  for (const int f : layout_.plain_factors) add_factor(f, gradient_reduced_.data());
+  for (const auto& part : partial) gradient_reduced_ += part;
+}
+
+// Per eliminated block e with factors f_1..f_m: V = sum J_e^T J_e + D_e / mu, g_e = sum J_e^T r,
+// W_a = J_e^T J_c for each (factor, reduced variable) a; then
+//   S(c_a, c_b) += J_ca^T J_cb (same factor)  -  W_a^T V^-1 W_b (all pairs),
+//   rhs(c_a) -= W_a^T V^-1 g_e.
+template <int R, int E, int F>
+void Engine::eliminate(int e, double mu_inverse, double* matrix_values, double* rhs, double* diagonal,
+                       bool diagonal_only) {
+  using MatrixEE = Eigen::Matrix<double, E, E>;
+  using MatrixEF = Eigen::Matrix<double, E, F>;
+  using VectorE = Eigen::Matrix<double, E, 1>;
+  const int e_variable = layout_.eliminated_variable[e];
+  const int e_size = E != Eigen::Dynamic ? E : problem_.variables[e_variable].manifold->tangent_size();
+  MatrixEE V = MatrixEE::Zero(e_size, e_size);
+  VectorE g_e = VectorE::Zero(e_size);
+
+  struct Item {
+    int block;
+    MatrixEF W;
+  };
+  thread_local std::vector<Item> items;
+  items.clear();
+  const int begin = layout_.eliminated_factor_start[e];
+  const int end = layout_.eliminated_factor_start[e + 1];
+  for (int index = begin; index < end; ++index) {
+    const int f = layout_.eliminated_factors[index];
+    const FactorEntry& factor = problem_.factors[f];
+    const int m = R != Eigen::Dynamic ? R : factor.residual_size;
+    const ConstVectorMap<R> r(residuals_.data() + layout_.residual_offset[f], m);
+    int e_slot = -1;
+    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+      if (factor.variables[k] == e_variable) e_slot = static_cast<int>(k);
+    }
+    const ConstMap<R, E> J_e(free_jacobian(f, e_slot), m, e_size);
+    V.noalias() += J_e.transpose().lazyProduct(J_e);
+    g_e.noalias() += J_e.transpose() * r;
+    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+      const int v = factor.variables[k];
+      if (static_cast<int>(k) == e_slot || layout_.block_of[v] < 0) continue;
+      const int block = layout_.block_of[v];
+      const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
+      const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+      items.push_back({block, J_e.transpose().lazyProduct(J_c)});
+      VectorMap<F>(rhs + reduced_->offset(block), f_size).noalias() += J_c.transpose() * r;
+      // J_c^T J_c' for the reduced variables of this factor.
+      for (std::size_t k2 = 0; k2 < factor.variables.size(); ++k2) {
+        const int v2 = factor.variables[k2];
+        if (static_cast<int>(k2) == e_slot || layout_.block_of[v2] < 0) continue;
+        const int block2 = layout_.block_of[v2];
+        if (block2 < block || (diagonal_only && block2 != block)) continue;
+        const int f2_size = F != Eigen::Dynamic ? F : problem_.variables[v2].manifold->tangent_size();
+        const ConstMap<R, F> J_c2(free_jacobian(f, static_cast<int>(k2)), m, f2_size);
+        const Eigen::Matrix<double, F, F> block_product = J_c.transpose().lazyProduct(J_c2);
+        reduced_->add(block, block2, block_product, matrix_values);
+        if (block2 == block) {
+          for (int i = 0; i < f_size; ++i) diagonal[reduced_->offset(block) + i] += block_product(i, i);
+        }
+      }
+    }
+  }
+  for (int i = 0; i < e_size; ++i) {
+    const double d = std::clamp(V(i, i), options_.min_diagonal, options_.max_diagonal);
+    V(i, i) += d * mu_inverse;
+  }
+  const Eigen::LLT<MatrixEE> llt(V);
+  MatrixEE V_inverse = MatrixEE::Identity(e_size, e_size);
+  if (llt.info() == Eigen::Success) {
+    llt.solveInPlace(V_inverse);
+  } else {
+    V_inverse = V.completeOrthogonalDecomposition().pseudoInverse();
+  }
+  Eigen::Map<MatrixEE>(v_inverse_.data() + v_inverse_offset_[e], e_size, e_size) = V_inverse;
+  const VectorE V_inverse_g = V_inverse * g_e;
+  for (const Item& a : items) {
+    const int f_size = static_cast<int>(a.W.cols());
+    VectorMap<F>(rhs + reduced_->offset(a.block), f_size).noalias() -= a.W.transpose() * V_inverse_g;
+  }
+  for (std::size_t a = 0; a < items.size(); ++a) {
+    const MatrixEF T_a = V_inverse.lazyProduct(items[a].W);
+    for (std::size_t b = 0; b < items.size(); ++b) {
+      if (items[b].block < items[a].block || (diagonal_only && items[b].block != items[a].block)) continue;
+      // Block (c_a, c_b) gets -W_a^T V^-1 W_b = -(V^-1 W_a)^T W_b.
+      const Eigen::Matrix<double, F, F> product = -T_a.transpose().lazyProduct(items[b].W);
+      reduced_->add(items[a].block, items[b].block, product, matrix_values);
+    }
+  }
+}
+
+template <int R, int F>
+void Engine::add_plain_factor(int f, double* matrix_values, double* rhs, double* diagonal, bool diagonal_only) {
+  const FactorEntry& factor = problem_.factors[f];
+  const int m = R != Eigen::Dynamic ? R : factor.residual_size;
+  const ConstVectorMap<R> r(residuals_.data() + layout_.residual_offset[f], m);
+  for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+    const int v = factor.variables[k];
+    const int block = layout_.block_of[v];
+    if (block < 0) continue;
+    const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
+    const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+    VectorMap<F>(rhs + reduced_->offset(block), f_size).noalias() += J_c.transpose() * r;
+    for (std::size_t k2 = 0; k2 < factor.variables.size(); ++k2) {
+      const int v2 = factor.variables[k2];
+      const int block2 = layout_.block_of[v2];
+      if (block2 < 0 || block2 < block || (diagonal_only && block2 != block)) continue;
+      const int f2_size = F != Eigen::Dynamic ? F : problem_.variables[v2].manifold->tangent_size();
+      const ConstMap<R, F> J_c2(free_jacobian(f, static_cast<int>(k2)), m, f2_size);
+      const Eigen::Matrix<double, F, F> product = J_c.transpose().lazyProduct(J_c2);
+      reduced_->add(block, block2, product, matrix_values);
+      if (block2 == block) {
+        for (int i = 0; i < f_size; ++i) diagonal[reduced_->offset(block) + i] += product(i, i);
+      }
+    }
+  }
+}
+
+// dx_e = -V^-1 (g_e + sum_f J_e^T (sum_c J_c dx_c)).
+template <int R, int E, int F>
+void Engine::back_substitute(int e) {
+  using VectorE = Eigen::Matrix<double, E, 1>;
+  const int e_variable = layout_.eliminated_variable[e];
+  const int e_size = E != Eigen::Dynamic ? E : problem_.variables[e_variable].manifold->tangent_size();
+  const int e_offset = layout_.eliminated_offset[e];
+  VectorE sum = gradient_eliminated_.segment(e_offset, e_size);
+  for (int index = layout_.eliminated_factor_start[e]; index < layout_.eliminated_factor_start[e + 1]; ++index) {
+    const int f = layout_.eliminated_factors[index];
+    const FactorEntry& factor = problem_.factors[f];
+    const int m = R != Eigen::Dynamic ? R : factor.residual_size;
+    Eigen::Matrix<double, R, 1> J_dx = Eigen::Matrix<double, R, 1>::Zero(m);
+    int e_slot = -1;
+    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+      const int v = factor.variables[k];
+      if (v == e_variable) {
+        e_slot = static_cast<int>(k);
+        continue;
+      }
+      const int block = layout_.block_of[v];
+      if (block < 0) continue;
+      const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
+      const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+      J_dx.noalias() += J_c * step_reduced_.segment(layout_.reduced_offset[block], f_size);
+    }
+    const ConstMap<R, E> J_e(free_jacobian(f, e_slot), m, e_size);
+    sum.noalias() += J_e.transpose() * J_dx;
+  }
+  const Eigen::Map<const Eigen::Matrix<double, E, E>> V_inverse(v_inverse_.data() + v_inverse_offset_[e], e_size, e_size);
+  step_eliminated_.segment(e_offset, e_size).noalias() = -(V_inverse * sum);
+}
+
+// y += (A - W V^-1 W^T) x restricted to eliminated block e's factors (A's part from them).
+template <int R, int E, int F>
+void Engine::schur_product_block(int e, const double* x, double* y) const {
+  using VectorE = Eigen::Matrix<double, E, 1>;
+  const int e_variable = layout_.eliminated_variable[e];
+  const int e_size = E != Eigen::Dynamic ? E : problem_.variables[e_variable].manifold->tangent_size();
+  const int begin = layout_.eliminated_factor_start[e];
+  const int end = layout_.eliminated_factor_start[e + 1];
+  VectorE w = VectorE::Zero(e_size);
+  for (int index = begin; index < end; ++index) {
+    const int f = layout_.eliminated_factors[index];
+    const FactorEntry& factor = problem_.factors[f];
+    const int m = R != Eigen::Dynamic ? R : factor.residual_size;
+    Eigen::Matrix<double, R, 1> z = Eigen::Matrix<double, R, 1>::Zero(m);
+    int e_slot = -1;
+    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+      const int v = factor.variables[k];
+      if (v == e_variable) {
+        e_slot = static_cast<int>(k);
+        continue;
+      }
+      const int block = layout_.block_of[v];
+      if (block < 0) continue;
+      const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
+      const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+      z.noalias() += J_c * ConstVectorMap<F>(x + layout_.reduced_offset[block], f_size);
+    }
+    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+      const int v = factor.variables[k];
+      const int block = layout_.block_of[v];
+      if (static_cast<int>(k) == e_slot || block < 0) continue;
+      const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
+      const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+      VectorMap<F>(y + layout_.reduced_offset[block], f_size).noalias() += J_c.transpose() * z;
+    }
+    const ConstMap<R, E> J_e(free_jacobian(f, e_slot), m, e_size);
+    w.noalias() += J_e.transpose() * z;
+  }
+  const Eigen::Map<const Eigen::Matrix<double, E, E>> V_inverse(v_inverse_.data() + v_inverse_offset_[e], e_size, e_size);
+  const VectorE u = V_inverse * w;
+  for (int index = begin; index < end; ++index) {
+    const int f = layout_.eliminated_factors[index];
+    const FactorEntry& factor = problem_.factors[f];
+    const int m = R != Eigen::Dynamic ? R : factor.residual_size;
+    int e_slot = -1;
+    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+      if (factor.variables[k] == e_variable) e_slot = static_cast<int>(k);
+    }
+    const ConstMap<R, E> J_e(free_jacobian(f, e_slot), m, e_size);
+    const Eigen::Matrix<double, R, 1> t = J_e * u;
+    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+      const int v = factor.variables[k];
+      const int block = layout_.block_of[v];
+      if (static_cast<int>(k) == e_slot || block < 0) continue;
+      const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
+      const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+      VectorMap<F>(y + layout_.reduced_offset[block], f_size).noalias() -= J_c.transpose() * t;
+    }
+  }
+}
+
+template <int R, int F>
+void Engine::plain_product(int f, const double* x, double* y) const {
+  const FactorEntry& factor = problem_.factors[f];
+  const int m = R != Eigen::Dynamic ? R : factor.residual_size;
+  Eigen::Matrix<double, R, 1> z = Eigen::Matrix<double, R, 1>::Zero(m);
+  for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+    const int block = layout_.block_of[factor.variables[k]];
+    if (block < 0) continue;
+    const int f_size = F != Eigen::Dynamic ? F : problem_.variables[factor.variables[k]].manifold->tangent_size();
+    const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+    z.noalias() += J_c * ConstVectorMap<F>(x + layout_.reduced_offset[block], f_size);
+  }
+  for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+    const int block = layout_.block_of[factor.variables[k]];
+    if (block < 0) continue;
+    const int f_size = F != Eigen::Dynamic ? F : problem_.variables[factor.variables[k]].manifold->tangent_size();
+    const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+    VectorMap<F>(y + layout_.reduced_offset[block], f_size).noalias() += J_c.transpose() * z;
+  }
+}
+
+#define CAIRN_DISPATCH_RFE(CALL_FIXED, CALL_DYNAMIC)                       \
+  if (fixed_r_ == 2 && fixed_e_ == 3 && fixed_f_ == 9) { CALL_FIXED(2, 3, 9); } \
+  else if (fixed_r_ == 2 && fixed_e_ == 3 && fixed_f_ == 6) { CALL_FIXED(2, 3, 6); } \
+  else if (fixed_r_ == 3 && fixed_e_ == 3 && fixed_f_ == 6) { CALL_FIXED(3, 3, 6); } \
+  else if (fixed_r_ == 2 && fixed_e_ == 2 && fixed_f_ == 3) { CALL_FIXED(2, 2, 3); } \
+  else { CALL_DYNAMIC; }
+
+void Engine::schur_product(const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+  const int n = layout_.reduced_dim;
+  tbb::enumerable_thread_specific<Eigen::VectorXd> partial([n] { return Eigen::VectorXd::Zero(n); });
+  const int blocks = static_cast<int>(layout_.eliminated_variable.size());
+  parallel(blocks, 64, [&](int i) {
+    const int e = elimination_order_[i];
+    double* out = partial.local().data();
+#define CAIRN_CALL(R, E, F) schur_product_block<R, E, F>(e, x.data(), out)
+    CAIRN_DISPATCH_RFE(CAIRN_CALL, (schur_product_block<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(e, x.data(), out)))
+#undef CAIRN_CALL
+  });
+  y = Eigen::Map<const Eigen::VectorXd>(damping_reduced_.data(), n).cwiseProduct(x);
+  for (const int f : layout_.plain_factors) plain_product<Eigen::Dynamic, Eigen::Dynamic>(f, x.data(), y.data());
+  for (const auto& part : partial) y += part;
+}
+
+// Preconditioned conjugate gradients on S x = rhs with the block-Jacobi preconditioner of S
+// (Ceres' SCHUR_JACOBI); stops at ||r_k|| <= cg_tolerance ||rhs||.
+bool Engine::solve_iterative(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, int& cg_iterations) {
+  const int n = layout_.reduced_dim;
+  x.setZero(n);
+  Eigen::VectorXd r = rhs;
+  const double rhs_norm = rhs.norm();
+  cg_iterations = 0;
+  if (rhs_norm == 0.0) return true;
+  const auto precondition = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) {
+    out.resize(n);
+    for (std::size_t b = 0; b < preconditioner_.size(); ++b) {
+      const int offset = layout_.reduced_offset[b];
+      const int size = static_cast<int>(preconditioner_[b].rows());
+      out.segment(offset, size).noalias() = preconditioner_[b] * in.segment(offset, size);
+    }
+  };
+  Eigen::VectorXd z, p, q;
+  precondition(r, z);
+  p = z;
+  double rz = r.dot(z);
+  for (int k = 0; k < options_.max_cg_iterations; ++k) {
+    schur_product(p, q);
+    const double pq = p.dot(q);
+    if (!(pq > 0.0)) return k > 0;  // S is positive definite; stop on breakdown
+    const double alpha = rz / pq;
+    x.noalias() += alpha * p;
+    r.noalias() -= alpha * q;
+    cg_iterations = k + 1;
+    if (cg_iterations >= options_.min_cg_iterations && r.norm() <= options_.cg_tolerance * rhs_norm) return true;
+    precondition(r, z);
+    const double rz_next = r.dot(z);
+    p = z + (rz_next / rz) * p;
+    rz = rz_next;
+  }
+  return true;
+}
+
+bool Engine::compute_step(double radius, int& cg_iterations) {
+  const double mu_inverse = 1.0 / radius;
+  const bool iterative = options_.linear_solver == LinearSolverType::kIterativeSchur;
+  UpperCsc& S = reduced_->matrix();
+  const int n = layout_.reduced_dim;
+  const int blocks = static_cast<int>(layout_.eliminated_variable.size());
+  const auto system_start = Clock::now();
+  // Per-thread partial sums of S's blocks, the rhs and diag(J^T J). The first thread to start
+  // accumulates into block_values_ itself, so a single-threaded solve copies nothing (S of the
+  // 318-camera BAL problem is dense, 4.1 million values).
+  struct Partial {
+    double* values = nullptr;
+    std::vector<double> own;
+    Eigen::VectorXd rhs;
+    Eigen::VectorXd diagonal;
+  };
+  const std::size_t nonzeros = reduced_->blocks_size();
+  block_values_.assign(nonzeros, 0.0);
+  std::atomic<bool> claimed{false};
+  tbb::enumerable_thread_specific<Partial> partial([&] {
+    Partial p{nullptr, {}, Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n)};
+    if (!claimed.exchange(true)) {
+      p.values = block_values_.data();
+    } else {
+      p.own.assign(nonzeros, 0.0);
+      p.values = p.own.data();
+    }
+    return p;
+  });
+  parallel(blocks, 32, [&](int i) {
+    const int e = elimination_order_[i];
+    Partial& mine = partial.local();
+#define CAIRN_CALL(R, E, F) eliminate<R, E, F>(e, mu_inverse, mine.values, mine.rhs.data(), mine.diagonal.data(), iterative)
+    CAIRN_DISPATCH_RFE(CAIRN_CALL, (eliminate<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(
+                                        e, mu_inverse, mine.values, mine.rhs.data(), mine.diagonal.data(), iterative)))
+#undef CAIRN_CALL
+  });
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(n);
+  // Plain factors (no eliminated variable) on the calling thread into S directly.
+  for (const int f : layout_.plain_factors) {
+    add_plain_factor<Eigen::Dynamic, Eigen::Dynamic>(f, block_values_.data(), rhs.data(), diagonal.data(), iterative);
+  }
+  for (const Partial& part : partial) {
+    if (!part.own.empty()) {
+      for (std::size_t i = 0; i < nonzeros; ++i) block_values_[i] += part.own[i];
+    }
+    rhs += part.rhs;
+    diagonal += part.diagonal;
+  }
+  reduced_->to_csc(block_values_.data(), S.value.data());
+  // LM damping D / mu on the reduced unknowns, D = diag(J^T J) clamped (Ceres).
+  damping_reduced_.assign(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    damping_reduced_[i] = std::clamp(diagonal[i], options_.min_diagonal, options_.max_diagonal) * mu_inverse;
+    reduced_->add_diagonal(i, damping_reduced_[i], S.value.data());
+  }
+  summary_->linear_system_s += seconds_since(system_start);
+
+  const auto solve_start = Clock::now();
+  Eigen::VectorXd minus_rhs = -rhs;
+  cg_iterations = 0;
+  if (n > 0) {
+    if (iterative) {
+      // S's diagonal blocks (formed above, diagonal_only) -> inverses for the preconditioner.
+      preconditioner_.resize(layout_.reduced_variable.size());
+      for (std::size_t b = 0; b < layout_.reduced_variable.size(); ++b) {
+        const int size = reduced_->size(static_cast<int>(b));
+        const int offset = reduced_->offset(static_cast<int>(b));
+        Eigen::MatrixXd block(size, size);
+        for (int j = 0; j < size; ++j) {
+          const int start = S.column_start[offset + j];
+          for (int i = 0; i <= j; ++i) block(i, j) = block(j, i) = S.value[start + i];
+        }
+        Eigen::LLT<Eigen::MatrixXd> llt(block);
+        if (llt.info() != Eigen::Success) return false;
+        preconditioner_[b] = llt.solve(Eigen::MatrixXd::Identity(size, size));
+      }
+      if (!solve_iterative(minus_rhs, step_reduced_, cg_iterations)) return false;
+    } else {
+      if (!analyzed_) {
+        const auto analyze_start = Clock::now();
+        cholesky_.analyze_in_stored_order(S);
+        summary_->analyze_s += seconds_since(analyze_start);
+        summary_->factor_nonzeros = cholesky_.factor_nonzeros();
+        analyzed_ = true;
+      }
+      if (cholesky_.factorize(S) != FactorizationStatus::kSuccess) return false;
+      step_reduced_ = cholesky_.solve(minus_rhs);
+    }
+  } else {
+    step_reduced_.resize(0);
+  }
+  if (!step_reduced_.allFinite()) return false;
+  summary_->linear_solve_s += seconds_since(solve_start);
+
+  const auto back_start = Clock::now();
+  step_eliminated_.setZero(layout_.eliminated_dim);
+  parallel(blocks, 256, [&](int e) {
+#define CAIRN_CALL(R, E, F) back_substitute<R, E, F>(e)
+    CAIRN_DISPATCH_RFE(CAIRN_CALL, (back_substitute<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(e)))
+#undef CAIRN_CALL
+  });
+  summary_->linear_solve_s += seconds_since(back_start);
+  return step_eliminated_.allFinite();
+}
+
+// 1/2 ||r||^2 - 1/2 ||r + J dx||^2 = -(r . J dx) - 1/2 ||J dx||^2 (Ceres' model cost change).
+double Engine::model_cost_change() const {
+  const int factors = static_cast<int>(problem_.factors.size());
+  double change = 0.0;
+  for (int f = 0; f < factors; ++f) {
+    const FactorEntry& factor = problem_.factors[f];
+    const int m = factor.residual_size;
+    const double* r = residuals_.data() + layout_.residual_offset[f];
+    double J_dx[16];
+    std::vector<double> large;
+    double* product = J_dx;
+    if (m > 16) {
+      large.assign(m, 0.0);
+      product = large.data();
+    } else {
+      std::fill(J_dx, J_dx + m, 0.0);
+    }
+    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+      const double* J = jacobian(f, static_cast<int>(k));
+      if (J == nullptr) continue;
+      const int v = factor.variables[k];
+      const int n = problem_.variables[v].manifold->tangent_size();
+      const int block = layout_.block_of[v];
+      const double* dx = layout_.eliminated[v] ? step_eliminated_.data() + layout_.eliminated_offset[block]
+                                               : step_reduced_.data() + layout_.reduced_offset[block];
+      for (int i = 0; i < m; ++i) {
+        double sum = 0.0;
+        for (int j = 0; j < n; ++j) sum += J[i * n + j] * dx[j];
+        product[i] += sum;
+      }
+    }
+    for (int i = 0; i < m; ++i) change -= r[i] * product[i] + 0.5 * product[i] * product[i];
+  }
+  return change;
+}
+
+void Engine::save_values() {
+  saved_values_.resize(layout_.ambient_free);
+  int k = 0;
+  for (const auto& list : {&layout_.reduced_variable, &layout_.eliminated_variable}) {
+    for (const int v : *list) {
+      const VariableEntry& variable = problem_.variables[v];
+      const int size = variable.manifold->ambient_size();
+      std::copy(variable.values, variable.values + size, saved_values_.begin() + k);
+      k += size;
+    }
+  }
+}
+
+void Engine::restore_values() {
+  int k = 0;
+  for (const auto& list : {&layout_.reduced_variable, &layout_.eliminated_variable}) {
+    for (const int v : *list) {
+      const VariableEntry& variable = problem_.variables[v];
+      const int size = variable.manifold->ambient_size();
+      std::copy(saved_values_.begin() + k, saved_values_.begin() + k + size, variable.values);
+      k += size;
+    }
+  }
+}
+
+void Engine::apply_step() {
+  for (std::size_t b = 0; b < layout_.reduced_variable.size(); ++b) {
+    const VariableEntry& variable = problem_.variables[layout_.reduced_variable[b]];
+    variable.manifold->plus(variable.values, step_reduced_.data() + layout_.reduced_offset[b], variable.values);
+  }
+  const int blocks = static_cast<int>(layout_.eliminated_variable.size());
+  parallel(blocks, 1024, [&](int e) {
+    const VariableEntry& variable = problem_.variables[layout_.eliminated_variable[e]];
+    variable.manifold->plus(variable.values, step_eliminated_.data() + layout_.eliminated_offset[e], variable.values);
+  });
+}
+
+double Engine::values_norm() const {
+  double squared = 0.0;
+  for (const auto& list : {&layout_.reduced_variable, &layout_.eliminated_variable}) {
+    for (const int v : *list) {
+      const VariableEntry& variable = problem_.variables[v];
+      for (int i = 0; i < variable.manifold->ambient_size(); ++i) squared += variable.values[i] * variable.values[i];
+    }
+  }
+  return std::sqrt(squared);
+}
+
+// Ceres' gradient norm: max_i |x_i - (x [+] -g)_i| (for R^n: max |g_i|).
+double Engine::gradient_max_norm() {
+  double norm = 0.0;
+  std::vector<double> minus_g, moved;
+  const auto visit = [&](int v, const double* g) {
+    const VariableEntry& variable = problem_.variables[v];
+    const int tangent = variable.manifold->tangent_size();
+    const int ambient = variable.manifold->ambient_size();
+    minus_g.assign(g, g + tangent);
+    for (double& value : minus_g) value = -value;
+    moved.resize(ambient);
+    variable.manifold->plus(variable.values, minus_g.data(), moved.data());
+    for (int i = 0; i < ambient; ++i) norm = std::max(norm, std::abs(variable.values[i] - moved[i]));
+  };
+  for (std::size_t b = 0; b < layout_.reduced_variable.size(); ++b) {
+    visit(layout_.reduced_variable[b], gradient_reduced_.data() + layout_.reduced_offset[b]);
+  }
+  for (std::size_t e = 0; e < layout_.eliminated_variable.size(); ++e) {
+    visit(layout_.eliminated_variable[e], gradient_eliminated_.data() + layout_.eliminated_offset[e]);
+  }
+  return norm;
+}
+
+LeastSquaresSummary Engine::run() {
+  const auto start = Clock::now();
+  LeastSquaresSummary summary;
+  summary_ = &summary;
+  summary.linear_solver = options_.linear_solver;
+  summary.threads = options_.threads > 0 ? options_.threads : arena_.max_concurrency();
+  // CHOLMOD's BLAS gets the solve's threads, not one per core spinning beside TBB's workers.
+  set_blas_threads(summary.threads);
+  summary.factors = static_cast<int>(problem_.factors.size());
+  summary.residuals = problem_.residuals;
+  const auto finish = [&](LeastSquaresTermination termination, std::string message) {
+    summary.termination = termination;
+    summary.message = std::move(message);
+    summary.total_s = seconds_since(start);
+    return summary;
+  };
+  std::string error;
+  if (!options_.is_valid(&error)) return finish(LeastSquaresTermination::kFailure, "invalid options: " + error);
+  if (!build_layout(&error)) return finish(LeastSquaresTermination::kFailure, error);
+  choose_kernels();
+  summary.variables = static_cast<int>(layout_.reduced_variable.size() + layout_.eliminated_variable.size());
+  summary.eliminated_variables = static_cast<int>(layout_.eliminated_variable.size());
+  summary.reduced_size = layout_.reduced_dim;
+
+  // The reduced pattern: reduced blocks coupled by a factor, or through an eliminated block.
+  std::vector<int> block_size;
+  for (const int v : layout_.reduced_variable) block_size.push_back(problem_.variables[v].manifold->tangent_size());
+  std::vector<std::pair<int, int>> pairs;
+  const bool iterative = options_.linear_solver == LinearSolverType::kIterativeSchur;
+  if (!iterative) {
+    std::vector<int> blocks_of_factor;
+    for (const int f : layout_.plain_factors) {
+      blocks_of_factor.clear();
+      for (const int v : problem_.factors[f].variables) {
+        if (layout_.block_of[v] >= 0) blocks_of_factor.push_back(layout_.block_of[v]);
+      }
+      for (std::size_t a = 0; a < blocks_of_factor.size(); ++a) {
+        for (std::size_t b = a + 1; b < blocks_of_factor.size(); ++b) pairs.emplace_back(blocks_of_factor[a], blocks_of_factor[b]);
+      }
+    }
+    for (std::size_t e = 0; e < layout_.eliminated_variable.size(); ++e) {
+      blocks_of_factor.clear();
+      for (int index = layout_.eliminated_factor_start[e]; index < layout_.eliminated_factor_start[e + 1]; ++index) {
+        for (const int v : problem_.factors[layout_.eliminated_factors[index]].variables) {
+          if (layout_.block_of[v] >= 0 && !layout_.eliminated[v]) blocks_of_factor.push_back(layout_.block_of[v]);
+        }
+      }
+      std::sort(blocks_of_factor.begin(), blocks_of_factor.end());
+      blocks_of_factor.erase(std::unique(blocks_of_factor.begin(), blocks_of_factor.end()), blocks_of_factor.end());
+      for (std::size_t a = 0; a < blocks_of_factor.size(); ++a) {
+        for (std::size_t b = a + 1; b < blocks_of_factor.size(); ++b) pairs.emplace_back(blocks_of_factor[a], blocks_of_factor[b]);
+      }
+    }
+  }
+  if (!iterative && !pairs.empty()) {
+    // Fill-reducing order of the reduced blocks (AMD on the block graph, as Ceres' use_block_amd),
+    // applied by renumbering the blocks, so that CHOLMOD factorises S in the order it is stored
+    // and never assembles a permuted copy (SparseCholesky::analyze_in_stored_order).
+    const int blocks = static_cast<int>(layout_.reduced_variable.size());
+    const std::vector<int> label = block_amd_labels(blocks, pairs);
+    std::vector<int> relabelled(blocks);
+    for (int b = 0; b < blocks; ++b) relabelled[label[b]] = layout_.reduced_variable[b];
+    layout_.reduced_variable = relabelled;
+    int offset = 0;
+    for (int b = 0; b < blocks; ++b) {
+      const int v = layout_.reduced_variable[b];
+      layout_.block_of[v] = b;
+      layout_.reduced_offset[b] = offset;
+      block_size[b] = problem_.variables[v].manifold->tangent_size();
+      offset += block_size[b];
+    }
+    for (auto& [a, b] : pairs) {
+      a = label[a];
+      b = label[b];
+    }
+  }
+  reduced_ = std::make_unique<ReducedMatrix>(block_size, std::move(pairs));
+  {
+    const int blocks = static_cast<int>(layout_.eliminated_variable.size());
+    std::vector<int> first_block(blocks, std::numeric_limits<int>::max());
+    for (int e = 0; e < blocks; ++e) {
+      for (int index = layout_.eliminated_factor_start[e]; index < layout_.eliminated_factor_start[e + 1]; ++index) {
+        for (const int v : problem_.factors[layout_.eliminated_factors[index]].variables) {
+          if (layout_.block_of[v] >= 0 && !layout_.eliminated[v]) first_block[e] = std::min(first_block[e], layout_.block_of[v]);
+        }
+      }
+    }
+    elimination_order_.resize(blocks);
+    for (int e = 0; e < blocks; ++e) elimination_order_[e] = e;
+    std::stable_sort(elimination_order_.begin(), elimination_order_.end(),
+                     [&](int a, int b) { return first_block[a] < first_block[b]; });
+  }
+  v_inverse_offset_.resize(layout_.eliminated_variable.size() + 1);
+  v_inverse_offset_[0] = 0;
+  for (std::size_t e = 0; e < layout_.eliminated_variable.size(); ++e) {
+    const int size = problem_.variables[layout_.eliminated_variable[e]].manifold->tangent_size();
+    v_inverse_offset_[e + 1] = v_inverse_offset_[e] + size * size;
+  }
+  v_inverse_.assign(v_inverse_offset_.back(), 0.0);
+  residuals_.assign(layout_.residual_size, 0.0);
+  jacobians_.assign(layout_.jacobian_size, 0.0);
+
+  // Iteration 0: the starting point.
+  auto phase = Clock::now();
+  double cost = 0.0;
+  if (!evaluate(true, cost)) {
+    summary.jacobian_s += seconds_since(phase);
+    return finish(LeastSquaresTermination::kFailure, "a factor could not be evaluated at the initial values (NaN or infinite residual or Jacobian)");
+  }
+  compute_gradient();
+  summary.jacobian_s += seconds_since(phase);
+  summary.initial_cost = cost;
+  summary.final_cost = cost;
+  double gradient_norm = gradient_max_norm();
+  if (gradient_norm <= options_.gradient_tolerance) {
+    return finish(LeastSquaresTermination::kConvergence, "gradient tolerance reached at the initial values");
+  }
+
+  double radius = options_.initial_trust_region_radius;
+  double decrease_factor = 2.0;
+  constexpr double kMinRelativeDecrease = 1e-3;  // Ceres' min_relative_decrease
+  constexpr double kMinTrustRegionRadius = 1e-32;
+  while (true) {
+    if (options_.should_stop && options_.should_stop()) {
+      return finish(LeastSquaresTermination::kInterrupted, "interrupted; values of the last accepted step");
+    }
+    if (summary.iterations >= options_.max_iterations) {
+      return finish(LeastSquaresTermination::kNoConvergence, "maximum number of iterations reached");
+    }
+    if (radius < kMinTrustRegionRadius) {
+      return finish(LeastSquaresTermination::kConvergence, "trust region radius below 1e-32");
+    }
+    const auto iteration_start = Clock::now();
+    LeastSquaresIteration iteration;
+    iteration.iteration = ++summary.iterations;
+    iteration.trust_region_radius = radius;
+    iteration.gradient_max_norm = gradient_norm;
+    int cg_iterations = 0;
+    const bool step_valid = compute_step(radius, cg_iterations);
+    iteration.cg_iterations = cg_iterations;
+    summary.cg_iterations += cg_iterations;
+    double new_cost = std::numeric_limits<double>::infinity();
+    double model_change = 0.0;
+    double step_norm = 0.0;
+    if (step_valid) {
+      model_change = model_cost_change();
+      step_norm = std::sqrt(step_reduced_.squaredNorm() + step_eliminated_.squaredNorm());
+      iteration.step_norm = step_norm;
+      const double x_norm = values_norm();
+      save_values();
+      apply_step();
+      phase = Clock::now();
+      double trial = 0.0;
+      const bool trial_ok = evaluate(false, trial);
+      summary.residual_s += seconds_since(phase);
+      if (trial_ok) new_cost = trial;
+      // Ceres checks the step size and the cost change before deciding on the step.
+      const double step_tolerance = options_.parameter_tolerance * (x_norm + options_.parameter_tolerance);
+      if (step_norm <= step_tolerance) {
+        restore_values();
+        iteration.cost = cost;
+        iteration.iteration_s = seconds_since(iteration_start);
+        summary.iteration_log.push_back(iteration);
+        if (options_.progress) options_.progress(iteration);
+        return finish(LeastSquaresTermination::kConvergence, "parameter tolerance reached");
+      }
+      const double cost_change = cost - new_cost;
+      iteration.cost_change = cost_change;
+      if (std::isfinite(new_cost) && std::abs(cost_change) <= options_.function_tolerance * cost) {
+        // Converged; keep the trial point when it is no worse (Ceres keeps the old one).
+        if (cost_change >= 0.0) {
+          cost = new_cost;
+          iteration.step_accepted = true;
+          ++summary.successful_iterations;
+        } else {
+          restore_values();
+        }
+        summary.final_cost = cost;
+        iteration.cost = cost;
+        iteration.iteration_s = seconds_since(iteration_start);
+        summary.iteration_log.push_back(iteration);
+        if (options_.progress) options_.progress(iteration);
+        char message[160];
+        std::snprintf(message, sizeof(message), "function tolerance reached: |cost change| / cost = %.3e <= %.1e",
+                      std::abs(cost_change) / std::max(cost, 1e-300), options_.function_tolerance);
+        return finish(LeastSquaresTermination::kConvergence, message);
+      }
+    }
+    const double relative_decrease = (step_valid && model_change > 0.0) ? (cost - new_cost) / model_change : -1.0;
+    iteration.relative_decrease = relative_decrease;
+    if (step_valid && std::isfinite(new_cost) && relative_decrease > kMinRelativeDecrease) {
+      cost = new_cost;
+      iteration.step_accepted = true;
+      ++summary.successful_iterations;
+      // LevenbergMarquardtStrategy::StepAccepted (Nielsen 1999).
+      radius = std::min(options_.max_trust_region_radius,
+                        radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * relative_decrease - 1.0, 3)));
+      decrease_factor = 2.0;
+      phase = Clock::now();
+      double relinearized = 0.0;
+      if (!evaluate(true, relinearized)) {
+        return finish(LeastSquaresTermination::kFailure, "a factor could not be evaluated at an accepted point");
+      }
+      compute_gradient();
+      summary.jacobian_s += seconds_since(phase);
+      gradient_norm = gradient_max_norm();
+    } else {
+      if (step_valid) restore_values();
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+    }
+    summary.final_cost = cost;
+    iteration.cost = cost;
+    iteration.iteration_s = seconds_since(iteration_start);
+    summary.iteration_log.push_back(iteration);
+    if (options_.progress) options_.progress(iteration);
+    if (iteration.step_accepted && gradient_norm <= options_.gradient_tolerance) {
+      return finish(LeastSquaresTermination::kConvergence, "gradient tolerance reached");
+    }
+  }
+}
+
+}  // namespace
+
+LeastSquaresSummary solve(LeastSquaresProblem& problem, const LeastSquaresOptions& options) {
+  Engine engine(problem, options);
+  return engine.run();
+}
+
+double evaluate_cost(const LeastSquaresProblem& problem) {
+  const auto& impl = problem.impl();
+  double cost = 0.0;
+  std::vector<const double*> values;
+  std::vector<double> residual;
+  for (const FactorEntry& factor : impl.factors) {
+    values.clear();
+    for (const int v : factor.variables) values.push_back(impl.variables[v].values);
+    residual.assign(factor.residual_size, 0.0);
+    if (!factor.factor->evaluate(values.data(), residual.data(), nullptr)) return std::numeric_limits<double>::quiet_NaN();
+    double squared = 0.0;
+    for (const double value : residual) squared += value * value;
+    cost += factor.loss.kernel == RobustKernel::kNone ? 0.5 * squared
+                                                     : 0.5 * evaluate_kernel(factor.loss.kernel, factor.loss.scale, squared).rho;
+  }
+  return std::isfinite(cost) ? cost : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace cairn::backend

@@ -1,0 +1,214 @@
+#pragma once
+/// \file
+/// cairn's general sparse nonlinear least-squares engine: variables of several manifolds,
+/// factors with analytic Jacobians, robust kernels, constant variables, and Levenberg-Marquardt
+/// on the normal equations with an optional Schur elimination of one variable group (points in
+/// bundle adjustment, landmarks in SLAM). The shape is Ceres' Problem / Solver
+/// (include/ceres/problem.h, solver.h) and GTSAM's NonlinearFactorGraph / Values:
+///
+///     LeastSquaresProblem problem;
+///     const int camera = problem.add_variable(camera_parameters, kEuclidean9);
+///     const int point = problem.add_variable(point_xyz, kEuclidean3, VariableGroup::kEliminate);
+///     problem.add_factor(std::make_unique<BalReprojectionFactor>(u, v), {camera, point});
+///     const LeastSquaresSummary summary = solve(problem, LeastSquaresOptions{});
+///
+/// Cost = 1/2 sum_f rho_f(||r_f||^2) (Ceres' convention; the pose-graph optimiser's cost has no
+/// 1/2, see optimizer.hpp). Variables live in memory the caller owns (like Ceres' parameter
+/// blocks) and are updated in place by x <- x [+] delta, delta in the tangent space of the
+/// variable's manifold; factors give their Jacobians directly with respect to that delta.
+///
+/// Linear solvers (LeastSquaresOptions::linear_solver):
+///  * kSparseNormalCholesky: J^T J over every free variable, CHOLMOD (AMD ordering).
+///  * kSparseSchur: the variables of group kEliminate are eliminated first (Triggs et al. 2000,
+///    "Bundle adjustment -- a modern synthesis", Sec. 6.1; Ceres' SPARSE_SCHUR): with H ordered
+///    [reduced; eliminated] = [[A, W], [W^T, V]], V block-diagonal, the reduced system
+///    S dx_r = -(g_r - W V^-1 g_e), S = A - W V^-1 W^T, is factorised by CHOLMOD and
+///    dx_e = -V^-1 (g_e + W^T dx_r) follows block by block. Every factor may touch at most one
+///    eliminated variable (Ceres' rule for its Schur solvers).
+///  * kIterativeSchur: the same reduced system solved by conjugate gradients without forming S
+///    (S x = A x - W (V^-1 (W^T x)), evaluated factor by factor), preconditioned by the block
+///    diagonal of S (Ceres' ITERATIVE_SCHUR with SCHUR_JACOBI; Agarwal et al., "Bundle
+///    adjustment in the large", ECCV 2010, Sec. 4). For large problems whose S would be dense.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cairn/backend/robust_kernel.hpp"
+
+namespace cairn::backend {
+
+/// A smooth manifold for a variable: its stored (ambient) size, its tangent size, and the
+/// retraction x [+] delta. Stateless; one instance per kind is shared by all variables.
+class Manifold {
+ public:
+  virtual ~Manifold() = default;
+  virtual int ambient_size() const = 0;
+  virtual int tangent_size() const = 0;
+  /// x_plus = x [+] delta (x and x_plus may alias).
+  virtual void plus(const double* x, const double* delta, double* x_plus) const = 0;
+  virtual std::string_view name() const = 0;
+};
+
+/// R^n with x [+] delta = x + delta (points, BAL cameras as Ceres' bundle_adjuster parameterises
+/// them: angle-axis, translation, f, k1, k2 all additive; small intrinsics vectors).
+const Manifold& euclidean_manifold(int n);
+/// SE(3) stored as (qx, qy, qz, qw, tx, ty, tz), T_world_body, delta = (rho, phi) translation
+/// first, T <- T exp(delta) (core/se3.hpp, docs/conventions.md).
+const Manifold& se3_manifold();
+/// SE(2) stored as (x, y, theta), delta = (rho_x, rho_y, phi), T <- T exp(delta).
+const Manifold& se2_manifold();
+
+/// Which linear-solver group a variable belongs to.
+enum class VariableGroup {
+  kReduced,    ///< stays in the reduced (camera / pose) system
+  kEliminate,  ///< eliminated first by the Schur solvers (points, landmarks)
+};
+
+/// A residual block: r = f(x_1, ..., x_k) of fixed size with analytic Jacobians (Ceres'
+/// SizedCostFunction with the Jacobians already in the tangent spaces, as GTSAM's factors).
+class Factor {
+ public:
+  virtual ~Factor() = default;
+  virtual int residual_size() const = 0;
+  /// Evaluates the residual (residual_size() values) at values[k] (each variable's ambient
+  /// storage) and, when `jacobians` is not null, each non-null jacobians[k] as a row-major
+  /// residual_size() x tangent_size(k) matrix (d r / d delta_k). Returns false when the
+  /// residual is not defined at these values (the step is then rejected, as Ceres does).
+  virtual bool evaluate(const double* const* values, double* residual, double* const* jacobians) const = 0;
+};
+
+/// The robust kernel of one factor (robust_kernel.hpp), scale in the residual's units.
+struct FactorLoss {
+  RobustKernel kernel = RobustKernel::kNone;
+  double scale = 1.0;
+};
+
+class LeastSquaresProblem {
+ public:
+  LeastSquaresProblem();
+  ~LeastSquaresProblem();
+  LeastSquaresProblem(LeastSquaresProblem&&) noexcept;
+  LeastSquaresProblem& operator=(LeastSquaresProblem&&) noexcept;
+
+  /// Adds a variable stored at `values` (manifold.ambient_size() doubles, owned by the caller,
+  /// alive and not moved while the problem is). Returns its index.
+  int add_variable(double* values, const Manifold& manifold, VariableGroup group = VariableGroup::kReduced);
+  /// Holds a variable constant (its factors still count; no step is taken on it).
+  void set_constant(int variable, bool constant = true);
+  bool is_constant(int variable) const;
+  /// Adds a factor on `variables` (in the order the factor's evaluate() expects them).
+  int add_factor(std::unique_ptr<Factor> factor, std::vector<int> variables, FactorLoss loss = {});
+
+  int num_variables() const;
+  int num_factors() const;
+  int num_residuals() const;
+  const Manifold& manifold(int variable) const;
+  VariableGroup group(int variable) const;
+  double* values(int variable) const;
+  const Factor& factor(int index) const;
+  const std::vector<int>& factor_variables(int index) const;
+  const FactorLoss& factor_loss(int index) const;
+
+  struct Impl;
+  Impl& impl() { return *impl_; }
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+enum class LinearSolverType { kSparseNormalCholesky, kSparseSchur, kIterativeSchur };
+std::string_view to_string(LinearSolverType type);
+
+struct LeastSquaresOptions {
+  LinearSolverType linear_solver = LinearSolverType::kSparseSchur;
+  /// Iterations, accepted or not (Ceres' max_num_iterations). >= 1.
+  int max_iterations = 50;
+  /// Stop when |old cost - new cost| / old cost < function_tolerance (Ceres' default). >= 0.
+  double function_tolerance = 1e-6;
+  /// Stop when max_i |x_i - (x [+] -g)_i| < gradient_tolerance; for the Euclidean variables of
+  /// BA this is max |g_i| (Ceres' definition, solver.h). >= 0.
+  double gradient_tolerance = 1e-10;
+  /// Stop when ||dx|| < parameter_tolerance * (||x|| + parameter_tolerance). >= 0.
+  double parameter_tolerance = 1e-8;
+  /// Initial trust-region radius mu; LM solves (J^T J + D / mu) dx = -J^T r with D the diagonal
+  /// of J^T J clamped to [min_diagonal, max_diagonal] (Ceres' LevenbergMarquardtStrategy:
+  /// initial radius 1e4, clamp [1e-6, 1e32]). > 0.
+  double initial_trust_region_radius = 1e4;
+  double max_trust_region_radius = 1e16;
+  double min_diagonal = 1e-6;
+  double max_diagonal = 1e32;
+  /// kIterativeSchur: stop conjugate gradients when ||r_k|| <= eta ||r_0|| (Ceres' default
+  /// eta 0.1 is the inexact-Newton forcing term) or after max_cg_iterations.
+  double cg_tolerance = 0.1;
+  int max_cg_iterations = 500;
+  int min_cg_iterations = 1;
+  /// Threads for evaluation and the Schur complement; 0 = all cores.
+  int threads = 0;
+  /// Called after every iteration; may be empty.
+  std::function<void(const struct LeastSquaresIteration&)> progress;
+  /// Polled before every iteration; true stops with kInterrupted at the last accepted point.
+  std::function<bool()> should_stop;
+
+  bool is_valid(std::string* error) const;
+};
+
+struct LeastSquaresIteration {
+  int iteration = 0;
+  double cost = 0.0;
+  double cost_change = 0.0;
+  double gradient_max_norm = 0.0;
+  double step_norm = 0.0;
+  double relative_decrease = 0.0;
+  double trust_region_radius = 0.0;
+  int cg_iterations = 0;
+  bool step_accepted = false;
+  double iteration_s = 0.0;
+};
+
+enum class LeastSquaresTermination { kConvergence, kNoConvergence, kFailure, kInterrupted };
+std::string_view to_string(LeastSquaresTermination termination);
+
+struct LeastSquaresSummary {
+  LeastSquaresTermination termination = LeastSquaresTermination::kFailure;
+  std::string message;
+  LinearSolverType linear_solver = LinearSolverType::kSparseSchur;
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  int iterations = 0;
+  int successful_iterations = 0;
+  int cg_iterations = 0;  ///< total, kIterativeSchur
+  int threads = 1;
+  int variables = 0;
+  int eliminated_variables = 0;
+  int factors = 0;
+  int residuals = 0;
+  int reduced_size = 0;  ///< scalar unknowns of the system CHOLMOD or CG solves
+  std::size_t factor_nonzeros = 0;
+  std::vector<LeastSquaresIteration> iteration_log;
+  /// Per phase, seconds (as Ceres' Summary): residual evaluation with Jacobians, trial-point
+  /// costs, forming the (reduced) normal equations, factorisation / CG, back-substitution.
+  double jacobian_s = 0.0;
+  double residual_s = 0.0;
+  double linear_system_s = 0.0;
+  double linear_solve_s = 0.0;
+  double analyze_s = 0.0;
+  double total_s = 0.0;
+
+  bool is_solution_usable() const { return termination != LeastSquaresTermination::kFailure; }
+  std::string brief_report() const;
+};
+
+/// Minimises 1/2 sum rho(||r||^2) over the free variables, updating them in place.
+LeastSquaresSummary solve(LeastSquaresProblem& problem, const LeastSquaresOptions& options);
+
+/// Cost 1/2 sum rho(||r||^2) at the current values; NaN when a factor cannot be evaluated.
+double evaluate_cost(const LeastSquaresProblem& problem);
+
+}  // namespace cairn::backend
