@@ -324,12 +324,16 @@ TEST(LandmarkSlam, NeesLargeHeadingUncertaintyEkfOverconfidentGraphNot) {
 namespace cairn::landmarks {
 namespace {
 // Very large heading noise (0.08 rad/sqrt(rad) + 0.03 rad/sqrt(m)): solved only at the 8 NEES
-// checkpoints, the graph extends half a lap of dead reckoning before each solve, and on seed 106
-// Levenberg-Marquardt ends in a wrong minimum (ATE 35 m). Solving the growing graph every 100
-// steps (10 s, the default graph_solve_every_steps) keeps every seed at the right minimum.
+// checkpoints, the graph extends half a lap of dead reckoning before each solve. With the
+// graph's own LM (before it moved onto the least-squares engine, 2026-11-24) seed 106 then
+// ended in a wrong minimum (ATE 35 m); the engine's LM (Ceres' damping rule) finds the right
+// one on all 8 seeds, and seed 103 still ends at a worse one from checkpoints only (0.310 m
+// against 0.193 m, docs/landmark-slam.md). Solving the growing graph every 100 steps (10 s, the
+// default graph_solve_every_steps) keeps every seed at least as good as checkpoint-only solves
+// and below the EKF.
 TEST(LandmarkSlam, PeriodicGraphSolvesSurviveVeryLargeHeadingNoise) {
   const double yaw_rad = 0.08, yaw_m = 0.03;
-  int checkpoint_only_failures = 0;
+  int checkpoint_only_worse = 0;
   for (int r = 0; r < 8; ++r) {
     const LandmarkRun run = sparse_unbiased_run(static_cast<std::uint64_t>(100 + r), yaw_rad, yaw_m);
     auto options = options_for(Method::kGraph, Association::kKnown, 8);
@@ -347,10 +351,10 @@ TEST(LandmarkSlam, PeriodicGraphSolvesSurviveVeryLargeHeadingNoise) {
     EXPECT_LT(periodic.ate_rmse_m, 0.5) << "seed " << 100 + r;
     EXPECT_LE(periodic.ate_rmse_m, checkpoints_only.ate_rmse_m + 1e-3) << "seed " << 100 + r;
     EXPECT_LE(periodic.ate_rmse_m, ekf.ate_rmse_m) << "seed " << 100 + r;
-    checkpoint_only_failures += checkpoints_only.ate_rmse_m > 5.0 ? 1 : 0;
+    checkpoint_only_worse += checkpoints_only.ate_rmse_m > periodic.ate_rmse_m + 0.05 ? 1 : 0;
   }
-  // The failure the periodic solves remove is real (if this changes, re-measure the docs).
-  EXPECT_GE(checkpoint_only_failures, 1);
+  // Periodic solves still matter on some seed (if this changes, re-measure the docs).
+  EXPECT_GE(checkpoint_only_worse, 1);
 }
 
 // LandmarkSlamOptions::should_stop (SIGINT in the CLI) ends the run after a step: the result is

@@ -1,6 +1,5 @@
 #include "cairn/backend/landmark_graph.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -8,19 +7,19 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "cairn/backend/least_squares.hpp"
 #include "cairn/core/assert.hpp"
 #include "cairn/core/so2.hpp"
 
 namespace cairn::backend {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using SparseMatrix = Eigen::SparseMatrix<double>;
 using Solver = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>>;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // Column of each variable in the normal equations: free poses (1..), then landmarks.
 struct Layout {
@@ -96,18 +95,73 @@ double linearise(const LandmarkGraph2D& graph, const Layout& layout, SparseMatri
   return cost;
 }
 
-void apply_step(LandmarkGraph2D* graph, const Layout& layout, const Eigen::VectorXd& dx) {
-  for (std::size_t i = 1; i < graph->poses.size(); ++i) {
-    Vector3& pose = graph->poses[i];
-    pose += dx.segment<3>(layout.pose_column(i));
-    pose.z() = core::wrap_angle(pose.z());
+bool finite(const Eigen::MatrixXd& m) { return m.allFinite(); }
+
+/// A pose stored as (x, y, theta), updated by x <- (x + dx, y + dy, wrap(theta + dtheta)): the
+/// parameterisation of this file's Jacobians (see the header), as a manifold of the engine.
+class PlanarPoseVector final : public Manifold {
+ public:
+  int ambient_size() const override { return 3; }
+  int tangent_size() const override { return 3; }
+  void plus(const double* x, const double* delta, double* x_plus) const override {
+    x_plus[0] = x[0] + delta[0];
+    x_plus[1] = x[1] + delta[1];
+    x_plus[2] = core::wrap_angle(x[2] + delta[2]);
   }
-  for (std::size_t l = 0; l < graph->landmarks.size(); ++l) {
-    graph->landmarks[l] += dx.segment<2>(layout.landmark_column(l));
-  }
+  std::string_view name() const override { return "(x, y, theta)"; }
+};
+
+template <int D>
+Eigen::Matrix<double, D, D> whitening(const Eigen::Matrix<double, D, D>& information) {
+  // S = Lambda^1/2 V^T from Omega = V Lambda V^T, so S^T S = Omega; eigenvalues below zero
+  // (rounding on a semi-definite matrix) count as zero.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>> eigen(information);
+  return eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eigen.eigenvectors().transpose();
 }
 
-bool finite(const Eigen::MatrixXd& m) { return m.allFinite(); }
+class OdometryFactor final : public Factor {
+ public:
+  explicit OdometryFactor(const OdometryFactor2D& f) : u_(f.u), S_(whitening<3>(f.information)) {}
+  int residual_size() const override { return 3; }
+  bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
+    Matrix3 J_i, J_j;
+    const bool want = jacobians != nullptr;
+    const Vector3 e = odometry_residual_2d(Eigen::Map<const Vector3>(values[0]), Eigen::Map<const Vector3>(values[1]), u_,
+                                           want ? &J_i : nullptr, want ? &J_j : nullptr);
+    Eigen::Map<Vector3>{residual} = S_ * e;
+    using RowMajor3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+    if (want && jacobians[0] != nullptr) Eigen::Map<RowMajor3>{jacobians[0]} = S_ * J_i;
+    if (want && jacobians[1] != nullptr) Eigen::Map<RowMajor3>{jacobians[1]} = S_ * J_j;
+    return true;
+  }
+
+ private:
+  Vector3 u_;
+  Matrix3 S_;
+};
+
+class RangeBearingFactor final : public Factor {
+ public:
+  explicit RangeBearingFactor(const RangeBearingFactor2D& f) : z_(f.z), S_(whitening<2>(f.information)) {}
+  int residual_size() const override { return 2; }
+  bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
+    const Eigen::Map<const Vector3> pose(values[0]);
+    const Eigen::Map<const Vector2> landmark(values[1]);
+    if ((landmark - pose.head<2>()).squaredNorm() == 0.0) return false;  // bearing undefined
+    Matrix23 J_pose;
+    Matrix2 J_landmark;
+    const bool want = jacobians != nullptr;
+    const Vector2 e = range_bearing_residual_2d(pose, landmark, z_, want ? &J_pose : nullptr, want ? &J_landmark : nullptr);
+    Eigen::Map<Vector2>{residual} = S_ * e;
+    if (want && jacobians[0] != nullptr) Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>>{jacobians[0]} = S_ * J_pose;
+    if (want && jacobians[1] != nullptr) Eigen::Map<Eigen::Matrix<double, 2, 2, Eigen::RowMajor>>{jacobians[1]} = S_ * J_landmark;
+    return true;
+  }
+
+ private:
+  Vector2 z_;
+  Matrix2 S_;
+};
 
 }  // namespace
 
@@ -210,65 +264,42 @@ LandmarkGraphSummary optimize(LandmarkGraph2D& graph, const LandmarkGraphOptions
     summary.message = "nothing to optimise (only the fixed pose)";
     return summary;
   }
-  SparseMatrix H;
-  Eigen::VectorXd b;
-  Solver solver;
-  bool analysed = false;
-  double lambda = options.initial_lambda;
-  auto start = Clock::now();
-  double cost = linearise(graph, layout, &H, &b);
-  summary.time_linearise_s += seconds_since(start);
-  summary.status = LandmarkGraphStatus::kMaxIterations;
-  summary.message = "reached max_iterations";
-  for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-    summary.iterations = iteration + 1;
-    start = Clock::now();
-    // (H + lambda diag(H)) dx = -b (Marquardt 1963 scaling).
-    SparseMatrix damped = H;
-    for (Eigen::Index k = 0; k < damped.outerSize(); ++k) damped.coeffRef(k, k) *= (1.0 + lambda);
-    if (!analysed) {
-      solver.analyzePattern(damped);
-      analysed = true;
-    }
-    solver.factorize(damped);
-    if (solver.info() != Eigen::Success) {
-      summary.time_solve_s += seconds_since(start);
-      lambda *= 10.0;
-      if (lambda > 1e12) {
-        summary.status = LandmarkGraphStatus::kFailed;
-        summary.message = "the damped normal equations are not positive definite (unconstrained variable?)";
-        break;
-      }
-      continue;
-    }
-    const Eigen::VectorXd dx = solver.solve(-b);
-    summary.factor_nonzeros = static_cast<std::size_t>(solver.matrixL().nestedExpression().nonZeros());
-    summary.time_solve_s += seconds_since(start);
-    LandmarkGraph2D trial = graph;
-    apply_step(&trial, layout, dx);
-    const double trial_cost = trial.cost();
-    if (std::isfinite(trial_cost) && trial_cost <= cost) {
-      const double decrease = cost - trial_cost;
-      graph = std::move(trial);
-      start = Clock::now();
-      cost = linearise(graph, layout, &H, &b);
-      summary.time_linearise_s += seconds_since(start);
-      lambda = std::max(lambda / 10.0, 1e-12);
-      if (decrease <= options.relative_cost_tolerance * cost || dx.lpNorm<Eigen::Infinity>() <= options.step_tolerance) {
-        summary.status = LandmarkGraphStatus::kConverged;
-        summary.message = "converged";
-        break;
-      }
-    } else {
-      lambda *= 10.0;
-      if (lambda > 1e12) {
-        summary.status = LandmarkGraphStatus::kConverged;
-        summary.message = "no step lowers the cost (at a minimum to machine precision)";
-        break;
-      }
-    }
+  // A front end over the least-squares engine (least_squares.hpp): poses and landmarks in one
+  // system (no Schur elimination, see the header), pose 0 constant.
+  static const PlanarPoseVector kPose;
+  LeastSquaresProblem problem;
+  for (Vector3& pose : graph.poses) problem.add_variable(pose.data(), kPose);
+  problem.set_constant(0);
+  const int first_landmark = static_cast<int>(graph.poses.size());
+  for (Vector2& landmark : graph.landmarks) problem.add_variable(landmark.data(), euclidean_manifold(2));
+  for (const OdometryFactor2D& f : graph.odometry) {
+    problem.add_factor(std::make_unique<OdometryFactor>(f), {static_cast<int>(f.from), static_cast<int>(f.to)});
   }
-  summary.final_cost = cost;
+  for (const RangeBearingFactor2D& f : graph.observations) {
+    problem.add_factor(std::make_unique<RangeBearingFactor>(f),
+                       {static_cast<int>(f.pose), first_landmark + static_cast<int>(f.landmark)});
+  }
+  LeastSquaresOptions engine;
+  engine.linear_solver = LinearSolverType::kSparseNormalCholesky;
+  engine.max_iterations = options.max_iterations;
+  engine.initial_trust_region_radius = 1.0 / options.initial_lambda;
+  engine.function_tolerance = options.relative_cost_tolerance;
+  engine.parameter_tolerance = options.step_tolerance;
+  engine.gradient_tolerance = 0.0;
+  engine.threads = 1;
+  const LeastSquaresSummary result = solve(problem, engine);
+  summary.iterations = result.iterations;
+  summary.factor_nonzeros = result.factor_nonzeros;
+  summary.time_linearise_s = result.jacobian_s + result.residual_s + result.linear_system_s;
+  summary.time_solve_s = result.linear_solve_s + result.analyze_s;
+  summary.final_cost = graph.cost();
+  summary.message = result.message;
+  switch (result.termination) {
+    case LeastSquaresTermination::kConvergence: summary.status = LandmarkGraphStatus::kConverged; break;
+    case LeastSquaresTermination::kNoConvergence:
+    case LeastSquaresTermination::kInterrupted: summary.status = LandmarkGraphStatus::kMaxIterations; break;
+    case LeastSquaresTermination::kFailure: summary.status = LandmarkGraphStatus::kFailed; break;
+  }
   return summary;
 }
 

@@ -19,13 +19,14 @@
 ///     e = ( |p - t_i| - r ,  wrap(atan2(p - t_i) - theta_i - b) ), Jacobians as in
 ///     filter/range_bearing.hpp (Thrun et al. 2005 Table 10.1).
 ///
-/// Linear solver and ordering: the normal equations over all free poses and all landmarks are
-/// solved by Eigen's SimplicialLDLT with an approximate-minimum-degree ordering (Amestoy, Davis
-/// & Duff 1996) of the whole system. Landmarks are NOT Schur-complemented first: in a
-/// range-bearing run each landmark is seen from hundreds of poses, so eliminating landmarks first
-/// would connect all those poses to each other (dense cliques); AMD on the joint system keeps
-/// the factor sparse (Schur elimination pays off in bundle adjustment, where points outnumber
-/// cameras and each point is seen from few).
+/// Solver: this file is a front end. It builds the factors (whitened by the Cholesky factor of
+/// their information) and the (x, y, theta) retraction above as a manifold, and hands them to the
+/// least-squares engine (least_squares.hpp) with its sparse normal Cholesky: the normal equations
+/// over all free poses and all landmarks, one block-AMD ordering of the whole system, CHOLMOD.
+/// Landmarks are NOT Schur-complemented first: in a range-bearing run each landmark is seen from
+/// hundreds of poses, so eliminating landmarks first would connect all those poses to each other
+/// (dense cliques); AMD on the joint system keeps the factor sparse (Schur elimination pays off in
+/// bundle adjustment, where points outnumber cameras and each point is seen from few).
 
 #include <cstddef>
 #include <optional>
@@ -79,11 +80,15 @@ struct LandmarkGraph2D {
 struct LandmarkGraphOptions {
   /// LM iterations at most (>= 1).
   int max_iterations = 100;
-  /// Initial damping, relative to the diagonal of H: (H + lambda diag(H)) dx = -b (> 0).
+  /// Initial damping, relative to the diagonal of H: (H + lambda diag(H)) dx = -b (> 0); the
+  /// engine's initial trust-region radius is 1 / initial_lambda, and later damping follows its
+  /// LM (Ceres' rule, least_squares.hpp).
   double initial_lambda = 1e-5;
-  /// Stop when an accepted step lowers the cost by less than this fraction of it (>= 0).
+  /// Stop when a step changes the cost by less than this fraction of it (>= 0; the engine's
+  /// function tolerance).
   double relative_cost_tolerance = 1e-10;
-  /// Stop when the largest step component is below this (metres / radians, >= 0).
+  /// Stop when ||step|| < step_tolerance (||x|| + step_tolerance), x every free variable (>= 0;
+  /// the engine's parameter tolerance).
   double step_tolerance = 1e-10;
 
   bool is_valid(std::string* why) const;

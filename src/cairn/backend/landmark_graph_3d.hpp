@@ -3,7 +3,10 @@
 /// Graph SLAM with 3D point landmarks: SE(3) poses T_world_body and points p_world as
 /// variables, relative-pose factors between poses and point / range-bearing-elevation factors
 /// from a pose to a point (landmark_factors_3d.hpp), solved by Levenberg-Marquardt
-/// (Grisetti et al. 2010, "A tutorial on graph-based SLAM", Sec. IV, here in 3D).
+/// (Grisetti et al. 2010, "A tutorial on graph-based SLAM", Sec. IV, here in 3D). This file is a
+/// front end: it builds the factors (whitened by the Cholesky factor of their information) and
+/// hands them to the least-squares engine (least_squares.hpp), whose LM and Schur elimination
+/// do the solving.
 ///
 /// Parameterisation: T <- T exp(delta), delta = (rho, phi) translation first
 /// (docs/conventions.md); p <- p + dp.
@@ -82,8 +85,10 @@ enum class LandmarkElimination {
   kJoint,  ///< factorise poses and landmarks together under one AMD ordering
 };
 
-/// The 2D solver's LM settings (max_iterations, initial_lambda, tolerances, documented there)
-/// plus the elimination.
+/// The 2D solver's LM settings (documented there) plus the elimination, mapped onto the engine:
+/// max_iterations as is, the initial damping as the initial trust-region radius
+/// 1 / initial_lambda, relative_cost_tolerance as the function tolerance and step_tolerance as
+/// the parameter tolerance (relative to the norm of the variables, Ceres' rule).
 struct LandmarkGraph3DOptions : LandmarkGraphOptions {
   LandmarkElimination elimination = LandmarkElimination::kSchur;
 };

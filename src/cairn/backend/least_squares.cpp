@@ -863,14 +863,16 @@ void Engine::schur_product(const Eigen::VectorXd& x, Eigen::VectorXd& y) {
 }
 
 // Preconditioned conjugate gradients on S x = rhs with the block-Jacobi preconditioner of S
-// (Ceres' SCHUR_JACOBI); stops at ||r_k|| <= cg_tolerance ||rhs||.
+// (Ceres' SCHUR_JACOBI). Stopping rule: the truncated-Newton test of Nash & Sofer (1990) on the
+// quadratic model Q(x) = 1/2 x^T S x - rhs^T x, stop when i (Q_i - Q_{i-1}) / Q_i < eta after
+// at least min_cg_iterations -- the rule Ceres' LevenbergMarquardtStrategy gives its CG
+// (q_tolerance = eta, no residual test; internal/ceres/conjugate_gradients_solver.cc).
 bool Engine::solve_iterative(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, int& cg_iterations) {
   const int n = layout_.reduced_dim;
   x.setZero(n);
   Eigen::VectorXd r = rhs;
-  const double rhs_norm = rhs.norm();
   cg_iterations = 0;
-  if (rhs_norm == 0.0) return true;
+  if (rhs.squaredNorm() == 0.0) return true;
   const auto precondition = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) {
     out.resize(n);
     for (std::size_t b = 0; b < preconditioner_.size(); ++b) {
@@ -883,6 +885,7 @@ bool Engine::solve_iterative(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, int
   precondition(r, z);
   p = z;
   double rz = r.dot(z);
+  double Q_previous = 0.0;  // Q(0)
   for (int k = 0; k < options_.max_cg_iterations; ++k) {
     schur_product(p, q);
     const double pq = p.dot(q);
@@ -891,7 +894,11 @@ bool Engine::solve_iterative(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, int
     x.noalias() += alpha * p;
     r.noalias() -= alpha * q;
     cg_iterations = k + 1;
-    if (cg_iterations >= options_.min_cg_iterations && r.norm() <= options_.cg_tolerance * rhs_norm) return true;
+    // Q(x) = 1/2 x^T S x - rhs^T x = -1/2 x^T (rhs + r), with r = rhs - S x.
+    const double Q = -0.5 * x.dot(rhs + r);
+    const double zeta = cg_iterations * (Q - Q_previous) / Q;
+    Q_previous = Q;
+    if (cg_iterations >= options_.min_cg_iterations && zeta < options_.cg_tolerance) return true;
     precondition(r, z);
     const double rz_next = r.dot(z);
     p = z + (rz_next / rz) * p;

@@ -144,8 +144,9 @@ struct LeastSquaresOptions {
   double max_trust_region_radius = 1e16;
   double min_diagonal = 1e-6;
   double max_diagonal = 1e32;
-  /// kIterativeSchur: stop conjugate gradients when ||r_k|| <= eta ||r_0|| (Ceres' default
-  /// eta 0.1 is the inexact-Newton forcing term) or after max_cg_iterations.
+  /// kIterativeSchur: conjugate gradients stop when i (Q_i - Q_{i-1}) / Q_i < cg_tolerance, Q
+  /// the quadratic model (Nash & Sofer 1990; Ceres' rule with q_tolerance = eta, default 0.1),
+  /// after at least min_cg_iterations and at most max_cg_iterations. cg_tolerance in (0, 1).
   double cg_tolerance = 0.1;
   int max_cg_iterations = 500;
   int min_cg_iterations = 1;
