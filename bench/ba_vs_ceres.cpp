@@ -7,8 +7,8 @@
 // group 0, cameras in group 1), Levenberg-Marquardt, SUITE_SPARSE; SPARSE_SCHUR, or
 // ITERATIVE_SCHUR with SCHUR_JACOBI, eta 1e-2 and at least 5 CG iterations per solve
 // (bundle_adjuster's --eta default and its min_linear_solver_iterations). Both solvers stop on
-// Ceres' default tolerances (function 1e-6, gradient 1e-10, parameter 1e-8) or after
-// --max-iterations (50 by default). bundle_adjuster also rescales the scene first; neither does
+// Ceres' default tolerances (function 1e-6, gradient 1e-10, parameter 1e-8; the function
+// tolerance can be set with --function-tolerance) or after --max-iterations (50 by default). bundle_adjuster also rescales the scene first; neither does
 // here (the cost and the steps are the same either way, up to rounding).
 //
 // Every solver runs in its own forked child (peak resident memory ru_maxrss is its own, the
@@ -16,7 +16,8 @@
 // (default 3); the median time is reported. The final cost of both is evaluated with the same
 // function (cairn's evaluate_cost, 1/2 sum of squared residuals).
 //
-// Usage: bench_ba_vs_ceres [--threads N] [--max-iterations N] [--repeat N] FILE [FILE ...]
+// Usage: bench_ba_vs_ceres [--threads N] [--max-iterations N] [--function-tolerance F] [--repeat N]
+//                          FILE [FILE ...]
 // Prints a Markdown table row per (file, solver).
 
 #include <ceres/ceres.h>
@@ -47,6 +48,7 @@ using Clock = std::chrono::steady_clock;
 int g_threads = 1;
 int g_max_iterations = 50;
 int g_repeat = 3;
+double g_function_tolerance = 1e-6;
 
 struct RunResult {
   double seconds = 0.0;  // median solve time
@@ -95,6 +97,7 @@ RunResult run_cairn(const std::string& path, backend::LinearSolverType type) {
     options.solver.linear_solver = type;
     options.solver.threads = g_threads;
     options.solver.max_iterations = g_max_iterations;
+    options.solver.function_tolerance = g_function_tolerance;
     options.solver.cg_tolerance = 1e-2;
     options.solver.min_cg_iterations = 5;
     const auto start = Clock::now();
@@ -136,7 +139,7 @@ RunResult run_ceres(const std::string& path, ceres::LinearSolverType type) {
     options.eta = 1e-2;
     options.num_threads = g_threads;
     options.max_num_iterations = g_max_iterations;
-    options.function_tolerance = 1e-6;
+    options.function_tolerance = g_function_tolerance;
     options.gradient_tolerance = 1e-10;
     options.parameter_tolerance = 1e-8;
     options.minimizer_progress_to_stdout = false;
@@ -212,6 +215,8 @@ int main(int argc, char** argv) {
       g_threads = std::atoi(argv[++i]);
     } else if (arg == "--max-iterations" && i + 1 < argc) {
       g_max_iterations = std::atoi(argv[++i]);
+    } else if (arg == "--function-tolerance" && i + 1 < argc) {
+      g_function_tolerance = std::atof(argv[++i]);
     } else if (arg == "--repeat" && i + 1 < argc) {
       g_repeat = std::max(1, std::atoi(argv[++i]));
     } else {
@@ -219,7 +224,8 @@ int main(int argc, char** argv) {
     }
   }
   if (files.empty()) {
-    std::fprintf(stderr, "usage: bench_ba_vs_ceres [--threads N] [--max-iterations N] [--repeat N] FILE...\n");
+    std::fprintf(stderr, "usage: bench_ba_vs_ceres [--threads N] [--max-iterations N] [--function-tolerance F] "
+                         "[--repeat N] FILE...\n");
     return 2;
   }
   // CHOLMOD's BLAS (OpenBLAS) gets the same threads in both solvers.

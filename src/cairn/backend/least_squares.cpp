@@ -129,6 +129,8 @@ bool LeastSquaresOptions::is_valid(std::string* error) const {
     problems << "need 0 <= min_cg_iterations <= max_cg_iterations, max_cg_iterations >= 1; ";
   }
   if (threads < 0) problems << "threads must be >= 0; ";
+  if (!(reuse_cg_tolerance > 0.0 && reuse_cg_tolerance < 1.0)) problems << "reuse_cg_tolerance must be in (0, 1); ";
+  if (reuse_max_cg_iterations < 0) problems << "reuse_max_cg_iterations must be >= 0; ";
   std::string text = problems.str();
   if (text.empty()) return true;
   if (error != nullptr) *error = text.substr(0, text.size() - 2);
@@ -355,6 +357,7 @@ class Engine {
   void plain_product(int f, const double* x, double* y) const;
   void schur_product(const Eigen::VectorXd& x, Eigen::VectorXd& y);
   bool solve_iterative(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, int& cg_iterations);
+  bool solve_with_previous_factor(const UpperCsc& S, const Eigen::VectorXd& rhs, int& cg_iterations);
 
   template <class Body>
   void parallel(int n, int grain, const Body& body) {
@@ -923,6 +926,46 @@ bool Engine::solve_iterative(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, int
   return true;
 }
 
+// kSparseSchur with reuse_factorization: S x = rhs by conjugate gradients preconditioned with
+// the last numeric factorisation (of the previous iteration's S) instead of a new one, as the
+// pose-graph optimiser does (optimizer.hpp, reuse_factorization; an inexact LM step, Wright &
+// Holt 1985). Tried only where a factorisation costs at least kReuseMinFlopRatio PCG iterations,
+// so a failed attempt (reuse_max_cg_iterations without reaching the forcing term) costs at most
+// a small fraction of the factorisation it tried to save. False: factorise.
+bool Engine::solve_with_previous_factor(const UpperCsc& S, const Eigen::VectorXd& rhs, int& cg_iterations) {
+  constexpr double kReuseMinFlopRatio = 50.0;
+  if (!options_.reuse_factorization || !cholesky_.has_factor()) return false;
+  const double pcg_flops = 4.0 * static_cast<double>(cholesky_.factor_nonzeros()) + 4.0 * static_cast<double>(S.value.size());
+  if (cholesky_.factor_flops() < kReuseMinFlopRatio * pcg_flops) return false;
+  const int n = S.size;
+  Eigen::VectorXd& x = step_reduced_;
+  x.setZero(n);
+  Eigen::VectorXd r = rhs, z(n), p, q;
+  const double rhs_norm = rhs.norm();
+  if (rhs_norm == 0.0) return true;
+  cholesky_.solve_in_place(r, z);
+  p = z;
+  double rz = r.dot(z);
+  for (int k = 0; k < options_.reuse_max_cg_iterations; ++k) {
+    symmetric_multiply(S, p, q);
+    const double pq = p.dot(q);
+    if (!(pq > 0.0)) break;
+    const double alpha = rz / pq;
+    x.noalias() += alpha * p;
+    r.noalias() -= alpha * q;
+    ++cg_iterations;
+    if (r.norm() <= options_.reuse_cg_tolerance * rhs_norm) {
+      ++summary_->reused_factorizations;
+      return true;
+    }
+    cholesky_.solve_in_place(r, z);
+    const double rz_next = r.dot(z);
+    p = z + (rz_next / rz) * p;
+    rz = rz_next;
+  }
+  return false;
+}
+
 bool Engine::compute_step(double radius, int& cg_iterations) {
   const double mu_inverse = 1.0 / radius;
   const bool iterative = options_.linear_solver == LinearSolverType::kIterativeSchur;
@@ -1010,8 +1053,11 @@ bool Engine::compute_step(double radius, int& cg_iterations) {
         summary_->factor_nonzeros = cholesky_.factor_nonzeros();
         analyzed_ = true;
       }
-      if (cholesky_.factorize(S) != FactorizationStatus::kSuccess) return false;
-      step_reduced_ = cholesky_.solve(minus_rhs);
+      if (!solve_with_previous_factor(S, minus_rhs, cg_iterations)) {
+        if (cholesky_.factorize(S) != FactorizationStatus::kSuccess) return false;
+        ++summary_->factorizations;
+        step_reduced_ = cholesky_.solve(minus_rhs);
+      }
     }
   } else {
     step_reduced_.resize(0);

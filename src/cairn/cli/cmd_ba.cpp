@@ -71,6 +71,8 @@ nlohmann::json summary_json(const backend::LeastSquaresSummary& s, const io::Bal
           {"iterations", s.iterations},
           {"successful_iterations", s.successful_iterations},
           {"cg_iterations", s.cg_iterations},
+          {"factorizations", s.factorizations},
+          {"reused_factorizations", s.reused_factorizations},
           {"reduced_size", s.reduced_size},
           {"factor_nonzeros", s.factor_nonzeros},
           {"time_s",
