@@ -8,7 +8,6 @@
 #include <Eigen/SparseCore>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 #include "cairn/backend/least_squares.hpp"
 #include "cairn/core/assert.hpp"
@@ -111,17 +110,10 @@ class PlanarPoseVector final : public Manifold {
   std::string_view name() const override { return "(x, y, theta)"; }
 };
 
-template <int D>
-Eigen::Matrix<double, D, D> whitening(const Eigen::Matrix<double, D, D>& information) {
-  // S = Lambda^1/2 V^T from Omega = V Lambda V^T, so S^T S = Omega; eigenvalues below zero
-  // (rounding on a semi-definite matrix) count as zero.
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>> eigen(information);
-  return eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eigen.eigenvectors().transpose();
-}
 
 class OdometryFactor final : public Factor {
  public:
-  explicit OdometryFactor(const OdometryFactor2D& f) : u_(f.u), S_(whitening<3>(f.information)) {}
+  explicit OdometryFactor(const OdometryFactor2D& f) : u_(f.u), S_(square_root_information<3>(f.information)) {}
   int residual_size() const override { return 3; }
   bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
     Matrix3 J_i, J_j;
@@ -142,7 +134,7 @@ class OdometryFactor final : public Factor {
 
 class RangeBearingFactor final : public Factor {
  public:
-  explicit RangeBearingFactor(const RangeBearingFactor2D& f) : z_(f.z), S_(whitening<2>(f.information)) {}
+  explicit RangeBearingFactor(const RangeBearingFactor2D& f) : z_(f.z), S_(square_root_information<2>(f.information)) {}
   int residual_size() const override { return 2; }
   bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
     const Eigen::Map<const Vector3> pose(values[0]);
@@ -251,6 +243,21 @@ bool LandmarkGraphOptions::is_valid(std::string* why) const {
   return problems.empty();
 }
 
+void copy_engine_summary(const LeastSquaresSummary& result, LandmarkGraphSummary& summary) {
+  summary.iterations = result.iterations;
+  summary.factorised_variables = static_cast<std::size_t>(result.reduced_size);
+  summary.factor_nonzeros = result.factor_nonzeros;
+  summary.time_linearise_s = result.jacobian_s + result.residual_s + result.linear_system_s;
+  summary.time_solve_s = result.linear_solve_s + result.analyze_s;
+  summary.message = result.message;
+  switch (result.termination) {
+    case LeastSquaresTermination::kConvergence: summary.status = LandmarkGraphStatus::kConverged; break;
+    case LeastSquaresTermination::kNoConvergence:
+    case LeastSquaresTermination::kInterrupted: summary.status = LandmarkGraphStatus::kMaxIterations; break;
+    case LeastSquaresTermination::kFailure: summary.status = LandmarkGraphStatus::kFailed; break;
+  }
+}
+
 LandmarkGraphSummary optimize(LandmarkGraph2D& graph, const LandmarkGraphOptions& options) {
   CAIRN_ASSERT(graph.check().empty(), "optimize(LandmarkGraph2D): graph.check() must be empty");
   CAIRN_ASSERT(options.is_valid(nullptr), "optimize(LandmarkGraph2D): invalid options");
@@ -288,18 +295,8 @@ LandmarkGraphSummary optimize(LandmarkGraph2D& graph, const LandmarkGraphOptions
   engine.gradient_tolerance = 0.0;
   engine.threads = 1;
   const LeastSquaresSummary result = solve(problem, engine);
-  summary.iterations = result.iterations;
-  summary.factor_nonzeros = result.factor_nonzeros;
-  summary.time_linearise_s = result.jacobian_s + result.residual_s + result.linear_system_s;
-  summary.time_solve_s = result.linear_solve_s + result.analyze_s;
+  copy_engine_summary(result, summary);
   summary.final_cost = graph.cost();
-  summary.message = result.message;
-  switch (result.termination) {
-    case LeastSquaresTermination::kConvergence: summary.status = LandmarkGraphStatus::kConverged; break;
-    case LeastSquaresTermination::kNoConvergence:
-    case LeastSquaresTermination::kInterrupted: summary.status = LandmarkGraphStatus::kMaxIterations; break;
-    case LeastSquaresTermination::kFailure: summary.status = LandmarkGraphStatus::kFailed; break;
-  }
   return summary;
 }
 

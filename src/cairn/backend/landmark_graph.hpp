@@ -114,6 +114,12 @@ struct LandmarkGraphSummary {
 /// options.is_valid().
 LandmarkGraphSummary optimize(LandmarkGraph2D& graph, const LandmarkGraphOptions& options = {});
 
+struct LeastSquaresSummary;
+/// Status, message, iterations, sizes and times of an engine solve (least_squares.hpp) in the
+/// landmark graphs' summary (both graphs are front ends over the engine); costs are left alone
+/// (the graphs' cost has no 1/2).
+void copy_engine_summary(const LeastSquaresSummary& result, LandmarkGraphSummary& summary);
+
 /// Marginal covariances from the inverse of the Gauss-Newton Hessian at the current estimate
 /// (the Laplace approximation; pose 0 fixed, so its covariance is zero).
 struct LandmarkGraphMarginals {

@@ -6,7 +6,6 @@
 #include <utility>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 #include "cairn/backend/factors.hpp"
 #include "cairn/backend/landmark_factors_3d.hpp"
@@ -36,22 +35,13 @@ Vector6 odometry_residual(const core::SE3& T_world_i, const core::SE3& T_world_j
   return e;
 }
 
-// Whitening: S with S^T S = Omega, so that the
-// engine's 1/2 ||S e||^2 is half this graph's e^T Omega e.
-template <int D>
-Eigen::Matrix<double, D, D> whitening(const Eigen::Matrix<double, D, D>& information) {
-  // S = Lambda^1/2 V^T from Omega = V Lambda V^T, so S^T S = Omega; eigenvalues below zero
-  // (rounding on a semi-definite matrix) count as zero.
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>> eigen(information);
-  return eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eigen.eigenvectors().transpose();
-}
 
 /// The engine's variables store a pose as (qx, qy, qz, qw, tx, ty, tz) (se3_manifold()).
 core::SE3 pose_of(const double* x) { return core::SE3(Quaternion(x[3], x[0], x[1], x[2]), Vector3(x[4], x[5], x[6])); }
 
 class OdometryFactor3D final : public Factor {
  public:
-  explicit OdometryFactor3D(const PoseFactor3D& f) : factor_(f), S_(whitening<6>(f.information)) {}
+  explicit OdometryFactor3D(const PoseFactor3D& f) : factor_(f), S_(square_root_information<6>(f.information)) {}
   int residual_size() const override { return 6; }
   bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
     Matrix6 J_i, J_j;
@@ -71,7 +61,7 @@ class OdometryFactor3D final : public Factor {
 
 class ObservationFactor3D final : public Factor {
  public:
-  explicit ObservationFactor3D(const LandmarkFactor3D& f) : factor_(f), S_(whitening<3>(f.information)) {}
+  explicit ObservationFactor3D(const LandmarkFactor3D& f) : factor_(f), S_(square_root_information<3>(f.information)) {}
   int residual_size() const override { return 3; }
   bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
     Matrix36 J_pose;
@@ -206,19 +196,8 @@ LandmarkGraphSummary optimize(LandmarkGraph3D& graph, const LandmarkGraph3DOptio
   engine.threads = 1;
   const LeastSquaresSummary result = solve(problem, engine);
   for (std::size_t i = 0; i < graph.poses.size(); ++i) graph.poses[i] = pose_of(pose_values.data() + 7 * i);
-  summary.iterations = result.iterations;
-  summary.factorised_variables = static_cast<std::size_t>(result.reduced_size);
-  summary.factor_nonzeros = result.factor_nonzeros;
-  summary.time_linearise_s = result.jacobian_s + result.residual_s + result.linear_system_s;
-  summary.time_solve_s = result.linear_solve_s + result.analyze_s;
+  copy_engine_summary(result, summary);
   summary.final_cost = graph.cost();
-  summary.message = result.message;
-  switch (result.termination) {
-    case LeastSquaresTermination::kConvergence: summary.status = LandmarkGraphStatus::kConverged; break;
-    case LeastSquaresTermination::kNoConvergence:
-    case LeastSquaresTermination::kInterrupted: summary.status = LandmarkGraphStatus::kMaxIterations; break;
-    case LeastSquaresTermination::kFailure: summary.status = LandmarkGraphStatus::kFailed; break;
-  }
   return summary;
 }
 

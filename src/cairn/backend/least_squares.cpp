@@ -180,6 +180,7 @@ struct Layout {
   std::vector<int> slot_start;         ///< factor -> first slot (one slot per factor variable)
   std::vector<int> jacobian_offset;    ///< slot -> offset in the Jacobian buffer, -1 if constant
   std::vector<int> factor_eliminated;  ///< factor -> eliminated block or -1
+  std::vector<int> factor_eliminated_slot;  ///< factor -> slot of its eliminated variable or -1
   std::vector<int> eliminated_factor_start;  ///< CSR: eliminated block -> its factors
   std::vector<int> eliminated_factors;
   std::vector<int> plain_factors;      ///< factors with no eliminated variable
@@ -349,6 +350,10 @@ class Engine {
   void eliminate(int e, double mu_inverse, double* matrix_values, double* rhs, double* diagonal, bool diagonal_only);
   template <int R, int F>
   void add_plain_factor(int f, double* matrix_values, double* rhs, double* diagonal, bool diagonal_only);
+  template <int R, int F>
+  Eigen::Matrix<double, R, 1> reduced_times(int f, const double* x) const;
+  template <int R, int F>
+  void add_reduced_transpose_times(int f, const Eigen::Matrix<double, R, 1>& z, double* y) const;
   template <int R, int E, int F>
   void back_substitute(int e);
   template <int R, int E, int F>
@@ -436,6 +441,7 @@ bool Engine::build_layout(std::string* error) {
   L.residual_offset.resize(factors);
   L.slot_start.resize(factors + 1);
   L.factor_eliminated.assign(factors, -1);
+  L.factor_eliminated_slot.assign(factors, -1);
   std::vector<int> eliminated_count(L.eliminated_variable.size(), 0);
   std::size_t jacobian_size = 0;
   int residual_size = 0;
@@ -457,6 +463,7 @@ bool Engine::build_layout(std::string* error) {
           return false;
         }
         L.factor_eliminated[f] = L.block_of[v];
+        L.factor_eliminated_slot[f] = static_cast<int>(L.jacobian_offset.size()) - 1 - L.slot_start[f];
         ++eliminated_count[L.block_of[v]];
       }
     }
@@ -658,10 +665,7 @@ void Engine::eliminate(int e, double mu_inverse, double* matrix_values, double* 
     const FactorEntry& factor = problem_.factors[f];
     const int m = R != Eigen::Dynamic ? R : factor.residual_size;
     const double* r = residuals_.data() + layout_.residual_offset[f];
-    int e_slot = -1;
-    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
-      if (factor.variables[k] == e_variable) e_slot = static_cast<int>(k);
-    }
+    const int e_slot = layout_.factor_eliminated_slot[f];
     const double* J_e_data = free_jacobian(f, e_slot);
     const ConstMap<R, E> J_e(J_e_data, m, e_size);
     V.noalias() += J_e.transpose().lazyProduct(J_e);
@@ -743,119 +747,86 @@ void Engine::add_plain_factor(int f, double* matrix_values, double* rhs, double*
   }
 }
 
-// dx_e = -V^-1 (g_e + sum_f J_e^T (sum_c J_c dx_c)).
+// J_r x_r of factor f: the sum over its free reduced variables c of J_c x_c.
+template <int R, int F>
+Eigen::Matrix<double, R, 1> Engine::reduced_times(int f, const double* x) const {
+  const FactorEntry& factor = problem_.factors[f];
+  const int m = R != Eigen::Dynamic ? R : factor.residual_size;
+  Eigen::Matrix<double, R, 1> z = Eigen::Matrix<double, R, 1>::Zero(m);
+  for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+    const int v = factor.variables[k];
+    const int block = layout_.block_of[v];
+    if (block < 0 || layout_.eliminated[v]) continue;
+    const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
+    const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+    z.noalias() += J_c * ConstVectorMap<F>(x + layout_.reduced_offset[block], f_size);
+  }
+  return z;
+}
+
+// y_c += J_c^T z for the free reduced variables c of factor f.
+template <int R, int F>
+void Engine::add_reduced_transpose_times(int f, const Eigen::Matrix<double, R, 1>& z, double* y) const {
+  const FactorEntry& factor = problem_.factors[f];
+  const int m = static_cast<int>(z.size());
+  for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+    const int v = factor.variables[k];
+    const int block = layout_.block_of[v];
+    if (block < 0 || layout_.eliminated[v]) continue;
+    const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
+    const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
+    VectorMap<F>(y + layout_.reduced_offset[block], f_size).noalias() += J_c.transpose() * z;
+  }
+}
+
+// dx_e = -V^-1 (g_e + sum_f J_e^T (J_r dx_r)).
 template <int R, int E, int F>
 void Engine::back_substitute(int e) {
   using VectorE = Eigen::Matrix<double, E, 1>;
-  const int e_variable = layout_.eliminated_variable[e];
-  const int e_size = E != Eigen::Dynamic ? E : problem_.variables[e_variable].manifold->tangent_size();
+  const int e_size = E != Eigen::Dynamic ? E : problem_.variables[layout_.eliminated_variable[e]].manifold->tangent_size();
   const int e_offset = layout_.eliminated_offset[e];
   VectorE sum = gradient_eliminated_.segment(e_offset, e_size);
   for (int index = layout_.eliminated_factor_start[e]; index < layout_.eliminated_factor_start[e + 1]; ++index) {
     const int f = layout_.eliminated_factors[index];
-    const FactorEntry& factor = problem_.factors[f];
-    const int m = R != Eigen::Dynamic ? R : factor.residual_size;
-    Eigen::Matrix<double, R, 1> J_dx = Eigen::Matrix<double, R, 1>::Zero(m);
-    int e_slot = -1;
-    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
-      const int v = factor.variables[k];
-      if (v == e_variable) {
-        e_slot = static_cast<int>(k);
-        continue;
-      }
-      const int block = layout_.block_of[v];
-      if (block < 0) continue;
-      const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
-      const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
-      J_dx.noalias() += J_c * step_reduced_.segment(layout_.reduced_offset[block], f_size);
-    }
-    const ConstMap<R, E> J_e(free_jacobian(f, e_slot), m, e_size);
+    const Eigen::Matrix<double, R, 1> J_dx = reduced_times<R, F>(f, step_reduced_.data());
+    const ConstMap<R, E> J_e(free_jacobian(f, layout_.factor_eliminated_slot[f]), J_dx.size(), e_size);
     sum.noalias() += J_e.transpose() * J_dx;
   }
   const Eigen::Map<const Eigen::Matrix<double, E, E>> V_inverse(v_inverse_.data() + v_inverse_offset_[e], e_size, e_size);
   step_eliminated_.segment(e_offset, e_size).noalias() = -(V_inverse * sum);
 }
 
-// y += (A - W V^-1 W^T) x restricted to eliminated block e's factors (A's part from them).
+// y += (A - W V^-1 W^T) x restricted to eliminated block e's factors (A's part from them):
+// z_f = J_r x for each factor, y += J_r^T z_f, then u = V^-1 sum_f J_e^T z_f and
+// y -= J_r^T (J_e u) factor by factor.
 template <int R, int E, int F>
 void Engine::schur_product_block(int e, const double* x, double* y) const {
   using VectorE = Eigen::Matrix<double, E, 1>;
-  const int e_variable = layout_.eliminated_variable[e];
-  const int e_size = E != Eigen::Dynamic ? E : problem_.variables[e_variable].manifold->tangent_size();
+  const int e_size = E != Eigen::Dynamic ? E : problem_.variables[layout_.eliminated_variable[e]].manifold->tangent_size();
   const int begin = layout_.eliminated_factor_start[e];
   const int end = layout_.eliminated_factor_start[e + 1];
   VectorE w = VectorE::Zero(e_size);
   for (int index = begin; index < end; ++index) {
     const int f = layout_.eliminated_factors[index];
-    const FactorEntry& factor = problem_.factors[f];
-    const int m = R != Eigen::Dynamic ? R : factor.residual_size;
-    Eigen::Matrix<double, R, 1> z = Eigen::Matrix<double, R, 1>::Zero(m);
-    int e_slot = -1;
-    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
-      const int v = factor.variables[k];
-      if (v == e_variable) {
-        e_slot = static_cast<int>(k);
-        continue;
-      }
-      const int block = layout_.block_of[v];
-      if (block < 0) continue;
-      const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
-      const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
-      z.noalias() += J_c * ConstVectorMap<F>(x + layout_.reduced_offset[block], f_size);
-    }
-    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
-      const int v = factor.variables[k];
-      const int block = layout_.block_of[v];
-      if (static_cast<int>(k) == e_slot || block < 0) continue;
-      const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
-      const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
-      VectorMap<F>(y + layout_.reduced_offset[block], f_size).noalias() += J_c.transpose() * z;
-    }
-    const ConstMap<R, E> J_e(free_jacobian(f, e_slot), m, e_size);
+    const Eigen::Matrix<double, R, 1> z = reduced_times<R, F>(f, x);
+    add_reduced_transpose_times<R, F>(f, z, y);
+    const ConstMap<R, E> J_e(free_jacobian(f, layout_.factor_eliminated_slot[f]), z.size(), e_size);
     w.noalias() += J_e.transpose() * z;
   }
   const Eigen::Map<const Eigen::Matrix<double, E, E>> V_inverse(v_inverse_.data() + v_inverse_offset_[e], e_size, e_size);
   const VectorE u = V_inverse * w;
   for (int index = begin; index < end; ++index) {
     const int f = layout_.eliminated_factors[index];
-    const FactorEntry& factor = problem_.factors[f];
-    const int m = R != Eigen::Dynamic ? R : factor.residual_size;
-    int e_slot = -1;
-    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
-      if (factor.variables[k] == e_variable) e_slot = static_cast<int>(k);
-    }
-    const ConstMap<R, E> J_e(free_jacobian(f, e_slot), m, e_size);
-    const Eigen::Matrix<double, R, 1> t = J_e * u;
-    for (std::size_t k = 0; k < factor.variables.size(); ++k) {
-      const int v = factor.variables[k];
-      const int block = layout_.block_of[v];
-      if (static_cast<int>(k) == e_slot || block < 0) continue;
-      const int f_size = F != Eigen::Dynamic ? F : problem_.variables[v].manifold->tangent_size();
-      const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
-      VectorMap<F>(y + layout_.reduced_offset[block], f_size).noalias() -= J_c.transpose() * t;
-    }
+    const int m = R != Eigen::Dynamic ? R : problem_.factors[f].residual_size;
+    const ConstMap<R, E> J_e(free_jacobian(f, layout_.factor_eliminated_slot[f]), m, e_size);
+    const Eigen::Matrix<double, R, 1> t = -(J_e * u);
+    add_reduced_transpose_times<R, F>(f, t, y);
   }
 }
 
 template <int R, int F>
 void Engine::plain_product(int f, const double* x, double* y) const {
-  const FactorEntry& factor = problem_.factors[f];
-  const int m = R != Eigen::Dynamic ? R : factor.residual_size;
-  Eigen::Matrix<double, R, 1> z = Eigen::Matrix<double, R, 1>::Zero(m);
-  for (std::size_t k = 0; k < factor.variables.size(); ++k) {
-    const int block = layout_.block_of[factor.variables[k]];
-    if (block < 0) continue;
-    const int f_size = F != Eigen::Dynamic ? F : problem_.variables[factor.variables[k]].manifold->tangent_size();
-    const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
-    z.noalias() += J_c * ConstVectorMap<F>(x + layout_.reduced_offset[block], f_size);
-  }
-  for (std::size_t k = 0; k < factor.variables.size(); ++k) {
-    const int block = layout_.block_of[factor.variables[k]];
-    if (block < 0) continue;
-    const int f_size = F != Eigen::Dynamic ? F : problem_.variables[factor.variables[k]].manifold->tangent_size();
-    const ConstMap<R, F> J_c(free_jacobian(f, static_cast<int>(k)), m, f_size);
-    VectorMap<F>(y + layout_.reduced_offset[block], f_size).noalias() += J_c.transpose() * z;
-  }
+  add_reduced_transpose_times<R, F>(f, reduced_times<R, F>(f, x), y);
 }
 
 #define CAIRN_DISPATCH_RFE(CALL_FIXED, CALL_DYNAMIC)                       \

@@ -31,6 +31,7 @@
 ///    adjustment in the large", ECCV 2010, Sec. 4). For large problems whose S would be dense.
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -220,6 +221,16 @@ struct LeastSquaresSummary {
 
 /// Minimises 1/2 sum rho(||r||^2) over the free variables, updating them in place.
 LeastSquaresSummary solve(LeastSquaresProblem& problem, const LeastSquaresOptions& options);
+
+/// S with S^T S = information, S = Lambda^1/2 V^T from information = V Lambda V^T (eigenvalues
+/// below zero, rounding on a semi-definite matrix, count as zero): whitens a residual e into
+/// S e, so that 1/2 ||S e||^2 = 1/2 e^T information e. For factors built from a covariance.
+template <int N>
+Eigen::Matrix<double, N, N> square_root_information(const Eigen::Matrix<double, N, N>& information) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eigen(information);
+  const Eigen::Matrix<double, N, 1> root = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  return root.asDiagonal() * eigen.eigenvectors().transpose();
+}
 
 /// Cost 1/2 sum rho(||r||^2) at the current values; NaN when a factor cannot be evaluated.
 double evaluate_cost(const LeastSquaresProblem& problem);

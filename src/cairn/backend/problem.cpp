@@ -1,5 +1,7 @@
 #include "cairn/backend/problem.hpp"
 
+#include "cairn/backend/least_squares.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <numeric>
@@ -44,13 +46,6 @@ Anchoring check_anchoring(const PoseGraphProblem<Group>& problem) {
 }
 
 namespace {
-
-template <int N>
-Eigen::Matrix<double, N, N> symmetric_sqrt(const Eigen::Matrix<double, N, N>& information) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eigen(information);
-  const Eigen::Matrix<double, N, 1> root = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-  return root.asDiagonal() * eigen.eigenvectors().transpose();
-}
 
 // SE-Sync's read_g2o_file: tau = d / tr(Omega_t^-1); kappa = I33 in 2D, 3 / (2 tr(Omega_R^-1)) in 3D.
 template <class Group>
@@ -106,7 +101,7 @@ PoseGraphProblem<Group> make_problem(const io::PoseGraphT<Group>& graph, const s
     edge.j = index.at(e.to);
     edge.T_i_j = e.T_from_to;
     edge.information = e.information;
-    edge.sqrt_information = symmetric_sqrt<Group::kDoF>(e.information);
+    edge.sqrt_information = square_root_information<Group::kDoF>(e.information);
     edge.kind = (e.to - e.from == 1 || e.from - e.to == 1) ? EdgeKind::kOdometry : EdgeKind::kLoopClosure;
     edge.line = e.line;
     if (!sesync_weights<Group>(e.information, edge.kappa, edge.tau)) {
