@@ -321,6 +321,13 @@ TEST(Cli, BundleAdjustmentRejectsBadInputWithFileAndLine) {
   EXPECT_NE(result.err.find("bad.bal:2: the point index of observation 1 of 1 3 is out of range"), std::string::npos)
       << result.err;
   EXPECT_EQ(run("ba " + quoted(std::filesystem::path(bad)) + " --linear-solver qr").status, 2);
+  // A point in its camera's plane (P_z = 0: t = 0, X = 0) has no BAL projection.
+  const std::string plane = write_file("plane.bal", "1 1 1\n0 0 1 1\n0 0 0 0 0 0 500 0 0\n0 0 0\n");
+  const Result in_plane = run("ba " + quoted(std::filesystem::path(plane)));
+  EXPECT_EQ(in_plane.status, 1);
+  EXPECT_NE(in_plane.err.find("plane.bal: observation 1 (camera 0, point 0): the point lies in the camera's plane"),
+            std::string::npos)
+      << in_plane.err;
 }
 
 }  // namespace

@@ -93,8 +93,16 @@ int ba_command(const BaFlags& flags) {
   claim_standard_output(flags.output);
   claim_standard_output(flags.report);
   io::BalProblem problem = io::read_bal(flags.input);
+  const std::string input_name = flags.input == "-" ? "standard input" : flags.input;
+  if (const long long k = io::first_observation_in_camera_plane(problem); k >= 0) {
+    const io::BalObservation& o = problem.observations[static_cast<std::size_t>(k)];
+    throw io::ParseError(input_name, 0,
+                         "observation " + std::to_string(k + 1) + " (camera " + std::to_string(o.camera) + ", point " +
+                             std::to_string(o.point) +
+                             "): the point lies in the camera's plane (P_z = 0), where BAL's projection is undefined");
+  }
   const std::size_t behind = io::count_points_behind_camera(problem);
-  std::printf("%s: %d cameras, %d points, %zu observations", io::output_display_name(flags.input).c_str(),
+  std::printf("%s: %d cameras, %d points, %zu observations", input_name.c_str(),
               problem.num_cameras, problem.num_points, problem.observations.size());
   if (behind > 0) std::printf(" (%zu with the point behind its camera: kept, as the BAL model defines them)", behind);
   std::printf("\n");
@@ -140,7 +148,7 @@ int ba_command(const BaFlags& flags) {
   }
   if (interrupted) return interrupted_exit_status();
   if (!summary.is_solution_usable()) {
-    std::fprintf(stderr, "cairn: error: %s: bundle adjustment failed: %s\n", io::output_display_name(flags.input).c_str(),
+    std::fprintf(stderr, "cairn: error: %s: bundle adjustment failed: %s\n", input_name.c_str(),
                  summary.message.c_str());
     return 1;
   }

@@ -177,18 +177,33 @@ void write_bal(std::ostream& out, const BalProblem& problem) {
   if (!out) throw std::runtime_error("cannot write the BAL problem");
 }
 
+namespace {
+
+/// The point of observation `o` in its camera's frame, P = R(w) X + t.
+Eigen::Vector3d point_in_camera(const BalProblem& problem, const BalObservation& o) {
+  const double* camera = problem.camera(o.camera);
+  const Eigen::Vector3d w(camera[0], camera[1], camera[2]);
+  const double angle = w.norm();
+  const Eigen::Matrix3d R =
+      angle > 0.0 ? Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  return R * Eigen::Vector3d(problem.point(o.point)) + Eigen::Vector3d(camera + 3);
+}
+
+}  // namespace
+
 std::size_t count_points_behind_camera(const BalProblem& problem) {
   std::size_t behind = 0;
   for (const BalObservation& o : problem.observations) {
-    const double* camera = problem.camera(o.camera);
-    const Eigen::Vector3d w(camera[0], camera[1], camera[2]);
-    const double angle = w.norm();
-    const Eigen::Matrix3d R =
-        angle > 0.0 ? Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
-    const Eigen::Vector3d P = R * Eigen::Vector3d(problem.point(o.point)) + Eigen::Vector3d(camera + 3);
-    if (P.z() >= 0.0) ++behind;
+    if (point_in_camera(problem, o).z() >= 0.0) ++behind;
   }
   return behind;
+}
+
+long long first_observation_in_camera_plane(const BalProblem& problem) {
+  for (std::size_t i = 0; i < problem.observations.size(); ++i) {
+    if (point_in_camera(problem, problem.observations[i]).z() == 0.0) return static_cast<long long>(i);
+  }
+  return -1;
 }
 
 }  // namespace cairn::io

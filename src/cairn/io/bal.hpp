@@ -58,4 +58,8 @@ void write_bal(std::ostream& out, const BalProblem& problem);
 /// the BAL model still defines their residual, so they are kept and counted, not dropped.
 std::size_t count_points_behind_camera(const BalProblem& problem);
 
+/// Index of the first observation whose point lies in its camera's plane (P_z = 0), where BAL's
+/// projection -P/P_z is undefined; -1 when there is none.
+long long first_observation_in_camera_plane(const BalProblem& problem);
+
 }  // namespace cairn::io
