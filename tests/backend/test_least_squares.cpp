@@ -261,3 +261,64 @@ TEST(LeastSquares, ReproducesCeresIterationCostsOnProblem16) {
 
 }  // namespace
 }  // namespace cairn::backend
+
+namespace cairn::backend {
+namespace {
+
+/// r = (p - z) / sigma on an R^2 variable.
+class PointPrior2 final : public Factor {
+ public:
+  PointPrior2(double zx, double zy, double sigma) : z_(zx, zy), sigma_(sigma) {}
+  int residual_size() const override { return 2; }
+  bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
+    residual[0] = (values[0][0] - z_.x()) / sigma_;
+    residual[1] = (values[0][1] - z_.y()) / sigma_;
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      jacobians[0][0] = jacobians[0][3] = 1.0 / sigma_;
+      jacobians[0][1] = jacobians[0][2] = 0.0;
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Vector2d z_;
+  double sigma_;
+};
+
+TEST(LeastSquaresCovariance, TwoPriorsCombineAsInverseVariances) {
+  // Two independent measurements of a point with sigma 1 and 2: the posterior covariance is
+  // (1/1 + 1/4)^-1 I = 0.8 I, whatever the measured values.
+  double p[2] = {0.3, -0.2};
+  double q[2] = {5.0, 5.0};
+  LeastSquaresProblem problem;
+  const int vp = problem.add_variable(p, euclidean_manifold(2));
+  const int vq = problem.add_variable(q, euclidean_manifold(2));
+  problem.set_constant(vq);
+  problem.add_factor(std::make_unique<PointPrior2>(0.0, 0.0, 1.0), {vp});
+  problem.add_factor(std::make_unique<PointPrior2>(1.0, 1.0, 2.0), {vp});
+  problem.add_factor(std::make_unique<PointPrior2>(5.0, 5.0, 1.0), {vq});
+  const MarginalCovariances covariance = marginal_covariances(problem, {vp, vq});
+  ASSERT_TRUE(covariance.ok) << covariance.message;
+  ASSERT_EQ(covariance.blocks.size(), 2u);
+  EXPECT_TRUE(covariance.blocks[0].isApprox(0.8 * Eigen::Matrix2d::Identity(), 1e-12)) << covariance.blocks[0];
+  EXPECT_TRUE(covariance.blocks[1].isZero()) << "a constant variable has no uncertainty";
+}
+
+TEST(LeastSquaresCovariance, AGaugeFreedomIsReportedNotInverted) {
+  double a[3] = {0, 0, 0}, b[3] = {1, 2, 3};
+  LeastSquaresProblem problem;
+  const int va = problem.add_variable(a, euclidean_manifold(3));
+  const int vb = problem.add_variable(b, euclidean_manifold(3));
+  problem.add_factor(std::make_unique<PointDistance>(), {va, vb});
+  MarginalCovariances covariance = marginal_covariances(problem, {va});
+  EXPECT_FALSE(covariance.ok);
+  EXPECT_NE(covariance.message.find("singular"), std::string::npos) << covariance.message;
+  // Holding a fixes the gauge: b - a has unit information, so Sigma_b = I.
+  problem.set_constant(va);
+  covariance = marginal_covariances(problem, {vb});
+  ASSERT_TRUE(covariance.ok) << covariance.message;
+  EXPECT_TRUE(covariance.blocks[0].isApprox(Eigen::Matrix3d::Identity(), 1e-12));
+}
+
+}  // namespace
+}  // namespace cairn::backend

@@ -328,10 +328,13 @@ class Engine {
         arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {}
 
   LeastSquaresSummary run();
+  MarginalCovariances covariances(const std::vector<int>& variables);
 
  private:
   // Setup
   bool build_layout(std::string* error);
+  /// The reduced pattern (block-AMD numbered), elimination order and buffers; after build_layout.
+  void prepare();
   void choose_kernels();
   // Evaluation. Returns false when a factor could not be evaluated or gave a non-finite value.
   bool evaluate(bool jacobians, double& cost);
@@ -1154,30 +1157,7 @@ double Engine::gradient_max_norm() {
   return norm;
 }
 
-LeastSquaresSummary Engine::run() {
-  const auto start = Clock::now();
-  LeastSquaresSummary summary;
-  summary_ = &summary;
-  summary.linear_solver = options_.linear_solver;
-  summary.threads = options_.threads > 0 ? options_.threads : arena_.max_concurrency();
-  // CHOLMOD's BLAS gets the solve's threads, not one per core spinning beside TBB's workers.
-  set_blas_threads(summary.threads);
-  summary.factors = static_cast<int>(problem_.factors.size());
-  summary.residuals = problem_.residuals;
-  const auto finish = [&](LeastSquaresTermination termination, std::string message) {
-    summary.termination = termination;
-    summary.message = std::move(message);
-    summary.total_s = seconds_since(start);
-    return summary;
-  };
-  std::string error;
-  if (!options_.is_valid(&error)) return finish(LeastSquaresTermination::kFailure, "invalid options: " + error);
-  if (!build_layout(&error)) return finish(LeastSquaresTermination::kFailure, error);
-  choose_kernels();
-  summary.variables = static_cast<int>(layout_.reduced_variable.size() + layout_.eliminated_variable.size());
-  summary.eliminated_variables = static_cast<int>(layout_.eliminated_variable.size());
-  summary.reduced_size = layout_.reduced_dim;
-
+void Engine::prepare() {
   // The reduced pattern: reduced blocks coupled by a factor, or through an eliminated block.
   std::vector<int> block_size;
   for (const int v : layout_.reduced_variable) block_size.push_back(problem_.variables[v].manifold->tangent_size());
@@ -1255,6 +1235,34 @@ LeastSquaresSummary Engine::run() {
   v_inverse_.assign(v_inverse_offset_.back(), 0.0);
   residuals_.assign(layout_.residual_size, 0.0);
   jacobians_.assign(layout_.jacobian_size, 0.0);
+
+}
+
+LeastSquaresSummary Engine::run() {
+  const auto start = Clock::now();
+  LeastSquaresSummary summary;
+  summary_ = &summary;
+  summary.linear_solver = options_.linear_solver;
+  summary.threads = options_.threads > 0 ? options_.threads : arena_.max_concurrency();
+  // CHOLMOD's BLAS gets the solve's threads, not one per core spinning beside TBB's workers.
+  set_blas_threads(summary.threads);
+  summary.factors = static_cast<int>(problem_.factors.size());
+  summary.residuals = problem_.residuals;
+  const auto finish = [&](LeastSquaresTermination termination, std::string message) {
+    summary.termination = termination;
+    summary.message = std::move(message);
+    summary.total_s = seconds_since(start);
+    return summary;
+  };
+  std::string error;
+  if (!options_.is_valid(&error)) return finish(LeastSquaresTermination::kFailure, "invalid options: " + error);
+  if (!build_layout(&error)) return finish(LeastSquaresTermination::kFailure, error);
+  choose_kernels();
+  summary.variables = static_cast<int>(layout_.reduced_variable.size() + layout_.eliminated_variable.size());
+  summary.eliminated_variables = static_cast<int>(layout_.eliminated_variable.size());
+  summary.reduced_size = layout_.reduced_dim;
+
+  prepare();
 
   // Iteration 0: the starting point.
   auto phase = Clock::now();
@@ -1376,7 +1384,68 @@ LeastSquaresSummary Engine::run() {
   }
 }
 
+MarginalCovariances Engine::covariances(const std::vector<int>& variables) {
+  MarginalCovariances result;
+  LeastSquaresSummary summary;
+  summary_ = &summary;
+  std::string error;
+  if (!build_layout(&error)) {
+    result.message = error;
+    return result;
+  }
+  for (const int v : variables) {
+    if (v < 0 || v >= static_cast<int>(problem_.variables.size())) {
+      result.message = "no variable " + std::to_string(v);
+      return result;
+    }
+  }
+  choose_kernels();
+  prepare();
+  double cost = 0.0;
+  if (!evaluate(true, cost)) {
+    result.message = "a factor could not be evaluated at the current values";
+    return result;
+  }
+  compute_gradient();
+  // The undamped normal equations J^T J (radius infinite: no LM damping), factorised.
+  int cg_iterations = 0;
+  if (!compute_step(std::numeric_limits<double>::infinity(), cg_iterations) || !cholesky_.has_factor()) {
+    result.message = "J^T J is singular at the current values (is the gauge fixed by a constant variable?)";
+    return result;
+  }
+  std::vector<int> columns;
+  for (const int v : variables) {
+    const int block = layout_.block_of[v];
+    if (block < 0) continue;
+    const int size = problem_.variables[v].manifold->tangent_size();
+    for (int i = 0; i < size; ++i) columns.push_back(layout_.reduced_offset[block] + i);
+  }
+  const Eigen::MatrixXd inverse = columns.empty() ? Eigen::MatrixXd() : cholesky_.inverse_columns(columns);
+  int column = 0;
+  for (const int v : variables) {
+    const int size = problem_.variables[v].manifold->tangent_size();
+    const int block = layout_.block_of[v];
+    if (block < 0) {
+      result.blocks.push_back(Eigen::MatrixXd::Zero(size, size));
+      continue;
+    }
+    result.blocks.push_back(inverse.block(layout_.reduced_offset[block], column, size, size));
+    column += size;
+  }
+  result.ok = true;
+  return result;
+}
+
 }  // namespace
+
+MarginalCovariances marginal_covariances(LeastSquaresProblem& problem, const std::vector<int>& variables, int threads) {
+  LeastSquaresOptions options;
+  options.linear_solver = LinearSolverType::kSparseNormalCholesky;
+  options.reuse_factorization = false;
+  options.threads = threads;
+  Engine engine(problem, options);
+  return engine.covariances(variables);
+}
 
 LeastSquaresSummary solve(LeastSquaresProblem& problem, const LeastSquaresOptions& options) {
   Engine engine(problem, options);

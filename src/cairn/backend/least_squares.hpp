@@ -222,6 +222,23 @@ struct LeastSquaresSummary {
 /// Minimises 1/2 sum rho(||r||^2) over the free variables, updating them in place.
 LeastSquaresSummary solve(LeastSquaresProblem& problem, const LeastSquaresOptions& options);
 
+/// Marginal covariances of a least-squares problem at its current values (Laplace approximation).
+struct MarginalCovariances {
+  bool ok = false;
+  std::string message;  ///< why not, when !ok
+  /// Per requested variable, in its tangent space (tangent_size x tangent_size); zero for a
+  /// constant variable.
+  std::vector<Eigen::MatrixXd> blocks;
+};
+
+/// The diagonal blocks of (J^T J)^-1 for `variables` at the current values, J whitened and
+/// robust-reweighted as in the solve (Ceres' Covariance with its default algorithm does the same:
+/// the inverse of the Gauss-Newton Hessian). J^T J over every free variable, factorised by
+/// CHOLMOD; the columns are solved for the requested blocks only. Not ok when J^T J is singular
+/// (a gauge freedom: hold a variable constant).
+MarginalCovariances marginal_covariances(LeastSquaresProblem& problem, const std::vector<int>& variables,
+                                         int threads = 1);
+
 /// S with S^T S = information, S = Lambda^1/2 V^T from information = V Lambda V^T (eigenvalues
 /// below zero, rounding on a semi-definite matrix, count as zero): whitens a residual e into
 /// S e, so that 1/2 ||S e||^2 = 1/2 e^T information e. For factors built from a covariance.
