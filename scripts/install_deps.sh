@@ -26,6 +26,7 @@ PACKAGES=(
   libyaml-cpp-dev      # slam2d configuration files
   zlib1g-dev           # reading .gz logs
   libbz2-dev           # reading .bz2 logs
+  liblzma-dev          # reading .xz point clouds
 )
 
 missing=()

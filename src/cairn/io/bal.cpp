@@ -17,37 +17,25 @@
 namespace cairn::io {
 namespace {
 
-/// Whitespace-separated tokens of a text held in memory, with the line of each.
+/// TextTokens with BAL's checks: no binary bytes, numbers and indices parsed with errors.
 class Tokens {
  public:
-  Tokens(const std::string& path, const std::string& text) : path_(path), text_(text) {}
+  Tokens(const std::string& path, const std::string& text) : path_(path), text_(text), tokens_(text) {}
 
   /// The next token; empty at the end of the text. Throws on binary bytes.
   std::string_view next() {
-    while (position_ < text_.size()) {
-      const char c = text_[position_];
-      if (c == '\n') {
-        ++line_;
-      } else if (c != ' ' && c != '\t' && c != '\r') {
-        break;
-      }
-      ++position_;
-    }
-    const std::size_t begin = position_;
-    while (position_ < text_.size()) {
-      const auto c = static_cast<unsigned char>(text_[position_]);
-      if (c == ' ' || c == '\t' || c == '\r' || c == '\n') break;
+    const std::string_view token = tokens_.next();
+    for (const char byte : token) {
+      const auto c = static_cast<unsigned char>(byte);
       if (c < 0x20 || c >= 0x7f) {
-        fail("binary data (byte 0x" + hex(c) + "): expected BAL text (numbers separated by white space)");
+        fail_at_token("binary data (byte 0x" + hex(c) + "): expected BAL text (numbers separated by white space)");
       }
-      ++position_;
     }
-    token_line_ = line_;
-    return std::string_view(text_).substr(begin, position_ - begin);
+    return token;
   }
 
-  [[noreturn]] void fail(const std::string& detail) const { throw ParseError(path_, line_, detail); }
-  [[noreturn]] void fail_at_token(const std::string& detail) const { throw ParseError(path_, token_line_, detail); }
+  [[noreturn]] void fail(const std::string& detail) const { throw ParseError(path_, tokens_.position_line(), detail); }
+  [[noreturn]] void fail_at_token(const std::string& detail) const { throw ParseError(path_, tokens_.line(), detail); }
 
   /// The next token as a number; `what` names it in errors ("truncated" at the end).
   double number(const std::string& what) {
@@ -89,9 +77,7 @@ class Tokens {
   }
   const std::string& path_;
   const std::string& text_;
-  std::size_t position_ = 0;
-  std::size_t line_ = 1;
-  std::size_t token_line_ = 1;
+  TextTokens tokens_;
 };
 
 }  // namespace

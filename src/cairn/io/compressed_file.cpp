@@ -1,9 +1,11 @@
 #include "cairn/io/compressed_file.hpp"
 
 #include <bzlib.h>
+#include <lzma.h>
 #include <zlib.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -92,25 +94,80 @@ std::string bunzip2(const std::string& path, std::size_t max_bytes) {
   return out;
 }
 
+/// xz (LZMA2 in the .xz container, as `xz` writes it), decoded with liblzma. Concatenated
+/// streams are read one after the other, as `xz -d` does; the integrity check (CRC64 by
+/// default) is verified by the decoder.
+std::string unxz(const std::string& path, std::size_t max_bytes) {
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!file) throw ParseError(path, 0, std::string("cannot open xz file: ") + std::strerror(errno));
+  lzma_stream stream = LZMA_STREAM_INIT;
+  if (lzma_stream_decoder(&stream, UINT64_MAX, LZMA_CONCATENATED) != LZMA_OK) {
+    throw ParseError(path, 0, "cannot start the xz decoder (out of memory?)");
+  }
+  std::unique_ptr<lzma_stream, void (*)(lzma_stream*)> guard(&stream, &lzma_end);
+  std::string out;
+  std::uint8_t input[1 << 16];
+  std::uint8_t buffer[1 << 16];
+  lzma_action action = LZMA_RUN;
+  while (true) {
+    if (stream.avail_in == 0 && action == LZMA_RUN) {
+      stream.next_in = input;
+      stream.avail_in = std::fread(input, 1, sizeof input, file.get());
+      if (std::ferror(file.get())) throw ParseError(path, 0, "read error");
+      // LZMA_FINISH at the end of the input: the decoder then reports a stream that stops
+      // before its footer (LZMA_BUF_ERROR) instead of waiting for more bytes.
+      if (std::feof(file.get())) action = LZMA_FINISH;
+    }
+    stream.next_out = buffer;
+    stream.avail_out = sizeof buffer;
+    const lzma_ret status = lzma_code(&stream, action);
+    out.append(reinterpret_cast<const char*>(buffer), sizeof buffer - stream.avail_out);
+    check_size(path, out.size(), max_bytes);
+    if (status == LZMA_STREAM_END) break;
+    if (status == LZMA_OK) continue;
+    switch (status) {
+      case LZMA_BUF_ERROR:
+        throw ParseError(path, 0, "xz data is truncated (the stream ends before its footer)");
+      case LZMA_MEM_ERROR:
+        throw ParseError(path, 0, "out of memory while decompressing xz data");
+      case LZMA_FORMAT_ERROR:
+        throw ParseError(path, 0, "xz data is corrupt: not in the .xz format");
+      case LZMA_OPTIONS_ERROR:
+        throw ParseError(path, 0, "xz data uses options this liblzma does not support");
+      case LZMA_DATA_ERROR:
+        throw ParseError(path, 0, "xz data is corrupt (bad compressed data or trailing garbage)");
+      default:
+        throw ParseError(path, 0, "xz data is corrupt (liblzma error " + std::to_string(static_cast<int>(status)) + ")");
+    }
+  }
+  return out;
+}
+
+bool is_xz(const char* bytes, std::size_t size) {
+  static constexpr unsigned char kMagic[6] = {0xfd, 0x37, 0x7a, 0x58, 0x5a, 0x00};
+  return size >= 6 && std::memcmp(bytes, kMagic, 6) == 0;
+}
+
 }  // namespace
 
 std::string read_maybe_compressed(const std::string& path, std::size_t max_bytes) {
   if (path == "-") {
     const std::string& in = standard_input(max_bytes);
     if ((in.size() >= 2 && static_cast<unsigned char>(in[0]) == 0x1f && static_cast<unsigned char>(in[1]) == 0x8b) ||
-        in.compare(0, 3, "BZh") == 0) {
-      throw ParseError("standard input", 0, "compressed data on standard input: decompress it first (zcat, bzcat)");
+        in.compare(0, 3, "BZh") == 0 || is_xz(in.data(), in.size())) {
+      throw ParseError("standard input", 0, "compressed data on standard input: decompress it first (zcat, bzcat, xzcat)");
     }
     return in;
   }
-  char magic[3] = {0, 0, 0};
+  char magic[6] = {0, 0, 0, 0, 0, 0};
   {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw ParseError(path, 0, std::string("cannot open file: ") + std::strerror(errno));
-    in.read(magic, 3);
+    in.read(magic, 6);
   }
   if (static_cast<unsigned char>(magic[0]) == 0x1f && static_cast<unsigned char>(magic[1]) == 0x8b) return gunzip(path, max_bytes);
   if (std::memcmp(magic, "BZh", 3) == 0) return bunzip2(path, max_bytes);
+  if (is_xz(magic, sizeof magic)) return unxz(path, max_bytes);
   std::string raw = read_raw(path);
   check_size(path, raw.size(), max_bytes);
   return raw;

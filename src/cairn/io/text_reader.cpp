@@ -117,6 +117,26 @@ std::string quote_token(std::string_view token) {
   return out;
 }
 
+std::string_view TextTokens::next() {
+  while (position_ < text_.size()) {
+    const char c = text_[position_];
+    if (c == '\n') {
+      ++line_;
+    } else if (c != ' ' && c != '\t' && c != '\r') {
+      break;
+    }
+    ++position_;
+  }
+  const std::size_t begin = position_;
+  while (position_ < text_.size()) {
+    const char c = text_[position_];
+    if (c == ' ' || c == '\t' || c == '\r' || c == '\n') break;
+    ++position_;
+  }
+  if (position_ > begin) token_line_ = line_;
+  return std::string_view(text_).substr(begin, position_ - begin);
+}
+
 double parse_double(const TextReader& reader, std::string_view token, std::string_view what) {
   double value = 0.0;
   const char* begin = token.data();

@@ -46,6 +46,27 @@ class TextReader {
   std::size_t line_number_ = 0;
 };
 
+/// Whitespace-separated tokens of a text held in memory, for formats whose line breaks carry no
+/// meaning (BAL, the data of ASCII PLY), with the 1-based line of each token for errors.
+class TextTokens {
+ public:
+  /// Starts at byte `position` of `text`, which is on line `line`. `text` must outlive this.
+  explicit TextTokens(const std::string& text, std::size_t position = 0, std::size_t line = 1)
+      : text_(text), position_(position), line_(line), token_line_(line) {}
+  /// The next token (spaces, tabs, '\r' and '\n' separate); empty at the end of the text.
+  std::string_view next();
+  /// Line of the last non-empty token read.
+  std::size_t line() const { return token_line_; }
+  /// Line of the current position (past the last token and the white space after it).
+  std::size_t position_line() const { return line_; }
+
+ private:
+  const std::string& text_;
+  std::size_t position_;
+  std::size_t line_;
+  std::size_t token_line_;
+};
+
 /// Splits on spaces and tabs; empty tokens are dropped.
 std::vector<std::string_view> split_whitespace(std::string_view line);
 /// Splits on `separator`, trimming spaces and tabs around each field; keeps empty fields.
