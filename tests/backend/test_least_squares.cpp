@@ -363,3 +363,39 @@ TEST(PoseGraphOnEngine, ReachesTheOptimisersOptimum) {
 
 }  // namespace
 }  // namespace cairn::backend
+
+namespace cairn::backend {
+namespace {
+
+// A rejected step must leave the current point's residuals alone: the next step is computed from
+// them. Evaluating the trial's Jacobians with its cost (the default) or after acceptance gives
+// the same iterates, through rejected steps too. (Before the trial got buffers of its own, a
+// rejected step overwrote the residuals and the steps after it were wrong.)
+TEST(LeastSquares, RejectedStepsLeaveTheIteratesAsTheyWere) {
+  std::vector<std::vector<double>> costs;
+  int rejected = 0;
+  for (const bool with_trial : {true, false}) {
+    SyntheticScene scene(6, 40, 1.0, 21);
+    for (auto& pose : scene.poses) pose[4] += 3.0;  // far from the truth: LM's first steps fail
+    LeastSquaresProblem problem = scene.problem();
+    LeastSquaresOptions options;
+    options.jacobians_with_trial_cost = with_trial;
+    options.initial_trust_region_radius = 1e16;
+    options.max_trust_region_radius = 1e16;
+    options.function_tolerance = 1e-14;
+    const LeastSquaresSummary summary = solve(problem, options);
+    ASSERT_TRUE(summary.is_solution_usable()) << summary.message;
+    std::vector<double> per_iteration;
+    for (const auto& it : summary.iteration_log) {
+      per_iteration.push_back(it.cost);
+      if (with_trial && !it.step_accepted) ++rejected;
+    }
+    costs.push_back(per_iteration);
+  }
+  EXPECT_GE(rejected, 1) << "no step was rejected: this test checks nothing";
+  ASSERT_EQ(costs[0].size(), costs[1].size());
+  for (std::size_t k = 0; k < costs[0].size(); ++k) EXPECT_EQ(costs[0][k], costs[1][k]) << "iteration " << k + 1;
+}
+
+}  // namespace
+}  // namespace cairn::backend

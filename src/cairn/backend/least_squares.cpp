@@ -337,7 +337,8 @@ class Engine {
   void prepare();
   void choose_kernels();
   // Evaluation. Returns false when a factor could not be evaluated or gave a non-finite value.
-  bool evaluate(bool jacobians, double& cost);
+  bool evaluate(bool jacobians, double& cost) { return evaluate(jacobians, cost, residuals_, jacobians_); }
+  bool evaluate(bool jacobians, double& cost, std::vector<double>& residual_buffer, std::vector<double>& jacobian_buffer);
   // Gradient g = J^T r over the free variables (reduced part, eliminated part).
   void compute_gradient();
   // Builds and solves the damped system for the step; false on a numerical failure.
@@ -396,9 +397,16 @@ class Engine {
   // Kernel selection: fixed sizes when every factor on an eliminated block has R residuals, the
   // eliminated blocks E and every reduced block F tangent dimensions (bundle adjustment).
   int fixed_r_ = 0, fixed_e_ = 0, fixed_f_ = 0;
+  // Likewise for the factors without an eliminated variable (pose graphs: (3, 3) and (6, 6)
+  // geodesic, (6, 3) and (12, 6) chordal).
+  int plain_r_ = 0, plain_f_ = 0;
 
   std::vector<double> residuals_;
   std::vector<double> jacobians_;
+  /// The trial point's residuals and Jacobians (LeastSquaresOptions::jacobians_with_trial_cost),
+  /// swapped with the above when the step is accepted.
+  std::vector<double> trial_residuals_;
+  std::vector<double> trial_jacobians_;
   std::vector<double> saved_values_;
   Eigen::VectorXd gradient_reduced_;
   Eigen::VectorXd gradient_eliminated_;
@@ -510,6 +518,21 @@ void Engine::choose_kernels() {
     if (e == 0) e = size;
     uniform = uniform && size == e;
   }
+  int plain_r = 0;
+  bool plain_uniform = true;
+  for (const int factor : layout_.plain_factors) {
+    const int size = problem_.factors[factor].residual_size;
+    if (plain_r == 0) plain_r = size;
+    plain_uniform = plain_uniform && size == plain_r;
+  }
+  const bool reduced_uniform = uniform;  // every reduced block has size f
+  if (plain_uniform && reduced_uniform) {
+    const auto plain_is = [&](int rr, int ff) { return plain_r == rr && f == ff; };
+    if (plain_is(3, 3) || plain_is(6, 6) || plain_is(6, 3) || plain_is(12, 6)) {
+      plain_r_ = plain_r;
+      plain_f_ = f;
+    }
+  }
   for (const int factor : layout_.eliminated_factors) {
     const int size = problem_.factors[factor].residual_size;
     if (r == 0) r = size;
@@ -524,7 +547,8 @@ void Engine::choose_kernels() {
   }
 }
 
-bool Engine::evaluate(bool with_jacobians, double& cost) {
+bool Engine::evaluate(bool with_jacobians, double& cost, std::vector<double>& residual_buffer,
+                      std::vector<double>& jacobian_buffer) {
   const int factors = static_cast<int>(problem_.factors.size());
   tbb::enumerable_thread_specific<double> partial(0.0);
   std::atomic<bool> ok{true};
@@ -540,9 +564,9 @@ bool Engine::evaluate(bool with_jacobians, double& cost) {
     for (std::size_t k = 0; k < n; ++k) {
       values[k] = problem_.variables[factor.variables[k]].values;
       const int offset = layout_.jacobian_offset[layout_.slot_start[f] + static_cast<int>(k)];
-      jacobians[k] = offset < 0 ? nullptr : jacobians_.data() + offset;
+      jacobians[k] = offset < 0 ? nullptr : jacobian_buffer.data() + offset;
     }
-    double* residual = residuals_.data() + layout_.residual_offset[f];
+    double* residual = residual_buffer.data() + layout_.residual_offset[f];
     const int m = factor.residual_size;
     if (!factor.factor->evaluate(values.data(), residual, with_jacobians ? jacobians.data() : nullptr)) {
       ok = false;
@@ -618,8 +642,9 @@ void Engine::compute_gradient() {
       add_factor(layout_.eliminated_factors[index], reduced);
     }
   });
+  parallel(static_cast<int>(layout_.plain_factors.size()), 512,
+           [&](int i) { add_factor(layout_.plain_factors[i], partial.local().data()); });
   gradient_reduced_.setZero(n);
-  for (const int f : layout_.plain_factors) add_factor(f, gradient_reduced_.data());
   for (const auto& part : partial) gradient_reduced_ += part;
 }
 
@@ -839,6 +864,13 @@ void Engine::plain_product(int f, const double* x, double* y) const {
   else if (fixed_r_ == 2 && fixed_e_ == 2 && fixed_f_ == 3) { CALL_FIXED(2, 2, 3); } \
   else { CALL_DYNAMIC; }
 
+#define CAIRN_DISPATCH_PLAIN(CALL_FIXED, CALL_DYNAMIC)                        \
+  if (plain_r_ == 3 && plain_f_ == 3) { CALL_FIXED(3, 3); }                  \
+  else if (plain_r_ == 6 && plain_f_ == 6) { CALL_FIXED(6, 6); }             \
+  else if (plain_r_ == 6 && plain_f_ == 3) { CALL_FIXED(6, 3); }             \
+  else if (plain_r_ == 12 && plain_f_ == 6) { CALL_FIXED(12, 6); }           \
+  else { CALL_DYNAMIC; }
+
 void Engine::schur_product(const Eigen::VectorXd& x, Eigen::VectorXd& y) {
   const int n = layout_.reduced_dim;
   tbb::enumerable_thread_specific<Eigen::VectorXd> partial([n] { return Eigen::VectorXd::Zero(n); });
@@ -977,12 +1009,17 @@ bool Engine::compute_step(double radius, int& cg_iterations) {
                                         e, mu_inverse, mine.values, mine.rhs.data(), mine.diagonal.data(), iterative)))
 #undef CAIRN_CALL
   });
+  // Plain factors (no eliminated variable: all of a pose graph's) into the same partial sums.
+  parallel(static_cast<int>(layout_.plain_factors.size()), 256, [&](int i) {
+    const int f = layout_.plain_factors[i];
+    Partial& mine = partial.local();
+#define CAIRN_CALL(R, F) add_plain_factor<R, F>(f, mine.values, mine.rhs.data(), mine.diagonal.data(), iterative)
+    CAIRN_DISPATCH_PLAIN(CAIRN_CALL, (add_plain_factor<Eigen::Dynamic, Eigen::Dynamic>(
+                                         f, mine.values, mine.rhs.data(), mine.diagonal.data(), iterative)))
+#undef CAIRN_CALL
+  });
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
   Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(n);
-  // Plain factors (no eliminated variable) on the calling thread into S directly.
-  for (const int f : layout_.plain_factors) {
-    add_plain_factor<Eigen::Dynamic, Eigen::Dynamic>(f, block_values_.data(), rhs.data(), diagonal.data(), iterative);
-  }
   for (const Partial& part : partial) {
     if (!part.own.empty()) {
       for (std::size_t i = 0; i < nonzeros; ++i) block_values_[i] += part.own[i];
@@ -1315,7 +1352,12 @@ LeastSquaresSummary Engine::run() {
       apply_step();
       phase = Clock::now();
       double trial = 0.0;
-      const bool trial_ok = evaluate(false, trial);
+      // The trial point's residuals go to their own buffer: a rejected step must leave the
+      // current point's residuals (the next step's right-hand side) untouched.
+      const bool with_jacobians = options_.jacobians_with_trial_cost;
+      if (trial_residuals_.size() != residuals_.size()) trial_residuals_.assign(residuals_.size(), 0.0);
+      if (with_jacobians && trial_jacobians_.size() != jacobians_.size()) trial_jacobians_.assign(jacobians_.size(), 0.0);
+      const bool trial_ok = evaluate(with_jacobians, trial, trial_residuals_, with_jacobians ? trial_jacobians_ : jacobians_);
       summary.residual_s += seconds_since(phase);
       if (trial_ok) new_cost = trial;
       // Ceres checks the step size and the cost change before deciding on the step.
@@ -1361,9 +1403,14 @@ LeastSquaresSummary Engine::run() {
                         radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * relative_decrease - 1.0, 3)));
       decrease_factor = 2.0;
       phase = Clock::now();
-      double relinearized = 0.0;
-      if (!evaluate(true, relinearized)) {
-        return finish(LeastSquaresTermination::kFailure, "a factor could not be evaluated at an accepted point");
+      if (options_.jacobians_with_trial_cost) {
+        std::swap(residuals_, trial_residuals_);
+        std::swap(jacobians_, trial_jacobians_);
+      } else {
+        double relinearized = 0.0;
+        if (!evaluate(true, relinearized)) {
+          return finish(LeastSquaresTermination::kFailure, "a factor could not be evaluated at an accepted point");
+        }
       }
       compute_gradient();
       summary.jacobian_s += seconds_since(phase);
