@@ -1319,6 +1319,8 @@ LeastSquaresSummary Engine::run() {
 
   double radius = options_.initial_trust_region_radius;
   double decrease_factor = 2.0;
+  int consecutive_invalid_steps = 0;
+  constexpr int kMaxConsecutiveInvalidSteps = 5;  // Ceres' max_num_consecutive_invalid_steps
   constexpr double kMinRelativeDecrease = 1e-3;  // Ceres' min_relative_decrease
   constexpr double kMinTrustRegionRadius = 1e-32;
   while (true) {
@@ -1340,6 +1342,12 @@ LeastSquaresSummary Engine::run() {
     const bool step_valid = compute_step(radius, cg_iterations);
     iteration.cg_iterations = cg_iterations;
     summary.cg_iterations += cg_iterations;
+    consecutive_invalid_steps = step_valid ? 0 : consecutive_invalid_steps + 1;
+    if (consecutive_invalid_steps >= kMaxConsecutiveInvalidSteps) {
+      return finish(LeastSquaresTermination::kFailure,
+                    "the linear solver failed " + std::to_string(kMaxConsecutiveInvalidSteps) +
+                        " times in a row (the damped system is not positive definite or its solution not finite)");
+    }
     double new_cost = std::numeric_limits<double>::infinity();
     double model_change = 0.0;
     double step_norm = 0.0;
