@@ -7,8 +7,8 @@
 /// (include/ceres/problem.h, solver.h) and GTSAM's NonlinearFactorGraph / Values:
 ///
 ///     LeastSquaresProblem problem;
-///     const int camera = problem.add_variable(camera_parameters, kEuclidean9);
-///     const int point = problem.add_variable(point_xyz, kEuclidean3, VariableGroup::kEliminate);
+///     const int camera = problem.add_variable(camera_parameters, euclidean_manifold(9));
+///     const int point = problem.add_variable(point_xyz, euclidean_manifold(3), VariableGroup::kEliminate);
 ///     problem.add_factor(std::make_unique<BalReprojectionFactor>(u, v), {camera, point});
 ///     const LeastSquaresSummary summary = solve(problem, LeastSquaresOptions{});
 ///
@@ -18,7 +18,7 @@
 /// variable's manifold; factors give their Jacobians directly with respect to that delta.
 ///
 /// Linear solvers (LeastSquaresOptions::linear_solver):
-///  * kSparseNormalCholesky: J^T J over every free variable, CHOLMOD (AMD ordering).
+///  * kSparseNormalCholesky: J^T J over every free variable, CHOLMOD (block-AMD ordering).
 ///  * kSparseSchur: the variables of group kEliminate are eliminated first (Triggs et al. 2000,
 ///    "Bundle adjustment -- a modern synthesis", Sec. 6.1; Ceres' SPARSE_SCHUR): with H ordered
 ///    [reduced; eliminated] = [[A, W], [W^T, V]], V block-diagonal, the reduced system
@@ -35,7 +35,6 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
-#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
