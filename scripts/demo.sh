@@ -4,7 +4,7 @@
 # Today that is: 2D LiDAR SLAM on a simulated office (scored against its exact ground truth) and on
 # the Freiburg benchmark logs (scored with their relations files); read and check every benchmark
 # pose graph (formats, counts, structure, broken information matrices), optimise SE-Sync's graphs to their certified optima, reject false loop
-# closures with GNC, convert between formats, and convert trajectories.
+# closures with GNC, bundle-adjust a BAL problem, convert between formats, and convert trajectories.
 set -euo pipefail
 CAIRN=${1:-build/src/cairn/cli/cairn}
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -94,6 +94,15 @@ print(f"  rejected {false_rejected} of 785 false and {len(rejected) - false_reje
 PY
 fi
 
+if [[ -f "$DATA/bal/problem-16-22106-pre.txt.bz2" ]]; then
+  echo
+  echo "Bundle adjustment of BAL's problem-16-22106 (the file Ceres' documentation runs; it reports"
+  echo "a final cost of 1.803390e+04; docs/benchmarks.md has the side-by-side timing):"
+  mkdir -p "$OUT/ba"
+  "$CAIRN" ba "$DATA/bal/problem-16-22106-pre.txt.bz2" -o "$OUT/ba/problem-16-22106.txt" \
+    --report "$OUT/ba/problem-16-22106.json" -q | sed 's/^/  /'
+fi
+
 echo
 echo "Simulation: a corridor of identical doors (perceptual aliasing), ground truth and sensor logs:"
 "$CAIRN" simulate corridor-aliasing --seed 1 --out "$OUT/simulated/corridor-aliasing" | sed 's/^/  /'
@@ -120,6 +129,7 @@ Done. Look at:
   $OUT/info/<graph>.txt / .json     what each graph holds (cairn info)
   $OUT/info/<graph>.warnings.txt    what cairn noticed (indefinite information, skipped records)
   $OUT/optimized/                   optimised graphs, JSON reports with per-iteration logs (cairn optimize)
+  $OUT/ba/                          the bundle-adjusted BAL problem and its report (cairn ba)
   $OUT/simulated/corridor-aliasing/world.png   the simulated world and trajectories (cairn simulate)
   $OUT/converted/                   the same data in other formats (cairn convert)
 Next: cairn --help, docs/slam2d.md, docs/evaluation.md, docs/backend.md, docs/formats.md, docs/conventions.md
