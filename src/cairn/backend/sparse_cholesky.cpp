@@ -401,6 +401,12 @@ std::size_t SparseCholesky::factor_nonzeros() const {
 
 std::size_t SparseCholesky::peak_memory_bytes() const { return impl_->common.memory_usage; }
 
+int blas_threads() {
+  using GetThreads = int (*)();
+  static const auto get = reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  return get == nullptr ? 0 : get();
+}
+
 bool set_blas_threads(int threads) {
   using SetThreads = void (*)(int);
   static const auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));

@@ -92,6 +92,8 @@ void apply_block_labels(const std::vector<int>& label, std::vector<int>& variabl
 /// bundle-adjusting problem-16-22106 (perf, 2026-11-24). Process-wide. Returns false when no
 /// OpenBLAS is loaded.
 bool set_blas_threads(int threads);
+/// OpenBLAS's current thread count, or 0 when no OpenBLAS is loaded.
+int blas_threads();
 
 enum class FactorizationStatus { kSuccess, kNotPositiveDefinite, kFailure };
 
