@@ -141,7 +141,9 @@ struct LeastSquaresOptions {
   /// of J^T J clamped to [min_diagonal, max_diagonal] (Ceres' LevenbergMarquardtStrategy:
   /// initial radius 1e4, clamp [1e-6, 1e32]). > 0.
   double initial_trust_region_radius = 1e4;
+  /// Largest radius the LM updates may reach (Ceres' default 1e16). >= initial radius.
   double max_trust_region_radius = 1e16;
+  /// The clamp of D above. 0 < min_diagonal <= max_diagonal.
   double min_diagonal = 1e-6;
   double max_diagonal = 1e32;
   /// kIterativeSchur: conjugate gradients stop when i (Q_i - Q_{i-1}) / Q_i < cg_tolerance, Q
@@ -150,11 +152,11 @@ struct LeastSquaresOptions {
   double cg_tolerance = 0.1;
   int max_cg_iterations = 500;
   int min_cg_iterations = 1;
-  /// kSparseSchur: solve the reduced system by PCG preconditioned with the previous iteration's
-  /// factorisation, and factorise only when that does not reach ||S x - b|| <= reuse_cg_tolerance
-  /// ||b|| within reuse_max_cg_iterations (the pose-graph optimiser's reuse_factorization). Tried
-  /// only when a factorisation costs at least 50 PCG iterations' flops (CHOLMOD's count), i.e. on
-  /// large dense-ish reduced systems (problem-318-41628: 2,862 unknowns, factor 3.7 M non-zeros);
+  /// kSparseSchur and kSparseNormalCholesky: solve the system by PCG preconditioned with the
+  /// previous iteration's factorisation, and factorise only when that does not reach
+  /// ||S x - b|| <= reuse_cg_tolerance ||b|| within reuse_max_cg_iterations (the pose-graph
+  /// optimiser's reuse_factorization). Tried only when a factorisation costs at least 50 PCG
+  /// iterations' flops (CHOLMOD's count), i.e. on large dense-ish reduced systems (problem-318-41628: 2,862 unknowns, factor 3.7 M non-zeros);
   /// on small ones every step is the exact LM step, as Ceres'. The steps become inexact Newton
   /// steps (Dembo, Eisenstat & Steihaug 1982), which LM's ratio test keeps safe.
   bool reuse_factorization = true;
@@ -166,7 +168,8 @@ struct LeastSquaresOptions {
   /// at the price of Jacobians computed for rejected steps and a second Jacobian buffer in memory.
   /// The iterates are the same either way.
   bool jacobians_with_trial_cost = true;
-  /// Threads for evaluation and the Schur complement; 0 = all cores.
+  /// Threads for evaluation and the Schur complement, and for CHOLMOD's BLAS during the solve
+  /// (restored afterwards, set_blas_threads); 0 = all cores.
   int threads = 0;
   /// Called after every iteration; may be empty.
   std::function<void(const struct LeastSquaresIteration&)> progress;
