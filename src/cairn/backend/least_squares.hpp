@@ -156,8 +156,9 @@ struct LeastSquaresOptions {
   /// previous iteration's factorisation, and factorise only when that does not reach
   /// ||S x - b|| <= reuse_cg_tolerance ||b|| within reuse_max_cg_iterations (the pose-graph
   /// optimiser's reuse_factorization). Tried only when a factorisation costs at least 50 PCG
-  /// iterations' flops (CHOLMOD's count), i.e. on large dense-ish reduced systems (problem-318-41628: 2,862 unknowns, factor 3.7 M non-zeros);
-  /// on small ones every step is the exact LM step, as Ceres'. The steps become inexact Newton
+  /// iterations' flops (CHOLMOD's count), i.e. on large dense-ish reduced systems
+  /// (problem-318-41628: 2,862 unknowns, factor 3.7 M non-zeros); on small ones every step is the
+  /// exact LM step, as Ceres'. The steps become inexact Newton
   /// steps (Dembo, Eisenstat & Steihaug 1982), which LM's ratio test keeps safe.
   bool reuse_factorization = true;
   double reuse_cg_tolerance = 0.01;
