@@ -36,8 +36,6 @@ Vector6 odometry_residual(const core::SE3& T_world_i, const core::SE3& T_world_j
 }
 
 
-/// The engine's variables store a pose as (qx, qy, qz, qw, tx, ty, tz) (se3_manifold()).
-core::SE3 pose_of(const double* x) { return core::SE3(Quaternion(x[3], x[0], x[1], x[2]), Vector3(x[4], x[5], x[6])); }
 
 class OdometryFactor3D final : public Factor {
  public:
@@ -46,7 +44,7 @@ class OdometryFactor3D final : public Factor {
   bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
     Matrix6 J_i, J_j;
     const bool want = jacobians != nullptr;
-    const Vector6 e = odometry_residual(pose_of(values[0]), pose_of(values[1]), factor_, want ? &J_i : nullptr,
+    const Vector6 e = odometry_residual(se3_from_values(values[0]), se3_from_values(values[1]), factor_, want ? &J_i : nullptr,
                                         want ? &J_j : nullptr);
     Eigen::Map<Vector6>{residual} = S_ * e;
     if (want && jacobians[0] != nullptr) Eigen::Map<RowMajor6>{jacobians[0]} = S_ * J_i;
@@ -67,7 +65,7 @@ class ObservationFactor3D final : public Factor {
     Matrix36 J_pose;
     Matrix3 J_landmark;
     const bool want = jacobians != nullptr;
-    const Vector3 e = observation_residual(pose_of(values[0]), Eigen::Map<const Vector3>(values[1]), factor_,
+    const Vector3 e = observation_residual(se3_from_values(values[0]), Eigen::Map<const Vector3>(values[1]), factor_,
                                            want ? &J_pose : nullptr, want ? &J_landmark : nullptr);
     if (!e.allFinite()) return false;
     Eigen::Map<Vector3>{residual} = S_ * e;
@@ -165,12 +163,7 @@ LandmarkGraphSummary optimize(LandmarkGraph3D& graph, const LandmarkGraph3DOptio
   LeastSquaresProblem problem;
   for (std::size_t i = 0; i < graph.poses.size(); ++i) {
     double* x = pose_values.data() + 7 * i;
-    const Quaternion& q = graph.poses[i].unit_quaternion();
-    x[0] = q.x();
-    x[1] = q.y();
-    x[2] = q.z();
-    x[3] = q.w();
-    for (int k = 0; k < 3; ++k) x[4 + k] = graph.poses[i].translation()[k];
+    se3_to_values(graph.poses[i], x);
     problem.add_variable(x, se3_manifold());
   }
   problem.set_constant(0);
@@ -195,7 +188,7 @@ LandmarkGraphSummary optimize(LandmarkGraph3D& graph, const LandmarkGraph3DOptio
   engine.gradient_tolerance = 0.0;
   engine.threads = 1;
   const LeastSquaresSummary result = solve(problem, engine);
-  for (std::size_t i = 0; i < graph.poses.size(); ++i) graph.poses[i] = pose_of(pose_values.data() + 7 * i);
+  for (std::size_t i = 0; i < graph.poses.size(); ++i) graph.poses[i] = se3_from_values(pose_values.data() + 7 * i);
   copy_engine_summary(result, summary);
   summary.final_cost = graph.cost();
   return summary;

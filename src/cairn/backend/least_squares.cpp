@@ -209,7 +209,6 @@ class ReducedMatrix {
     });
     pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
     column_rows_.assign(blocks, {});
-    column_prefix_.assign(blocks, {});
     for (const auto& [r, c] : pairs) column_rows_[c].push_back(r);
     const int n = offset_[blocks];
     csc_.size = n;
@@ -217,7 +216,6 @@ class ReducedMatrix {
     for (int c = 0; c < blocks; ++c) {
       int prefix = 0;
       for (const int r : column_rows_[c]) {
-        column_prefix_[c].push_back(prefix);
         prefix += block_size[r];
       }
       // Column j of block c holds every row of the blocks above c, then rows 0..j of block c.
@@ -254,7 +252,6 @@ class ReducedMatrix {
   UpperCsc& matrix() { return csc_; }
   int offset(int block) const { return offset_[block]; }
   int size(int block) const { return offset_[block + 1] - offset_[block]; }
-  std::size_t nonzeros() const { return csc_.value.size(); }
 
   /// Values of the block storage (blocks_size() doubles) that add() accumulates into:
   /// every stored block (r, c), r <= c, dense and column-major, so that one update touches
@@ -293,7 +290,6 @@ class ReducedMatrix {
   void add_diagonal(int column, double amount, double* values) const {
     values[csc_.column_start[column + 1] - 1] += amount;
   }
-  double diagonal(int column, const double* values) const { return values[csc_.column_start[column + 1] - 1]; }
 
  private:
   template <class Matrix>
@@ -311,7 +307,6 @@ class ReducedMatrix {
 
   std::vector<int> offset_;
   std::vector<std::vector<int>> column_rows_;
-  std::vector<std::vector<int>> column_prefix_;
   std::vector<std::vector<std::size_t>> column_block_offset_;
   std::size_t block_values_ = 0;
   UpperCsc csc_;

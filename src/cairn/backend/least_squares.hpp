@@ -40,6 +40,8 @@
 #include <vector>
 
 #include "cairn/backend/robust_kernel.hpp"
+#include "cairn/core/se2.hpp"
+#include "cairn/core/se3.hpp"
 
 namespace cairn::backend {
 
@@ -63,6 +65,12 @@ const Manifold& euclidean_manifold(int n);
 const Manifold& se3_manifold();
 /// SE(2) stored as (x, y, theta), delta = (rho_x, rho_y, phi), T <- T exp(delta).
 const Manifold& se2_manifold();
+
+/// A pose and the storage of se3_manifold() / se2_manifold(), both ways.
+core::SE3 se3_from_values(const double* x);
+void se3_to_values(const core::SE3& T, double* x);
+core::SE2 se2_from_values(const double* x);
+void se2_to_values(const core::SE2& T, double* x);
 
 /// Which linear-solver group a variable belongs to.
 enum class VariableGroup {

@@ -32,15 +32,7 @@ class SE3Manifold final : public Manifold {
   int ambient_size() const override { return 7; }
   int tangent_size() const override { return 6; }
   void plus(const double* x, const double* delta, double* x_plus) const override {
-    const cairn::Quaternion q(x[3], x[0], x[1], x[2]);  // Eigen's constructor takes w first
-    const core::SE3 T(q, cairn::Vector3(x[4], x[5], x[6]));
-    const core::SE3 T_plus = T * core::SE3::exp(Eigen::Map<const cairn::Vector6>(delta));
-    const cairn::Quaternion& q_plus = T_plus.unit_quaternion();
-    x_plus[0] = q_plus.x();
-    x_plus[1] = q_plus.y();
-    x_plus[2] = q_plus.z();
-    x_plus[3] = q_plus.w();
-    for (int i = 0; i < 3; ++i) x_plus[4 + i] = T_plus.translation()[i];
+    se3_to_values(se3_from_values(x) * core::SE3::exp(Eigen::Map<const cairn::Vector6>(delta)), x_plus);
   }
   std::string_view name() const override { return "SE(3)"; }
 };
@@ -50,11 +42,7 @@ class SE2Manifold final : public Manifold {
   int ambient_size() const override { return 3; }
   int tangent_size() const override { return 3; }
   void plus(const double* x, const double* delta, double* x_plus) const override {
-    const core::SE2 T(x[0], x[1], x[2]);
-    const core::SE2 T_plus = T * core::SE2::exp(cairn::Vector3(delta[0], delta[1], delta[2]));
-    x_plus[0] = T_plus.translation().x();
-    x_plus[1] = T_plus.translation().y();
-    x_plus[2] = T_plus.angle();
+    se2_to_values(se2_from_values(x) * core::SE2::exp(cairn::Vector3(delta[0], delta[1], delta[2])), x_plus);
   }
   std::string_view name() const override { return "SE(2)"; }
 };
@@ -71,6 +59,27 @@ const Manifold& euclidean_manifold(int n) {
     return all;
   }();
   return *manifolds[n];
+}
+
+core::SE3 se3_from_values(const double* x) {
+  return core::SE3(cairn::Quaternion(x[3], x[0], x[1], x[2]), cairn::Vector3(x[4], x[5], x[6]));  // w first
+}
+
+void se3_to_values(const core::SE3& T, double* x) {
+  const cairn::Quaternion& q = T.unit_quaternion();
+  x[0] = q.x();
+  x[1] = q.y();
+  x[2] = q.z();
+  x[3] = q.w();
+  for (int i = 0; i < 3; ++i) x[4 + i] = T.translation()[i];
+}
+
+core::SE2 se2_from_values(const double* x) { return core::SE2(x[0], x[1], x[2]); }
+
+void se2_to_values(const core::SE2& T, double* x) {
+  x[0] = T.translation().x();
+  x[1] = T.translation().y();
+  x[2] = T.angle();
 }
 
 const Manifold& se3_manifold() {

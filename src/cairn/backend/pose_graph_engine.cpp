@@ -11,25 +11,18 @@ constexpr int kAmbient = Group::kDoF == 3 ? 3 : 7;
 template <class Group>
 Group pose_from_values(const double* x) {
   if constexpr (Group::kDoF == 3) {
-    return Group(x[0], x[1], x[2]);
+    return se2_from_values(x);
   } else {
-    return Group(Quaternion(x[3], x[0], x[1], x[2]), Vector3(x[4], x[5], x[6]));
+    return se3_from_values(x);
   }
 }
 
 template <class Group>
 void values_from_pose(const Group& T, double* x) {
   if constexpr (Group::kDoF == 3) {
-    x[0] = T.translation().x();
-    x[1] = T.translation().y();
-    x[2] = T.angle();
+    se2_to_values(T, x);
   } else {
-    const Quaternion& q = T.unit_quaternion();
-    x[0] = q.x();
-    x[1] = q.y();
-    x[2] = q.z();
-    x[3] = q.w();
-    for (int k = 0; k < 3; ++k) x[4 + k] = T.translation()[k];
+    se3_to_values(T, x);
   }
 }
 

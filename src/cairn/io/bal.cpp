@@ -20,7 +20,7 @@ namespace {
 /// TextTokens with BAL's checks: no binary bytes, numbers and indices parsed with errors.
 class Tokens {
  public:
-  Tokens(const std::string& path, const std::string& text) : path_(path), text_(text), tokens_(text) {}
+  Tokens(const std::string& path, const std::string& text) : path_(path), tokens_(text) {}
 
   /// The next token; empty at the end of the text. Throws on binary bytes.
   std::string_view next() {
@@ -67,7 +67,6 @@ class Tokens {
     return value;
   }
 
-  std::size_t size() const { return text_.size(); }
 
  private:
   static std::string hex(unsigned char c) {
@@ -76,7 +75,6 @@ class Tokens {
     return buffer;
   }
   const std::string& path_;
-  const std::string& text_;
   TextTokens tokens_;
 };
 
