@@ -1,0 +1,227 @@
+#include "cairn/lidar3d/odometry.hpp"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace cairn::lidar3d {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// KISS-ICP's model error of a pose deviation (Vizzo et al. 2023, eq. 3): the largest
+// displacement it causes on a point within max_range.
+double model_error(const core::SE3& deviation, double max_range_m) {
+  const double theta = deviation.so3().log().norm();
+  return deviation.translation().norm() + 2.0 * max_range_m * std::sin(0.5 * theta);
+}
+
+}  // namespace
+
+struct LidarOdometry::Arena {
+  explicit Arena(int threads) : arena(threads > 0 ? threads : tbb::task_arena::automatic) {}
+  tbb::task_arena arena;
+};
+
+bool LidarOdometryOptions::is_valid(std::string* error) const {
+  auto fail = [&](const std::string& message) {
+    if (error != nullptr) *error = message;
+    return false;
+  };
+  if (!(max_range_m > 0.0) || !std::isfinite(max_range_m)) return fail("max_range_m must be > 0");
+  if (!(min_range_m >= 0.0) || !(min_range_m < max_range_m)) return fail("min_range_m must be in [0, max_range_m)");
+  if (!std::isfinite(vertical_angle_correction_rad) || std::abs(vertical_angle_correction_rad) > 0.1) {
+    return fail("vertical_angle_correction_rad must be within +-0.1 rad");
+  }
+  if (!(sweep_period_s > 0.0) || !std::isfinite(sweep_period_s)) return fail("sweep_period_s must be > 0");
+  if (!(voxel_size_m > 0.0) || !std::isfinite(voxel_size_m)) return fail("voxel_size_m must be > 0");
+  if (max_points_per_voxel < 1) return fail("max_points_per_voxel must be >= 1");
+  if (!(initial_threshold_m > 0.0) || !std::isfinite(initial_threshold_m)) return fail("initial_threshold_m must be > 0");
+  if (!(min_motion_m >= 0.0) || !std::isfinite(min_motion_m)) return fail("min_motion_m must be >= 0");
+  if (registration.max_iterations < 1) return fail("registration.max_iterations must be >= 1");
+  if (!(registration.convergence_step > 0.0)) return fail("registration.convergence_step must be > 0");
+  if (!(registration.degenerate_min_eigenvalue >= 0.0 && registration.degenerate_min_eigenvalue < 1.0)) {
+    return fail("registration.degenerate_min_eigenvalue must be in [0, 1)");
+  }
+  if (threads < 0) return fail("threads must be >= 0 (0 = all)");
+  if (min_scan_points < 0) return fail("min_scan_points must be >= 0");
+  if (!(lost_min_correspondence_fraction >= 0.0 && lost_min_correspondence_fraction <= 1.0)) {
+    return fail("lost_min_correspondence_fraction must be in [0, 1]");
+  }
+  if (!(degraded_min_correspondence_fraction >= lost_min_correspondence_fraction &&
+        degraded_min_correspondence_fraction <= 1.0)) {
+    return fail("degraded_min_correspondence_fraction must be in [lost_min_correspondence_fraction, 1]");
+  }
+  return true;
+}
+
+LidarOdometryOptions preset_options(std::string_view name) {
+  LidarOdometryOptions options;
+  if (name == "default") return options;
+  if (name == "kitti") {
+    options.vertical_angle_correction_rad = 0.205 * std::numbers::pi / 180.0;
+    options.deskew = DeskewMode::kOff;
+    return options;
+  }
+  throw std::invalid_argument("unknown preset '" + std::string(name) + "' (expected default or kitti)");
+}
+
+std::string_view to_string(DeskewMode mode) {
+  switch (mode) {
+    case DeskewMode::kOff: return "off";
+    case DeskewMode::kPointTimes: return "point-times";
+    case DeskewMode::kAzimuth: return "azimuth";
+  }
+  return "?";
+}
+
+std::string_view to_string(Health health) {
+  switch (health) {
+    case Health::kOk: return "ok";
+    case Health::kDegraded: return "degraded";
+    case Health::kLost: return "lost";
+  }
+  return "?";
+}
+
+LidarOdometry::LidarOdometry(const LidarOdometryOptions& options)
+    : options_(options), map_(VoxelHashMapOptions{options.voxel_size_m, options.max_points_per_voxel}) {
+  std::string error;
+  if (!options_.is_valid(&error)) throw std::invalid_argument("LidarOdometryOptions: " + error);
+  arena_ = std::make_unique<Arena>(options_.threads);
+}
+
+LidarOdometry::~LidarOdometry() = default;
+
+OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double time_s) {
+  if (!std::isfinite(time_s) || (!times_.empty() && !(time_s > times_.back()))) {
+    throw std::invalid_argument("LidarOdometry::add_scan: scan times must be finite and strictly increasing");
+  }
+  const auto start = Clock::now();
+  OdometryScanResult result;
+  result.time_s = time_s;
+  result.segment = segment_;
+  result.points_read = cloud.size();
+
+  // 1. Constant-velocity prediction from the last two poses (twist per second).
+  Eigen::Matrix<double, 6, 1> velocity = Eigen::Matrix<double, 6, 1>::Zero();
+  core::SE3 T_pred;
+  const std::size_t n = poses_.size();
+  if (n >= 2) {
+    velocity = (poses_[n - 2].inverse() * poses_[n - 1]).log() / (times_[n - 1] - times_[n - 2]);
+  }
+  if (n >= 1) T_pred = poses_[n - 1] * core::SE3::exp(velocity * (time_s - times_[n - 1]));
+
+  // 2-3. Crop, deskew, subsample.
+  const double min2 = options_.min_range_m * options_.min_range_m;
+  const double max2 = options_.max_range_m * options_.max_range_m;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<float> point_time;
+  points.reserve(cloud.size());
+  const bool have_time = cloud.time_s.size() == cloud.size();
+  const bool deskew = n >= 2 && (options_.deskew == DeskewMode::kAzimuth ||
+                                 (options_.deskew == DeskewMode::kPointTimes && have_time));
+  if (deskew) point_time.reserve(cloud.size());
+  const double correction = options_.vertical_angle_correction_rad;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    Eigen::Vector3d p = cloud.points[i].cast<double>();
+    const double r2 = p.squaredNorm();
+    if (r2 < min2 || r2 > max2) continue;
+    if (correction != 0.0) {
+      const Eigen::Vector3d axis(p.y(), -p.x(), 0.0);  // p x z
+      const double axis_norm = axis.norm();
+      if (axis_norm > 0.0) p = Eigen::AngleAxisd(correction, axis / axis_norm) * p;
+    }
+    points.push_back(p);
+    if (deskew) {
+      point_time.push_back(have_time && options_.deskew == DeskewMode::kPointTimes ? cloud.time_s[i]
+                                     : static_cast<float>((std::numbers::pi - std::atan2(p.y(), p.x())) /
+                                                          (2.0 * std::numbers::pi) * options_.sweep_period_s));
+    }
+  }
+  result.points_in_range = points.size();
+  std::vector<Eigen::Vector3d> frame, source;
+  arena_->arena.execute([&] {
+    if (deskew) {
+      const double mid = 0.5 * options_.sweep_period_s;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096),
+                        [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                            points[i] = core::SE3::exp(velocity * (static_cast<double>(point_time[i]) - mid)) * points[i];
+                          }
+                        });
+    }
+    frame = voxel_downsample(points, 0.5 * options_.voxel_size_m);
+    source = voxel_downsample(frame, 1.5 * options_.voxel_size_m);
+  });
+  result.times.preprocess_s = seconds_since(start);
+
+  // 4. Adaptive threshold.
+  const double sigma = model_error_samples_ > 0
+                           ? std::sqrt(model_error_sse_ / static_cast<double>(model_error_samples_))
+                           : options_.initial_threshold_m;
+  result.threshold_sigma_m = sigma;
+
+  // 5. Registration.
+  const auto register_start = Clock::now();
+  core::SE3 T_world_sensor = T_pred;
+  const bool too_few_points = points.size() < static_cast<std::size_t>(options_.min_scan_points);
+  bool lost = too_few_points && n > 0;
+  if (!map_.empty() && !too_few_points) {
+    arena_->arena.execute([&] {
+      result.registration = register_scan(map_, source, T_pred, 3.0 * sigma, sigma / 3.0, options_.registration);
+    });
+    const RegistrationResult& reg = result.registration;
+    const double fraction =
+        reg.source_points > 0 ? static_cast<double>(reg.correspondences) / static_cast<double>(reg.source_points) : 0.0;
+    lost = !reg.converged || fraction < options_.lost_min_correspondence_fraction || reg.correspondences < 6;
+    if (!lost) {
+      T_world_sensor = reg.T_map_sensor;
+      if (reg.degenerate_directions > 0) {
+        result.health = Health::kDegraded;
+        result.degenerate_axis =
+            name_direction(reg.weakest_direction, T_world_sensor.so3(), reg.characteristic_length_m);
+      } else if (fraction < options_.degraded_min_correspondence_fraction) {
+        result.health = Health::kDegraded;
+      }
+      const double error = model_error(T_pred.inverse() * T_world_sensor, options_.max_range_m);
+      if (error > options_.min_motion_m) {
+        model_error_sse_ += error * error;
+        ++model_error_samples_;
+      }
+    }
+  }
+  result.times.register_s = seconds_since(register_start);
+
+  // 6. Map update; a lost scan starts a new segment from the predicted pose.
+  const auto map_start = Clock::now();
+  if (lost) {
+    result.health = Health::kLost;
+    map_.clear();
+    result.segment = ++segment_;
+  }
+  result.T_world_sensor = T_world_sensor;
+  const Eigen::Matrix3d R = T_world_sensor.rotation_matrix();
+  const Eigen::Vector3d t = T_world_sensor.translation();
+  for (Eigen::Vector3d& p : frame) p = R * p + t;
+  if (too_few_points) frame.clear();
+  map_.add_points(frame);
+  map_.remove_far_from(t, options_.max_range_m);
+  result.map_points_added = frame.size();
+  result.local_map_points = map_.num_points();
+  result.times.map_s = seconds_since(map_start);
+  poses_.push_back(T_world_sensor);
+  times_.push_back(time_s);
+  result.times.total_s = seconds_since(start);
+  return result;
+}
+
+}  // namespace cairn::lidar3d

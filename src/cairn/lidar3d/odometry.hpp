@@ -1,0 +1,160 @@
+#pragma once
+/// \file
+/// 3D LiDAR odometry: scan-to-local-map registration after KISS-ICP (Vizzo et al., "KISS-ICP: In
+/// Defense of Point-to-Point ICP -- Simple, Accurate, and Robust Registration If Done the Right
+/// Way", RA-L 2023), driven by the scans' timestamps, with degeneracy awareness (Zhang, Kaess &
+/// Singh, ICRA 2016) and a health state. One scan at a time goes in; `add_scan` returns its pose
+/// at once, so a live robot drives it as `cairn slam3d` does with a folder of scans.
+///
+/// Per scan (KISS-ICP Sec. III, with the differences marked *):
+///  1. Motion prediction, constant velocity. * KISS-ICP repeats the last frame-to-frame motion;
+///     here the last motion is a velocity (the twist log(T_{k-2}^-1 T_{k-1}) per second of
+///     timestamp difference) applied over the new timestamp difference, so scans that arrive at
+///     irregular intervals (key frames, dropped scans) are predicted as well as regular ones.
+///  2. Deskew (Sec. III-A): point p taken at time tau of the sweep is moved to the sweep's middle
+///     with exp(xi (tau - P/2)) p, xi the velocity of step 1, P = `sweep_period_s`. tau comes from
+///     the file's per-point time field (DeskewMode::kPointTimes, the default: scans without one
+///     are used as they are), or from the point's azimuth as KISS-ICP's KITTI-raw loader does
+///     (kAzimuth): tau = (pi - atan2(y, x)) / (2 pi) P, a sweep that starts facing backward and
+///     turns clockwise (io/point_cloud.hpp). Scans a driver has already motion-compensated
+///     (KITTI's "sync" and odometry scans, see docs/lidar3d.md) must not be deskewed again.
+///  3. Range crop [min_range_m, max_range_m]; voxel subsampling at 0.5 v for the map and again at
+///     1.5 v for registration (Sec. III-B), v = `voxel_size_m`.
+///  4. Adaptive threshold (Sec. III-C, eq. 3-4): sigma = RMS of the model errors
+///     ||t|| + 2 r_max sin(theta / 2) of the deviations T_pred^-1 T_est seen so far above
+///     `min_motion_m`, `initial_threshold_m` before any; correspondences up to 3 sigma, Geman-McClure
+///     kernel scale sigma / 3.
+///  5. Registration to the voxel-hash local map (registration.hpp), then the scan's map points
+///     join the map and voxels beyond max_range_m of the sensor leave it.
+///  6. * Health: `degraded` when a direction of the registration is degenerate (named, e.g. x
+///     along a straight tunnel; the prediction carries it) or fewer than
+///     `degraded_min_correspondence_fraction` of the points found a map neighbour; `lost` when
+///     registration fails (fewer than `lost_min_correspondence_fraction` matched, or no
+///     convergence) or the scan has fewer than `min_scan_points` points in range. A lost scan
+///     takes the predicted pose and * starts a new map segment: the local map is cleared and
+///     rebuilt from that scan (or, if it had too few points, from the next one), so the next scans match again instead of
+///     staying lost (the segments are joined only by the motion prediction until loop closure can
+///     merge them).
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cairn/core/se3.hpp"
+#include "cairn/io/point_cloud.hpp"
+#include "cairn/lidar3d/registration.hpp"
+#include "cairn/lidar3d/voxel_hash_map.hpp"
+
+namespace cairn::lidar3d {
+
+enum class DeskewMode {
+  kOff,
+  /// With the file's per-point times where the scan has them, none otherwise.
+  kPointTimes,
+  /// With times from each point's azimuth (a spinning sensor), whatever the file holds.
+  kAzimuth,
+};
+std::string_view to_string(DeskewMode mode);
+
+struct LidarOdometryOptions {
+  /// Points beyond this range are dropped; also the map's radius and r_max of the model error.
+  /// KISS-ICP's default 100 m.
+  double max_range_m = 100.0;
+  /// Points nearer than this are dropped (the vehicle itself), metres. KISS-ICP's default 0.
+  double min_range_m = 0.0;
+  /// Motion compensation of each sweep (step 2).
+  DeskewMode deskew = DeskewMode::kPointTimes;
+  /// Elevation added to every point, radians: p is turned by this angle about p x z, toward +z.
+  /// KITTI's HDL-64E scans need 0.205 deg (about 3.578e-3 rad; found by IMLS-SLAM, Deschaud ICRA
+  /// 2018, Sec. IV-B, as 0.22 deg, and applied as 0.205 deg by KISS-ICP's KITTI loaders): the
+  /// intrinsic calibration KITTI used leaves the rings bent slightly down, so the ground seen
+  /// from the next scan looks tilted. 0 (default) for other sensors; `cairn slam3d --preset
+  /// kitti` sets it.
+  double vertical_angle_correction_rad = 0.0;
+  /// Duration of one sweep, seconds (> 0): 0.1 for a 10 Hz spinning LiDAR.
+  double sweep_period_s = 0.1;
+  /// Voxel edge v of the map, metres (> 0). KISS-ICP: max_range / 100.
+  double voxel_size_m = 1.0;
+  int max_points_per_voxel = 20;  ///< KISS-ICP's default
+  double initial_threshold_m = 2.0;  ///< sigma before any motion sample (KISS-ICP)
+  double min_motion_m = 0.1;         ///< deviations below this do not update sigma (KISS-ICP)
+  RegistrationOptions registration;
+  /// Threads for preprocessing and registration; 0 = all the machine has.
+  int threads = 0;
+
+  /// A scan with fewer points in range than this (a blinded or disconnected sensor) is `lost`
+  /// without registration and adds nothing to the map (>= 0).
+  int min_scan_points = 100;
+  double degraded_min_correspondence_fraction = 0.5;
+  double lost_min_correspondence_fraction = 0.2;
+
+  /// False with the reason when an option is out of range.
+  bool is_valid(std::string* error) const;
+};
+
+/// Named starting configurations: "default" (KISS-ICP's defaults with point-to-plane
+/// registration and deskew from per-point times where the files have them) and "kitti" (for
+/// KITTI's HDL-64E scans: the 0.205 deg vertical-angle correction, no deskew since KITTI's
+/// published scans are already motion-compensated). Throws std::invalid_argument for another name.
+LidarOdometryOptions preset_options(std::string_view name);
+
+enum class Health { kOk, kDegraded, kLost };
+std::string_view to_string(Health health);
+
+/// Seconds spent per stage on one scan.
+struct OdometryStageTimes {
+  double preprocess_s = 0.0;  ///< deskew, crop, subsampling
+  double register_s = 0.0;
+  double map_s = 0.0;         ///< map update
+  double total_s = 0.0;
+};
+
+struct OdometryScanResult {
+  double time_s = 0.0;
+  core::SE3 T_world_sensor;
+  Health health = Health::kOk;
+  /// Map segment (0, then one more after each lost scan).
+  int segment = 0;
+  /// Empty unless the registration had a degenerate direction: its sensor axis (name_direction).
+  std::string degenerate_axis;
+  RegistrationResult registration;
+  double threshold_sigma_m = 0.0;   ///< adaptive threshold used (step 4)
+  std::size_t points_read = 0;
+  std::size_t points_in_range = 0;
+  std::size_t map_points_added = 0;  ///< after 0.5 v subsampling
+  std::size_t local_map_points = 0;  ///< after the update
+  OdometryStageTimes times;
+};
+
+class LidarOdometry {
+ public:
+  /// Throws std::invalid_argument if the options are invalid.
+  explicit LidarOdometry(const LidarOdometryOptions& options = {});
+  ~LidarOdometry();
+  LidarOdometry(const LidarOdometry&) = delete;
+  LidarOdometry& operator=(const LidarOdometry&) = delete;
+
+  /// Processes one scan taken at `time_s` (seconds, any origin, strictly increasing; throws
+  /// std::invalid_argument otherwise). The first scan defines the world frame (identity pose).
+  OdometryScanResult add_scan(const io::PointCloud& cloud, double time_s);
+
+  const VoxelHashMap& local_map() const { return map_; }
+  const LidarOdometryOptions& options() const { return options_; }
+  std::size_t scans() const { return poses_.size(); }
+
+ private:
+  struct Arena;
+  LidarOdometryOptions options_;
+  std::unique_ptr<Arena> arena_;
+  VoxelHashMap map_;
+  std::vector<core::SE3> poses_;
+  std::vector<double> times_;
+  double model_error_sse_ = 0.0;
+  std::size_t model_error_samples_ = 0;
+  int segment_ = 0;
+};
+
+}  // namespace cairn::lidar3d

@@ -1,0 +1,179 @@
+#include "cairn/lidar3d/registration.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+namespace cairn::lidar3d {
+namespace {
+
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+using Vector6 = Eigen::Matrix<double, 6, 1>;
+
+struct LinearSystem {
+  Matrix6 H = Matrix6::Zero();        // of the chosen metric
+  Vector6 g = Vector6::Zero();
+  Matrix6 H_plane = Matrix6::Zero();  // point-to-plane, for the degeneracy analysis
+  double plane_weight_sum = 0.0;
+  double plane_squared_range_sum = 0.0;
+  double squared_distance_sum = 0.0;
+  std::size_t correspondences = 0;
+  std::size_t planar = 0;
+
+  LinearSystem& operator+=(const LinearSystem& other) {
+    H += other.H;
+    g += other.g;
+    H_plane += other.H_plane;
+    plane_weight_sum += other.plane_weight_sum;
+    plane_squared_range_sum += other.plane_squared_range_sum;
+    squared_distance_sum += other.squared_distance_sum;
+    correspondences += other.correspondences;
+    planar += other.planar;
+    return *this;
+  }
+};
+
+// Fixed chunks reduced in a fixed tree (parallel_deterministic_reduce with its default
+// simple_partitioner): the same sums whatever the number of threads.
+constexpr std::size_t kGrain = 512;
+
+LinearSystem build_system(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& source_sensor,
+                          const core::SE3& T_map_sensor, double max_squared_distance, double kernel,
+                          IcpMetric metric) {
+  const Eigen::Matrix3d R = T_map_sensor.rotation_matrix();
+  const Eigen::Vector3d t = T_map_sensor.translation();
+  const double kernel_squared = kernel * kernel;
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, source_sensor.size(), kGrain), LinearSystem{},
+      [&](const tbb::blocked_range<std::size_t>& range, LinearSystem system) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const Eigen::Vector3d p = R * source_sensor[i] + t;
+          Eigen::Vector3d q, n;
+          double d2 = 0.0;
+          if (!map.nearest(p, &q, &d2, &n) || d2 > max_squared_distance) continue;
+          const Eigen::Vector3d r = p - q;
+          Eigen::Matrix<double, 3, 6> J;
+          J.leftCols<3>().setIdentity();
+          J.rightCols<3>() << 0.0, p.z(), -p.y(), -p.z(), 0.0, p.x(), p.y(), -p.x(), 0.0;  // -[p]x
+          system.squared_distance_sum += d2;
+          ++system.correspondences;
+          const bool planar = n.squaredNorm() > 0.0;
+          if (planar) {
+            const Eigen::Matrix<double, 1, 6> Jn = n.transpose() * J;
+            const double e = n.dot(r);
+            // Geman-McClure weight as KISS-ICP: kappa^2 / (kappa + r^2)^2, on the residual used.
+            const double denominator = kernel + e * e;
+            const double w = kernel_squared / (denominator * denominator);
+            system.H_plane.noalias() += w * Jn.transpose() * Jn;
+            system.plane_weight_sum += w;
+            system.plane_squared_range_sum += w * (p - T_map_sensor.translation()).squaredNorm();
+            ++system.planar;
+            if (metric == IcpMetric::kPointToPlane) {
+              system.H.noalias() += w * Jn.transpose() * Jn;
+              system.g.noalias() += (w * e) * Jn.transpose();
+              continue;
+            }
+          }
+          const double denominator = kernel + d2;
+          const double w = kernel_squared / (denominator * denominator);
+          system.H.noalias() += w * J.transpose() * J;
+          system.g.noalias() += w * J.transpose() * r;
+        }
+        return system;
+      },
+      [](LinearSystem a, const LinearSystem& b) { return a += b; });
+}
+
+}  // namespace
+
+RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& source_sensor,
+                                 const core::SE3& T_map_sensor_guess, double max_correspondence_m,
+                                 double kernel_scale_m, const RegistrationOptions& options) {
+  RegistrationResult result;
+  result.T_map_sensor = T_map_sensor_guess;
+  result.source_points = source_sensor.size();
+  const double max_squared = max_correspondence_m * max_correspondence_m;
+  for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
+    const LinearSystem system =
+        build_system(map, source_sensor, result.T_map_sensor, max_squared, kernel_scale_m, options.metric);
+    result.iterations = iteration + 1;
+    result.correspondences = system.correspondences;
+    result.planar_correspondences = system.planar;
+    result.rms_m = system.correspondences > 0
+                       ? std::sqrt(system.squared_distance_sum / static_cast<double>(system.correspondences))
+                       : 0.0;
+    if (system.correspondences < 6) {
+      result.degeneracy = 0.0;
+      result.eigenvalues.setZero();
+      break;
+    }
+    // Degeneracy on the normalised point-to-plane matrix H_s = S H_plane S / sum w, with
+    // delta_s = S^-1 delta and L the weighted RMS range of the planar correspondences. Without
+    // enough planar correspondences there is nothing to judge: the full step is taken.
+    Vector6 delta = Vector6::Zero();
+    result.degenerate_directions = 0;
+    result.degeneracy = 0.0;
+    result.eigenvalues.setZero();
+    if (system.planar >= 6 && system.plane_weight_sum > 0.0) {
+      const double L = std::sqrt(system.plane_squared_range_sum / system.plane_weight_sum);
+      result.characteristic_length_m = L;
+      Vector6 scale;
+      scale << 1.0, 1.0, 1.0, 1.0 / L, 1.0 / L, 1.0 / L;
+      const Matrix6 H_s = scale.asDiagonal() * system.H_plane * scale.asDiagonal() / system.plane_weight_sum;
+      const Eigen::SelfAdjointEigenSolver<Matrix6> eigen(H_s);
+      const Vector6 lambda = eigen.eigenvalues();
+      const Matrix6& V = eigen.eigenvectors();
+      result.eigenvalues = lambda;
+      result.weakest_direction = scale.cwiseProduct(V.col(0)).normalized();
+      result.degeneracy = std::max(0.0, lambda(0));
+      // Zhang et al. 2016, Sec. V: keep the prior along the degenerate directions. The step is
+      // solved within the span U of the well-determined eigenvectors (in the scaled variables,
+      // where they are orthonormal): delta_s = U y, (U^T H' U) y = -U^T g' with H' = S H S,
+      // g' = S g. For a point-to-plane H this is their solution remapping; it also stays finite
+      // where H itself is singular (a tunnel seen only by planes).
+      Eigen::Matrix<double, 6, Eigen::Dynamic> U(6, 0);
+      for (int k = 0; k < 6; ++k) {
+        if (lambda(k) > options.degenerate_min_eigenvalue) {
+          U.conservativeResize(Eigen::NoChange, U.cols() + 1);
+          U.col(U.cols() - 1) = V.col(k);
+        } else {
+          ++result.degenerate_directions;
+        }
+      }
+      if (result.degenerate_directions > 0) {
+        const Matrix6 H_scaled = scale.asDiagonal() * system.H * scale.asDiagonal();
+        const Eigen::MatrixXd reduced = U.transpose() * H_scaled * U;
+        const Eigen::VectorXd y = reduced.ldlt().solve(-(U.transpose() * scale.cwiseProduct(system.g)));
+        delta = scale.cwiseProduct(U * y);
+      }
+    }
+    if (result.degenerate_directions == 0) delta = system.H.ldlt().solve(-system.g);
+    if (!delta.allFinite()) break;
+    result.T_map_sensor = core::SE3::exp(delta) * result.T_map_sensor;
+    if (delta.norm() < options.convergence_step) {
+      result.converged = true;
+      break;
+    }
+  }
+  return result;
+}
+
+std::string name_direction(const Eigen::Matrix<double, 6, 1>& direction_map, const core::SO3& R_map_sensor,
+                           double length_m) {
+  const Eigen::Matrix3d R_sensor_map = R_map_sensor.matrix().transpose();
+  const Eigen::Vector3d translation = R_sensor_map * direction_map.head<3>();
+  const Eigen::Vector3d rotation = R_sensor_map * direction_map.tail<3>() * length_m;
+  Eigen::Index axis = 0;
+  if (translation.cwiseAbs().maxCoeff() >= rotation.cwiseAbs().maxCoeff()) {
+    translation.cwiseAbs().maxCoeff(&axis);
+    static const char* const kNames[] = {"x (forward)", "y (left)", "z (up)"};
+    return kNames[axis];
+  }
+  rotation.cwiseAbs().maxCoeff(&axis);
+  static const char* const kNames[] = {"roll", "pitch", "yaw"};
+  return kNames[axis];
+}
+
+}  // namespace cairn::lidar3d

@@ -1,0 +1,96 @@
+#pragma once
+/// \file
+/// Scan-to-map registration: point-to-point ICP with a Geman-McClure kernel, as KISS-ICP
+/// (Vizzo et al., RA-L 2023, Sec. III-D, eq. 5-6; kiss_icp/core/Registration.cpp), with the
+/// degeneracy analysis of Zhang, Kaess & Singh, "On degeneracy of optimization-based state
+/// estimation problems", ICRA 2016.
+///
+/// Each iteration pairs every source point, moved by the current T_map_sensor, with its nearest
+/// map point (voxel_hash_map.hpp) if that lies within `max_correspondence_m`, and takes one
+/// Gauss-Newton step on
+///   sum_i rho(||T p_i - q_i||^2),  rho's weight w(r^2) = kappa^2 / (kappa + r^2)^2
+/// (KISS-ICP's weight, kappa = `kernel_scale_m`), with the left perturbation
+/// T <- exp(delta) T, delta = (rho, phi) translation first, Jacobian J_i = [I, -[T p_i]x].
+///
+/// Degeneracy (Zhang et al. 2016, Sec. IV-V) is a property of the surfaces, so it is judged on the
+/// point-to-plane normal matrix H = sum w J_n^T J_n, J_n = n^T [I, -[T p]x], of the correspondences
+/// with a planar voxel, whatever the metric (a point-to-point H has a translation block sum w I,
+/// never degenerate, even in a featureless tunnel). H is compared
+/// across its eigen-directions after the rotation block is scaled to metres at
+/// `degeneracy_length_m` (a rotation phi moves a point at that range by L phi), H_s = S H S with
+/// S = diag(1, 1, 1, 1/L, 1/L, 1/L). Directions whose eigenvalue is below
+/// `degenerate_eigenvalue_ratio` times the largest are degenerate: the step is projected onto the
+/// well-determined eigen-subspace (their "solution remapping", which for a symmetric H is that
+/// projection), so along a degenerate direction the pose stays at the initial guess,
+/// i.e. the motion prior carries it. The ratio lambda_min / lambda_max is reported per scan.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "cairn/core/se3.hpp"
+#include "cairn/lidar3d/voxel_hash_map.hpp"
+
+namespace cairn::lidar3d {
+
+/// Residual per correspondence (p the moved source point, q its map neighbour, n the normal of
+/// q's voxel).
+enum class IcpMetric {
+  /// ||p - q||^2: KISS-ICP's choice (Vizzo et al. 2023, Sec. III-D).
+  kPointToPoint,
+  /// (n . (p - q))^2 where q's voxel is planar, ||p - q||^2 elsewhere (Chen & Medioni 1992;
+  /// LOAM's planar residual, Zhang & Singh 2014, eq. 3, with a per-voxel plane fit).
+  kPointToPlane,
+};
+
+struct RegistrationOptions {
+  IcpMetric metric = IcpMetric::kPointToPlane;
+  /// Gauss-Newton iterations at most (KISS-ICP: 500).
+  int max_iterations = 500;
+  /// Stop when the step's norm (m and rad mixed, as KISS-ICP) is below this (KISS-ICP: 1e-4).
+  double convergence_step = 1e-4;
+  /// Eigenvalue of the normalised H_s below which a direction is degenerate and left to the
+  /// prior, in [0, 1). 0 turns the remapping off.
+  double degenerate_min_eigenvalue = 1e-3;
+};
+
+struct RegistrationResult {
+  core::SE3 T_map_sensor;
+  int iterations = 0;
+  /// The last step was below convergence_step (false: the iteration limit was reached).
+  bool converged = false;
+  /// Source points with a map point within max_correspondence_m, at the last iteration.
+  std::size_t correspondences = 0;
+  std::size_t source_points = 0;
+  /// Root mean square distance of those correspondences, metres.
+  double rms_m = 0.0;
+  /// Correspondences whose map voxel is planar, at the last iteration.
+  std::size_t planar_correspondences = 0;
+  /// Eigenvalues of the scaled point-to-plane normal matrix H_s at the last iteration, ascending, and the
+  /// eigenvector of the smallest: (translation, rotation) in the map frame.
+  Eigen::Matrix<double, 6, 1> eigenvalues = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 1> weakest_direction = Eigen::Matrix<double, 6, 1>::Zero();
+  /// lambda_min of H_s (0 when there were too few planar correspondences).
+  double degeneracy = 0.0;
+  /// L of the normalisation, metres.
+  double characteristic_length_m = 0.0;
+  /// Directions solved from the prior instead of the scan (0 normally).
+  int degenerate_directions = 0;
+};
+
+/// Registers `source_sensor` (points in the sensor frame) to `map`, starting at
+/// `T_map_sensor_guess`. Preconditions: max_correspondence_m > 0, kernel_scale_m > 0. Uses the
+/// calling thread's TBB arena; the sums are reduced in a fixed order, so the result does not
+/// depend on the number of threads.
+RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& source_sensor,
+                                 const core::SE3& T_map_sensor_guess, double max_correspondence_m,
+                                 double kernel_scale_m, const RegistrationOptions& options = {});
+
+/// "x (forward)", "y (left)", "z (up)", "roll", "pitch" or "yaw": the sensor axis along (or
+/// about) which `direction_map` (translation, rotation) mostly points, after rotating it into the
+/// sensor frame with R_map_sensor and scaling the rotation by `length_m`.
+std::string name_direction(const Eigen::Matrix<double, 6, 1>& direction_map, const core::SO3& R_map_sensor,
+                           double length_m);
+
+}  // namespace cairn::lidar3d
