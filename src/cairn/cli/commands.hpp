@@ -24,6 +24,7 @@ Runner register_slam2d(CLI::App& app);
 Runner register_landmarks(CLI::App& app);
 Runner register_eval(CLI::App& app);
 Runner register_ba(CLI::App& app);
+Runner register_slam3d(CLI::App& app);
 
 /// Flags shared by every command that reads a pose graph.
 struct GraphReadFlags {

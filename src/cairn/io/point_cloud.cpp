@@ -10,6 +10,7 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <ostream>
 #include <string_view>
 
 #include "cairn/core/assert.hpp"
@@ -1050,6 +1051,22 @@ void recover_kitti_ring_and_time(PointCloud& cloud, double sweep_period_s) {
     cloud.ring[i] = ring;
     // Clockwise spin, sweep from behind the car (azimuth +pi) round to behind it again (-pi).
     cloud.time_s[i] = static_cast<float>((kPi - azimuth) / (2.0 * kPi) * sweep_period_s);
+  }
+}
+
+void write_ply(std::ostream& out, const std::vector<Eigen::Vector3f>& points, const std::string& comment) {
+  out << "ply\nformat binary_little_endian 1.0\n";
+  if (!comment.empty()) out << "comment " << comment << '\n';
+  out << "element vertex " << points.size() << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  static_assert(std::endian::native == std::endian::little, "write_ply assumes a little-endian machine");
+  std::vector<float> buffer;
+  buffer.reserve(3 * std::min<std::size_t>(points.size(), 65536));
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    buffer.insert(buffer.end(), {points[i].x(), points[i].y(), points[i].z()});
+    if (buffer.size() >= 3 * 65536 || i + 1 == points.size()) {
+      out.write(reinterpret_cast<const char*>(buffer.data()), static_cast<std::streamsize>(buffer.size() * sizeof(float)));
+      buffer.clear();
+    }
   }
 }
 

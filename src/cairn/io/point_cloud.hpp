@@ -27,6 +27,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,11 @@ PointCloud read_point_cloud(const std::string& path, PointCloudReadReport* repor
 /// extension decides only when the bytes match no header (`.bin`: KITTI).
 PointCloud parse_point_cloud(const std::string& path, const std::string& contents,
                              PointCloudReadReport* report = nullptr);
+
+/// Writes `points` as a binary little-endian PLY (format binary_little_endian 1.0, element vertex
+/// with float x y z), readable by read_point_cloud, CloudCompare, PCL and Open3D. `comment` (one
+/// line, no newline) goes into the header if not empty. Stream errors are the caller's to check.
+void write_ply(std::ostream& out, const std::vector<Eigen::Vector3f>& points, const std::string& comment = "");
 
 /// Fills `cloud.ring` and `cloud.time_s` of a KITTI Velodyne HDL-64E scan from its point order.
 /// Approximate, and meaningful only for points in KITTI's original order (a `.bin` file, or a

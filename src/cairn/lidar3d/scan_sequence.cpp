@@ -1,0 +1,145 @@
+#include "cairn/lidar3d/scan_sequence.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "cairn/io/parse_error.hpp"
+
+namespace cairn::lidar3d {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_scan_file(const std::string& name) {
+  std::string base = name;
+  for (const char* suffix : {".gz", ".bz2", ".xz"}) {
+    const std::string s(suffix);
+    if (base.size() > s.size() && base.compare(base.size() - s.size(), s.size(), s) == 0) {
+      base.resize(base.size() - s.size());
+      break;
+    }
+  }
+  for (const char* ext : {".pcd", ".ply", ".bin"}) {
+    const std::string e(ext);
+    if (base.size() > e.size() && base.compare(base.size() - e.size(), e.size(), e) == 0) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool natural_less(const std::string& a, const std::string& b) {
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    const bool da = std::isdigit(static_cast<unsigned char>(a[i])) != 0;
+    const bool db = std::isdigit(static_cast<unsigned char>(b[j])) != 0;
+    if (da && db) {
+      std::size_t ie = i, je = j;
+      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie])) != 0) ++ie;
+      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je])) != 0) ++je;
+      // Compare by value without overflow: strip leading zeros, then by length, then by digits.
+      std::size_t ia = i, jb = j;
+      while (ia + 1 < ie && a[ia] == '0') ++ia;
+      while (jb + 1 < je && b[jb] == '0') ++jb;
+      if (ie - ia != je - jb) return ie - ia < je - jb;
+      const int c = a.compare(ia, ie - ia, b, jb, je - jb);
+      if (c != 0) return c < 0;
+      if (ie - i != je - j) return ie - i < je - j;  // "01" after "1": deterministic
+      i = ie;
+      j = je;
+      continue;
+    }
+    if (a[i] != b[j]) return static_cast<unsigned char>(a[i]) < static_cast<unsigned char>(b[j]);
+    ++i;
+    ++j;
+  }
+  return a.size() - i < b.size() - j;
+}
+
+std::vector<std::string> list_scans(const std::vector<std::string>& paths) {
+  if (paths.empty()) throw io::ParseError("(scans)", 0, "no scan files or folder given");
+  std::vector<std::string> files;
+  for (const std::string& path : paths) {
+    std::error_code ec;
+    const fs::file_status status = fs::status(path, ec);
+    if (ec || !fs::exists(status)) throw io::ParseError(path, 0, "cannot open: no such file or directory");
+    if (fs::is_directory(status)) {
+      if (paths.size() != 1) throw io::ParseError(path, 0, "give one folder of scans, or scan files, not both");
+      for (const fs::directory_entry& entry : fs::directory_iterator(path, ec)) {
+        const std::string name = entry.path().filename().string();
+        if (is_scan_file(name) && !entry.is_directory()) files.push_back(entry.path().string());
+      }
+      if (ec) throw io::ParseError(path, 0, "cannot list the folder: " + ec.message());
+      std::sort(files.begin(), files.end(), [](const std::string& a, const std::string& b) {
+        return natural_less(fs::path(a).filename().string(), fs::path(b).filename().string());
+      });
+      if (files.empty()) {
+        throw io::ParseError(path, 0, "no scan files in the folder (expected .pcd, .ply or .bin, optionally .gz/.bz2/.xz)");
+      }
+      return files;
+    }
+    files.push_back(path);
+  }
+  return files;
+}
+
+std::vector<double> read_scan_times(const std::string& times_path, int column, std::size_t count) {
+  if (column < 1) throw io::ParseError(times_path, 0, "the time column must be >= 1, got " + std::to_string(column));
+  std::ifstream in(times_path, std::ios::binary);
+  if (!in) throw io::ParseError(times_path, 0, "cannot open");
+  std::vector<double> times;
+  times.reserve(count);
+  std::string line;
+  std::size_t line_number = 0;
+  while (times.size() < count && std::getline(in, line)) {
+    ++line_number;
+    if (line.find('\0') != std::string::npos) throw io::ParseError(times_path, line_number, "binary data in a text table");
+    std::istringstream fields(line);
+    std::string field, first;
+    if (!(fields >> first) || first[0] == '#') continue;
+    field = first;
+    for (int c = 1; c < column; ++c) {
+      if (!(fields >> field)) {
+        throw io::ParseError(times_path, line_number,
+                             "expected at least " + std::to_string(column) + " columns, found " + std::to_string(c));
+      }
+    }
+    double value = 0.0;
+    const auto [end, error] = std::from_chars(field.data(), field.data() + field.size(), value);
+    if (error != std::errc() || end != field.data() + field.size() || !std::isfinite(value)) {
+      throw io::ParseError(times_path, line_number,
+                           "expected a time in seconds in column " + std::to_string(column) + ", found '" + field + "'");
+    }
+    if (!times.empty() && !(value > times.back())) {
+      throw io::ParseError(times_path, line_number, "times must strictly increase (" + field + " after " +
+                                                        std::to_string(times.back()) + ")");
+    }
+    times.push_back(value);
+  }
+  if (in.bad()) throw io::ParseError(times_path, line_number, "read error");
+  if (times.size() < count) {
+    throw io::ParseError(times_path, line_number, "expected a time for each of the " + std::to_string(count) +
+                                                      " scans, found " + std::to_string(times.size()));
+  }
+  return times;
+}
+
+ScanSequence make_scan_sequence(const std::vector<std::string>& paths, const std::string& times_path, int column,
+                                double default_period_s) {
+  ScanSequence sequence;
+  sequence.files = list_scans(paths);
+  if (!times_path.empty()) {
+    sequence.times_s = read_scan_times(times_path, column, sequence.files.size());
+    sequence.times_from_file = true;
+  } else {
+    for (std::size_t k = 0; k < sequence.files.size(); ++k) sequence.times_s.push_back(static_cast<double>(k) * default_period_s);
+  }
+  return sequence;
+}
+
+}  // namespace cairn::lidar3d

@@ -1,0 +1,42 @@
+#pragma once
+/// \file
+/// Which scans a run reads, in which order, and when each was taken.
+///
+/// Scans come as one folder (every file whose name ends in .pcd, .ply or .bin, each optionally
+/// followed by .gz, .bz2 or .xz, in natural order: "scan_9" before "scan_10") or as a list of
+/// files in the order given. Times come from a whitespace-separated table with one row per scan
+/// in that order (KITTI's times.txt has one column; a key-frame list may hold the time in its
+/// fourth), lines starting with '#' and blank lines skipped; without a table the scans are taken
+/// as `default_period_s` apart, as KISS-ICP assumes for every scan.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace cairn::lidar3d {
+
+struct ScanSequence {
+  std::vector<std::string> files;
+  /// One per file, seconds, strictly increasing.
+  std::vector<double> times_s;
+  /// False when the times were made up (no table).
+  bool times_from_file = false;
+};
+
+/// Natural order of names: runs of digits compare by value, everything else by bytes.
+bool natural_less(const std::string& a, const std::string& b);
+
+/// The scan files of `paths` (one folder, or files). Throws ParseError for a missing path, an
+/// empty folder, or a folder mixed with files.
+std::vector<std::string> list_scans(const std::vector<std::string>& paths);
+
+/// Reads column `column` (1-based) of the first `count` data rows of `times_path`. Throws
+/// ParseError naming the file and line for a short table, a missing column, a value that is not a
+/// finite number, or times that do not strictly increase.
+std::vector<double> read_scan_times(const std::string& times_path, int column, std::size_t count);
+
+/// list_scans, then read_scan_times if `times_path` is not empty (or times k * default_period_s).
+ScanSequence make_scan_sequence(const std::vector<std::string>& paths, const std::string& times_path, int column,
+                                double default_period_s = 0.1);
+
+}  // namespace cairn::lidar3d
