@@ -182,14 +182,14 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
     const RegistrationResult& reg = result.registration;
     const double fraction =
         reg.source_points > 0 ? static_cast<double>(reg.correspondences) / static_cast<double>(reg.source_points) : 0.0;
-    lost = !reg.converged || fraction < options_.lost_min_correspondence_fraction || reg.correspondences < 6;
+    lost = fraction < options_.lost_min_correspondence_fraction || reg.correspondences < 6;
     if (!lost) {
       T_world_sensor = reg.T_map_sensor;
       if (reg.degenerate_directions > 0) {
         result.health = Health::kDegraded;
         result.degenerate_axis =
             name_direction(reg.weakest_direction, T_world_sensor.so3(), reg.characteristic_length_m);
-      } else if (fraction < options_.degraded_min_correspondence_fraction) {
+      } else if (fraction < options_.degraded_min_correspondence_fraction || !reg.converged) {
         result.health = Health::kDegraded;
       }
       const double error = model_error(T_pred.inverse() * T_world_sensor, options_.max_range_m);

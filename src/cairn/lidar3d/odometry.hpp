@@ -27,10 +27,11 @@
 ///  5. Registration to the voxel-hash local map (registration.hpp), then the scan's map points
 ///     join the map and voxels beyond max_range_m of the sensor leave it.
 ///  6. * Health: `degraded` when a direction of the registration is degenerate (named, e.g. x
-///     along a straight tunnel; the prediction carries it) or fewer than
-///     `degraded_min_correspondence_fraction` of the points found a map neighbour; `lost` when
-///     registration fails (fewer than `lost_min_correspondence_fraction` matched, or no
-///     convergence) or the scan has fewer than `min_scan_points` points in range. A lost scan
+///     along a straight tunnel; the prediction carries it), fewer than
+///     `degraded_min_correspondence_fraction` of the points found a map neighbour, or the
+///     registration reached its iteration limit; `lost` when registration fails (fewer than
+///     `lost_min_correspondence_fraction` matched) or the scan has fewer than `min_scan_points`
+///     points in range. A lost scan
 ///     takes the predicted pose and * starts a new map segment: the local map is cleared and
 ///     rebuilt from that scan (or, if it had too few points, from the next one), so the next scans match again instead of
 ///     staying lost (the segments are joined only by the motion prediction until loop closure can

@@ -95,6 +95,7 @@ RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eige
   result.T_map_sensor = T_map_sensor_guess;
   result.source_points = source_sensor.size();
   const double max_squared = max_correspondence_m * max_correspondence_m;
+  Vector6 previous_delta = Vector6::Zero();
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
     const LinearSystem system =
         build_system(map, source_sensor, result.T_map_sensor, max_squared, kernel_scale_m, options.metric);
@@ -151,7 +152,16 @@ RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eige
     }
     if (result.degenerate_directions == 0) delta = system.H.ldlt().solve(-system.g);
     if (!delta.allFinite()) break;
+    // A point whose nearest neighbour flips between two voxels at every step makes a two-cycle
+    // (delta, -delta, delta, ...) that never meets the step criterion: when a step undoes the
+    // previous one to within the tolerance, stop half-way between the two poses.
+    if (iteration > 0 && (delta + previous_delta).norm() < options.convergence_step) {
+      result.T_map_sensor = core::SE3::exp(0.5 * delta) * result.T_map_sensor;
+      result.converged = true;
+      break;
+    }
     result.T_map_sensor = core::SE3::exp(delta) * result.T_map_sensor;
+    previous_delta = delta;
     if (delta.norm() < options.convergence_step) {
       result.converged = true;
       break;

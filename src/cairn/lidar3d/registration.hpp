@@ -58,7 +58,8 @@ struct RegistrationOptions {
 struct RegistrationResult {
   core::SE3 T_map_sensor;
   int iterations = 0;
-  /// The last step was below convergence_step (false: the iteration limit was reached).
+  /// The last step was below convergence_step, or undid the step before it to within that (a
+  /// two-cycle, ended half-way); false: the iteration limit was reached.
   bool converged = false;
   /// Source points with a map point within max_correspondence_m, at the last iteration.
   std::size_t correspondences = 0;
