@@ -77,19 +77,41 @@ bool VoxelHashMap::nearest(const Eigen::Vector3d& query_map, Eigen::Vector3d* ne
   double best = std::numeric_limits<double>::infinity();
   const Eigen::Vector3d* best_point = nullptr;
   const Block* best_block = nullptr;
+  auto search = [&](const Voxel& voxel) {
+    const auto it = voxels_.find(voxel);
+    if (it == voxels_.end()) return;
+    for (const Eigen::Vector3d& p : it->second.points) {
+      const double d = (p - query_map).squaredNorm();
+      if (d < best) {
+        best = d;
+        best_point = &p;
+        best_block = &it->second;
+      }
+    }
+  };
+  // The query's own voxel first; a neighbour is then visited only if its box comes nearer to
+  // the query than the best point so far. The result is the nearest point of the 27 voxels,
+  // exactly as a search of all of them, with far fewer hash lookups once ICP has converged
+  // (the neighbour is then usually centimetres away, the voxel faces decimetres).
+  search(center);
+  const double size = options_.voxel_size_m;
+  const Eigen::Vector3d low = center.cast<double>() * size;
+  // Squared distance from the query to the slab of the neighbour at offset -1, 0, +1 per axis.
+  Eigen::Matrix<double, 3, 3> slab;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double below = query_map(axis) - low(axis);
+    const double above = low(axis) + size - query_map(axis);
+    slab(axis, 0) = below * below;
+    slab(axis, 1) = 0.0;
+    slab(axis, 2) = above * above;
+  }
   for (int dx = -1; dx <= 1; ++dx) {
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dz = -1; dz <= 1; ++dz) {
-        const auto it = voxels_.find(Voxel(center.x() + dx, center.y() + dy, center.z() + dz));
-        if (it == voxels_.end()) continue;
-        for (const Eigen::Vector3d& p : it->second.points) {
-          const double d = (p - query_map).squaredNorm();
-          if (d < best) {
-            best = d;
-            best_point = &p;
-            best_block = &it->second;
-          }
-        }
+        if (dx == 0 && dy == 0 && dz == 0) continue;
+        const double box = slab(0, dx + 1) + slab(1, dy + 1) + slab(2, dz + 1);
+        if (box >= best) continue;
+        search(Voxel(center.x() + dx, center.y() + dy, center.z() + dz));
       }
     }
   }
