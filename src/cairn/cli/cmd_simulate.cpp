@@ -107,9 +107,13 @@ int simulate_command(const SimulateFlags& flags) {
   if (!found) return usage_error(unknown);
   sim::Scenario scenario = *found;
 
-  // --set NAME=VALUE, all problems reported at once.
+  // --set NAME=VALUE, all problems reported at once. A sensor preset (lidar3d.model) goes first,
+  // so the other lidar3d.* settings override it whatever their order on the command line.
   std::vector<std::string> problems;
-  for (const auto& assignment : flags.set) {
+  std::vector<std::string> assignments = flags.set;
+  std::stable_partition(assignments.begin(), assignments.end(),
+                        [](const std::string& a) { return a.starts_with("lidar3d.model="); });
+  for (const auto& assignment : assignments) {
     const auto equals = assignment.find('=');
     if (equals == std::string::npos) {
       problems.push_back("--set expects NAME=VALUE, found '" + assignment + "'");
@@ -188,6 +192,50 @@ int simulate_command(const SimulateFlags& flags) {
     const std::string path = out.staging_path(name);
     file_list.push_back({{"name", name}, {"bytes", fs::file_size(path)}, {"fnv1a64", hex(fnv1a64(path))}});
   }
+  if (scenario.is_3d()) {
+    const bool pcd = scenario.lidar3d_format == "pcd";
+    manifest["lidar3d"] = {
+        {"model", scenario.lidar3d_model},
+        {"format", scenario.lidar3d_format},
+        {"scans", pcd ? "scans/NNNNNN.pcd: binary PCD v0.7, FIELDS x y z intensity ring time (float32 x y z intensity, "
+                        "uint16 ring, float32 time); sensor frame at each point's firing time; intensity 0"
+                      : "velodyne/NNNNNN.bin: float32 x y z intensity (0); velodyne_times/NNNNNN.bin: float32 time"},
+        {"ring", "0 = lowest elevation, rings - 1 = highest, evenly spaced"},
+        {"time", "seconds after the sweep start (times.txt)"},
+        {"times_txt", "time of each sweep's start (its first column's firing), seconds"},
+        {"poses_txt", pcd ? "T_world_lidar at the sweep start (times.txt), KITTI 3x4 row-major, world frame"
+                          : "T_lidar0_lidar at the sweep start (times.txt), KITTI 3x4 row-major: first pose identity"},
+        {"ground_truth_tum", "T_world_lidar at the sweep start"}};
+    std::size_t reverse = 0;
+    for (const auto& loop : result.true_loops) reverse += loop.heading_difference_rad > std::numbers::pi / 2 ? 1 : 0;
+    nlohmann::json truth;
+    truth["loops"] = {{"file", "loops.txt"},
+                      {"criterion", "scan pairs i < j with LiDAR positions at most max_distance_m apart and times at "
+                                    "least min_separation_s apart"},
+                      {"max_distance_m", scenario.loop_truth.max_distance_m},
+                      {"min_separation_s", scenario.loop_truth.min_separation_s},
+                      {"pairs", result.true_loops.size()},
+                      {"reverse_pairs", reverse},
+                      {"note", result.true_loops.empty()
+                                   ? "no true loop closure: every loop closure a SLAM system accepts here is false"
+                                   : "reverse_pairs: heading difference above 90 degrees"}};
+    truth["moving_objects"] = result.world_3d.moving_boxes.size();
+    if (result.passage_scans) {
+      const auto& p = *result.passage_scans;
+      nlohmann::json passage = {{"kind", p.passage.kind},
+                                {"entry_world", {p.passage.entry.x(), p.passage.entry.y(), 0.0}},
+                                {"axis_world", {p.passage.axis.x(), p.passage.axis.y(), 0.0}},
+                                {"length_m", p.passage.length_m}};
+      if (p.any_inside) {
+        passage["inside_scans"] = {p.first_inside, p.last_inside};
+        passage["inside_time_s"] = {p.first_inside_time_s, p.last_inside_time_s};
+      }
+      passage["inside_definition"] = "scans whose LiDAR position at the sweep start projects between entry and exit";
+      if (p.any_blind) passage["out_of_range_of_both_ends_scans"] = {p.first_blind, p.last_blind};
+      truth["passage"] = passage;
+    }
+    manifest["ground_truth"] = truth;
+  }
   manifest["files"] = file_list;
   io::write_output(out.staging_path("manifest.json"), [&](std::ostream& o) { o << manifest.dump(2) << '\n'; });
   out.commit();
@@ -200,9 +248,14 @@ int simulate_command(const SimulateFlags& flags) {
     std::printf("%s, seed %" PRIu64 ": %.1f m in %.1f s; %zu scans, %zu ODOM records", scenario.name.c_str(), flags.seed,
                 result.path_length_m, result.duration_s, result.scan_samples.size(), result.odometry_samples.size());
     if (scenario.simulate_landmarks) std::printf(", %zu landmark observations", result.landmark_observations.size());
-    if (scenario.world == sim::WorldKind::kStreet3D) {
-      std::printf("\n%zu points in %zu clouds; %zu camera observations of %zu lamps\n", cloud_points, result.clouds.size(),
-                  result.camera_observations.size(), result.world_3d.landmarks.size());
+    if (scenario.is_3d()) {
+      std::printf("\n%zu points in %zu clouds; %zu camera observations of %zu lamps; %zu true loop-closure pairs\n",
+                  cloud_points, result.clouds.size(), result.camera_observations.size(), result.world_3d.landmarks.size(),
+                  result.true_loops.size());
+      if (result.passage_scans && result.passage_scans->any_inside) {
+        std::printf("%s: scans %zu-%zu inside\n", result.passage_scans->passage.kind.c_str(),
+                    result.passage_scans->first_inside, result.passage_scans->last_inside);
+      }
     } else {
       std::printf("\ngraph: %zu nodes, %zu edges (%zu true loop closures, %zu false); %zu relations\n",
                   result.graph.graph.vertices.size(), result.graph.graph.edges.size(), true_loops, false_loops,
@@ -222,7 +275,8 @@ int simulate_command(const SimulateFlags& flags) {
 
 Runner register_simulate(CLI::App& app) {
   auto flags = std::make_shared<SimulateFlags>();
-  app.add_option("SCENARIO", flags->scenario, "office, office-people, corridor-aliasing, open-hall, loop-building, landmarks or street-3d");
+  app.add_option("SCENARIO", flags->scenario, "office, office-people, corridor-aliasing, open-hall, loop-building, landmarks, street-3d, street-3d-loops, "
+                 "garage-3d or tunnel-3d");
   app.add_option("--seed", flags->seed, "Seed of every random draw; the same seed gives the same bytes")
       ->capture_default_str();
   app.add_option("--out", flags->out, "Output directory (created if missing; must be empty unless --overwrite)");

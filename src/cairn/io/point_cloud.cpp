@@ -1070,4 +1070,49 @@ void write_ply(std::ostream& out, const std::vector<Eigen::Vector3f>& points, co
   }
 }
 
+void write_pcd(std::ostream& out, const PointCloud& cloud, const std::string& comment) {
+  const std::size_t n = cloud.size();
+  const bool has_intensity = !cloud.intensity.empty();
+  const bool has_ring = !cloud.ring.empty();
+  const bool has_time = !cloud.time_s.empty();
+  CAIRN_ASSERT((!has_intensity || cloud.intensity.size() == n) && (!has_ring || cloud.ring.size() == n) &&
+                   (!has_time || cloud.time_s.size() == n),
+               "write_pcd: every attribute needs one value per point (or none)");
+  std::string fields = "x y z";
+  std::string sizes = "4 4 4";
+  std::string types = "F F F";
+  std::string counts = "1 1 1";
+  auto field = [&](const char* name, const char* size, const char* type) {
+    fields += std::string(" ") + name;
+    sizes += std::string(" ") + size;
+    types += std::string(" ") + type;
+    counts += " 1";
+  };
+  if (has_intensity) field("intensity", "4", "F");
+  if (has_ring) field("ring", "2", "U");
+  if (has_time) field("time", "4", "F");
+  out << "# .PCD v0.7 - Point Cloud Data file format\n";
+  if (!comment.empty()) out << "# " << comment << '\n';
+  out << "VERSION 0.7\nFIELDS " << fields << "\nSIZE " << sizes << "\nTYPE " << types << "\nCOUNT " << counts
+      << "\nWIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n << "\nDATA binary\n";
+  static_assert(std::endian::native == std::endian::little, "write_pcd assumes a little-endian machine");
+  const std::size_t record = 12 + (has_intensity ? 4 : 0) + (has_ring ? 2 : 0) + (has_time ? 4 : 0);
+  std::vector<char> buffer;
+  buffer.reserve(record * std::min<std::size_t>(n, 65536));
+  auto append = [&](const void* value, std::size_t bytes) {
+    const auto* p = static_cast<const char*>(value);
+    buffer.insert(buffer.end(), p, p + bytes);
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    append(cloud.points[i].data(), 12);
+    if (has_intensity) append(&cloud.intensity[i], 4);
+    if (has_ring) append(&cloud.ring[i], 2);
+    if (has_time) append(&cloud.time_s[i], 4);
+    if (buffer.size() >= record * 65536 || i + 1 == n) {
+      out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+      buffer.clear();
+    }
+  }
+}
+
 }  // namespace cairn::io

@@ -78,6 +78,14 @@ PointCloud parse_point_cloud(const std::string& path, const std::string& content
 /// line, no newline) goes into the header if not empty. Stream errors are the caller's to check.
 void write_ply(std::ostream& out, const std::vector<Eigen::Vector3f>& points, const std::string& comment = "");
 
+/// Writes `cloud` as a binary PCD v0.7 (DATA binary, little endian, WIDTH = POINTS, HEIGHT 1):
+/// FIELDS x y z (float32), then intensity (float32), ring (uint16) and time (float32 seconds)
+/// for each attribute that is not empty, readable by read_point_cloud and PCL. The header starts
+/// with PCL's "# .PCD v0.7" line; `comment` (one line, no newline) follows as a `#` line if not
+/// empty. Stream errors are the caller's
+/// to check. Precondition: each non-empty attribute has one value per point.
+void write_pcd(std::ostream& out, const PointCloud& cloud, const std::string& comment = "");
+
 /// Fills `cloud.ring` and `cloud.time_s` of a KITTI Velodyne HDL-64E scan from its point order.
 /// Approximate, and meaningful only for points in KITTI's original order (a `.bin` file, or a
 /// PCD re-serialisation that kept the order, as the KITTI key frames in ../shared/data do).

@@ -1,5 +1,6 @@
 #include "cairn/sim/lidar_3d.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -25,22 +26,58 @@ bool Lidar3DOptions::is_valid(std::string* why) const {
   return text.empty();
 }
 
+bool apply_lidar3d_model(std::string_view model, Lidar3DOptions& options) {
+  constexpr double kDegree = std::numbers::pi / 180.0;
+  if (model == "vlp16") {
+    const Lidar3DOptions defaults;
+    options.rings = defaults.rings;
+    options.elevation_min_rad = defaults.elevation_min_rad;
+    options.elevation_max_rad = defaults.elevation_max_rad;
+    options.columns = defaults.columns;
+    options.max_range_m = defaults.max_range_m;
+    return true;
+  }
+  if (model == "hdl64") {
+    options.rings = 64;
+    options.elevation_min_rad = -24.8 * kDegree;
+    options.elevation_max_rad = 2.0 * kDegree;
+    options.columns = 2000;
+    options.max_range_m = 120.0;
+    return true;
+  }
+  return false;
+}
+
 std::vector<LidarPoint> spin_scan(const World3D& world, double scan_start_s,
                                   const std::function<core::SE3(double)>& T_world_lidar_at,
                                   const Lidar3DOptions& options, Random& random) {
   std::vector<LidarPoint> points;
-  // Only objects within reach of the sensor during this revolution (1 m slack for its motion).
-  const core::SE3 T_start = T_world_lidar_at(scan_start_s);
-  const World3D local = nearby(world, T_start.translation().head<2>(), options.max_range_m + 1.0);
+  // The sensor's pose at every column's firing time, and how far it moves in the revolution.
+  std::vector<core::SE3> T_world_lidar_columns;
+  T_world_lidar_columns.reserve(static_cast<std::size_t>(options.columns));
+  double motion_radius_m = 0.0;
+  for (int c = 0; c < options.columns; ++c) {
+    T_world_lidar_columns.push_back(T_world_lidar_at(scan_start_s + options.period_s * c / options.columns));
+    motion_radius_m = std::max(motion_radius_m, (T_world_lidar_columns.back().translation().head<2>() -
+                                                 T_world_lidar_columns.front().translation().head<2>()).norm());
+  }
+  // Only objects within reach of the sensor during this revolution (1 m slack for its motion),
+  // sorted by azimuth so each ray tests only those in its direction (ray_cast_3d.hpp).
+  const Vector2 start_xy = T_world_lidar_columns.front().translation().head<2>();
+  const World3D local = nearby(world, start_xy, options.max_range_m + 1.0);
+  const AzimuthIndex index(local, start_xy, motion_radius_m + 1e-6);
   std::vector<double> cos_elevation(static_cast<std::size_t>(options.rings));
   std::vector<double> sin_elevation(static_cast<std::size_t>(options.rings));
   for (int r = 0; r < options.rings; ++r) {
     cos_elevation[static_cast<std::size_t>(r)] = std::cos(options.elevation(r));
     sin_elevation[static_cast<std::size_t>(r)] = std::sin(options.elevation(r));
   }
+  std::vector<Box> moving_now;
   for (int c = 0; c < options.columns; ++c) {
     const double offset = options.period_s * c / options.columns;
-    const core::SE3 T_world_lidar = T_world_lidar_at(scan_start_s + offset);
+    const core::SE3& T_world_lidar = T_world_lidar_columns[static_cast<std::size_t>(c)];
+    moving_now.clear();
+    for (const auto& mover : world.moving_boxes) moving_now.push_back(mover.at(scan_start_s + offset));
     const double azimuth = -std::numbers::pi + 2.0 * std::numbers::pi * c / options.columns;
     const double ca = std::cos(azimuth);
     const double sa = std::sin(azimuth);
@@ -50,7 +87,11 @@ std::vector<LidarPoint> spin_scan(const World3D& world, double scan_start_s,
       const Vector3 direction_world = T_world_lidar.so3() * direction_lidar;
       const bool dropout = random.bernoulli(options.dropout_probability);
       const double noise = random.gaussian(options.range_sigma_m);
-      const auto hit = cast_ray(local, T_world_lidar.translation(), direction_world, options.max_range_m);
+      auto hit = index.cast(T_world_lidar.translation(), direction_world, options.max_range_m);
+      for (const Box& box : moving_now) {
+        const auto t = intersect(T_world_lidar.translation(), direction_world, box);
+        if (t && *t <= hit.value_or(options.max_range_m)) hit = t;
+      }
       if (!hit || dropout) continue;
       const double range = *hit + noise;
       if (range <= 0.0 || range >= options.max_range_m) continue;

@@ -9,6 +9,8 @@
 /// frame at that time with its time offset: a moving robot therefore distorts the scan exactly
 /// as a real spinning sensor does, and de-skewing can be checked against the truth.
 ///
+/// Moving boxes (World3D::moving_boxes) are placed at each column's firing time.
+///
 /// Noise: no return within max range or a dropout (probability dropout_probability): no point;
 /// otherwise range = true range + range_sigma_m * n, n ~ N(0, 1). Every ray draws one uniform
 /// and one Gaussian variate.
@@ -16,6 +18,7 @@
 #include <functional>
 #include <numbers>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "cairn/core/se3.hpp"
@@ -52,6 +55,13 @@ struct LidarPoint {
   double time_offset_s = 0.0;
   int ring = 0;
 };
+
+/// Sets rings, elevations, columns and max range to those of a sensor model, leaving the rest:
+///  - "vlp16" (the defaults above): 16 rings over -15..+15 deg, 360 columns (1 deg), 60 m.
+///  - "hdl64" (a Velodyne HDL-64E as in KITTI): 64 rings evenly spaced over -24.8..+2 deg (the
+///    real sensor's two laser blocks are spaced unevenly), 2000 columns (0.18 deg), 120 m.
+/// Returns false (options untouched) for any other name.
+bool apply_lidar3d_model(std::string_view model, Lidar3DOptions& options);
 
 /// One revolution starting at `scan_start_s`. `T_world_lidar_at(t)` gives the sensor pose at
 /// any time of the revolution (the simulator interpolates its ground truth).

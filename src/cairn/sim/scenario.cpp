@@ -129,6 +129,11 @@ bool Scenario::is_valid(std::string* why) const {
       }
       break;
     case WorldKind::kStreet3D:
+    case WorldKind::kGarage3D:
+    case WorldKind::kTunnel3D:
+      break;
+  }
+  if (world == WorldKind::kStreet3D) {
       above(street.loop_width_m, 2.0 * street.street_half_width_m + 4.0, "street.loop_width_m");
       above(street.loop_depth_m, 2.0 * street.street_half_width_m + 4.0, "street.loop_depth_m");
       above(street.street_half_width_m, 4.0, "street.street_half_width_m");
@@ -137,7 +142,38 @@ bool Scenario::is_valid(std::string* why) const {
       above(street.pole_spacing_m, 2.0, "street.pole_spacing_m");
       above(street.tree_spacing_m, 2.0, "street.tree_spacing_m");
       if (street.parked_cars < 0 || street.parked_cars > 1000) problems.push_back("street.parked_cars must be in [0, 1000]");
+      if (street.moving_cars < 0 || street.moving_cars > 20) problems.push_back("street.moving_cars must be in [0, 20]");
+      above(street.moving_car_speed_mps, 0.0, "street.moving_car_speed_mps");
+      if (street.reverse_second_lap) {
+        if (!(street.reverse_lane_offset_m >= 0.0 && street.reverse_lane_offset_m <= street.street_half_width_m - 3.0)) {
+          problems.push_back("street.reverse_lane_offset_m must be in [0, street_half_width_m - 3]");
+        }
+        if (trajectory.laps != 1) problems.push_back("street.reverse_second_lap drives both laps itself: trajectory.laps must be 1");
+      }
+  }
+  if (world == WorldKind::kGarage3D) {
+    if (!(garage.half_width_m >= 8.0 && garage.half_width_m <= 20.0)) problems.push_back("garage.half_width_m must be in [8, 20]");
+    if (!(garage.ceiling_height_m >= 2.6 && garage.ceiling_height_m <= 10.0)) problems.push_back("garage.ceiling_height_m must be in [2.6, 10]");
+    if (!(garage.bay_pitch_m >= 3.0 && garage.bay_pitch_m <= 30.0)) problems.push_back("garage.bay_pitch_m must be in [3, 30]");
+    if (!(garage.length_m >= 4.0 * garage.bay_pitch_m && garage.length_m <= 2000.0)) {
+      problems.push_back("garage.length_m must be in [4 bay_pitch_m, 2000]");
+    }
+    if (!(garage.approach_m >= 10.0 && garage.approach_m <= 200.0)) problems.push_back("garage.approach_m must be in [10, 200]");
+  }
+  if (world == WorldKind::kTunnel3D) {
+    if (!(tunnel.length_m >= 20.0 && tunnel.length_m <= 2000.0)) problems.push_back("tunnel.length_m must be in [20, 2000]");
+    if (!(tunnel.half_width_m >= 3.0 && tunnel.half_width_m <= 20.0)) problems.push_back("tunnel.half_width_m must be in [3, 20]");
+    if (!(tunnel.height_m >= 3.0 && tunnel.height_m <= 20.0)) problems.push_back("tunnel.height_m must be in [3, 20]");
+    if (!(tunnel.approach_m >= 10.0 && tunnel.approach_m <= 200.0)) problems.push_back("tunnel.approach_m must be in [10, 200]");
+  }
+  if (is_3d()) {
+      above(loop_truth.max_distance_m, 0.0, "loops.max_distance_m");
+      if (!(loop_truth.min_separation_s >= 0.0 && std::isfinite(loop_truth.min_separation_s))) {
+        problems.push_back("loops.min_separation_s must be >= 0");
+      }
       if (!lidar3d.is_valid(&text)) problems.push_back("lidar3d: " + text);
+      if (lidar3d_model != "vlp16" && lidar3d_model != "hdl64") problems.push_back("lidar3d.model must be vlp16 or hdl64");
+      if (lidar3d_format != "kitti" && lidar3d_format != "pcd") problems.push_back("lidar3d.format must be kitti or pcd");
       if (!camera.is_valid(&text)) problems.push_back("camera: " + text);
       if (trajectory.sample_period_s > 0.0) {
         if (whole_steps(lidar3d.period_s, trajectory.sample_period_s) == 0) {
@@ -147,7 +183,6 @@ bool Scenario::is_valid(std::string* why) const {
           problems.push_back("camera.period_s must be a whole multiple of trajectory.sample_period_s");
         }
       }
-      break;
   }
   // A run of more than 20 km is almost surely a typo in a size, and would fill the memory.
   if (problems.empty()) {
@@ -177,7 +212,8 @@ TrajectoryOptions Scenario::effective_trajectory() const {
 }
 
 std::vector<std::string> scenario_names() {
-  return {"office", "office-people", "corridor-aliasing", "open-hall", "loop-building", "landmarks", "street-3d"};
+  return {"office",    "office-people",   "corridor-aliasing", "open-hall", "loop-building",
+          "landmarks", "street-3d",       "street-3d-loops",   "garage-3d", "tunnel-3d"};
 }
 
 std::optional<Scenario> make_scenario(std::string_view name) {
@@ -222,6 +258,37 @@ std::optional<Scenario> make_scenario(std::string_view name) {
     s.description = "A loop of streets around a city block: facades, lamp poles, trees and parked cars; a "
                     "spinning 16-ring LiDAR with per-point times (motion distortion) and a pinhole camera "
                     "seeing the lamps";
+  } else if (name == "street-3d-loops") {
+    s.world = WorldKind::kStreet3D;
+    s.street.reverse_second_lap = true;
+    s.street.moving_cars = 6;
+    s.trajectory.laps = 1;
+    s.trajectory.max_speed_mps = 6.0;
+    s.trajectory.max_acceleration_mps2 = 1.5;
+    s.trajectory.corner_radius_m = 6.0;
+    s.lidar3d_format = "pcd";
+    s.image_pixels_per_m = 8.0;
+    s.description = "The street loop driven twice: counter-clockwise on the centre line, then after a U-turn "
+                    "clockwise one lane (3 m) further in (reverse revisits), with six cars driving around the "
+                    "block; true loop closures in loops.txt";
+  } else if (name == "garage-3d") {
+    s.world = WorldKind::kGarage3D;
+    s.trajectory.laps = 1;
+    s.trajectory.max_speed_mps = 4.0;
+    s.trajectory.max_acceleration_mps2 = 1.0;
+    s.lidar3d_format = "pcd";
+    s.image_pixels_per_m = 5.0;
+    s.description = "Straight through a 160 m parking garage whose pillars, beams and parked cars repeat every "
+                    "8 m (perceptual aliasing); nothing is revisited, so every loop closure is false";
+  } else if (name == "tunnel-3d") {
+    s.world = WorldKind::kTunnel3D;
+    s.trajectory.laps = 1;
+    s.trajectory.max_speed_mps = 6.0;
+    s.trajectory.max_acceleration_mps2 = 1.5;
+    s.lidar3d_format = "pcd";
+    s.image_pixels_per_m = 5.0;
+    s.description = "Straight through a 150 m tunnel with flat walls at constant speed: scan matching is "
+                    "degenerate along the axis; the scans inside are listed in the manifest";
   } else {
     return std::nullopt;
   }
@@ -234,6 +301,8 @@ std::string Parameter::text() const {
         using T = std::remove_pointer_t<decltype(field)>;
         if constexpr (std::is_same_v<T, bool>) {
           return *field ? "true" : "false";
+        } else if constexpr (std::is_same_v<T, std::string>) {
+          return *field;
         } else if constexpr (std::is_same_v<T, double>) {
           std::string out;
           io::append_number(out, *field);
@@ -246,10 +315,21 @@ std::string Parameter::text() const {
 }
 
 bool Parameter::set(std::string_view input, std::string* why) {
-  return std::visit(
+  const bool ok = std::visit(
       [&](auto* field) -> bool {
         using T = std::remove_pointer_t<decltype(field)>;
-        if constexpr (std::is_same_v<T, bool>) {
+        if constexpr (std::is_same_v<T, std::string>) {
+          if (!choices.empty() && std::find(choices.begin(), choices.end(), input) == choices.end()) {
+            if (why) {
+              std::string list;
+              for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
+              *why = name + " expects one of " + list + ", found '" + std::string(input) + "'";
+            }
+            return false;
+          }
+          *field = std::string(input);
+          return true;
+        } else if constexpr (std::is_same_v<T, bool>) {
           if (input == "true" || input == "1" || input == "on") *field = true;
           else if (input == "false" || input == "0" || input == "off") *field = false;
           else {
@@ -278,6 +358,8 @@ bool Parameter::set(std::string_view input, std::string* why) {
         }
       },
       value);
+  if (ok && after_set) after_set();
+  return ok;
 }
 
 std::vector<Parameter> parameters(Scenario& s) {
@@ -340,6 +422,27 @@ std::vector<Parameter> parameters(Scenario& s) {
       add("street.tree_spacing_m", "m", "distance between trees", &s.street.tree_spacing_m);
       add("street.parked_cars", "", "parked cars along the outer kerb", &s.street.parked_cars);
       add("street.world_seed", "", "seed of building sizes and car places", &s.street.world_seed);
+      add("street.reverse_second_lap", "", "drive the loop again clockwise in the inner lane (open route)",
+          &s.street.reverse_second_lap);
+      add("street.reverse_lane_offset_m", "m", "inner lane of the reverse lap, from the centre line",
+          &s.street.reverse_lane_offset_m);
+      add("street.moving_cars", "", "cars driving clockwise around the block (0-20)", &s.street.moving_cars);
+      add("street.moving_car_speed_mps", "m/s", "their speed", &s.street.moving_car_speed_mps);
+      break;
+    case WorldKind::kGarage3D:
+      add("garage.length_m", "m", "length of the garage", &s.garage.length_m);
+      add("garage.half_width_m", "m", "aisle centre to side walls (8-20)", &s.garage.half_width_m);
+      add("garage.ceiling_height_m", "m", "ceiling height", &s.garage.ceiling_height_m);
+      add("garage.bay_pitch_m", "m", "distance between pillars: the period of the structure", &s.garage.bay_pitch_m);
+      add("garage.approach_m", "m", "street before and after the garage", &s.garage.approach_m);
+      add("garage.world_seed", "", "seed of the buildings, poles and trees outside", &s.garage.world_seed);
+      break;
+    case WorldKind::kTunnel3D:
+      add("tunnel.length_m", "m", "length of the tunnel", &s.tunnel.length_m);
+      add("tunnel.half_width_m", "m", "centre line to either wall", &s.tunnel.half_width_m);
+      add("tunnel.height_m", "m", "ceiling height", &s.tunnel.height_m);
+      add("tunnel.approach_m", "m", "road before and after the tunnel", &s.tunnel.approach_m);
+      add("tunnel.world_seed", "", "seed of the buildings, poles and trees outside", &s.tunnel.world_seed);
       break;
   }
   TrajectoryOptions& t = s.trajectory;
@@ -368,8 +471,13 @@ std::vector<Parameter> parameters(Scenario& s) {
   add("odometry.slip_rate_per_s", "1/s", "slip events per second", &o.slip_rate_per_s);
   add("odometry.slip_duration_s", "s", "duration of a slip", &o.slip_duration_s);
   add("odometry.slip_max_excess", "", "largest over-reported translation fraction during a slip", &o.slip_max_excess);
-  if (s.world == WorldKind::kStreet3D) {
+  if (s.is_3d()) {
     Lidar3DOptions& l3 = s.lidar3d;
+    out.push_back(Parameter{"lidar3d.model", "", "sensor preset: vlp16 or hdl64 (sets rings, elevations, columns, "
+                            "max range; other lidar3d.* settings override it)", &s.lidar3d_model, {"vlp16", "hdl64"},
+                            [&s] { apply_lidar3d_model(s.lidar3d_model, s.lidar3d); }});
+    out.push_back(Parameter{"lidar3d.format", "", "scan files: kitti (velodyne/*.bin) or pcd (scans/*.pcd with ring, time)",
+                            &s.lidar3d_format, {"kitti", "pcd"}});
     add("lidar3d.rings", "", "number of rings", &l3.rings);
     add("lidar3d.elevation_min_rad", "rad", "elevation of the lowest ring", &l3.elevation_min_rad);
     add("lidar3d.elevation_max_rad", "rad", "elevation of the highest ring", &l3.elevation_max_rad);
@@ -390,6 +498,8 @@ std::vector<Parameter> parameters(Scenario& s) {
     add("camera.max_range_m", "m", "farthest landmark seen", &c.max_range_m);
     add("camera.mount_height_m", "m", "camera height above the body origin", &c.mount_height_m);
     add("camera.period_s", "s", "time between images", &c.period_s);
+    add("loops.max_distance_m", "m", "loops.txt lists scan pairs at most this far apart", &s.loop_truth.max_distance_m);
+    add("loops.min_separation_s", "s", "and at least this far apart in time", &s.loop_truth.min_separation_s);
   } else {
     LidarOptions& l = s.lidar;
     add("lidar.beams", "", "number of beams", &l.beams);
@@ -445,12 +555,25 @@ WorldWithRoute build_world(const Scenario& scenario) {
     case WorldKind::kOpenHall: return open_hall_world(scenario.open_hall);
     case WorldKind::kBuildingLoop: return building_loop_world(scenario.building);
     case WorldKind::kLandmarkField: return landmark_field_world(scenario.landmark_field);
-    case WorldKind::kStreet3D: {
-      const StreetWorld street = street_world(scenario.street);
-      return {footprint(street.world), street.route};
+    case WorldKind::kStreet3D:
+    case WorldKind::kGarage3D:
+    case WorldKind::kTunnel3D: {
+      const World3DWithRoute built = build_world_3d(scenario);
+      return {footprint(built.world), built.route, built.closed_route};
     }
   }
   CAIRN_ASSERT(false, "build_world: unknown world kind");
+  return {};
+}
+
+World3DWithRoute build_world_3d(const Scenario& scenario) {
+  switch (scenario.world) {
+    case WorldKind::kStreet3D: return street_world(scenario.street);
+    case WorldKind::kGarage3D: return garage_world(scenario.garage);
+    case WorldKind::kTunnel3D: return tunnel_world(scenario.tunnel);
+    default: break;
+  }
+  CAIRN_ASSERT(false, "build_world_3d: not a 3D world");
   return {};
 }
 
@@ -460,7 +583,7 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
   result.world = build_world(scenario);
   const World& world = result.world.world;
   const TrajectoryOptions trajectory = scenario.effective_trajectory();
-  result.truth = generate_trajectory(result.world.route, trajectory);
+  result.truth = generate_trajectory(result.world.route, trajectory, result.world.closed_route);
   result.odometry = simulate_odometry(result.truth, scenario.odometry, Random::derive_seed(seed, kOdometryStream));
 
   const auto odometry_step = static_cast<std::size_t>(whole_steps(scenario.odometry_period_s, trajectory.sample_period_s));
@@ -469,12 +592,23 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
   for (std::size_t k = 0; k < result.truth.size(); k += odometry_step) result.odometry_samples.push_back(k);
   for (std::size_t k = 0; k < result.truth.size(); k += scan_step) result.scan_samples.push_back(k);
 
-  if (scenario.world == WorldKind::kStreet3D) {
+  if (scenario.is_3d()) {
     result.scan_samples.clear();
     const auto cloud_step = static_cast<std::size_t>(whole_steps(scenario.lidar3d.period_s, trajectory.sample_period_s));
     for (std::size_t k = 0; k < result.truth.size(); k += cloud_step) result.scan_samples.push_back(k);
     simulate_street_sensors(scenario, Random::derive_seed(seed, kLidarStream), Random::derive_seed(seed, kLandmarkStream),
                             result);
+    std::vector<core::SE3> T_world_lidar;
+    std::vector<double> times_s;
+    for (std::size_t k : result.scan_samples) {
+      T_world_lidar.push_back(lidar_pose(result.truth[k].T_world_body, scenario.lidar3d));
+      times_s.push_back(result.truth[k].stamp.seconds());
+    }
+    result.true_loops = find_true_loops(T_world_lidar, times_s, scenario.loop_truth);
+    const World3DWithRoute built = build_world_3d(scenario);
+    if (built.passage) {
+      result.passage_scans = find_passage_scans(*built.passage, T_world_lidar, times_s, scenario.lidar3d.max_range_m);
+    }
   } else {
     Random lidar_random(Random::derive_seed(seed, kLidarStream));
     const core::SE2 T_body_laser = scenario.lidar.T_body_laser();
@@ -529,7 +663,7 @@ std::vector<std::string> write_outputs(const SimulationResult& result, const Sce
     files.push_back(name);
     return (fs::path(directory) / name).string();
   };
-  if (scenario.world == WorldKind::kStreet3D) {
+  if (scenario.is_3d()) {
     files = write_street_outputs(result, scenario, directory);
     std::vector<Vector2> truth_points;
     std::vector<Vector2> odometry_points;

@@ -14,8 +14,12 @@
 /// | loop-building     | building_loop_world         | 1    | one long loop closed at the end           |
 /// | landmarks         | landmark_field_world        | 2    | range-bearing landmarks with identities   |
 /// | street-3d         | street_world (3D)           | 1    | spinning 3D LiDAR, pinhole camera         |
+/// | street-3d-loops   | street_world (3D)           | 1    | 2nd lap reversed in another lane, traffic |
+/// | garage-3d         | garage_world (3D)           | 1    | periodic garage: aliasing, no true loops  |
+/// | tunnel-3d         | tunnel_world (3D)           | 1    | featureless straight tunnel: degeneracy   |
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -23,10 +27,12 @@
 #include <vector>
 
 #include "cairn/sim/camera.hpp"
+#include "cairn/sim/ground_truth_3d.hpp"
 #include "cairn/sim/landmark_sensor.hpp"
 #include "cairn/sim/lidar_3d.hpp"
 #include "cairn/sim/lidar.hpp"
 #include "cairn/sim/odometry.hpp"
+#include "cairn/sim/passage_worlds.hpp"
 #include "cairn/sim/relations.hpp"
 #include "cairn/sim/simulated_graph.hpp"
 #include "cairn/sim/street_world.hpp"
@@ -35,9 +41,9 @@
 
 namespace cairn::sim {
 
-/// kStreet3D is the one 3D world: it runs the 3D LiDAR and the camera instead of the 2D LiDAR,
-/// the landmark sensor, the pose graph and the relations.
-enum class WorldKind { kOffice, kCorridor, kOpenHall, kBuildingLoop, kLandmarkField, kStreet3D };
+/// The 3D worlds (kStreet3D, kGarage3D, kTunnel3D) run the 3D LiDAR and the camera instead of
+/// the 2D LiDAR, the landmark sensor, the pose graph and the relations.
+enum class WorldKind { kOffice, kCorridor, kOpenHall, kBuildingLoop, kLandmarkField, kStreet3D, kGarage3D, kTunnel3D };
 
 struct Scenario {
   std::string name;
@@ -50,9 +56,20 @@ struct Scenario {
   BuildingLoopOptions building;
   LandmarkFieldOptions landmark_field;
   StreetOptions street;
-  /// 3D sensors (street-3d only).
+  GarageOptions garage;
+  TunnelOptions tunnel;
+  /// 3D sensors (3D worlds only). lidar3d_model names the last preset applied to lidar3d through
+  /// the parameter lidar3d.model ("vlp16" or "hdl64", see apply_lidar3d_model); lidar3d.* settings
+  /// may override parts of it, so the fields of lidar3d, not this name, describe the sensor.
   Lidar3DOptions lidar3d;
+  std::string lidar3d_model = "vlp16";
+  /// How the scans are written: "kitti" (velodyne/NNNNNN.bin float32 x y z intensity, plus
+  /// velodyne_times/NNNNNN.bin) or "pcd" (scans/NNNNNN.pcd: binary PCD v0.7 with x y z
+  /// intensity as float32, ring as uint16, time as float32 seconds after the sweep start).
+  std::string lidar3d_format = "kitti";
   CameraOptions camera;
+  /// Which scan pairs are listed as true loop closures (3D worlds; loops.txt).
+  LoopTruthOptions loop_truth;
 
   TrajectoryOptions trajectory;
   /// When true, every corner sharper than 0.3 rad becomes a spin at 2.5 rad/s (8 rad/s^2):
@@ -74,6 +91,8 @@ struct Scenario {
   bool is_valid(std::string* why) const;
   /// The trajectory options after `fast_turns` is applied.
   TrajectoryOptions effective_trajectory() const;
+  /// Whether the world is 3D (street, garage, tunnel).
+  bool is_3d() const { return world == WorldKind::kStreet3D || world == WorldKind::kGarage3D || world == WorldKind::kTunnel3D; }
 };
 
 /// The scenario names, in the order `--list` shows them.
@@ -87,7 +106,11 @@ struct Parameter {
   std::string name;
   std::string unit;
   std::string description;
-  std::variant<double*, int*, bool*, std::uint64_t*> value;
+  std::variant<double*, int*, bool*, std::uint64_t*, std::string*> value;
+  /// For a text parameter: the values it accepts (empty: any).
+  std::vector<std::string> choices = {};
+  /// Called after every successful set() (a sensor model preset fills the fields it implies).
+  std::function<void()> after_set = {};
 
   /// The value as text: shortest round-trip decimal for doubles, "true"/"false" for flags.
   std::string text() const;
@@ -113,11 +136,15 @@ struct SimulationResult {
   std::vector<LandmarkObservation> landmark_observations;
   SimulatedGraph graph;
   std::vector<Relation> relations;
-  /// street-3d: the 3D world, one point cloud per revolution (starting at scan_samples[k]),
+  /// 3D worlds: the 3D world, one point cloud per revolution (starting at scan_samples[k]),
   /// camera observations.
   World3D world_3d;
   std::vector<std::vector<LidarPoint>> clouds;
   std::vector<CameraObservation> camera_observations;
+  /// 3D worlds: the true loop closures between scans (Scenario::loop_truth), and the scans
+  /// inside the world's passage (garage, tunnel).
+  std::vector<TrueLoop> true_loops;
+  std::optional<PassageScans> passage_scans;
 
   /// Summary numbers (also written to the manifest).
   double duration_s = 0.0;
@@ -141,12 +168,16 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed);
 /// file names in the order written: log.clf, log.relations, ground_truth.tum, odometry.tum,
 /// graph.g2o, graph_nodes.tum, loop_closures.csv, world.txt, [landmarks.csv,
 /// landmark_observations.csv], world.png. street-3d writes instead: velodyne/NNNNNN.bin,
-/// velodyne_times/NNNNNN.bin, poses.txt, times.txt, ground_truth.tum, odometry.tum,
-/// camera_observations.csv, landmarks_3d.csv, world_3d.txt, world.png (see docs/simulation.md). Throws io::ParseError when a file cannot be written.
+/// velodyne_times/NNNNNN.bin (or scans/NNNNNN.pcd), poses.txt, times.txt, ground_truth.tum,
+/// odometry.tum, camera_observations.csv, world_3d.txt, loops.txt, world.png (see
+/// docs/simulation.md). Throws io::ParseError when a file cannot be written.
 std::vector<std::string> write_outputs(const SimulationResult& result, const Scenario& scenario, std::uint64_t seed,
                                        const std::string& directory);
 
-/// Builds the scenario's world (no randomness beyond the world's own seed).
+/// Builds the scenario's world (no randomness beyond the world's own seed); for a 3D world, its
+/// footprint (boxes reaching below 2.2 m as rectangles, cylinders as circles).
 WorldWithRoute build_world(const Scenario& scenario);
+/// Builds a 3D scenario's world. Precondition: scenario.is_3d().
+World3DWithRoute build_world_3d(const Scenario& scenario);
 
 }  // namespace cairn::sim

@@ -3,12 +3,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <numbers>
 
 #include "cairn/io/output_file.hpp"
+#include "cairn/io/point_cloud.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/trajectory.hpp"
 #include "cairn/sim/carmen_log.hpp"
-#include "cairn/sim/street_world.hpp"
 
 namespace cairn::sim {
 namespace {
@@ -34,9 +35,9 @@ core::SE2 truth_at(const std::vector<TrajectorySample>& truth, double time_s) {
   return a * core::SE2::exp(alpha * (a.inverse() * b).log());
 }
 
-std::string indexed(const char* folder, std::size_t i) {
+std::string indexed(const char* folder, std::size_t i, const char* extension) {
   char name[64];
-  std::snprintf(name, sizeof name, "%s/%06zu.bin", folder, i);
+  std::snprintf(name, sizeof name, "%s/%06zu.%s", folder, i, extension);
   return name;
 }
 
@@ -51,14 +52,20 @@ void write_floats(const std::string& path, const std::vector<float>& values) {
 World footprint(const World3D& world) {
   World out;
   out.name = world.name;
-  for (const auto& box : world.boxes) out.add_rectangle(box.min.head<2>(), box.max.head<2>());
+  for (const auto& box : world.boxes) {
+    if (box.min.z() < 2.2) out.add_rectangle(box.min.head<2>(), box.max.head<2>());
+  }
   for (const auto& cylinder : world.cylinders) out.circles.push_back({cylinder.center, cylinder.radius_m});
   return out;
 }
 
+core::SE3 lidar_pose(const core::SE2& T_world_body, const Lidar3DOptions& lidar) {
+  return lift(T_world_body, lidar.mount_height_m);
+}
+
 void simulate_street_sensors(const Scenario& scenario, std::uint64_t lidar_seed, std::uint64_t camera_seed,
                              SimulationResult& result) {
-  result.world_3d = street_world(scenario.street).world;
+  result.world_3d = build_world_3d(scenario).world;
   const auto& truth = result.truth;
   const double mount = scenario.lidar3d.mount_height_m;
   const auto T_world_lidar_at = [&](double time_s) { return lift(truth_at(truth, time_s), mount); };
@@ -91,8 +98,25 @@ std::vector<std::string> write_street_outputs(const SimulationResult& result, co
     files.push_back(name);
     return (fs::path(directory) / name).string();
   };
-  for (const char* folder : {"velodyne", "velodyne_times"}) fs::create_directories(fs::path(directory) / folder);
+  const bool pcd = scenario.lidar3d_format == "pcd";
+  if (pcd) {
+    fs::create_directories(fs::path(directory) / "scans");
+  } else {
+    for (const char* folder : {"velodyne", "velodyne_times"}) fs::create_directories(fs::path(directory) / folder);
+  }
   for (std::size_t i = 0; i < result.clouds.size(); ++i) {
+    if (pcd) {
+      io::PointCloud cloud;
+      cloud.points.reserve(result.clouds[i].size());
+      for (const auto& p : result.clouds[i]) {
+        cloud.points.push_back(p.position.cast<float>());
+        cloud.intensity.push_back(0.0F);
+        cloud.ring.push_back(static_cast<std::uint16_t>(p.ring));
+        cloud.time_s.push_back(static_cast<float>(p.time_offset_s));
+      }
+      io::write_output(path_of(indexed("scans", i, "pcd")), [&](std::ostream& out) { io::write_pcd(out, cloud); });
+      continue;
+    }
     std::vector<float> xyzi;
     std::vector<float> times;
     xyzi.reserve(4 * result.clouds[i].size());
@@ -102,15 +126,17 @@ std::vector<std::string> write_street_outputs(const SimulationResult& result, co
                                static_cast<float>(p.position.z()), 0.0F});
       times.push_back(static_cast<float>(p.time_offset_s));
     }
-    write_floats(path_of(indexed("velodyne", i)), xyzi);
-    write_floats(path_of(indexed("velodyne_times", i)), times);
+    write_floats(path_of(indexed("velodyne", i, "bin")), xyzi);
+    write_floats(path_of(indexed("velodyne_times", i, "bin")), times);
   }
 
   const double mount = scenario.lidar3d.mount_height_m;
   io::Trajectory truth;
   io::Trajectory odometry;
   io::Trajectory kitti;
-  const core::SE3 T_lidar0_world = lift(result.truth[result.scan_samples.front()].T_world_body, mount).inverse();
+  // KITTI layout: poses relative to the first scan (KITTI's convention); PCD: in the world frame.
+  const core::SE3 T_lidar0_world =
+      pcd ? core::SE3() : lift(result.truth[result.scan_samples.front()].T_world_body, mount).inverse();
   for (std::size_t k : result.scan_samples) {
     const core::SE3 T_world_lidar = lift(result.truth[k].T_world_body, mount);
     truth.stamps.push_back(result.truth[k].stamp);
@@ -140,6 +166,10 @@ std::vector<std::string> write_street_outputs(const SimulationResult& result, co
   io::write_output(path_of("world_3d.txt"), [&](std::ostream& out) {
     out << "# cairn world '" << result.world_3d.name << "': GROUND z=0 | BOX min_x min_y min_z max_x max_y max_z | "
         << "CYLINDER cx cy radius z_min z_max (vertical) | LANDMARK id x y z (metres, world frame, z up)\n";
+    if (!result.world_3d.moving_boxes.empty()) {
+      out << "# MOVING_BOX length width height speed_mps phase_m x0 y0 x1 y1 ...: a box driving around the closed "
+             "path, at time t its centre phase + speed t metres along it, its length along the current edge\n";
+    }
     if (result.world_3d.ground) out << "GROUND\n";
     std::string line;
     auto emit = [&](const std::string& head, std::initializer_list<double> values) {
@@ -155,6 +185,36 @@ std::vector<std::string> write_street_outputs(const SimulationResult& result, co
     for (const auto& c : result.world_3d.cylinders) emit("CYLINDER", {c.center.x(), c.center.y(), c.radius_m, c.z_min_m, c.z_max_m});
     for (const auto& l : result.world_3d.landmarks) {
       emit("LANDMARK " + std::to_string(l.id), {l.position.x(), l.position.y(), l.position.z()});
+    }
+    for (const auto& m : result.world_3d.moving_boxes) {
+      line = "MOVING_BOX";
+      for (double v : {m.length_m, m.width_m, m.height_m, m.speed_mps, m.phase_m}) {
+        line += ' ';
+        io::append_number(line, v);
+      }
+      for (const auto& p : m.path) {
+        for (double v : {p.x(), p.y()}) {
+          line += ' ';
+          io::append_number(line, v);
+        }
+      }
+      line += '\n';
+      out << line;
+    }
+  });
+  io::write_output(path_of("loops.txt"), [&](std::ostream& out) {
+    out << "# true loop closures: scans i < j whose LiDAR positions (poses.txt) are at most ";
+    std::string number;
+    io::append_number(number, scenario.loop_truth.max_distance_m);
+    out << number << " m apart and whose times differ by at least ";
+    number.clear();
+    io::append_number(number, scenario.loop_truth.min_separation_s);
+    out << number << " s\n# i j distance_m heading_difference_deg (0: same direction, 180: reverse) time_difference_s\n";
+    char text[128];
+    for (const auto& loop : result.true_loops) {
+      std::snprintf(text, sizeof text, "%zu %zu %.3f %.1f %.1f\n", loop.earlier, loop.later, loop.distance_m,
+                    loop.heading_difference_rad * 180.0 / std::numbers::pi, loop.time_difference_s);
+      out << text;
     }
   });
   return files;

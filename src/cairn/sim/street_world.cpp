@@ -99,6 +99,35 @@ StreetWorld street_world(const StreetOptions& o) {
     // `corner` lies on the outer sidewalk line; step back towards the street by sidewalk - 2.6.
     world.boxes.push_back(footprint_box(kerb, along, 4.5, right, 1.8, 0.0, 1.5));
   }
+
+  if (o.reverse_second_lap) {
+    // On past the start, a U-turn over two quarter arcs into the inner lane, then clockwise.
+    const double lane = o.reverse_lane_offset_m;
+    result.closed_route = false;
+    result.route.push_back({0.5 * W, 0});
+    result.route.push_back({0.5 * W + 6.0, 0});
+    result.route.push_back({0.5 * W + 6.0, lane});
+    result.route.push_back({lane, lane});
+    result.route.push_back({lane, D - lane});
+    result.route.push_back({W - lane, D - lane});
+    result.route.push_back({W - lane, lane});
+    result.route.push_back({0.5 * W, lane});
+  }
+  // Moving cars: clockwise around the rectangle 1.5 m outside the centre line (oncoming
+  // traffic on a counter-clockwise lap), evenly spaced along its perimeter.
+  if (o.moving_cars > 0) {
+    const double lane = 1.5;
+    const std::vector<Vector2> path = {{-lane, -lane}, {-lane, D + lane}, {W + lane, D + lane}, {W + lane, -lane}};
+    const double perimeter = 2.0 * (W + D + 4.0 * lane);
+    const double offset = random.uniform(0.0, perimeter);
+    for (int i = 0; i < o.moving_cars; ++i) {
+      MovingBox car;
+      car.path = path;
+      car.speed_mps = o.moving_car_speed_mps;
+      car.phase_m = offset + perimeter * i / o.moving_cars;
+      world.moving_boxes.push_back(car);
+    }
+  }
   return result;
 }
 

@@ -194,7 +194,8 @@ bool TrajectoryOptions::is_valid(std::string* why) const {
   return text.empty();
 }
 
-std::vector<TrajectorySample> generate_trajectory(const std::vector<Vector2>& route, const TrajectoryOptions& options) {
+std::vector<TrajectorySample> generate_trajectory(const std::vector<Vector2>& route, const TrajectoryOptions& options,
+                                                  bool closed_route) {
   CAIRN_ASSERT(options.is_valid(nullptr), "generate_trajectory: invalid options (check is_valid first)");
   std::vector<Vector2> points;
   for (int lap = 0; lap < options.laps; ++lap) {
@@ -202,7 +203,7 @@ std::vector<TrajectorySample> generate_trajectory(const std::vector<Vector2>& ro
       if (points.empty() || (p - points.back()).norm() > 1e-9) points.push_back(p);
     }
   }
-  if ((route.front() - points.back()).norm() > 1e-9) points.push_back(route.front());
+  if (closed_route && (route.front() - points.back()).norm() > 1e-9) points.push_back(route.front());
   CAIRN_ASSERT(points.size() >= 2, "generate_trajectory: the route needs two distinct points");
 
   const std::size_t legs = points.size() - 1;

@@ -58,8 +58,11 @@ struct TrajectorySample {
 
 /// Samples every sample_period_s from start to end (at rest at both ends; the last sample is
 /// the first multiple of the period at or after arrival). `route` needs >= 2 distinct
-/// consecutive points. Precondition: options.is_valid().
-std::vector<TrajectorySample> generate_trajectory(const std::vector<Vector2>& route, const TrajectoryOptions& options);
+/// consecutive points. A closed route ends back at its first point; an open one
+/// (`closed_route` false) ends at its last point (with several laps, each lap after the first
+/// starts with a leg from the last point back to the first). Precondition: options.is_valid().
+std::vector<TrajectorySample> generate_trajectory(const std::vector<Vector2>& route, const TrajectoryOptions& options,
+                                                  bool closed_route = true);
 
 /// Path length of a sampled trajectory (sum of distances between samples), metres.
 double path_length(const std::vector<TrajectorySample>& samples);

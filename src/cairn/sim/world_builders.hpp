@@ -23,10 +23,12 @@
 namespace cairn::sim {
 
 /// A world and the closed route driven through it: the robot starts at route.front() facing
-/// route[1], visits every waypoint in order and comes back to route.front() (one lap).
+/// route[1], visits every waypoint in order and comes back to route.front() (one lap); an open
+/// route (closed_route false, some 3D worlds) ends at route.back().
 struct WorldWithRoute {
   World world;
   std::vector<Vector2> route;
+  bool closed_route = true;
 };
 
 struct OfficeOptions {
