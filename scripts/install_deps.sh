@@ -24,6 +24,7 @@ PACKAGES=(
   libceres-dev         # only for side-by-side comparisons in bench/
   libcairo2-dev        # PNG/SVG plots and maps
   libyaml-cpp-dev      # slam2d configuration files
+  libnanoflann-dev     # k-d tree of the Scan Context place recognition (lidar3d)
   zlib1g-dev           # reading .gz logs
   libbz2-dev           # reading .bz2 logs
   liblzma-dev          # reading .xz point clouds

@@ -1,4 +1,4 @@
-// `cairn slam3d SCANS --out DIR`: 3D LiDAR odometry on a folder (or list) of scans, fed one scan
+// `cairn slam3d SCANS --out DIR`: 3D LiDAR SLAM on a folder (or list) of scans, fed one scan
 // at a time through the same streaming interface a robot would use (lidar3d/odometry.hpp).
 
 #include <algorithm>
@@ -22,6 +22,8 @@
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/outputs.hpp"
 #include "cairn/lidar3d/scan_sequence.hpp"
+#include "cairn/lidar3d/slam.hpp"
+#include "cairn/lidar3d/voxel_hash_map.hpp"
 
 namespace cairn::cli {
 namespace {
@@ -39,7 +41,9 @@ struct Slam3dFlags {
   long max_scans = 0;
   int threads = 0;
   double map_voxel_m = 0.25;
+  int picture_px = 1600;
   bool lenient = false;
+  bool no_loop_closure = false;
   bool quiet = false;
   bool progress = false;
   bool overwrite = false;
@@ -71,7 +75,10 @@ nlohmann::json pose_json(const core::SE3& T) {
 }
 
 int slam3d_command(const Slam3dFlags& flags) {
-  lidar3d::LidarOdometryOptions options = lidar3d::preset_options(flags.preset);
+  lidar3d::LidarSlamOptions slam_options;
+  slam_options.odometry = lidar3d::preset_options(flags.preset);
+  slam_options.loop_closure = !flags.no_loop_closure;
+  lidar3d::LidarOdometryOptions& options = slam_options.odometry;
   if (flags.metric == "point-to-point") options.registration.metric = lidar3d::IcpMetric::kPointToPoint;
   else if (flags.metric == "point-to-plane") options.registration.metric = lidar3d::IcpMetric::kPointToPlane;
   else if (!flags.metric.empty()) throw std::invalid_argument("--metric must be point-to-plane or point-to-point");
@@ -81,7 +88,7 @@ int slam3d_command(const Slam3dFlags& flags) {
   else if (!flags.deskew.empty()) throw std::invalid_argument("--deskew must be off, point-times or azimuth");
   options.threads = flags.threads;
   std::string error;
-  if (!options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
+  if (!slam_options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
   if (!(flags.map_voxel_m > 0.0) || !std::isfinite(flags.map_voxel_m)) throw std::invalid_argument("--map-voxel must be > 0");
   if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
 
@@ -112,8 +119,9 @@ int slam3d_command(const Slam3dFlags& flags) {
   // Refuse a directory of another run before the work, not after it.
   io::OutputDirectory out(flags.out, flags.overwrite);
   const auto start = std::chrono::steady_clock::now();
-  lidar3d::LidarOdometry odometry(options);
-  lidar3d::GlobalMap global_map(flags.map_voxel_m);
+  lidar3d::LidarSlam slam(slam_options);
+  // Keyframe points at the map's voxel, kept to draw the map at the final (loop-corrected) poses.
+  std::vector<std::vector<Eigen::Vector3d>> keyframe_points;
   std::vector<lidar3d::OdometryScanResult> results;
   std::vector<std::size_t> used_index;  // scan k of the sequence -> results
   std::vector<std::pair<std::string, std::string>> skipped;
@@ -134,15 +142,18 @@ int slam3d_command(const Slam3dFlags& flags) {
       continue;
     }
     read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
-    const lidar3d::OdometryScanResult result = odometry.add_scan(cloud, sequence.times_s[k]);
-    std::vector<Eigen::Vector3d> points;
-    points.reserve(cloud.size());
-    const double max2 = options.max_range_m * options.max_range_m, min2 = options.min_range_m * options.min_range_m;
-    for (const Eigen::Vector3f& p : cloud.points) {
-      const double r2 = p.cast<double>().squaredNorm();
-      if (r2 >= min2 && r2 <= max2) points.push_back(p.cast<double>());
+    const lidar3d::SlamScanResult slam_result = slam.add_scan(cloud, sequence.times_s[k]);
+    const lidar3d::OdometryScanResult& result = slam_result.odometry;
+    if (slam_result.keyframe) {
+      std::vector<Eigen::Vector3d> points;
+      points.reserve(cloud.size());
+      const double max2 = options.max_range_m * options.max_range_m, min2 = options.min_range_m * options.min_range_m;
+      for (const Eigen::Vector3f& p : cloud.points) {
+        const double r2 = p.cast<double>().squaredNorm();
+        if (r2 >= min2 && r2 <= max2) points.push_back(p.cast<double>());
+      }
+      keyframe_points.push_back(lidar3d::voxel_downsample(points, flags.map_voxel_m));
     }
-    global_map.add_scan(points, result.T_world_sensor);
     results.push_back(result);
     used_index.push_back(k);
     processed = k + 1;
@@ -153,9 +164,9 @@ int slam3d_command(const Slam3dFlags& flags) {
       last_health = result.health;
     }
     if ((tty_progress || flags.progress) && (k % 20 == 0 || k + 1 == n)) {
-      std::fprintf(stderr, "%sscan %zu / %zu  %.0f ms  segment %d  %s%s", tty_progress ? "\r" : "", k + 1, n,
-                   1e3 * result.times.total_s, result.segment, std::string(lidar3d::to_string(result.health)).c_str(),
-                   tty_progress ? "   " : "\n");
+      std::fprintf(stderr, "%sscan %zu / %zu  %.0f ms  segment %d  loops %zu  %s%s", tty_progress ? "\r" : "", k + 1, n,
+                   1e3 * result.times.total_s, result.segment, slam.summary().loops_accepted,
+                   std::string(lidar3d::to_string(result.health)).c_str(), tty_progress ? "   " : "\n");
       std::fflush(stderr);
     }
   }
@@ -166,6 +177,19 @@ int slam3d_command(const Slam3dFlags& flags) {
                  interrupt_signal_name(), processed, n);
   }
   if (results.empty()) throw std::runtime_error("no scan could be processed");
+  if (!stopped) slam.finish();
+  {
+    const std::vector<core::SE3> final_poses = slam.trajectory();
+    for (std::size_t i = 0; i < results.size(); ++i) results[i].T_world_sensor = final_poses[i];
+  }
+  lidar3d::GlobalMap global_map(flags.map_voxel_m);
+  {
+    const std::vector<core::SE3> keyframe_poses = slam.keyframe_poses();
+    for (std::size_t i = 0; i < keyframe_poses.size() && i < keyframe_points.size(); ++i) {
+      global_map.add_scan(keyframe_points[i], keyframe_poses[i]);
+    }
+  }
+  const lidar3d::LidarSlamSummary& slam_summary = slam.summary();
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // Trajectory files.
@@ -184,7 +208,7 @@ int slam3d_command(const Slam3dFlags& flags) {
   for (std::size_t index : used_index) {
     if (!ground_truth.empty()) ground_truth_used.push_back(ground_truth[index]);
   }
-  const std::vector<unsigned char> png = lidar3d::render_top_down(map_points, results, ground_truth_used);
+  const std::vector<unsigned char> png = lidar3d::render_top_down(map_points, results, ground_truth_used, flags.picture_px);
   io::write_output(out.staging_path("map.png"), [&](std::ostream& o) {
     o.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
   });
@@ -251,6 +275,35 @@ int slam3d_command(const Slam3dFlags& flags) {
   report["summary"] = {{"scans_ok", ok}, {"scans_degraded", degraded}, {"scans_lost", lost},
                        {"map_segments", results.back().segment + 1}, {"map_points", map_points.size()}};
   report["health_events"] = events;
+  nlohmann::json candidates = nlohmann::json::array();
+  for (const auto& c : slam_summary.candidates) {
+    candidates.push_back({{"query_keyframe", c.query_keyframe},
+                          {"candidate_keyframe", c.candidate_keyframe},
+                          {"query_time_s", c.query_time_s},
+                          {"candidate_time_s", c.candidate_time_s},
+                          {"descriptor_distance", c.descriptor_distance},
+                          {"descriptor_yaw_deg", c.descriptor_yaw_rad * 180.0 / M_PI},
+                          {"second_place_descriptor_distance", c.second_descriptor_distance},
+                          {"icp_fitness", c.fitness},
+                          {"icp_rms_m", c.rms_m},
+                          {"gate_translation_m", c.gate_translation_m},
+                          {"gate_limit_m", c.gate_limit_m},
+                          {"gate_rotation_deg", c.gate_rotation_rad * 180.0 / M_PI},
+                          {"T_candidate_query", pose_json(c.T_candidate_query)},
+                          {"decision", c.decision},
+                          {"rejected_by_gnc", c.rejected_by_gnc}});
+  }
+  report["loop_closure"] = {{"enabled", slam_options.loop_closure},
+                            {"keyframes", slam_summary.keyframes},
+                            {"queries", slam_summary.loop_queries},
+                            {"candidates_verified", slam_summary.candidates.size()},
+                            {"accepted", slam_summary.loops_accepted},
+                            {"rejected_by_gnc", slam_summary.loops_rejected_by_gnc},
+                            {"optimizations", slam_summary.optimizations},
+                            {"time_s", {{"search", slam_summary.loop_search_s},
+                                        {"verification", slam_summary.verification_s},
+                                        {"optimization", slam_summary.optimization_s}}},
+                            {"candidates", candidates}};
   report["time_per_scan_ms"] = {{"total", spread_json_ms(t_total)}, {"preprocess", spread_json_ms(t_pre)},
                                 {"register", spread_json_ms(t_reg)}, {"map_update", spread_json_ms(t_map)},
                                 {"read_file", spread_json_ms(read_s)}};
@@ -283,6 +336,11 @@ int slam3d_command(const Slam3dFlags& flags) {
                 total_s, 1e3 * total.median, 1e3 * total.mean, 1e3 * total.max);
     std::printf("health: %zu ok, %zu degraded, %zu lost; %d map segment%s\n", ok, degraded, lost, results.back().segment + 1,
                 results.back().segment == 0 ? "" : "s");
+    if (slam_options.loop_closure) {
+      std::printf("loop closure: %zu keyframes, %zu candidates verified, %zu accepted, %zu rejected by the back end (GNC)\n",
+                  slam_summary.keyframes, slam_summary.candidates.size(), slam_summary.loops_accepted,
+                  slam_summary.loops_rejected_by_gnc);
+    }
     if (errors) {
       std::printf("against %s (%zu poses, %.1f m):\n", flags.ground_truth.c_str(), errors->poses, errors->path_length_m);
       std::printf("  end-point error      %.3f m (%.2f %% of the path)\n", errors->end_point_error_m, errors->end_point_error_percent);
@@ -320,7 +378,9 @@ Runner register_slam3d(CLI::App& app) {
   app.add_option("--deskew", flags->deskew, "off, point-times (default: with the files' per-point times) or azimuth");
   app.add_option("--threads", flags->threads, "Threads (0 = all)")->capture_default_str();
   app.add_option("--map-voxel", flags->map_voxel_m, "Voxel of the written map, metres")->capture_default_str();
+  app.add_option("--picture-size", flags->picture_px, "Longer side of map.png, pixels")->capture_default_str()->check(CLI::Range(200, 20000));
   app.add_option("--max-scans", flags->max_scans, "Process only the first N scans");
+  app.add_flag("--no-loop-closure", flags->no_loop_closure, "Odometry only: no Scan Context search, no pose graph");
   app.add_flag("--lenient", flags->lenient, "Skip scans that cannot be read (listed in the report) instead of stopping");
   app.add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
   app.add_flag("--progress", flags->progress, "Progress as a line every 20 scans on stderr, also when stderr is not a terminal");

@@ -211,8 +211,9 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   result.T_world_sensor = T_world_sensor;
   const Eigen::Matrix3d R = T_world_sensor.rotation_matrix();
   const Eigen::Vector3d t = T_world_sensor.translation();
-  for (Eigen::Vector3d& p : frame) p = R * p + t;
   if (too_few_points) frame.clear();
+  last_frame_sensor_ = frame;
+  for (Eigen::Vector3d& p : frame) p = R * p + t;
   map_.add_points(frame);
   map_.remove_far_from(t, options_.max_range_m);
   result.map_points_added = frame.size();

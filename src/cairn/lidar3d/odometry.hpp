@@ -143,6 +143,9 @@ class LidarOdometry {
   OdometryScanResult add_scan(const io::PointCloud& cloud, double time_s);
 
   const VoxelHashMap& local_map() const { return map_; }
+  /// The last scan's points as they went into the map (corrected, deskewed, cropped, subsampled at
+  /// 0.5 v), in its sensor frame at the sweep's middle; empty for a scan with too few points.
+  const std::vector<Eigen::Vector3d>& last_frame_points() const { return last_frame_sensor_; }
   const LidarOdometryOptions& options() const { return options_; }
   std::size_t scans() const { return poses_.size(); }
 
@@ -151,6 +154,7 @@ class LidarOdometry {
   LidarOdometryOptions options_;
   std::unique_ptr<Arena> arena_;
   VoxelHashMap map_;
+  std::vector<Eigen::Vector3d> last_frame_sensor_;
   std::vector<core::SE3> poses_;
   std::vector<double> times_;
   double model_error_sse_ = 0.0;

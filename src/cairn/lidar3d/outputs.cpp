@@ -94,7 +94,7 @@ TrajectoryErrors evaluate_trajectory(const std::vector<core::SE3>& ground_truth,
 
 std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& map_points,
                                            const std::vector<OdometryScanResult>& scans,
-                                           const std::vector<core::SE3>& ground_truth) {
+                                           const std::vector<core::SE3>& ground_truth, int max_side_px) {
   // Extent: the trajectory plus the map within 30 m of it (the map reaches 100 m out and would
   // shrink the trajectory to a few pixels).
   Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
@@ -105,7 +105,7 @@ std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& m
   if (scans.empty()) lo = hi = Eigen::Vector2d::Zero();
   lo -= Eigen::Vector2d(30.0, 30.0);
   hi += Eigen::Vector2d(30.0, 30.0);
-  const int max_side = 1600;
+  const int max_side = std::max(200, max_side_px);
   const double resolution = std::max((hi - lo).maxCoeff() / max_side, 0.05);  // metres per pixel
   const int width = std::max(200, static_cast<int>(std::ceil((hi.x() - lo.x()) / resolution)));
   const int height = std::max(200, static_cast<int>(std::ceil((hi.y() - lo.y()) / resolution)));

@@ -61,8 +61,9 @@ TrajectoryErrors evaluate_trajectory(const std::vector<core::SE3>& ground_truth,
 /// A PNG: the map seen from above (points shaded by height), the trajectory coloured by health
 /// (blue ok, orange degraded, red lost; a gap where a new map segment starts) and, if given, the
 /// ground truth aligned by SE(3) Umeyama in grey; legend and scale bar.
+/// The longer side is at most `max_side_px` pixels (>= 200).
 std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& map_points,
                                            const std::vector<OdometryScanResult>& scans,
-                                           const std::vector<core::SE3>& ground_truth);
+                                           const std::vector<core::SE3>& ground_truth, int max_side_px = 1600);
 
 }  // namespace cairn::lidar3d

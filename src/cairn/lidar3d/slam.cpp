@@ -1,0 +1,377 @@
+#include "cairn/lidar3d/slam.hpp"
+
+#include <tbb/task_arena.h>
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "cairn/backend/gnc.hpp"
+#include "cairn/backend/optimizer.hpp"
+#include "cairn/backend/problem.hpp"
+#include "cairn/io/pose_graph.hpp"
+#include "cairn/lidar3d/registration.hpp"
+#include "cairn/lidar3d/voxel_hash_map.hpp"
+
+namespace cairn::lidar3d {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+Eigen::Matrix<double, 6, 6> information(double translation_sigma_m, double rotation_sigma_rad) {
+  Eigen::Matrix<double, 6, 1> diagonal;
+  const double it = 1.0 / (translation_sigma_m * translation_sigma_m);
+  const double ir = 1.0 / (rotation_sigma_rad * rotation_sigma_rad);
+  diagonal << it, it, it, ir, ir, ir;
+  return diagonal.asDiagonal();
+}
+
+struct Keyframe {
+  std::size_t scan = 0;
+  double time_s = 0.0;
+  core::SE3 T_odom_sensor;   ///< the odometry's estimate
+  core::SE3 T_world_sensor;  ///< the graph's estimate
+  int segment = 0;
+  double path_m = 0.0;       ///< odometry path length up to this keyframe
+  std::vector<Eigen::Vector3d> points_sensor;
+};
+
+struct Edge {
+  int from = 0;
+  int to = 0;
+  core::SE3 T_from_to;
+  bool loop = false;
+  bool weak = false;
+  int candidate = -1;  ///< index into summary.candidates for loop edges
+};
+
+struct Verification {
+  core::SE3 T_candidate_query;
+  double fitness = 0.0;
+  double rms_m = 0.0;
+  bool degenerate = false;
+};
+
+}  // namespace
+
+ScanContextOptions slam_scan_context_options() {
+  ScanContextOptions options;
+  options.lateral_offsets_m = {-4.0, -2.0, 2.0, 4.0};
+  return options;
+}
+
+bool LidarSlamOptions::is_valid(std::string* error) const {
+  auto fail = [&](const std::string& message) {
+    if (error != nullptr) *error = message;
+    return false;
+  };
+  if (!odometry.is_valid(error)) return false;
+  if (!scan_context.is_valid(error)) return false;
+  auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (!positive(keyframe_distance_m) || !positive(keyframe_angle_rad)) return fail("keyframe_distance_m and keyframe_angle_rad must be > 0");
+  if (verification_neighbours < 0) return fail("verification_neighbours must be >= 0");
+  if (!positive(verification_coarse_threshold_m) || !positive(verification_fine_threshold_m) || !positive(verification_voxel_m)) {
+    return fail("verification thresholds and voxel must be > 0");
+  }
+  if (!(loop_min_fitness >= 0.0 && loop_min_fitness <= 1.0)) return fail("loop_min_fitness must be in [0, 1]");
+  if (!positive(loop_max_rms_m)) return fail("loop_max_rms_m must be > 0");
+  if (!(loop_gate_translation_m >= 0.0) || !(loop_gate_rotation_rad >= 0.0) || !(loop_gate_drift_per_m >= 0.0) ||
+      !(loop_gate_rotation_drift_per_m >= 0.0)) {
+    return fail("loop gates must be >= 0");
+  }
+  if (!(loop_uniqueness_separation_m >= 0.0)) return fail("loop_uniqueness_separation_m must be >= 0");
+  if (!(loop_ambiguity_fitness_margin >= 0.0 && loop_ambiguity_fitness_margin <= 1.0)) {
+    return fail("loop_ambiguity_fitness_margin must be in [0, 1]");
+  }
+  if (!positive(odometry_translation_sigma_m) || !positive(odometry_rotation_sigma_rad) ||
+      !positive(segment_break_translation_sigma_m) || !positive(segment_break_rotation_sigma_rad) ||
+      !positive(loop_translation_sigma_m) || !positive(loop_rotation_sigma_rad)) {
+    return fail("pose-graph sigmas must be > 0");
+  }
+  return true;
+}
+
+struct LidarSlam::Impl {
+  explicit Impl(const LidarSlamOptions& o)
+      : options(o),
+        odometry(o.odometry),
+        database(o.scan_context),
+        arena(o.odometry.threads > 0 ? o.odometry.threads : tbb::task_arena::automatic) {}
+
+  LidarSlamOptions options;
+  LidarOdometry odometry;
+  ScanContextDatabase database;
+  tbb::task_arena arena;
+  std::vector<Keyframe> keyframes;
+  std::vector<Edge> edges;
+  std::vector<core::SE3> scan_T_odom;
+  std::vector<int> scan_anchor;
+  double path_m = 0.0;
+  std::size_t loops_since_optimization = 0;
+
+  core::SE3 T_world_from_odom(const core::SE3& T_odom) const {
+    const Keyframe& last = keyframes.back();
+    return last.T_world_sensor * (last.T_odom_sensor.inverse() * T_odom);
+  }
+
+  // The candidate's neighbourhood in its own frame, as a voxel map for ICP.
+  VoxelHashMap target_map(int candidate) const {
+    VoxelHashMap map(VoxelHashMapOptions{options.verification_voxel_m, 20});
+    const int n = static_cast<int>(keyframes.size());
+    const core::SE3 T_candidate_world = keyframes[static_cast<std::size_t>(candidate)].T_world_sensor.inverse();
+    for (int j = std::max(0, candidate - options.verification_neighbours);
+         j <= std::min(n - 1, candidate + options.verification_neighbours); ++j) {
+      const Keyframe& kf = keyframes[static_cast<std::size_t>(j)];
+      const core::SE3 T = T_candidate_world * kf.T_world_sensor;
+      std::vector<Eigen::Vector3d> points;
+      points.reserve(kf.points_sensor.size());
+      for (const Eigen::Vector3d& p : kf.points_sensor) points.push_back(T * p);
+      map.add_points(points);
+    }
+    return map;
+  }
+
+  Verification verify(int query, int candidate, const ScanContextMatch& match) {
+    const VoxelHashMap map = target_map(candidate);
+    const std::vector<Eigen::Vector3d> source =
+        voxel_downsample(keyframes[static_cast<std::size_t>(query)].points_sensor, 1.5 * options.verification_voxel_m);
+    const core::SE3 T_estimate = keyframes[static_cast<std::size_t>(candidate)].T_world_sensor.inverse() *
+                                 keyframes[static_cast<std::size_t>(query)].T_world_sensor;
+    const core::SE3 T_descriptor(core::SO3::exp(Eigen::Vector3d(0.0, 0.0, match.yaw_rad)), match.t_candidate_query);
+    Verification best;
+    best.fitness = -1.0;
+    for (const core::SE3& start : {T_descriptor, T_estimate}) {
+      const double coarse = options.verification_coarse_threshold_m, fine = options.verification_fine_threshold_m;
+      RegistrationResult r = register_scan(map, source, start, coarse, coarse / 3.0);
+      r = register_scan(map, source, r.T_map_sensor, fine, fine / 3.0);
+      const double fitness =
+          r.source_points > 0 ? static_cast<double>(r.correspondences) / static_cast<double>(r.source_points) : 0.0;
+      if (fitness > best.fitness) {
+        best.T_candidate_query = r.T_map_sensor;
+        best.fitness = fitness;
+        best.rms_m = r.rms_m;
+        best.degenerate = r.degenerate_directions > 0;
+      }
+    }
+    return best;
+  }
+
+  io::PoseGraph3D graph() const {
+    io::PoseGraph3D graph;
+    for (std::size_t k = 0; k < keyframes.size(); ++k) graph.vertices.push_back({static_cast<std::int64_t>(k), keyframes[k].T_world_sensor});
+    for (const Edge& e : edges) {
+      io::GraphEdge<core::SE3> edge;
+      edge.from = e.from;
+      edge.to = e.to;
+      edge.T_from_to = e.T_from_to;
+      edge.information = e.loop   ? information(options.loop_translation_sigma_m, options.loop_rotation_sigma_rad)
+                         : e.weak ? information(options.segment_break_translation_sigma_m, options.segment_break_rotation_sigma_rad)
+                                  : information(options.odometry_translation_sigma_m, options.odometry_rotation_sigma_rad);
+      graph.edges.push_back(edge);
+    }
+    graph.fixed.push_back(0);
+    return graph;
+  }
+
+  void optimize(bool gnc, LidarSlamSummary& summary) {
+    if (keyframes.size() < 2) return;
+    const auto start = Clock::now();
+    backend::Problem3D problem = backend::make_problem(graph(), "slam3d pose graph");
+    backend::OptimizerOptions solver;
+    solver.max_iterations = 30;
+    solver.function_tolerance = 1e-9;
+    solver.threads = 1;
+    if (gnc) {
+      backend::GncOptions gnc_options;
+      gnc_options.inner = solver;
+      const backend::GncSummary result = backend::optimize_gnc(problem, gnc_options);
+      if (result.interrupted) return;
+      std::vector<Edge> kept;
+      for (std::size_t e = 0; e < edges.size(); ++e) {
+        const bool rejected = !result.weights.empty() && result.weights[e] <= 0.5 && edges[e].loop;
+        if (rejected) {
+          summary.candidates[static_cast<std::size_t>(edges[e].candidate)].rejected_by_gnc = true;
+          ++summary.loops_rejected_by_gnc;
+        } else {
+          kept.push_back(edges[e]);
+        }
+      }
+      edges = std::move(kept);
+    } else {
+      backend::optimize(problem, solver);
+    }
+    for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k].T_world_sensor = problem.T_world_pose[k];
+    ++summary.optimizations;
+    loops_since_optimization = 0;
+    summary.optimization_s += seconds_since(start);
+  }
+
+  void search_loops(int query, const ScanContext& context, LidarSlamSummary& summary) {
+    auto start = Clock::now();
+    const std::vector<LoopCandidate> candidates = database.query(context, query);
+    ++summary.loop_queries;
+    summary.loop_search_s += seconds_since(start);
+    if (candidates.empty() || !candidates.front().below_threshold) return;
+    start = Clock::now();
+    const LoopCandidate& best = candidates.front();
+    const Keyframe& q = keyframes[static_cast<std::size_t>(query)];
+    const Keyframe& c = keyframes[static_cast<std::size_t>(best.id)];
+    LoopCandidateRecord record;
+    record.query_keyframe = query;
+    record.candidate_keyframe = best.id;
+    record.query_time_s = q.time_s;
+    record.candidate_time_s = c.time_s;
+    record.descriptor_distance = best.match.distance;
+    record.descriptor_yaw_rad = best.match.yaw_rad;
+    record.second_descriptor_distance = 1.0;
+    const LoopCandidate* second = nullptr;
+    for (std::size_t i = 1; i < candidates.size(); ++i) {
+      const Keyframe& other = keyframes[static_cast<std::size_t>(candidates[i].id)];
+      if ((other.T_world_sensor.translation() - c.T_world_sensor.translation()).norm() > options.loop_uniqueness_separation_m) {
+        second = &candidates[i];
+        record.second_descriptor_distance = candidates[i].match.distance;
+        break;
+      }
+    }
+    Verification v;
+    arena.execute([&] { v = verify(query, best.id, best.match); });
+    record.T_candidate_query = v.T_candidate_query;
+    record.fitness = v.fitness;
+    record.rms_m = v.rms_m;
+    const core::SE3 T_estimate = c.T_world_sensor.inverse() * q.T_world_sensor;
+    const core::SE3 difference = T_estimate.inverse() * v.T_candidate_query;
+    const double travelled = std::abs(q.path_m - c.path_m);
+    record.gate_translation_m = difference.translation().norm();
+    record.gate_rotation_rad = difference.so3().log().norm();
+    record.gate_limit_m = options.loop_gate_translation_m + options.loop_gate_drift_per_m * travelled;
+    const double rotation_limit = options.loop_gate_rotation_rad + options.loop_gate_rotation_drift_per_m * travelled;
+    if (v.fitness < options.loop_min_fitness) {
+      record.decision = "icp fitness";
+    } else if (v.rms_m > options.loop_max_rms_m) {
+      record.decision = "icp rms";
+    } else if (v.degenerate) {
+      record.decision = "icp degenerate";
+    } else if (record.gate_translation_m > record.gate_limit_m || record.gate_rotation_rad > rotation_limit) {
+      record.decision = "odometry gate";
+    } else {
+      record.decision = "accepted";
+      if (second != nullptr && second->below_threshold) {
+        // The second place verifies too: the same place seen from a neighbouring keyframe puts
+        // the query where the best does; a look-alike elsewhere puts it somewhere else.
+        Verification w;
+        arena.execute([&] { w = verify(query, second->id, second->match); });
+        const Keyframe& s2 = keyframes[static_cast<std::size_t>(second->id)];
+        const Eigen::Vector3d by_best = (c.T_world_sensor * v.T_candidate_query).translation();
+        const Eigen::Vector3d by_second = (s2.T_world_sensor * w.T_candidate_query).translation();
+        record.second_fitness = w.fitness;
+        if (w.fitness >= options.loop_min_fitness && w.rms_m <= options.loop_max_rms_m &&
+            w.fitness > v.fitness - options.loop_ambiguity_fitness_margin &&
+            (by_best - by_second).norm() > options.loop_uniqueness_separation_m) {
+          record.decision = "ambiguous";
+        }
+      }
+    }
+    record.accepted = record.decision == "accepted";
+    summary.verification_s += seconds_since(start);
+    summary.candidates.push_back(record);
+    if (record.accepted) {
+      edges.push_back({best.id, query, v.T_candidate_query, true, false, static_cast<int>(summary.candidates.size() - 1)});
+      ++summary.loops_accepted;
+      ++loops_since_optimization;
+      optimize(false, summary);
+    }
+  }
+};
+
+LidarSlam::LidarSlam(const LidarSlamOptions& options) : options_(options) {
+  std::string error;
+  if (!options_.is_valid(&error)) throw std::invalid_argument("LidarSlamOptions: " + error);
+  impl_ = std::make_unique<Impl>(options_);
+}
+
+LidarSlam::~LidarSlam() = default;
+
+SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s) {
+  Impl& m = *impl_;
+  SlamScanResult result;
+  result.odometry = m.odometry.add_scan(cloud, time_s);
+  const core::SE3& T_odom = result.odometry.T_world_sensor;
+  if (!m.scan_T_odom.empty()) m.path_m += (T_odom.translation() - m.scan_T_odom.back().translation()).norm();
+  m.scan_T_odom.push_back(T_odom);
+  ++summary_.scans;
+
+  bool make_keyframe = m.keyframes.empty();
+  if (!make_keyframe) {
+    const Keyframe& last = m.keyframes.back();
+    const core::SE3 motion = last.T_odom_sensor.inverse() * T_odom;
+    make_keyframe = motion.translation().norm() >= options_.keyframe_distance_m ||
+                    motion.so3().log().norm() >= options_.keyframe_angle_rad || result.odometry.segment != last.segment;
+  }
+  if (make_keyframe && !m.odometry.last_frame_points().empty()) {
+    Keyframe kf;
+    kf.scan = m.scan_T_odom.size() - 1;
+    kf.time_s = time_s;
+    kf.T_odom_sensor = T_odom;
+    kf.T_world_sensor = m.keyframes.empty() ? T_odom : m.T_world_from_odom(T_odom);
+    kf.segment = result.odometry.segment;
+    kf.path_m = m.path_m;
+    kf.points_sensor = m.odometry.last_frame_points();
+    const int id = static_cast<int>(m.keyframes.size());
+    if (!m.keyframes.empty()) {
+      const Keyframe& last = m.keyframes.back();
+      m.edges.push_back({id - 1, id, last.T_odom_sensor.inverse() * T_odom, false, last.segment != kf.segment, -1});
+    }
+    m.keyframes.push_back(std::move(kf));
+    result.keyframe = true;
+    summary_.keyframes = m.keyframes.size();
+    if (options_.loop_closure) {
+      const auto start = Clock::now();
+      ScanContext context = make_scan_context(m.keyframes.back().points_sensor, options_.scan_context);
+      summary_.loop_search_s += seconds_since(start);
+      m.search_loops(id, context, summary_);
+      m.database.add(id, std::move(context));
+    }
+  }
+  m.scan_anchor.push_back(m.keyframes.empty() ? -1 : static_cast<int>(m.keyframes.size()) - 1);
+  result.odometry.T_world_sensor = m.keyframes.empty() ? T_odom : m.T_world_from_odom(T_odom);
+  return result;
+}
+
+void LidarSlam::finish() {
+  Impl& m = *impl_;
+  if (options_.final_gnc && summary_.loops_accepted > 0) m.optimize(true, summary_);
+}
+
+std::vector<core::SE3> LidarSlam::trajectory() const {
+  const Impl& m = *impl_;
+  std::vector<core::SE3> out;
+  out.reserve(m.scan_T_odom.size());
+  for (std::size_t i = 0; i < m.scan_T_odom.size(); ++i) {
+    const int a = m.scan_anchor[i];
+    if (a < 0) {
+      out.push_back(m.scan_T_odom[i]);
+      continue;
+    }
+    const Keyframe& kf = m.keyframes[static_cast<std::size_t>(a)];
+    out.push_back(kf.T_world_sensor * (kf.T_odom_sensor.inverse() * m.scan_T_odom[i]));
+  }
+  return out;
+}
+
+std::vector<core::SE3> LidarSlam::keyframe_poses() const {
+  std::vector<core::SE3> out;
+  for (const Keyframe& kf : impl_->keyframes) out.push_back(kf.T_world_sensor);
+  return out;
+}
+
+std::vector<std::size_t> LidarSlam::keyframe_scans() const {
+  std::vector<std::size_t> out;
+  for (const Keyframe& kf : impl_->keyframes) out.push_back(kf.scan);
+  return out;
+}
+
+}  // namespace cairn::lidar3d
