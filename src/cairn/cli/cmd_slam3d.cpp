@@ -184,9 +184,10 @@ int slam3d_command(const Slam3dFlags& flags) {
   }
   lidar3d::GlobalMap global_map(flags.map_voxel_m);
   {
-    const std::vector<core::SE3> keyframe_poses = slam.keyframe_poses();
-    for (std::size_t i = 0; i < keyframe_poses.size() && i < keyframe_points.size(); ++i) {
-      global_map.add_scan(keyframe_points[i], keyframe_poses[i]);
+    // The stored points are the raw scans (not deskewed): placed at their scans' stamp poses.
+    const std::vector<std::size_t> keyframe_scans = slam.keyframe_scans();
+    for (std::size_t i = 0; i < keyframe_scans.size() && i < keyframe_points.size(); ++i) {
+      global_map.add_scan(keyframe_points[i], results[keyframe_scans[i]].T_world_sensor);
     }
   }
   const lidar3d::LidarSlamSummary& slam_summary = slam.summary();
@@ -266,6 +267,7 @@ int slam3d_command(const Slam3dFlags& flags) {
                      {"rms_m", r.registration.rms_m},
                      {"threshold_sigma_m", r.threshold_sigma_m},
                      {"degeneracy", r.registration.degeneracy},
+                     {"translation_degeneracy", r.registration.translation_degeneracy},
                      {"degenerate_directions", r.registration.degenerate_directions},
                      {"degenerate_axis", r.degenerate_axis},
                      {"local_map_points", r.local_map_points},
@@ -319,7 +321,8 @@ int slam3d_command(const Slam3dFlags& flags) {
                         {"end_point_error_percent", errors->end_point_error_percent},
                         {"rpe_translation_rmse_m", errors->rpe_translation_rmse_m},
                         {"rpe_rotation_rmse_deg", errors->rpe_rotation_rmse_deg},
-                        {"ate_se3_rmse_m", errors->ate_rmse_m}};
+                        {"ate_se3_rmse_m", errors->ate_rmse_m ? nlohmann::json(*errors->ate_rmse_m) : nlohmann::json(nullptr)}};
+    if (!errors->ate_note.empty()) e["ate_note"] = errors->ate_note;
     if (errors->kitti_translation_percent) {
       e["kitti_t_err_percent"] = *errors->kitti_translation_percent;
       e["kitti_r_err_deg_per_100m"] = *errors->kitti_rotation_deg_per_100m;
@@ -345,7 +348,11 @@ int slam3d_command(const Slam3dFlags& flags) {
       std::printf("against %s (%zu poses, %.1f m):\n", flags.ground_truth.c_str(), errors->poses, errors->path_length_m);
       std::printf("  end-point error      %.3f m (%.2f %% of the path)\n", errors->end_point_error_m, errors->end_point_error_percent);
       std::printf("  RPE, consecutive     %.4f m  %.4f deg (RMSE)\n", errors->rpe_translation_rmse_m, errors->rpe_rotation_rmse_deg);
-      std::printf("  ATE, SE(3)-aligned   %.4f m (RMSE)\n", errors->ate_rmse_m);
+      if (errors->ate_rmse_m) {
+        std::printf("  ATE, SE(3)-aligned   %.4f m (RMSE)\n", *errors->ate_rmse_m);
+      } else {
+        std::printf("  ATE, SE(3)-aligned   not available: %s\n", errors->ate_note.c_str());
+      }
       if (errors->kitti_translation_percent) {
         std::printf("  KITTI devkit         t_err %.3f %%  r_err %.4f deg/100 m\n", *errors->kitti_translation_percent,
                     *errors->kitti_rotation_deg_per_100m);

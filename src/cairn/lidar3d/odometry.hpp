@@ -11,12 +11,18 @@
 ///     here the last motion is a velocity (the twist log(T_{k-2}^-1 T_{k-1}) per second of
 ///     timestamp difference) applied over the new timestamp difference, so scans that arrive at
 ///     irregular intervals (key frames, dropped scans) are predicted as well as regular ones.
-///  2. Deskew (Sec. III-A): point p taken at time tau of the sweep is moved to the sweep's middle
-///     with exp(xi (tau - P/2)) p, xi the velocity of step 1, P = `sweep_period_s`. tau comes from
-///     the file's per-point time field (DeskewMode::kPointTimes, the default: scans without one
-///     are used as they are), or from the point's azimuth as KISS-ICP's KITTI-raw loader does
-///     (kAzimuth): tau = (pi - atan2(y, x)) / (2 pi) P, a sweep that starts facing backward and
-///     turns clockwise (io/point_cloud.hpp). Scans a driver has already motion-compensated
+///  2. Deskew (Sec. III-A): point p taken at time tau is moved to the sweep's middle tau_mid with
+///     exp(xi (tau - tau_mid)) p, xi the velocity of step 1, and registered there; the pose
+///     reported is moved on to the instant of the scan's timestamp tau_0 with the new velocity
+///     (KISS-ICP's PR #421 makes the same distinction). tau comes from the file's per-point
+///     time field, counted from the timestamp, tau_0 = 0, tau_mid the middle of the scan's time
+///     range (DeskewMode::kPointTimes, the default: scans without one are used as they are), or
+///     from the point's azimuth as KISS-ICP's KITTI-raw loader does (kAzimuth):
+///     tau = (pi - atan2(y, x)) / (2 pi) P, P = `sweep_period_s`, a sweep that starts facing
+///     backward and turns clockwise (io/point_cloud.hpp), with tau_0 = tau_mid = P/2, facing
+///     forward, where KITTI stamps its scans. Registering at the middle matters: there the
+///     deskew moves the points by zero on average, so an error of the velocity does not move
+///     the registered pose and feed back into the next velocity. Scans a driver has already motion-compensated
 ///     (KITTI's "sync" and odometry scans, see docs/lidar3d.md) must not be deskewed again.
 ///  3. Range crop [min_range_m, max_range_m]; voxel subsampling at 0.5 v for the map and again at
 ///     1.5 v for registration (Sec. III-B), v = `voxel_size_m`.
@@ -115,7 +121,12 @@ struct OdometryStageTimes {
 
 struct OdometryScanResult {
   double time_s = 0.0;
+  /// The sensor at the scan's timestamp.
   core::SE3 T_world_sensor;
+  /// The sensor at the sweep's middle, where the scan was registered: the frame of
+  /// LidarOdometry::last_frame_points(). Equals T_world_sensor when the scan was not deskewed
+  /// or its stamp is the middle (KITTI).
+  core::SE3 T_world_registered;
   Health health = Health::kOk;
   /// Map segment (0, then one more after each lost scan).
   int segment = 0;
@@ -156,7 +167,8 @@ class LidarOdometry {
   VoxelHashMap map_;
   std::vector<Eigen::Vector3d> last_frame_sensor_;
   std::vector<core::SE3> poses_;
-  std::vector<double> times_;
+  std::vector<double> times_;   ///< of poses_: the sweep middles
+  std::vector<double> stamps_;  ///< the scans' timestamps
   double model_error_sse_ = 0.0;
   std::size_t model_error_samples_ = 0;
   int segment_ = 0;

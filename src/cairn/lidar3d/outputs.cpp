@@ -81,8 +81,11 @@ TrajectoryErrors evaluate_trajectory(const std::vector<core::SE3>& ground_truth,
   eval::ApeOptions ape;
   ape.alignment.method = eval::AlignmentMethod::kSE3;
   const eval::ApeResult ate = eval::evaluate_ape(gt, est, ape);
-  if (!ate.outcome.ok()) throw std::runtime_error("ATE: " + ate.outcome.message);
-  e.ate_rmse_m = ate.statistics.rmse;
+  if (ate.outcome.ok()) {
+    e.ate_rmse_m = ate.statistics.rmse;
+  } else {
+    e.ate_note = ate.outcome.message;
+  }
 
   const eval::KittiResult kitti = eval::evaluate_kitti(gt, est);
   if (kitti.outcome.ok() && !kitti.segments.empty()) {

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <iosfwd>
 #include <optional>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -47,15 +48,18 @@ struct TrajectoryErrors {
   double rpe_translation_rmse_m = 0.0;
   double rpe_rotation_rmse_deg = 0.0;
   /// Absolute trajectory error after SE(3) Umeyama alignment, translation RMSE (evo_ape -a).
-  double ate_rmse_m = 0.0;
+  /// Empty when the alignment is undetermined (a straight-line trajectory fixes no rotation
+  /// about its line); `ate_note` then says why.
+  std::optional<double> ate_rmse_m;
+  std::string ate_note;
   /// KITTI devkit t_err (%) and r_err (deg/100 m) over 100..800 m segments, when the
   /// trajectory is long enough for one.
   std::optional<double> kitti_translation_percent;
   std::optional<double> kitti_rotation_deg_per_100m;
 };
 
-/// Throws std::invalid_argument when the sizes differ or are below 2, std::runtime_error when a
-/// metric fails (e.g. degenerate alignment).
+/// Throws std::invalid_argument when the sizes differ or are below 2, std::runtime_error when the
+/// RPE fails.
 TrajectoryErrors evaluate_trajectory(const std::vector<core::SE3>& ground_truth, const std::vector<core::SE3>& estimate);
 
 /// A PNG: the map seen from above (points shaded by height), the trajectory coloured by health

@@ -16,6 +16,7 @@ struct LinearSystem {
   Matrix6 H = Matrix6::Zero();        // of the chosen metric
   Vector6 g = Vector6::Zero();
   Matrix6 H_plane = Matrix6::Zero();  // point-to-plane, for the degeneracy analysis
+  Eigen::Matrix3d normal_moment = Eigen::Matrix3d::Zero();  // sum w n n^T
   double plane_weight_sum = 0.0;
   double plane_squared_range_sum = 0.0;
   double squared_distance_sum = 0.0;
@@ -27,6 +28,7 @@ struct LinearSystem {
     g += other.g;
     H_plane += other.H_plane;
     plane_weight_sum += other.plane_weight_sum;
+    normal_moment += other.normal_moment;
     plane_squared_range_sum += other.plane_squared_range_sum;
     squared_distance_sum += other.squared_distance_sum;
     correspondences += other.correspondences;
@@ -68,6 +70,7 @@ LinearSystem build_system(const VoxelHashMap& map, const std::vector<Eigen::Vect
             const double w = kernel_squared / (denominator * denominator);
             system.H_plane.noalias() += w * Jn.transpose() * Jn;
             system.plane_weight_sum += w;
+            system.normal_moment.noalias() += w * n * n.transpose();
             system.plane_squared_range_sum += w * (p - T_map_sensor.translation()).squaredNorm();
             ++system.planar;
             if (metric == IcpMetric::kPointToPlane) {
@@ -110,12 +113,15 @@ RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eige
       result.eigenvalues.setZero();
       break;
     }
-    // Degeneracy on the normalised point-to-plane matrix H_s = S H_plane S / sum w, with
-    // delta_s = S^-1 delta and L the weighted RMS range of the planar correspondences. Without
-    // enough planar correspondences there is nothing to judge: the full step is taken.
+    // Degeneracy (Zhang et al. 2016) of the surfaces: the 6-DoF normalised point-to-plane matrix
+    // H_s = S H_plane S / sum w (reported), and the weighted mean N = sum w n n^T / sum w of the
+    // planar correspondences' normals, whose eigenvalues (in [0, 1/3] for the smallest) say how
+    // much the surfaces constrain each translation direction (decides). Without enough planar
+    // correspondences there is nothing to judge: the full step is taken.
     Vector6 delta = Vector6::Zero();
     result.degenerate_directions = 0;
     result.degeneracy = 0.0;
+    result.translation_degeneracy = 0.0;
     result.eigenvalues.setZero();
     if (system.planar >= 6 && system.plane_weight_sum > 0.0) {
       const double L = std::sqrt(system.plane_squared_range_sum / system.plane_weight_sum);
@@ -124,33 +130,37 @@ RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eige
       scale << 1.0, 1.0, 1.0, 1.0 / L, 1.0 / L, 1.0 / L;
       const Matrix6 H_s = scale.asDiagonal() * system.H_plane * scale.asDiagonal() / system.plane_weight_sum;
       const Eigen::SelfAdjointEigenSolver<Matrix6> eigen(H_s);
-      const Vector6 lambda = eigen.eigenvalues();
-      const Matrix6& V = eigen.eigenvectors();
-      result.eigenvalues = lambda;
-      result.weakest_direction = scale.cwiseProduct(V.col(0)).normalized();
-      result.degeneracy = std::max(0.0, lambda(0));
-      // Zhang et al. 2016, Sec. V: keep the prior along the degenerate directions. The step is
-      // solved within the span U of the well-determined eigenvectors (in the scaled variables,
-      // where they are orthonormal): delta_s = U y, (U^T H' U) y = -U^T g' with H' = S H S,
-      // g' = S g. For a point-to-plane H this is their solution remapping; it also stays finite
-      // where H itself is singular (a tunnel seen only by planes).
-      Eigen::Matrix<double, 6, Eigen::Dynamic> U(6, 0);
-      for (int k = 0; k < 6; ++k) {
-        if (lambda(k) > options.degenerate_min_eigenvalue) {
-          U.conservativeResize(Eigen::NoChange, U.cols() + 1);
-          U.col(U.cols() - 1) = V.col(k);
+      result.eigenvalues = eigen.eigenvalues();
+      result.degeneracy = std::max(0.0, result.eigenvalues(0));
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> normals(system.normal_moment / system.plane_weight_sum);
+      const Eigen::Vector3d nu = normals.eigenvalues();
+      const Eigen::Matrix3d& W = normals.eigenvectors();
+      result.translation_degeneracy = std::max(0.0, nu(0));
+      result.weakest_direction << W.col(0), Eigen::Vector3d::Zero();
+      // Solution remapping (Zhang et al. 2016, Sec. V): keep the prior along the degenerate
+      // translation directions by solving the step within the span B of the others (and every
+      // rotation): delta = B y, (B^T H B) y = -B^T g. It stays finite where H itself is singular
+      // (a tunnel seen only by planes).
+      int well = 0;
+      Eigen::Matrix<double, 6, 6> B = Eigen::Matrix<double, 6, 6>::Zero();
+      for (int k = 0; k < 3; ++k) {
+        if (nu(k) > options.degenerate_min_eigenvalue) {
+          B.block<3, 1>(0, well++) = W.col(k);
         } else {
           ++result.degenerate_directions;
         }
       }
-      if (result.degenerate_directions > 0) {
-        const Matrix6 H_scaled = scale.asDiagonal() * system.H * scale.asDiagonal();
-        const Eigen::MatrixXd reduced = U.transpose() * H_scaled * U;
-        const Eigen::VectorXd y = reduced.ldlt().solve(-(U.transpose() * scale.cwiseProduct(system.g)));
-        delta = scale.cwiseProduct(U * y);
+      if (result.degenerate_directions > 0 && options.remap_degenerate_directions) {
+        for (int k = 0; k < 3; ++k) B(3 + k, well++) = 1.0;
+        const Eigen::MatrixXd Bw = B.leftCols(well);
+        const Eigen::MatrixXd reduced = Bw.transpose() * system.H * Bw;
+        const Eigen::VectorXd y = reduced.ldlt().solve(-(Bw.transpose() * system.g));
+        delta = Bw * y;
       }
     }
-    if (result.degenerate_directions == 0) delta = system.H.ldlt().solve(-system.g);
+    if (result.degenerate_directions == 0 || !options.remap_degenerate_directions) {
+      delta = system.H.ldlt().solve(-system.g);
+    }
     if (!delta.allFinite()) break;
     // A point whose nearest neighbour flips between two voxels at every step makes a two-cycle
     // (delta, -delta, delta, ...) that never meets the step criterion: when a step undoes the

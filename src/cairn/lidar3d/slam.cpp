@@ -137,8 +137,7 @@ struct LidarSlam::Impl {
 
   Verification verify(int query, int candidate, const ScanContextMatch& match) {
     const VoxelHashMap map = target_map(candidate);
-    const std::vector<Eigen::Vector3d> source =
-        voxel_downsample(keyframes[static_cast<std::size_t>(query)].points_sensor, 1.5 * options.verification_voxel_m);
+    const std::vector<Eigen::Vector3d>& source = keyframes[static_cast<std::size_t>(query)].points_sensor;
     const core::SE3 T_estimate = keyframes[static_cast<std::size_t>(candidate)].T_world_sensor.inverse() *
                                  keyframes[static_cast<std::size_t>(query)].T_world_sensor;
     const core::SE3 T_descriptor(core::SO3::exp(Eigen::Vector3d(0.0, 0.0, match.yaw_rad)), match.t_candidate_query);
@@ -147,6 +146,7 @@ struct LidarSlam::Impl {
     for (const core::SE3& start : {T_descriptor, T_estimate}) {
       const double coarse = options.verification_coarse_threshold_m, fine = options.verification_fine_threshold_m;
       RegistrationResult r = register_scan(map, source, start, coarse, coarse / 3.0);
+      r = register_scan(map, source, r.T_map_sensor, 2.0 * fine, 2.0 * fine / 3.0);
       r = register_scan(map, source, r.T_map_sensor, fine, fine / 3.0);
       const double fitness =
           r.source_points > 0 ? static_cast<double>(r.correspondences) / static_cast<double>(r.source_points) : 0.0;
@@ -299,9 +299,11 @@ SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s) {
   Impl& m = *impl_;
   SlamScanResult result;
   result.odometry = m.odometry.add_scan(cloud, time_s);
-  const core::SE3& T_odom = result.odometry.T_world_sensor;
-  if (!m.scan_T_odom.empty()) m.path_m += (T_odom.translation() - m.scan_T_odom.back().translation()).norm();
-  m.scan_T_odom.push_back(T_odom);
+  // Keyframes live at the registered instant (their points' frame); scans report their stamp.
+  const core::SE3& T_odom = result.odometry.T_world_registered;
+  const core::SE3 T_odom_stamp = result.odometry.T_world_sensor;
+  if (!m.scan_T_odom.empty()) m.path_m += (T_odom_stamp.translation() - m.scan_T_odom.back().translation()).norm();
+  m.scan_T_odom.push_back(T_odom_stamp);
   ++summary_.scans;
 
   bool make_keyframe = m.keyframes.empty();
@@ -337,7 +339,10 @@ SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s) {
     }
   }
   m.scan_anchor.push_back(m.keyframes.empty() ? -1 : static_cast<int>(m.keyframes.size()) - 1);
-  result.odometry.T_world_sensor = m.keyframes.empty() ? T_odom : m.T_world_from_odom(T_odom);
+  if (!m.keyframes.empty()) {
+    result.odometry.T_world_sensor = m.T_world_from_odom(T_odom_stamp);
+    result.odometry.T_world_registered = m.T_world_from_odom(T_odom);
+  }
   return result;
 }
 

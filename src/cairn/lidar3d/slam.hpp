@@ -143,7 +143,8 @@ class LidarSlam {
 
   /// T_world_sensor of every scan so far, after the latest pose-graph solve.
   std::vector<core::SE3> trajectory() const;
-  /// T_world_sensor of the keyframes and the scan index each was taken at.
+  /// The keyframes' poses at their registered instant (OdometryScanResult::T_world_registered),
+  /// after the latest solve, and the index (in add_scan order) of the scan each was taken at.
   std::vector<core::SE3> keyframe_poses() const;
   std::vector<std::size_t> keyframe_scans() const;
   const LidarSlamSummary& summary() const { return summary_; }
