@@ -133,6 +133,27 @@ TEST(LidarOdometry, ALostScanStartsANewSegmentAndTrackingResumes) {
   EXPECT_GT(results[5].registration.correspondences, 1000u);
 }
 
+TEST(LidarOdometry, PointTimesThatAreNotSweepOffsetsAreIgnored) {
+  // A box room; the second scan carries absolute times (seconds since 1970) in its time field.
+  io::PointCloud cloud;
+  for (int i = 0; i < 400; ++i) {
+    const double a = 2.0 * M_PI * i / 400.0;
+    for (double z : {-1.0, 0.0, 1.0}) {
+      const double r = 8.0 / std::max(std::abs(std::cos(a)), std::abs(std::sin(a)));
+      cloud.points.emplace_back(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)), static_cast<float>(z));
+    }
+  }
+  LidarOdometry odometry;
+  const OdometryScanResult first = odometry.add_scan(cloud, 0.0);
+  EXPECT_FALSE(first.point_times_unusable);
+  io::PointCloud absolute = cloud;
+  absolute.time_s.assign(cloud.size(), 1.7e9f);
+  const OdometryScanResult second = odometry.add_scan(absolute, 0.1);
+  EXPECT_TRUE(second.point_times_unusable);
+  EXPECT_TRUE(second.T_world_sensor.matrix().allFinite());
+  EXPECT_LT(second.T_world_sensor.translation().norm(), 0.05);  // the room did not move
+}
+
 TEST(LidarOdometry, RefusesTimesThatDoNotIncreaseAndInvalidOptions) {
   LidarOdometry odometry;
   io::PointCloud cloud;

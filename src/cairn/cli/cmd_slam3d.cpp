@@ -236,7 +236,8 @@ int slam3d_command(const Slam3dFlags& flags) {
                        {"degenerate_min_eigenvalue", options.registration.degenerate_min_eigenvalue},
                        {"threads", options.threads},
                        {"map_voxel_m", flags.map_voxel_m}};
-  std::size_t ok = 0, degraded = 0, lost = 0;
+  std::size_t ok = 0, degraded = 0, lost = 0, unusable_times = 0;
+  for (const auto& r : results) unusable_times += r.point_times_unusable ? 1 : 0;
   std::vector<double> t_total, t_pre, t_reg, t_map;
   nlohmann::json scans = nlohmann::json::array();
   nlohmann::json events = nlohmann::json::array();
@@ -259,6 +260,7 @@ int slam3d_command(const Slam3dFlags& flags) {
                      {"pose", pose_json(r.T_world_sensor)},
                      {"points_read", r.points_read},
                      {"points_in_range", r.points_in_range},
+                     {"point_times_unusable", r.point_times_unusable},
                      {"source_points", r.registration.source_points},
                      {"correspondences", r.registration.correspondences},
                      {"planar_correspondences", r.registration.planar_correspondences},
@@ -275,7 +277,8 @@ int slam3d_command(const Slam3dFlags& flags) {
                                   {"map", 1e3 * r.times.map_s}, {"total", 1e3 * r.times.total_s}}}});
   }
   report["summary"] = {{"scans_ok", ok}, {"scans_degraded", degraded}, {"scans_lost", lost},
-                       {"map_segments", results.back().segment + 1}, {"map_points", map_points.size()}};
+                       {"map_segments", results.back().segment + 1}, {"map_points", map_points.size()},
+                       {"scans_with_unusable_point_times", unusable_times}};
   report["health_events"] = events;
   nlohmann::json candidates = nlohmann::json::array();
   for (const auto& c : slam_summary.candidates) {
@@ -339,6 +342,10 @@ int slam3d_command(const Slam3dFlags& flags) {
                 total_s, 1e3 * total.median, 1e3 * total.mean, 1e3 * total.max);
     std::printf("health: %zu ok, %zu degraded, %zu lost; %d map segment%s\n", ok, degraded, lost, results.back().segment + 1,
                 results.back().segment == 0 ? "" : "s");
+    if (unusable_times > 0) {
+      std::printf("warning: %zu scans carry per-point times that are not offsets within a sweep (absolute times? another "
+                  "unit?): used without deskew\n", unusable_times);
+    }
     if (slam_options.loop_closure) {
       std::printf("loop closure: %zu keyframes, %zu candidates verified, %zu accepted, %zu rejected by the back end (GNC)\n",
                   slam_summary.keyframes, slam_summary.candidates.size(), slam_summary.loops_accepted,

@@ -117,10 +117,22 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   // zero, so an error of the velocity does not shift the registered pose (with tau_0 = 0 it
   // shifts it by half a sweep of that error, the next velocity inherits it with the opposite
   // sign, and the estimate oscillates: measured on the simulated street, 1.6 m steps). The pose
-  // at the stamp is reported (step 5), the pose at the middle is kept for the prediction.
+  // at the stamp is reported (after registration), the pose at the middle kept for prediction.
   const double min2 = options_.min_range_m * options_.min_range_m;
   const double max2 = options_.max_range_m * options_.max_range_m;
-  const bool have_time = cloud.time_s.size() == cloud.size() && !cloud.time_s.empty();
+  bool have_time = cloud.time_s.size() == cloud.size() && !cloud.time_s.empty();
+  if (have_time) {
+    // Times that cannot be offsets within one sweep from the stamp (absolute times, another unit)
+    // would move the points anywhere: such a scan is used without deskew, and counted.
+    const auto [lo, hi] = std::minmax_element(cloud.time_s.begin(), cloud.time_s.end());
+    const double span = static_cast<double>(*hi) - static_cast<double>(*lo);
+    const double limit = 2.0 * options_.sweep_period_s;
+    if (!std::isfinite(span) || span > limit || std::abs(static_cast<double>(*lo)) > limit ||
+        std::abs(static_cast<double>(*hi)) > limit) {
+      have_time = false;
+      result.point_times_unusable = options_.deskew == DeskewMode::kPointTimes;
+    }
+  }
   const bool from_file = options_.deskew == DeskewMode::kPointTimes && have_time;
   const bool deskew = from_file || options_.deskew == DeskewMode::kAzimuth;
   std::vector<Eigen::Vector3d> points;
@@ -155,7 +167,7 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
     }
   }
   double t_mid = time_s + (tau_mid - tau_0);
-  if (!times_.empty() && !(t_mid > times_.back())) t_mid = time_s;  // pathological point times
+  if (!times_.empty() && !(t_mid > times_.back())) t_mid = times_.back() + (time_s - stamps_.back());
 
   // 1. Constant-velocity prediction from the last two poses (twist per second, at sweep middles).
   Eigen::Matrix<double, 6, 1> velocity = Eigen::Matrix<double, 6, 1>::Zero();

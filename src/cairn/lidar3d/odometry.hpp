@@ -136,6 +136,10 @@ struct OdometryScanResult {
   double threshold_sigma_m = 0.0;   ///< adaptive threshold used (step 4)
   std::size_t points_read = 0;
   std::size_t points_in_range = 0;
+  /// The file's per-point times could not be offsets within one sweep of the stamp (their span
+  /// or size exceeds two sweep periods: absolute times, another unit), so the scan was not
+  /// deskewed.
+  bool point_times_unusable = false;
   std::size_t map_points_added = 0;  ///< after 0.5 v subsampling
   std::size_t local_map_points = 0;  ///< after the update
   OdometryStageTimes times;
