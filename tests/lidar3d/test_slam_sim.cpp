@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <numbers>
 
+#include "cairn/lidar3d/outputs.hpp"
 #include "cairn/lidar3d/slam.hpp"
 #include "cairn/sim/scenario.hpp"
 #include "cairn/sim/street_run.hpp"
@@ -21,10 +22,14 @@ struct SimRun {
   std::vector<SlamScanResult> scans;
   LidarSlamSummary summary;
   std::vector<core::SE3> T_world_lidar_middle;  ///< ground truth at each sweep's middle
+  std::vector<core::SE3> T_world_lidar_stamp;   ///< ground truth at each scan's stamp (sweep start)
+  std::vector<core::SE3> trajectory;            ///< the final estimate at the stamps
   sim::SimulationResult simulation;
 };
 
-SimRun run_scenario(const sim::Scenario& scenario, std::uint64_t seed, const LidarSlamOptions& options = {}) {
+/// Scans [blind_begin, blind_end) arrive empty (a covered or disconnected sensor).
+SimRun run_scenario(const sim::Scenario& scenario, std::uint64_t seed, const LidarSlamOptions& options = {},
+                    std::size_t blind_begin = 0, std::size_t blind_end = 0) {
   SimRun out;
   out.simulation = sim::simulate(scenario, seed);
   const sim::SimulationResult& s = out.simulation;
@@ -34,7 +39,9 @@ SimRun run_scenario(const sim::Scenario& scenario, std::uint64_t seed, const Lid
   const auto half = static_cast<std::size_t>(std::lround(0.5 * scenario.lidar3d.period_s / sample_period));
   for (std::size_t k = 0; k < s.clouds.size(); ++k) {
     io::PointCloud cloud;
+    const bool blind = k >= blind_begin && k < blind_end;
     for (const sim::LidarPoint& p : s.clouds[k]) {
+      if (blind) break;
       cloud.points.push_back(p.position.cast<float>());
       cloud.time_s.push_back(static_cast<float>(p.time_offset_s));
       cloud.ring.push_back(static_cast<std::uint16_t>(p.ring));
@@ -42,8 +49,10 @@ SimRun run_scenario(const sim::Scenario& scenario, std::uint64_t seed, const Lid
     out.scans.push_back(slam.add_scan(cloud, s.truth[s.scan_samples[k]].stamp.seconds()));
     const std::size_t middle = std::min(s.scan_samples[k] + half, s.truth.size() - 1);
     out.T_world_lidar_middle.push_back(sim::lidar_pose(s.truth[middle].T_world_body, scenario.lidar3d));
+    out.T_world_lidar_stamp.push_back(sim::lidar_pose(s.truth[s.scan_samples[k]].T_world_body, scenario.lidar3d));
   }
   slam.finish();
+  out.trajectory = slam.trajectory();
   out.summary = slam.summary();
   return out;
 }
@@ -93,14 +102,48 @@ TEST(LidarSlamSimulation, FindsTheStreetLoopsIncludingReverseOnesAndNoFalseOne) 
   const sim::Scenario scenario = *sim::make_scenario("street-3d-loops");
   const SimRun r = run_scenario(scenario, 1);
   const LoopCheck c = check_loops(r);
+  const TrajectoryErrors e = evaluate_trajectory(r.T_world_lidar_stamp, r.trajectory);
   std::printf("street-3d-loops seed 1: %zu keyframes, %zu candidates verified, %d accepted (%d reverse, %d same "
-              "direction), %d false; worst loop error %.3f m %.2f deg; %zu true loop pairs in the ground truth\n",
+              "direction), %d false; worst loop error %.3f m %.2f deg; %zu true loop pairs in the ground truth; "
+              "ATE %.3f m\n",
               r.summary.keyframes, r.summary.candidates.size(), c.accepted, c.reverse_accepted, c.same_direction_accepted,
-              c.false_accepted, c.worst_translation_m, c.worst_rotation_deg, r.simulation.true_loops.size());
+              c.false_accepted, c.worst_translation_m, c.worst_rotation_deg, r.simulation.true_loops.size(),
+              e.ate_rmse_m.value_or(-1.0));
+  EXPECT_LT(e.ate_rmse_m.value_or(1e9), 0.6);
   EXPECT_EQ(c.false_accepted, 0);
   EXPECT_GE(c.reverse_accepted, 1) << "the reversed lap on the opposite lane must close loops";
   EXPECT_GE(c.same_direction_accepted, 1) << "the end of the first lap meets its start";
   for (const SlamScanResult& s : r.scans) EXPECT_NE(s.odometry.health, Health::kLost);
+}
+
+TEST(LidarSlamSimulation, AfterBeingLostANewMapSegmentIsMergedByALoopClosure) {
+  // Half a second without returns in the middle of the first lap: the odometry is lost, starts a
+  // new map segment from its prediction, and the segments are joined only by a weak edge until
+  // the reversed second lap closes loops across the break.
+  const sim::Scenario scenario = *sim::make_scenario("street-3d-loops");
+  const SimRun r = run_scenario(scenario, 1, {}, 200, 205);
+  int lost = 0, segment_changes = 0;
+  for (std::size_t k = 0; k < r.scans.size(); ++k) {
+    lost += r.scans[k].odometry.health == Health::kLost ? 1 : 0;
+    if (k > 0 && r.scans[k].odometry.segment != r.scans[k - 1].odometry.segment) ++segment_changes;
+  }
+  const std::vector<std::size_t> kf = keyframe_scans(r);
+  int across = 0;
+  for (const LoopCandidateRecord& record : r.summary.candidates) {
+    if (!record.accepted || record.rejected_by_gnc) continue;
+    const int a = r.scans[kf[static_cast<std::size_t>(record.query_keyframe)]].odometry.segment;
+    const int b = r.scans[kf[static_cast<std::size_t>(record.candidate_keyframe)]].odometry.segment;
+    across += a != b ? 1 : 0;
+  }
+  const LoopCheck c = check_loops(r);
+  const TrajectoryErrors e = evaluate_trajectory(r.T_world_lidar_stamp, r.trajectory);
+  std::printf("street-3d-loops seed 1, scans 200-204 blind: %d lost, %d segment change(s), %d loops accepted, %d "
+              "across segments, %d false; ATE %.3f m, end-point error %.3f m\n",
+              lost, segment_changes, c.accepted, across, c.false_accepted, e.ate_rmse_m.value_or(-1.0), e.end_point_error_m);
+  EXPECT_EQ(lost, 5);
+  EXPECT_EQ(segment_changes, 1);
+  EXPECT_GE(across, 1) << "a loop closure must join the segments";
+  EXPECT_EQ(c.false_accepted, 0);
 }
 
 TEST(LidarSlamSimulation, NoFalseLoopInTheGarageOverTenSeeds) {

@@ -235,8 +235,12 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   const auto map_start = Clock::now();
   if (lost) {
     result.health = Health::kLost;
-    map_.clear();
-    result.segment = ++segment_;
+    // A new segment, unless the map is already empty (still blind since the last lost scan).
+    if (!map_.empty()) {
+      map_.clear();
+      ++segment_;
+    }
+    result.segment = segment_;
   }
   // The pose at the stamp: from the middle back (or on) by the new velocity.
   result.T_world_sensor = T_world_sensor;
