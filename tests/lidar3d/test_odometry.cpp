@@ -95,6 +95,29 @@ TEST(LidarOdometry, TracksRealKittiKeyFrames) {
   EXPECT_LT(e.end_point_m, 1.0);
 }
 
+TEST(LidarOdometry, LoamFrontEndTracksRealKittiKeyFrames) {
+  CAIRN_REQUIRE_DATA("lidar3d/kitti00_keyframes/keyframes.txt");
+  const KeyFrames k = read_key_frames(25);
+  LidarOdometryOptions options = preset_options("kitti");  // rings from KITTI's point order
+  options.front_end = FrontEnd::kLoamFeatures;
+  const auto results = run(k, options);
+  std::vector<core::SE3> estimate;
+  for (const auto& r : results) {
+    estimate.push_back(r.T_world_sensor);
+    EXPECT_EQ(r.health, Health::kOk) << "scan at " << r.time_s;
+  }
+  const StepErrors e = step_errors(k.T_enu_velo, estimate);
+  std::printf("25 key frames, LOAM front end: step RMSE %.4f m %.4f deg, end point %.3f m\n", e.translation_rmse_m,
+              e.rotation_rmse_deg, e.end_point_m);
+  EXPECT_LT(e.translation_rmse_m, 0.05);
+  EXPECT_LT(e.rotation_rmse_deg, 0.2);
+  EXPECT_LT(e.end_point_m, 1.0);
+  // Without rings and without KITTI's order to recover them, the LOAM front end refuses the scan.
+  options.rings_from_kitti_order = false;
+  LidarOdometry odometry(options);
+  EXPECT_THROW(odometry.add_scan(io::read_point_cloud(k.files[0]), k.times_s[0]), std::invalid_argument);
+}
+
 TEST(LidarOdometry, SameResultOnOneAndTwoThreads) {
   CAIRN_REQUIRE_DATA("lidar3d/kitti00_keyframes/keyframes.txt");
   const KeyFrames k = read_key_frames(6);

@@ -70,9 +70,14 @@ LidarOdometryOptions preset_options(std::string_view name) {
   if (name == "kitti") {
     options.vertical_angle_correction_rad = 0.205 * std::numbers::pi / 180.0;
     options.deskew = DeskewMode::kOff;
+    options.rings_from_kitti_order = true;
     return options;
   }
   throw std::invalid_argument("unknown preset '" + std::string(name) + "' (expected default or kitti)");
+}
+
+std::string_view to_string(FrontEnd front_end) {
+  return front_end == FrontEnd::kDense ? "dense" : "loam";
 }
 
 std::string_view to_string(DeskewMode mode) {
@@ -94,7 +99,10 @@ std::string_view to_string(Health health) {
 }
 
 LidarOdometry::LidarOdometry(const LidarOdometryOptions& options)
-    : options_(options), map_(VoxelHashMapOptions{options.voxel_size_m, options.max_points_per_voxel}) {
+    : options_(options),
+      map_(VoxelHashMapOptions{options.voxel_size_m, options.max_points_per_voxel}),
+      edge_map_(VoxelHashMapOptions{options.voxel_size_m, options.max_points_per_voxel}),
+      plane_map_(VoxelHashMapOptions{options.voxel_size_m, options.max_points_per_voxel}) {
   std::string error;
   if (!options_.is_valid(&error)) throw std::invalid_argument("LidarOdometryOptions: " + error);
   arena_ = std::make_unique<Arena>(options_.threads);
@@ -135,10 +143,25 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   }
   const bool from_file = options_.deskew == DeskewMode::kPointTimes && have_time;
   const bool deskew = from_file || options_.deskew == DeskewMode::kAzimuth;
+  const bool loam = options_.front_end == FrontEnd::kLoamFeatures;
+  std::vector<std::uint16_t> recovered_rings;
+  const std::vector<std::uint16_t>* rings = &cloud.ring;
+  if (loam && cloud.ring.size() != cloud.size()) {
+    if (!options_.rings_from_kitti_order) {
+      throw std::invalid_argument("the LOAM front end needs a ring per point (a ring field, or rings from KITTI's point order)");
+    }
+    io::PointCloud copy;
+    copy.points = cloud.points;
+    io::recover_kitti_ring_and_time(copy, options_.sweep_period_s);
+    recovered_rings = std::move(copy.ring);
+    rings = &recovered_rings;
+  }
   std::vector<Eigen::Vector3d> points;
   std::vector<float> point_time;
+  std::vector<std::uint16_t> point_ring;
   points.reserve(cloud.size());
   if (deskew) point_time.reserve(cloud.size());
+  if (loam) point_ring.reserve(cloud.size());
   const double correction = options_.vertical_angle_correction_rad;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     Eigen::Vector3d p = cloud.points[i].cast<double>();
@@ -150,6 +173,7 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
       if (axis_norm > 0.0) p = Eigen::AngleAxisd(correction, axis / axis_norm) * p;
     }
     points.push_back(p);
+    if (loam) point_ring.push_back((*rings)[i]);
     if (deskew) {
       point_time.push_back(from_file ? cloud.time_s[i]
                                      : static_cast<float>((std::numbers::pi - std::atan2(p.y(), p.x())) /
@@ -180,6 +204,7 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
 
   // 2-3. Deskew to the sweep's middle, subsample.
   std::vector<Eigen::Vector3d> frame, source;
+  LoamFeatures features;
   arena_->arena.execute([&] {
     if (deskew && n >= 2) {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096),
@@ -190,7 +215,11 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
                         });
     }
     frame = voxel_downsample(points, 0.5 * options_.voxel_size_m);
-    source = voxel_downsample(frame, 1.5 * options_.voxel_size_m);
+    if (loam) {
+      features = extract_loam_features(points, point_ring, options_.loam);
+    } else {
+      source = voxel_downsample(frame, 1.5 * options_.voxel_size_m);
+    }
   });
   result.times.preprocess_s = seconds_since(start);
 
@@ -205,9 +234,13 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   core::SE3 T_world_sensor = T_pred;
   const bool too_few_points = points.size() < static_cast<std::size_t>(options_.min_scan_points);
   bool lost = too_few_points && n > 0;
-  if (!map_.empty() && !too_few_points) {
+  const bool map_empty = loam ? (edge_map_.empty() && plane_map_.empty()) : map_.empty();
+  if (!map_empty && !too_few_points) {
     arena_->arena.execute([&] {
-      result.registration = register_scan(map_, source, T_pred, 3.0 * sigma, sigma / 3.0, options_.registration);
+      result.registration =
+          loam ? register_features(edge_map_, plane_map_, features.sharp, features.flat, T_pred, 3.0 * sigma, sigma / 3.0,
+                                   options_.registration)
+               : register_scan(map_, source, T_pred, 3.0 * sigma, sigma / 3.0, options_.registration);
     });
     const RegistrationResult& reg = result.registration;
     const double fraction =
@@ -236,8 +269,10 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   if (lost) {
     result.health = Health::kLost;
     // A new segment, unless the map is already empty (still blind since the last lost scan).
-    if (!map_.empty()) {
+    if (!map_empty) {
       map_.clear();
+      edge_map_.clear();
+      plane_map_.clear();
       ++segment_;
     }
     result.segment = segment_;
@@ -254,10 +289,22 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   if (too_few_points) frame.clear();
   last_frame_sensor_ = frame;
   for (Eigen::Vector3d& p : frame) p = R * p + t;
-  map_.add_points(frame);
-  map_.remove_far_from(t, options_.max_range_m);
-  result.map_points_added = frame.size();
-  result.local_map_points = map_.num_points();
+  if (loam) {
+    if (too_few_points) features = {};
+    for (Eigen::Vector3d& p : features.less_sharp) p = R * p + t;
+    for (Eigen::Vector3d& p : features.less_flat) p = R * p + t;
+    edge_map_.add_points(features.less_sharp);
+    plane_map_.add_points(features.less_flat);
+    edge_map_.remove_far_from(t, options_.max_range_m);
+    plane_map_.remove_far_from(t, options_.max_range_m);
+    result.map_points_added = features.less_sharp.size() + features.less_flat.size();
+    result.local_map_points = edge_map_.num_points() + plane_map_.num_points();
+  } else {
+    map_.add_points(frame);
+    map_.remove_far_from(t, options_.max_range_m);
+    result.map_points_added = frame.size();
+    result.local_map_points = map_.num_points();
+  }
   result.times.map_s = seconds_since(map_start);
   poses_.push_back(T_world_sensor);
   times_.push_back(t_mid);

@@ -52,6 +52,7 @@
 
 #include "cairn/core/se3.hpp"
 #include "cairn/io/point_cloud.hpp"
+#include "cairn/lidar3d/loam_features.hpp"
 #include "cairn/lidar3d/registration.hpp"
 #include "cairn/lidar3d/voxel_hash_map.hpp"
 
@@ -66,7 +67,23 @@ enum class DeskewMode {
 };
 std::string_view to_string(DeskewMode mode);
 
+/// What a scan is registered with (step 5).
+enum class FrontEnd {
+  /// Every point (subsampled at 1.5 v) against the voxel-hash map: KISS-ICP's way, with the
+  /// residual of `registration.metric`.
+  kDense,
+  /// LOAM's features (loam_features.hpp): sharp edge points against a map of lines, flat points
+  /// against a map of planes (register_features). Needs per-point rings.
+  kLoamFeatures,
+};
+std::string_view to_string(FrontEnd front_end);
+
 struct LidarOdometryOptions {
+  FrontEnd front_end = FrontEnd::kDense;
+  LoamFeatureOptions loam;
+  /// Scans without a ring field get rings from KITTI's point order
+  /// (io::recover_kitti_ring_and_time); only the LOAM front end uses rings. Set by the kitti preset.
+  bool rings_from_kitti_order = false;
   /// Points beyond this range are dropped; also the map's radius and r_max of the model error.
   /// KISS-ICP's default 100 m.
   double max_range_m = 100.0;
@@ -149,6 +166,7 @@ class LidarOdometry {
  public:
   /// Throws std::invalid_argument if the options are invalid.
   explicit LidarOdometry(const LidarOdometryOptions& options = {});
+  // add_scan throws std::invalid_argument for the LOAM front end when the scan has no rings.
   ~LidarOdometry();
   LidarOdometry(const LidarOdometry&) = delete;
   LidarOdometry& operator=(const LidarOdometry&) = delete;
@@ -169,6 +187,8 @@ class LidarOdometry {
   LidarOdometryOptions options_;
   std::unique_ptr<Arena> arena_;
   VoxelHashMap map_;
+  VoxelHashMap edge_map_;   ///< LOAM front end: less-sharp points
+  VoxelHashMap plane_map_;  ///< LOAM front end: less-flat points
   std::vector<Eigen::Vector3d> last_frame_sensor_;
   std::vector<core::SE3> poses_;
   std::vector<double> times_;   ///< of poses_: the sweep middles

@@ -43,7 +43,7 @@ constexpr std::size_t kGrain = 512;
 
 LinearSystem build_system(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& source_sensor,
                           const core::SE3& T_map_sensor, double max_squared_distance, double kernel,
-                          IcpMetric metric) {
+                          IcpMetric metric, bool point_to_point_fallback = true) {
   const Eigen::Matrix3d R = T_map_sensor.rotation_matrix();
   const Eigen::Vector3d t = T_map_sensor.translation();
   const double kernel_squared = kernel * kernel;
@@ -55,6 +55,7 @@ LinearSystem build_system(const VoxelHashMap& map, const std::vector<Eigen::Vect
           Eigen::Vector3d q, n;
           double d2 = 0.0;
           if (!map.nearest(p, &q, &d2, &n) || d2 > max_squared_distance) continue;
+          if (!point_to_point_fallback && n.squaredNorm() == 0.0) continue;
           const Eigen::Vector3d r = p - q;
           Eigen::Matrix<double, 3, 6> J;
           J.leftCols<3>().setIdentity();
@@ -89,19 +90,62 @@ LinearSystem build_system(const VoxelHashMap& map, const std::vector<Eigen::Vect
       [](LinearSystem a, const LinearSystem& b) { return a += b; });
 }
 
+// LOAM's edge residual (Zhang & Singh 2014, eq. 2): the distance from the point to the map's
+// line through q along d, e = (I - d d^T)(p - q), J = (I - d d^T) [I, -[p]x]. Points whose nearest
+// map voxel is not linear are skipped. A line tells about the two directions across it: its
+// information share for the degeneracy test is (I - d d^T) / 2.
+LinearSystem build_edge_system(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& source_sensor,
+                               const core::SE3& T_map_sensor, double max_squared_distance, double kernel) {
+  const Eigen::Matrix3d R = T_map_sensor.rotation_matrix();
+  const Eigen::Vector3d t = T_map_sensor.translation();
+  const double kernel_squared = kernel * kernel;
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, source_sensor.size(), kGrain), LinearSystem{},
+      [&](const tbb::blocked_range<std::size_t>& range, LinearSystem system) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const Eigen::Vector3d p = R * source_sensor[i] + t;
+          Eigen::Vector3d q, d;
+          double d2 = 0.0;
+          if (!map.nearest(p, &q, &d2, nullptr, &d) || d2 > max_squared_distance || d.squaredNorm() == 0.0) continue;
+          const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - d * d.transpose();
+          const Eigen::Vector3d e = P * (p - q);
+          Eigen::Matrix<double, 3, 6> J;
+          J.leftCols<3>() = P;
+          Eigen::Matrix3d minus_hat;
+          minus_hat << 0.0, p.z(), -p.y(), -p.z(), 0.0, p.x(), p.y(), -p.x(), 0.0;  // -[p]x
+          J.rightCols<3>() = P * minus_hat;
+          const double e2 = e.squaredNorm();
+          const double denominator = kernel + e2;
+          const double w = kernel_squared / (denominator * denominator);
+          system.H.noalias() += w * J.transpose() * J;
+          system.g.noalias() += w * J.transpose() * e;
+          system.H_plane.noalias() += w * J.transpose() * J;
+          system.normal_moment.noalias() += (0.5 * w) * P;
+          system.plane_weight_sum += w;
+          system.plane_squared_range_sum += w * (p - t).squaredNorm();
+          system.squared_distance_sum += e2;
+          ++system.correspondences;
+          ++system.planar;
+        }
+        return system;
+      },
+      [](LinearSystem a, const LinearSystem& b) { return a += b; });
+}
+
 }  // namespace
 
-RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& source_sensor,
-                                 const core::SE3& T_map_sensor_guess, double max_correspondence_m,
-                                 double kernel_scale_m, const RegistrationOptions& options) {
+namespace {
+
+// Gauss-Newton with the degeneracy analysis, on whatever `build(T)` linearises.
+template <class Build>
+RegistrationResult solve(const Build& build, std::size_t source_points, const core::SE3& T_map_sensor_guess,
+                         const RegistrationOptions& options) {
   RegistrationResult result;
   result.T_map_sensor = T_map_sensor_guess;
-  result.source_points = source_sensor.size();
-  const double max_squared = max_correspondence_m * max_correspondence_m;
+  result.source_points = source_points;
   Vector6 previous_delta = Vector6::Zero();
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-    const LinearSystem system =
-        build_system(map, source_sensor, result.T_map_sensor, max_squared, kernel_scale_m, options.metric);
+    const LinearSystem system = build(result.T_map_sensor);
     result.iterations = iteration + 1;
     result.correspondences = system.correspondences;
     result.planar_correspondences = system.planar;
@@ -178,6 +222,35 @@ RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eige
     }
   }
   return result;
+}
+
+}  // namespace
+
+RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& source_sensor,
+                                 const core::SE3& T_map_sensor_guess, double max_correspondence_m,
+                                 double kernel_scale_m, const RegistrationOptions& options) {
+  const double max_squared = max_correspondence_m * max_correspondence_m;
+  return solve(
+      [&](const core::SE3& T) {
+        return build_system(map, source_sensor, T, max_squared, kernel_scale_m, options.metric);
+      },
+      source_sensor.size(), T_map_sensor_guess, options);
+}
+
+RegistrationResult register_features(const VoxelHashMap& edge_map, const VoxelHashMap& plane_map,
+                                     const std::vector<Eigen::Vector3d>& edges_sensor,
+                                     const std::vector<Eigen::Vector3d>& planes_sensor,
+                                     const core::SE3& T_map_sensor_guess, double max_correspondence_m,
+                                     double kernel_scale_m, const RegistrationOptions& options) {
+  const double max_squared = max_correspondence_m * max_correspondence_m;
+  return solve(
+      [&](const core::SE3& T) {
+        LinearSystem system = build_system(plane_map, planes_sensor, T, max_squared, kernel_scale_m,
+                                           IcpMetric::kPointToPlane, /*point_to_point_fallback=*/false);
+        system += build_edge_system(edge_map, edges_sensor, T, max_squared, kernel_scale_m);
+        return system;
+      },
+      edges_sensor.size() + planes_sensor.size(), T_map_sensor_guess, options);
 }
 
 std::string name_direction(const Eigen::Matrix<double, 6, 1>& direction_map, const core::SO3& R_map_sensor,

@@ -105,6 +105,17 @@ RegistrationResult register_scan(const VoxelHashMap& map, const std::vector<Eige
                                  const core::SE3& T_map_sensor_guess, double max_correspondence_m,
                                  double kernel_scale_m, const RegistrationOptions& options = {});
 
+/// LOAM's scan-to-map step (Zhang & Singh 2014, Sec. VI, eq. 2-3): edge points (sensor frame)
+/// against the lines of `edge_map` (point-to-line), planar points against the planes of
+/// `plane_map` (point-to-plane); points whose nearest voxel has no line or plane are skipped.
+/// Same Gauss-Newton, kernel, convergence and degeneracy analysis as register_scan (a line
+/// contributes (I - d d^T) / 2 to the translation information).
+RegistrationResult register_features(const VoxelHashMap& edge_map, const VoxelHashMap& plane_map,
+                                     const std::vector<Eigen::Vector3d>& edges_sensor,
+                                     const std::vector<Eigen::Vector3d>& planes_sensor,
+                                     const core::SE3& T_map_sensor_guess, double max_correspondence_m,
+                                     double kernel_scale_m, const RegistrationOptions& options = {});
+
 /// "x (forward)", "y (left)", "z (up)", "roll", "pitch" or "yaw": the sensor axis along (or
 /// about) which `direction_map` (translation, rotation) mostly points, after rotating it into the
 /// sensor frame with R_map_sensor and scaling the rotation by `length_m`.

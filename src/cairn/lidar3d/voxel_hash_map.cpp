@@ -58,6 +58,8 @@ void VoxelHashMap::fit_normal(Block& block) const {
   const Eigen::Vector3d lambda = eigen.eigenvalues();
   block.normal = lambda(0) < options_.planarity_ratio * lambda(1) ? Eigen::Vector3d(eigen.eigenvectors().col(0))
                                                                   : Eigen::Vector3d::Zero();
+  block.direction = lambda(1) < options_.linearity_ratio * lambda(2) ? Eigen::Vector3d(eigen.eigenvectors().col(2))
+                                                                     : Eigen::Vector3d::Zero();
 }
 
 void VoxelHashMap::remove_far_from(const Eigen::Vector3d& origin_map, double max_distance_m) {
@@ -72,7 +74,7 @@ void VoxelHashMap::remove_far_from(const Eigen::Vector3d& origin_map, double max
 }
 
 bool VoxelHashMap::nearest(const Eigen::Vector3d& query_map, Eigen::Vector3d* nearest_map,
-                           double* squared_distance, Eigen::Vector3d* normal) const {
+                           double* squared_distance, Eigen::Vector3d* normal, Eigen::Vector3d* direction) const {
   const Voxel center = voxel_of(query_map, inverse_voxel_size_);
   double best = std::numeric_limits<double>::infinity();
   const Eigen::Vector3d* best_point = nullptr;
@@ -119,6 +121,7 @@ bool VoxelHashMap::nearest(const Eigen::Vector3d& query_map, Eigen::Vector3d* ne
   *nearest_map = *best_point;
   *squared_distance = best;
   if (normal != nullptr) *normal = best_block->normal;
+  if (direction != nullptr) *direction = best_block->direction;
   return true;
 }
 

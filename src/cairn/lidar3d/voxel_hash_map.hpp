@@ -39,8 +39,10 @@ std::vector<Eigen::Vector3d> voxel_downsample(const std::vector<Eigen::Vector3d>
 /// A voxel's points are planar when it holds at least `min_points_for_normal` of them and the
 /// smallest eigenvalue of their covariance is below `planarity_ratio` times the middle one; its
 /// normal is then the eigenvector of the smallest (the plane fit of point-to-plane ICP, Chen &
-/// Medioni 1992, and of LOAM's planar features, Zhang & Singh 2014, here per voxel). Normals are
-/// refit whenever a voxel gains points.
+/// Medioni 1992, and of LOAM's planar features, Zhang & Singh 2014, here per voxel). Its points
+/// are linear when the middle eigenvalue is below `linearity_ratio` times the largest; the line's
+/// direction is then the eigenvector of the largest (LOAM's edge line, Sec. V-B: "the largest
+/// eigenvalue larger than 3 times the second"). Both are refit whenever a voxel gains points.
 struct VoxelHashMapOptions {
   /// Voxel edge, metres (> 0). KISS-ICP's default is max_range / 100 = 1 m for a 100 m sensor.
   double voxel_size_m = 1.0;
@@ -48,6 +50,7 @@ struct VoxelHashMapOptions {
   int max_points_per_voxel = 20;
   int min_points_for_normal = 5;
   double planarity_ratio = 0.1;
+  double linearity_ratio = 1.0 / 3.0;
 };
 
 class VoxelHashMap {
@@ -62,9 +65,10 @@ class VoxelHashMap {
 
   /// The nearest stored point to `query_map` among the 27 voxels around it. Returns false (and
   /// leaves the outputs alone) when those voxels are empty. `normal`, if given, receives the unit
-  /// normal of the nearest point's voxel, or zero when that voxel is not planar (see below).
+  /// normal of the nearest point's voxel, or zero when that voxel is not planar; `direction` its
+  /// line direction, or zero when it is not linear (see VoxelHashMapOptions).
   bool nearest(const Eigen::Vector3d& query_map, Eigen::Vector3d* nearest_map, double* squared_distance,
-               Eigen::Vector3d* normal = nullptr) const;
+               Eigen::Vector3d* normal = nullptr, Eigen::Vector3d* direction = nullptr) const;
 
   /// Every stored point, voxel by voxel (order of the hash table).
   std::vector<Eigen::Vector3d> points() const;
@@ -76,7 +80,8 @@ class VoxelHashMap {
  private:
   struct Block {
     std::vector<Eigen::Vector3d> points;
-    Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< zero when not planar
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();     ///< zero when not planar
+    Eigen::Vector3d direction = Eigen::Vector3d::Zero();  ///< zero when not linear
   };
   void fit_normal(Block& block) const;
   VoxelHashMapOptions options_;
