@@ -87,7 +87,8 @@ int slam3d_command(const Slam3dFlags& flags) {
   if (flags.remap_degenerate) options.registration.remap_degenerate_directions = true;
   if (flags.front_end == "loam") options.front_end = lidar3d::FrontEnd::kLoamFeatures;
   else if (flags.front_end == "dense") options.front_end = lidar3d::FrontEnd::kDense;
-  else if (!flags.front_end.empty()) throw std::invalid_argument("--front-end must be dense or loam");
+  else if (flags.front_end == "auto") options.front_end = lidar3d::FrontEnd::kAuto;
+  else if (!flags.front_end.empty()) throw std::invalid_argument("--front-end must be auto, dense or loam");
   if (flags.deskew == "off") options.deskew = lidar3d::DeskewMode::kOff;
   else if (flags.deskew == "point-times") options.deskew = lidar3d::DeskewMode::kPointTimes;
   else if (flags.deskew == "azimuth") options.deskew = lidar3d::DeskewMode::kAzimuth;
@@ -231,6 +232,7 @@ int slam3d_command(const Slam3dFlags& flags) {
   for (const auto& [file, why] : skipped) report["input"]["skipped"].push_back({{"file", file}, {"error", why}});
   report["options"] = {{"preset", flags.preset},
                        {"front_end", std::string(lidar3d::to_string(options.front_end))},
+                       {"front_end_used", std::string(lidar3d::to_string(slam.front_end()))},
                        {"metric", options.registration.metric == lidar3d::IcpMetric::kPointToPlane ? "point-to-plane" : "point-to-point"},
                        {"deskew", std::string(lidar3d::to_string(options.deskew))},
                        {"max_range_m", options.max_range_m},
@@ -398,14 +400,16 @@ Runner register_slam3d(CLI::App& app) {
   app.add_option("--ground-truth-format", flags->ground_truth_format, "kitti or tum (default: from the file)");
   app.add_option("--metric", flags->metric, "ICP residual: point-to-plane (default) or point-to-point (KISS-ICP's)");
   app.add_option("--front-end", flags->front_end,
-                 "dense (default: every point, KISS-ICP's way) or loam (edge and planar features per ring, Zhang & Singh 2014)");
+                 "auto (default: loam when the scans carry rings, dense otherwise; the kitti preset: dense), dense (every "
+                 "point, KISS-ICP's way) or loam (edge and planar features per ring, Zhang & Singh 2014)");
   app.add_option("--deskew", flags->deskew, "off, point-times (default: with the files' per-point times) or azimuth");
   app.add_option("--threads", flags->threads, "Threads (0 = all)")->capture_default_str();
   app.add_option("--map-voxel", flags->map_voxel_m, "Voxel of the written map, metres")->capture_default_str();
   app.add_option("--picture-size", flags->picture_px, "Longer side of map.png, pixels")->capture_default_str()->check(CLI::Range(200, 20000));
   app.add_option("--max-scans", flags->max_scans, "Process only the first N scans");
   app.add_flag("--remap-degenerate", flags->remap_degenerate,
-               "Solve degenerate directions from the motion prediction only (Zhang et al. 2016's remapping)");
+               "Dense front end: solve degenerate directions from the motion prediction only (Zhang et al. 2016's "
+               "remapping; the loam front end always does)");
   app.add_flag("--no-loop-closure", flags->no_loop_closure, "Odometry only: no Scan Context search, no pose graph");
   app.add_flag("--lenient", flags->lenient, "Skip scans that cannot be read (listed in the report) instead of stopping");
   app.add_flag("-q,--quiet", flags->quiet, "Print nothing on success");

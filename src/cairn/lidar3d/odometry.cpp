@@ -70,14 +70,20 @@ LidarOdometryOptions preset_options(std::string_view name) {
   if (name == "kitti") {
     options.vertical_angle_correction_rad = 0.205 * std::numbers::pi / 180.0;
     options.deskew = DeskewMode::kOff;
-    options.rings_from_kitti_order = true;
+    options.rings_from_kitti_order = true;  // for --front-end loam
+    options.front_end = FrontEnd::kDense;  // measured better on the real KITTI key frames
     return options;
   }
   throw std::invalid_argument("unknown preset '" + std::string(name) + "' (expected default or kitti)");
 }
 
 std::string_view to_string(FrontEnd front_end) {
-  return front_end == FrontEnd::kDense ? "dense" : "loam";
+  switch (front_end) {
+    case FrontEnd::kAuto: return "auto";
+    case FrontEnd::kDense: return "dense";
+    case FrontEnd::kLoamFeatures: return "loam";
+  }
+  return "?";
 }
 
 std::string_view to_string(DeskewMode mode) {
@@ -143,7 +149,13 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   }
   const bool from_file = options_.deskew == DeskewMode::kPointTimes && have_time;
   const bool deskew = from_file || options_.deskew == DeskewMode::kAzimuth;
-  const bool loam = options_.front_end == FrontEnd::kLoamFeatures;
+  if (front_end_ == FrontEnd::kAuto) {
+    front_end_ = options_.front_end != FrontEnd::kAuto ? options_.front_end
+                 : (cloud.ring.size() == cloud.size() && cloud.size() > 0) || options_.rings_from_kitti_order
+                     ? FrontEnd::kLoamFeatures
+                     : FrontEnd::kDense;
+  }
+  const bool loam = front_end_ == FrontEnd::kLoamFeatures;
   std::vector<std::uint16_t> recovered_rings;
   const std::vector<std::uint16_t>* rings = &cloud.ring;
   if (loam && cloud.ring.size() != cloud.size()) {
@@ -237,10 +249,14 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   const bool map_empty = loam ? (edge_map_.empty() && plane_map_.empty()) : map_.empty();
   if (!map_empty && !too_few_points) {
     arena_->arena.execute([&] {
-      result.registration =
-          loam ? register_features(edge_map_, plane_map_, features.sharp, features.flat, T_pred, 3.0 * sigma, sigma / 3.0,
-                                   options_.registration)
-               : register_scan(map_, source, T_pred, 3.0 * sigma, sigma / 3.0, options_.registration);
+      if (loam) {
+        RegistrationOptions registration = options_.registration;
+        registration.remap_degenerate_directions = true;
+        result.registration = register_features(edge_map_, plane_map_, features.sharp, features.flat, T_pred,
+                                                 3.0 * sigma, sigma / 3.0, registration);
+      } else {
+        result.registration = register_scan(map_, source, T_pred, 3.0 * sigma, sigma / 3.0, options_.registration);
+      }
     });
     const RegistrationResult& reg = result.registration;
     const double fraction =

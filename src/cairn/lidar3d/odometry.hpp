@@ -69,17 +69,25 @@ std::string_view to_string(DeskewMode mode);
 
 /// What a scan is registered with (step 5).
 enum class FrontEnd {
+  /// kLoamFeatures when the first scan carries a ring per point (or rings_from_kitti_order is
+  /// set), kDense otherwise; decided once, at the first scan.
+  kAuto,
   /// Every point (subsampled at 1.5 v) against the voxel-hash map: KISS-ICP's way, with the
   /// residual of `registration.metric`.
   kDense,
   /// LOAM's features (loam_features.hpp): sharp edge points against a map of lines, flat points
-  /// against a map of planes (register_features). Needs per-point rings.
+  /// against a map of planes (register_features). Needs per-point rings. Degenerate directions
+  /// are always solved from the prediction here (RegistrationOptions::remap_degenerate_directions
+  /// is forced on): nothing else pulls along them, and measured it never did worse (docs/lidar3d.md).
   kLoamFeatures,
 };
 std::string_view to_string(FrontEnd front_end);
 
 struct LidarOdometryOptions {
-  FrontEnd front_end = FrontEnd::kDense;
+  /// Default kAuto, by measurement (docs/lidar3d.md, "Front ends"): LOAM's features did better
+  /// on every simulated run (VLP-16 and HDL-64 models, street, garage, tunnel), the dense front
+  /// end on the real KITTI key frames (end-point drift, ATE, t_err), whose preset sets kDense.
+  FrontEnd front_end = FrontEnd::kAuto;
   LoamFeatureOptions loam;
   /// Scans without a ring field get rings from KITTI's point order
   /// (io::recover_kitti_ring_and_time); only the LOAM front end uses rings. Set by the kitti preset.
@@ -181,6 +189,9 @@ class LidarOdometry {
   const std::vector<Eigen::Vector3d>& last_frame_points() const { return last_frame_sensor_; }
   const LidarOdometryOptions& options() const { return options_; }
   std::size_t scans() const { return poses_.size(); }
+  /// The front end in use: options().front_end, or what kAuto chose at the first scan (kAuto
+  /// before it).
+  FrontEnd front_end() const { return front_end_; }
 
  private:
   struct Arena;
@@ -196,6 +207,7 @@ class LidarOdometry {
   double model_error_sse_ = 0.0;
   std::size_t model_error_samples_ = 0;
   int segment_ = 0;
+  FrontEnd front_end_ = FrontEnd::kAuto;
 };
 
 }  // namespace cairn::lidar3d

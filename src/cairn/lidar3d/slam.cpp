@@ -367,6 +367,8 @@ std::vector<core::SE3> LidarSlam::trajectory() const {
   return out;
 }
 
+FrontEnd LidarSlam::front_end() const { return impl_->odometry.front_end(); }
+
 std::vector<core::SE3> LidarSlam::keyframe_poses() const {
   std::vector<core::SE3> out;
   for (const Keyframe& kf : impl_->keyframes) out.push_back(kf.T_world_sensor);

@@ -148,6 +148,8 @@ class LidarSlam {
   std::vector<core::SE3> keyframe_poses() const;
   std::vector<std::size_t> keyframe_scans() const;
   const LidarSlamSummary& summary() const { return summary_; }
+  /// The odometry's front end in use (LidarOdometry::front_end).
+  FrontEnd front_end() const;
   const LidarSlamOptions& options() const { return options_; }
 
  private:
