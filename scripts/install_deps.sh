@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages cairn needs, and only those that are missing.
-# Idempotent: when everything is present it prints nothing and exits 0.
+# Idempotent: when everything is present it prints nothing and exits 0. `--bench` adds the large
+# peers only bench/registration_vs_peers.cpp needs.
 # Needs root (or passwordless sudo) only when something is missing.
 set -euo pipefail
 
@@ -29,6 +30,15 @@ PACKAGES=(
   libbz2-dev           # reading .bz2 logs
   liblzma-dev          # reading .xz point clouds
 )
+# `install_deps.sh --bench` adds the registration peers of bench/registration_vs_peers.cpp. They
+# pull in about 400 packages (Qt, Java, VTK), too many for every build, and only that benchmark
+# uses them.
+if [[ "${1:-}" == "--bench" ]]; then
+  PACKAGES+=(
+    libpcl-dev         # PCL 1.13: ICP, GICP, NDT
+    libopen3d-dev      # Open3D 0.16: ICP, generalized ICP
+  )
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -110,6 +110,28 @@ TEST(LidarSlamSimulation, FindsTheStreetLoopsIncludingReverseOnesAndNoFalseOne) 
               c.false_accepted, c.worst_translation_m, c.worst_rotation_deg, r.simulation.true_loops.size(),
               e.ate_rmse_m.value_or(-1.0));
   EXPECT_LT(e.ate_rmse_m.value_or(1e9), 0.6);
+  // Recall, reported beside the false loops: of the keyframes that have a true partner keyframe
+  // (within 5 m, outside the 50 most recent the search leaves out), how many got a loop closure.
+  const std::vector<std::size_t> kf = keyframe_scans(r);
+  std::vector<char> has_partner(kf.size(), 0), closed(kf.size(), 0);
+  for (std::size_t q = 0; q < kf.size(); ++q) {
+    for (std::size_t k = 0; q >= 50 && k + 50 <= q; ++k) {
+      if ((r.T_world_lidar_middle[kf[q]].translation() - r.T_world_lidar_middle[kf[k]].translation()).norm() <= 5.0) {
+        has_partner[q] = 1;
+        break;
+      }
+    }
+  }
+  for (const LoopCandidateRecord& record : r.summary.candidates) {
+    if (record.accepted && !record.rejected_by_gnc) closed[static_cast<std::size_t>(record.query_keyframe)] = 1;
+  }
+  int eligible = 0, found = 0;
+  for (std::size_t q = 0; q < kf.size(); ++q) {
+    eligible += has_partner[q];
+    found += has_partner[q] && closed[q];
+  }
+  std::printf("recall: %d of %d keyframes with a true partner got a loop closure (%.0f %%)\n", found, eligible,
+              eligible > 0 ? 100.0 * found / eligible : 0.0);
   EXPECT_EQ(c.false_accepted, 0);
   EXPECT_GE(c.reverse_accepted, 1) << "the reversed lap on the opposite lane must close loops";
   EXPECT_GE(c.same_direction_accepted, 1) << "the end of the first lap meets its start";

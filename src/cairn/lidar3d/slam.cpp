@@ -84,6 +84,7 @@ bool LidarSlamOptions::is_valid(std::string* error) const {
     return fail("loop gates must be >= 0");
   }
   if (!(loop_uniqueness_separation_m >= 0.0)) return fail("loop_uniqueness_separation_m must be >= 0");
+  if (loop_places_verified < 1) return fail("loop_places_verified must be >= 1");
   if (!(loop_ambiguity_fitness_margin >= 0.0 && loop_ambiguity_fitness_margin <= 1.0)) {
     return fail("loop_ambiguity_fitness_margin must be in [0, 1]");
   }
@@ -217,73 +218,97 @@ struct LidarSlam::Impl {
     summary.loop_search_s += seconds_since(start);
     if (candidates.empty() || !candidates.front().below_threshold) return;
     start = Clock::now();
-    const LoopCandidate& best = candidates.front();
     const Keyframe& q = keyframes[static_cast<std::size_t>(query)];
-    const Keyframe& c = keyframes[static_cast<std::size_t>(best.id)];
-    LoopCandidateRecord record;
-    record.query_keyframe = query;
-    record.candidate_keyframe = best.id;
-    record.query_time_s = q.time_s;
-    record.candidate_time_s = c.time_s;
-    record.descriptor_distance = best.match.distance;
-    record.descriptor_yaw_rad = best.match.yaw_rad;
-    record.second_descriptor_distance = 1.0;
-    const LoopCandidate* second = nullptr;
-    for (std::size_t i = 1; i < candidates.size(); ++i) {
-      const Keyframe& other = keyframes[static_cast<std::size_t>(candidates[i].id)];
-      if ((other.T_world_sensor.translation() - c.T_world_sensor.translation()).norm() > options.loop_uniqueness_separation_m) {
-        second = &candidates[i];
-        record.second_descriptor_distance = candidates[i].match.distance;
-        break;
+    // Distinct places among the candidates below the threshold, best first: a candidate within
+    // the separation of one already taken is the same place seen from a neighbouring keyframe.
+    std::vector<const LoopCandidate*> places;
+    for (const LoopCandidate& candidate : candidates) {
+      if (!candidate.below_threshold || static_cast<int>(places.size()) >= options.loop_places_verified) break;
+      const Eigen::Vector3d position = keyframes[static_cast<std::size_t>(candidate.id)].T_world_sensor.translation();
+      bool seen = false;
+      for (const LoopCandidate* place : places) {
+        seen = seen || (keyframes[static_cast<std::size_t>(place->id)].T_world_sensor.translation() - position).norm() <=
+                           options.loop_uniqueness_separation_m;
       }
+      if (!seen) places.push_back(&candidate);
     }
-    Verification v;
-    arena.execute([&] { v = verify(query, best.id, best.match); });
-    record.T_candidate_query = v.T_candidate_query;
-    record.fitness = v.fitness;
-    record.rms_m = v.rms_m;
-    const core::SE3 T_estimate = c.T_world_sensor.inverse() * q.T_world_sensor;
-    const core::SE3 difference = T_estimate.inverse() * v.T_candidate_query;
-    const double travelled = std::abs(q.path_m - c.path_m);
-    record.gate_translation_m = difference.translation().norm();
-    record.gate_rotation_rad = difference.so3().log().norm();
-    record.gate_limit_m = options.loop_gate_translation_m + options.loop_gate_drift_per_m * travelled;
-    const double rotation_limit = options.loop_gate_rotation_rad + options.loop_gate_rotation_drift_per_m * travelled;
-    if (v.fitness < options.loop_min_fitness) {
-      record.decision = "icp fitness";
-    } else if (v.rms_m > options.loop_max_rms_m) {
-      record.decision = "icp rms";
-    } else if (v.degenerate) {
-      record.decision = "icp degenerate";
-    } else if (record.gate_translation_m > record.gate_limit_m || record.gate_rotation_rad > rotation_limit) {
-      record.decision = "odometry gate";
-    } else {
-      record.decision = "accepted";
-      if (second != nullptr && second->below_threshold) {
-        // The second place verifies too: the same place seen from a neighbouring keyframe puts
-        // the query where the best does; a look-alike elsewhere puts it somewhere else.
-        Verification w;
-        arena.execute([&] { w = verify(query, second->id, second->match); });
-        const Keyframe& s2 = keyframes[static_cast<std::size_t>(second->id)];
-        const Eigen::Vector3d by_best = (c.T_world_sensor * v.T_candidate_query).translation();
-        const Eigen::Vector3d by_second = (s2.T_world_sensor * w.T_candidate_query).translation();
-        record.second_fitness = w.fitness;
-        if (w.fitness >= options.loop_min_fitness && w.rms_m <= options.loop_max_rms_m &&
-            w.fitness > v.fitness - options.loop_ambiguity_fitness_margin &&
-            (by_best - by_second).norm() > options.loop_uniqueness_separation_m) {
-          record.decision = "ambiguous";
+    // Verify each place (steps 1-3); the places that pass are then tested for uniqueness (step 4).
+    struct Verified {
+      LoopCandidateRecord record;
+      Verification v;
+      Eigen::Vector3d query_position;  // where the loop puts the query
+    };
+    std::vector<Verified> verified;
+    for (const LoopCandidate* place : places) {
+      const Keyframe& c = keyframes[static_cast<std::size_t>(place->id)];
+      Verified item;
+      LoopCandidateRecord& record = item.record;
+      record.query_keyframe = query;
+      record.candidate_keyframe = place->id;
+      record.query_time_s = q.time_s;
+      record.candidate_time_s = c.time_s;
+      record.descriptor_distance = place->match.distance;
+      record.descriptor_yaw_rad = place->match.yaw_rad;
+      record.second_descriptor_distance = places.size() > 1 ? places[place == places[0] ? 1 : 0]->match.distance : 1.0;
+      arena.execute([&] { item.v = verify(query, place->id, place->match); });
+      const Verification& v = item.v;
+      record.T_candidate_query = v.T_candidate_query;
+      record.fitness = v.fitness;
+      record.rms_m = v.rms_m;
+      item.query_position = (c.T_world_sensor * v.T_candidate_query).translation();
+      const core::SE3 T_estimate = c.T_world_sensor.inverse() * q.T_world_sensor;
+      const core::SE3 difference = T_estimate.inverse() * v.T_candidate_query;
+      const double travelled = std::abs(q.path_m - c.path_m);
+      record.gate_translation_m = difference.translation().norm();
+      record.gate_rotation_rad = difference.so3().log().norm();
+      record.gate_limit_m = options.loop_gate_translation_m + options.loop_gate_drift_per_m * travelled;
+      const double rotation_limit = options.loop_gate_rotation_rad + options.loop_gate_rotation_drift_per_m * travelled;
+      if (v.fitness < options.loop_min_fitness) {
+        record.decision = "icp fitness";
+      } else if (v.rms_m > options.loop_max_rms_m) {
+        record.decision = "icp rms";
+      } else if (v.degenerate) {
+        record.decision = "icp degenerate";
+      } else if (record.gate_translation_m > record.gate_limit_m || record.gate_rotation_rad > rotation_limit) {
+        record.decision = "odometry gate";
+      } else {
+        record.decision = "passed";
+      }
+      verified.push_back(std::move(item));
+    }
+    // Uniqueness: two places that both pass, about as well, and put the query in different
+    // places make the loop ambiguous (a garage's identical bays within what the odometry allows).
+    Verified* best = nullptr;
+    for (Verified& item : verified) {
+      if (item.record.decision == "passed" && (best == nullptr || item.v.fitness > best->v.fitness)) best = &item;
+    }
+    if (best != nullptr) {
+      bool ambiguous = false;
+      for (Verified& item : verified) {
+        if (&item == best || item.record.decision != "passed") continue;
+        best->record.second_fitness = std::max(best->record.second_fitness, item.v.fitness);
+        if (item.v.fitness > best->v.fitness - options.loop_ambiguity_fitness_margin &&
+            (item.query_position - best->query_position).norm() > options.loop_uniqueness_separation_m) {
+          ambiguous = true;
         }
       }
+      for (Verified& item : verified) {
+        if (item.record.decision != "passed") continue;
+        item.record.decision = ambiguous ? "ambiguous" : &item == best ? "accepted" : "not the best place";
+      }
     }
-    record.accepted = record.decision == "accepted";
     summary.verification_s += seconds_since(start);
-    summary.candidates.push_back(record);
-    if (record.accepted) {
-      edges.push_back({best.id, query, v.T_candidate_query, true, false, static_cast<int>(summary.candidates.size() - 1)});
-      ++summary.loops_accepted;
-      ++loops_since_optimization;
-      optimize(false, summary);
+    for (Verified& item : verified) {
+      item.record.accepted = item.record.decision == "accepted";
+      summary.candidates.push_back(item.record);
+      if (item.record.accepted) {
+        edges.push_back({item.record.candidate_keyframe, query, item.v.T_candidate_query, true, false,
+                         static_cast<int>(summary.candidates.size() - 1)});
+        ++summary.loops_accepted;
+        ++loops_since_optimization;
+      }
     }
+    if (best != nullptr && best->record.decision == "accepted") optimize(false, summary);
   }
 };
 

@@ -12,25 +12,23 @@
 ///    pose (a weak edge across a map-segment change, where the odometry was lost, so that a loop
 ///    closure can put the segments back together); accepted loop closures as edges.
 ///  - Loop closure, for each new keyframe: the Scan Context database proposes candidates
-///    (`candidates` nearest ring keys, exclude_recent keyframes left out). The best candidate
-///    below the descriptor threshold is verified, never trusted:
+///    (`candidates` nearest ring keys, exclude_recent keyframes left out). Up to
+///    `loop_places_verified` distinct places among those below the descriptor threshold
+///    (candidates more than `loop_uniqueness_separation_m` apart) are verified, never trusted:
 ///      1. ICP of the keyframe's points against the candidate's neighbourhood (its keyframe and
 ///         `verification_neighbours` on either side, in the candidate's frame), started from the
 ///         descriptor's alignment (yaw and lateral view) and, separately, from the current
-///         estimate of the relative pose;
-///         coarse then fine correspondence thresholds; the better start wins;
+///         estimate of the relative pose; the better start wins;
 ///      2. fitness (share of points with a target point within the fine threshold) at least
 ///         `loop_min_fitness`, RMS at most `loop_max_rms_m`, and no degenerate direction;
 ///      3. odometry consistency: the verified relative pose may differ from the current
 ///         estimate's by at most `loop_gate_translation_m` + `loop_gate_drift_per_m` times the
 ///         path travelled between the two keyframes (rotation likewise), the drift odometry can
-///         have accumulated;
-///      4. uniqueness: the next candidate below the threshold whose keyframe lies more than
-///         `loop_uniqueness_separation_m` from the first's is verified too; if it passes 1-2 with
-///         a fitness within `loop_ambiguity_fitness_margin` of the first's and puts the query more
-///         than that distance away from where the first puts it (a different place that looks
-///         the same, as in a garage, rather than the same place seen from a neighbouring
-///         keyframe), the loop is ambiguous and rejected.
+///         have accumulated (a look-alike place elsewhere fails here);
+///      4. uniqueness: if two places pass 1-3 with fitnesses within
+///         `loop_ambiguity_fitness_margin` and put the query more than the separation apart (a
+///         garage's identical bays within what the odometry allows), the loop is ambiguous and
+///         rejected; otherwise the best place that passed is accepted.
 ///    A false loop closure is the worst failure; every candidate is reported with the reason it
 ///    was accepted or rejected. Accepted loops trigger a least-squares solve of the graph; at
 ///    finish() GNC (backend/gnc.hpp) has the last word over all loop closures.
@@ -73,6 +71,9 @@ struct LidarSlamOptions {
   double loop_gate_drift_per_m = 0.05;          ///< metres of translation error per metre travelled
   double loop_gate_rotation_drift_per_m = 0.002;  ///< radians per metre travelled
   double loop_uniqueness_separation_m = 5.0;
+  /// Distinct places (candidates below the descriptor threshold more than the separation apart)
+  /// verified per keyframe, best descriptor distance first (>= 1).
+  int loop_places_verified = 3;
   /// The second place is as good as the first unless its fitness is lower by more than this.
   double loop_ambiguity_fitness_margin = 0.05;
   /// Pose-graph noise (standard deviations).
@@ -95,8 +96,8 @@ struct LoopCandidateRecord {
   double candidate_time_s = 0.0;
   double descriptor_distance = 0.0;
   double descriptor_yaw_rad = 0.0;
-  double second_descriptor_distance = 0.0;  ///< of the next candidate at another place, or 1
-  double second_fitness = 0.0;              ///< its ICP fitness, when it was verified
+  double second_descriptor_distance = 0.0;  ///< of another place verified for the query, or 1
+  double second_fitness = 0.0;              ///< best ICP fitness of another place that passed, or 0
   double fitness = 0.0;
   double rms_m = 0.0;
   double gate_translation_m = 0.0;  ///< |verified - estimated| relative translation
@@ -105,8 +106,8 @@ struct LoopCandidateRecord {
   core::SE3 T_candidate_query;      ///< verified relative pose (when ICP ran)
   bool accepted = false;
   bool rejected_by_gnc = false;
-  /// "accepted", or why not: "descriptor above threshold", "icp fitness", "icp rms",
-  /// "icp degenerate", "odometry gate", "ambiguous".
+  /// "accepted", or why not: "icp fitness", "icp rms", "icp degenerate", "odometry gate",
+  /// "ambiguous", "not the best place" (passed, but another place of the same query fitted better).
   std::string decision;
 };
 
