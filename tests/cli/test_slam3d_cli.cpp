@@ -145,6 +145,11 @@ TEST(Slam3dCli, BrokenTimesTablesNameFileAndLine) {
   r = run(q(scans) + " --times " + q(backwards) + " --times-column 3 --out " + q(scratch() / "o6"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("times_back.txt:1"), std::string::npos) << r.err;
+  // Windows line ends are read, not refused.
+  const fs::path crlf = scratch() / "times_crlf.txt";
+  std::ofstream(crlf) << "# t\r\n0.0\r\n0.1\r\n0.2\r\n";
+  r = run(q(scans) + " --times " + q(crlf) + " --out " + q(scratch() / "o6b") + " -q");
+  EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_FALSE(fs::exists(scratch() / "o3"));
 }
 

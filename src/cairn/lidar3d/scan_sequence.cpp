@@ -98,6 +98,7 @@ std::vector<double> read_scan_times(const std::string& times_path, int column, s
   std::size_t line_number = 0;
   while (times.size() < count && std::getline(in, line)) {
     ++line_number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF line ends
     if (line.find('\0') != std::string::npos) throw io::ParseError(times_path, line_number, "binary data in a text table");
     std::istringstream fields(line);
     std::string field, first;
