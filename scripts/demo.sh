@@ -149,7 +149,9 @@ Done. Look at:
   $OUT/info/<graph>.warnings.txt    what cairn noticed (indefinite information, skipped records)
   $OUT/optimized/                   optimised graphs, JSON reports with per-iteration logs (cairn optimize)
   $OUT/ba/                          the bundle-adjusted BAL problem and its report (cairn ba)
+  $OUT/slam3d/<run>/map.png          3D LiDAR maps from above, trajectory by health (map.ply: the points)
+  $OUT/slam3d/<run>/report.json      per-scan stages, health events, every loop candidate and its decision
   $OUT/simulated/corridor-aliasing/world.png   the simulated world and trajectories (cairn simulate)
   $OUT/converted/                   the same data in other formats (cairn convert)
-Next: cairn --help, docs/slam2d.md, docs/evaluation.md, docs/backend.md, docs/formats.md, docs/conventions.md
+Next: cairn --help, docs/slam2d.md, docs/lidar3d.md, docs/evaluation.md, docs/backend.md, docs/formats.md, docs/conventions.md
 MSG
