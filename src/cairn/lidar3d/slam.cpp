@@ -112,7 +112,6 @@ struct LidarSlam::Impl {
   std::vector<core::SE3> scan_T_odom;
   std::vector<int> scan_anchor;
   double path_m = 0.0;
-  std::size_t loops_since_optimization = 0;
 
   core::SE3 T_world_from_odom(const core::SE3& T_odom) const {
     const Keyframe& last = keyframes.back();
@@ -207,7 +206,6 @@ struct LidarSlam::Impl {
     }
     for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k].T_world_sensor = problem.T_world_pose[k];
     ++summary.optimizations;
-    loops_since_optimization = 0;
     summary.optimization_s += seconds_since(start);
   }
 
@@ -305,7 +303,6 @@ struct LidarSlam::Impl {
         edges.push_back({item.record.candidate_keyframe, query, item.v.T_candidate_query, true, false,
                          static_cast<int>(summary.candidates.size() - 1)});
         ++summary.loops_accepted;
-        ++loops_since_optimization;
       }
     }
     if (best != nullptr && best->record.decision == "accepted") optimize(false, summary);
