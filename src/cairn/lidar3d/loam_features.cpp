@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numeric>
 
+#include <tbb/parallel_for.h>
+
 #include "cairn/lidar3d/voxel_hash_map.hpp"
 
 namespace cairn::lidar3d {
@@ -16,10 +18,14 @@ LoamFeatures extract_loam_features(const std::vector<Eigen::Vector3d>& points, c
   std::vector<std::vector<std::size_t>> rings(static_cast<std::size_t>(max_ring) + 1);
   for (std::size_t i = 0; i < points.size(); ++i) rings[ring[i]].push_back(i);
   const int k = options.neighbours;
-  std::vector<Eigen::Vector3d> less_flat;
-  for (std::vector<std::size_t>& indices : rings) {
+  // Rings are independent: one task each, results joined in ring order (the same for any number
+  // of threads).
+  std::vector<LoamFeatures> per_ring(rings.size());
+  tbb::parallel_for(std::size_t{0}, rings.size(), [&](std::size_t r) {
+    const std::vector<std::size_t>& indices = rings[r];
+    LoamFeatures& out = per_ring[r];
     const int n = static_cast<int>(indices.size());
-    if (n < 2 * k + 1) continue;
+    if (n < 2 * k + 1) return;
     std::vector<double> azimuth(indices.size());
     for (std::size_t j = 0; j < indices.size(); ++j) azimuth[j] = std::atan2(points[indices[j]].y(), points[indices[j]].x());
     std::vector<std::size_t> order(indices.size());
@@ -76,9 +82,9 @@ LoamFeatures extract_loam_features(const std::vector<Eigen::Vector3d>& points, c
       for (int i : by_c) {
         const auto u = static_cast<std::size_t>(i);
         if (!usable[u] || picked[u] || c[u] <= options.edge_curvature) continue;
-        if (edges < options.sharp_per_sector) features.sharp.push_back(p[u]);
+        if (edges < options.sharp_per_sector) out.sharp.push_back(p[u]);
         if (edges >= options.less_sharp_per_sector) break;
-        features.less_sharp.push_back(p[u]);
+        out.less_sharp.push_back(p[u]);
         is_edge[u] = 1;
         ++edges;
         block(i);
@@ -87,15 +93,22 @@ LoamFeatures extract_loam_features(const std::vector<Eigen::Vector3d>& points, c
       for (auto it = by_c.rbegin(); it != by_c.rend() && flats < options.flat_per_sector; ++it) {
         const auto u = static_cast<std::size_t>(*it);
         if (!usable[u] || picked[u] || c[u] >= options.plane_curvature) continue;
-        features.flat.push_back(p[u]);
+        out.flat.push_back(p[u]);
         ++flats;
         block(*it);
       }
       for (int i = begin; i < end; ++i) {
         const auto u = static_cast<std::size_t>(i);
-        if (usable[u] && !is_edge[u] && c[u] < options.plane_curvature) less_flat.push_back(p[u]);
+        if (usable[u] && !is_edge[u] && c[u] < options.plane_curvature) out.less_flat.push_back(p[u]);
       }
     }
+    });
+  std::vector<Eigen::Vector3d> less_flat;
+  for (const LoamFeatures& f : per_ring) {
+    features.sharp.insert(features.sharp.end(), f.sharp.begin(), f.sharp.end());
+    features.less_sharp.insert(features.less_sharp.end(), f.less_sharp.begin(), f.less_sharp.end());
+    features.flat.insert(features.flat.end(), f.flat.begin(), f.flat.end());
+    less_flat.insert(less_flat.end(), f.less_flat.begin(), f.less_flat.end());
   }
   features.less_flat = voxel_downsample(less_flat, options.less_flat_voxel_m);
   return features;
