@@ -398,7 +398,7 @@ Runner register_slam3d(CLI::App& app) {
   app.add_option("--ground-truth", flags->ground_truth,
                  "Ground-truth poses of the same scans (KITTI 3x4 per line, or TUM): print and report drift, RPE, ATE");
   app.add_option("--ground-truth-format", flags->ground_truth_format, "kitti or tum (default: from the file)");
-  app.add_option("--metric", flags->metric, "ICP residual: point-to-plane (default) or point-to-point (KISS-ICP's)");
+  app.add_option("--metric", flags->metric, "ICP residual of the dense front end: point-to-plane (default) or point-to-point (KISS-ICP's)");
   app.add_option("--front-end", flags->front_end,
                  "auto (default: loam when the scans carry rings, dense otherwise; the kitti preset: dense), dense (every "
                  "point, KISS-ICP's way) or loam (edge and planar features per ring, Zhang & Singh 2014)");
