@@ -2,7 +2,6 @@
 // conversions that read back the same.
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -11,43 +10,17 @@
 #include <sstream>
 #include <string>
 
+#include "cli_runner.hpp"
 #include "test_data.hpp"
 
 namespace {
 
-struct Result {
-  int status = -1;  // exit code, or -1 when killed by a signal
-  std::string out;
-  std::string err;
-};
+using Result = cairn::test::CliResult;
+using cairn::test::slurp;
 
-std::filesystem::path scratch() {
-  const auto dir = std::filesystem::temp_directory_path() / ("cairn_cli_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return dir;
-}
+std::filesystem::path scratch() { return cairn::test::scratch_folder("cli_test"); }
 
-std::string slurp(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-Result run(const std::string& args) {
-  const auto err_path = scratch() / "stderr.txt";
-  const std::string command = std::string(CAIRN_BINARY) + " " + args + " 2>" + err_path.string();
-  Result result;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) result.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.err = slurp(err_path);
-  return result;
-}
+Result run(const std::string& args) { return cairn::test::run_command(CAIRN_BINARY, args, scratch() / "stderr.txt"); }
 
 std::string write_file(const std::string& name, const std::string& content) {
   const auto path = scratch() / name;

@@ -3,8 +3,6 @@
 // the file and line and a non-zero exit, never a partial output directory.
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -13,45 +11,19 @@
 #include <sstream>
 #include <string>
 
+#include "cli_runner.hpp"
 #include "test_data.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status = -1;  // exit code, or -1 when killed by a signal
-  std::string out;
-  std::string err;
-};
+using Result = cairn::test::CliResult;
+using cairn::test::slurp;
 
-fs::path scratch() {
-  const auto dir = fs::temp_directory_path() / ("cairn_slam3d_test_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir;
-}
+std::filesystem::path scratch() { return cairn::test::scratch_folder("slam3d_test"); }
 
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-Result run(const std::string& args) {
-  const auto err_path = scratch() / "stderr.txt";
-  const std::string command = std::string(CAIRN_BINARY) + " slam3d " + args + " 2>" + err_path.string();
-  Result result;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) result.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.err = slurp(err_path);
-  return result;
-}
+Result run(const std::string& args) { return cairn::test::run_command(CAIRN_BINARY + std::string(" slam3d"), args, scratch() / "stderr.txt"); }
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 

@@ -4,44 +4,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/lidar3d/odometry.hpp"
+#include "kitti_key_frames.hpp"
 #include "test_data.hpp"
 
 namespace cairn::lidar3d {
 namespace {
 
-constexpr const char* kFolder = "lidar3d/kitti00_keyframes";
-
-struct KeyFrames {
-  std::vector<std::string> files;
-  std::vector<double> times_s;
-  std::vector<core::SE3> T_enu_velo;
-};
-
-KeyFrames read_key_frames(std::size_t count) {
-  KeyFrames k;
-  std::ifstream list(test::data_path(std::string(kFolder) + "/keyframes.txt"));
-  std::ifstream poses(test::data_path(std::string(kFolder) + "/poses_keyframes.txt"));
-  std::string line;
-  while (k.files.size() < count && std::getline(list, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream fields(line);
-    int index = 0, trajectory_line = 0, frame = 0;
-    double time = 0.0;
-    std::string file;
-    fields >> index >> trajectory_line >> frame >> time >> file;
-    k.files.push_back(test::data_path(std::string(kFolder) + "/" + file).string());
-    k.times_s.push_back(time);
-    Eigen::Matrix<double, 3, 4> T;
-    for (int i = 0; i < 12; ++i) poses >> T(i / 4, i % 4);
-    k.T_enu_velo.push_back(core::SE3::from_matrix3x4(T));
-  }
-  return k;
-}
+using KeyFrames = test::KittiKeyFrames;
+KeyFrames read_key_frames(std::size_t count) { return test::read_kitti_key_frames(count); }
 
 struct StepErrors {
   double translation_rmse_m = 0.0;

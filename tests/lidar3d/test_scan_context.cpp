@@ -18,6 +18,7 @@
 #include "cairn/lidar3d/scan_context.hpp"
 #include "cairn/sim/lidar_3d.hpp"
 #include "cairn/sim/street_world.hpp"
+#include "kitti_key_frames.hpp"
 #include "test_data.hpp"
 
 namespace cairn::lidar3d {
@@ -261,8 +262,6 @@ TEST(ScanContextDatabase, FindsTheRotatedSceneAndExcludesRecentIds) {
 // Real KITTI 00 key frames: no revisit in this stretch (SOURCE.txt), so every pair far apart in
 // time is a non-revisit.
 
-constexpr const char* kFolder = "lidar3d/kitti00_keyframes";
-
 struct KittiScans {
   std::vector<std::vector<Eigen::Vector3d>> points;
   std::vector<Eigen::Vector3d> positions;  // ENU, from poses_keyframes.txt
@@ -271,24 +270,14 @@ struct KittiScans {
 const KittiScans& kitti_scans() {
   static const KittiScans scans = [] {
     KittiScans k;
-    std::ifstream list(test::data_path(std::string(kFolder) + "/keyframes.txt"));
-    std::ifstream poses(test::data_path(std::string(kFolder) + "/poses_keyframes.txt"));
-    std::string line;
-    while (std::getline(list, line)) {
-      if (line.empty() || line[0] == '#') continue;
-      std::istringstream fields(line);
-      int index = 0, trajectory_line = 0, frame = 0;
-      double time = 0.0;
-      std::string file;
-      fields >> index >> trajectory_line >> frame >> time >> file;
-      const io::PointCloud cloud = io::read_point_cloud(test::data_path(std::string(kFolder) + "/" + file).string());
+    const test::KittiKeyFrames key_frames = test::read_kitti_key_frames();
+    for (std::size_t i = 0; i < key_frames.files.size(); ++i) {
+      const io::PointCloud cloud = io::read_point_cloud(key_frames.files[i]);
       std::vector<Eigen::Vector3d> points;
       points.reserve(cloud.points.size());
       for (const auto& p : cloud.points) points.push_back(p.cast<double>());
       k.points.push_back(std::move(points));
-      Eigen::Matrix<double, 3, 4> T;
-      for (int i = 0; i < 12; ++i) poses >> T(i / 4, i % 4);
-      k.positions.push_back(T.col(3));
+      k.positions.push_back(key_frames.T_enu_velo[i].translation());
     }
     return k;
   }();

@@ -37,57 +37,72 @@ struct LinearSystem {
   }
 };
 
-// Fixed chunks reduced in a fixed tree (parallel_deterministic_reduce with its default
+// Geman-McClure weight as KISS-ICP: kappa^2 / (kappa + r^2)^2, on the squared residual used.
+double geman_mcclure_weight(double kernel, double squared_residual) {
+  const double denominator = kernel + squared_residual;
+  return kernel * kernel / (denominator * denominator);
+}
+
+// d(exp(delta) p) / d(rotation part of delta) at delta = 0: -[p]x.
+Eigen::Matrix3d minus_hat(const Eigen::Vector3d& p) {
+  Eigen::Matrix3d m;
+  m << 0.0, p.z(), -p.y(), -p.z(), 0.0, p.x(), p.y(), -p.x(), 0.0;
+  return m;
+}
+
+// Sums add(p_map, system) over the source points moved into the map frame by T_map_sensor, in
+// fixed chunks reduced in a fixed tree (parallel_deterministic_reduce with its default
 // simple_partitioner): the same sums whatever the number of threads.
-constexpr std::size_t kGrain = 512;
+template <class AddPoint>
+LinearSystem accumulate(const std::vector<Eigen::Vector3d>& source_sensor, const core::SE3& T_map_sensor,
+                        const AddPoint& add) {
+  constexpr std::size_t kGrain = 512;
+  const Eigen::Matrix3d R = T_map_sensor.rotation_matrix();
+  const Eigen::Vector3d t = T_map_sensor.translation();
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, source_sensor.size(), kGrain), LinearSystem{},
+      [&](const tbb::blocked_range<std::size_t>& range, LinearSystem system) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) add(Eigen::Vector3d(R * source_sensor[i] + t), system);
+        return system;
+      },
+      [](LinearSystem a, const LinearSystem& b) { return a += b; });
+}
 
 LinearSystem build_system(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& source_sensor,
                           const core::SE3& T_map_sensor, double max_squared_distance, double kernel,
                           IcpMetric metric, bool point_to_point_fallback = true) {
-  const Eigen::Matrix3d R = T_map_sensor.rotation_matrix();
-  const Eigen::Vector3d t = T_map_sensor.translation();
-  const double kernel_squared = kernel * kernel;
-  return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, source_sensor.size(), kGrain), LinearSystem{},
-      [&](const tbb::blocked_range<std::size_t>& range, LinearSystem system) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          const Eigen::Vector3d p = R * source_sensor[i] + t;
-          Eigen::Vector3d q, n;
-          double d2 = 0.0;
-          if (!map.nearest(p, &q, &d2, &n) || d2 > max_squared_distance) continue;
-          if (!point_to_point_fallback && n.squaredNorm() == 0.0) continue;
-          const Eigen::Vector3d r = p - q;
-          Eigen::Matrix<double, 3, 6> J;
-          J.leftCols<3>().setIdentity();
-          J.rightCols<3>() << 0.0, p.z(), -p.y(), -p.z(), 0.0, p.x(), p.y(), -p.x(), 0.0;  // -[p]x
-          system.squared_distance_sum += d2;
-          ++system.correspondences;
-          const bool planar = n.squaredNorm() > 0.0;
-          if (planar) {
-            const Eigen::Matrix<double, 1, 6> Jn = n.transpose() * J;
-            const double e = n.dot(r);
-            // Geman-McClure weight as KISS-ICP: kappa^2 / (kappa + r^2)^2, on the residual used.
-            const double denominator = kernel + e * e;
-            const double w = kernel_squared / (denominator * denominator);
-            system.H_plane.noalias() += w * Jn.transpose() * Jn;
-            system.plane_weight_sum += w;
-            system.normal_moment.noalias() += w * n * n.transpose();
-            system.plane_squared_range_sum += w * (p - T_map_sensor.translation()).squaredNorm();
-            ++system.planar;
-            if (metric == IcpMetric::kPointToPlane) {
-              system.H.noalias() += w * Jn.transpose() * Jn;
-              system.g.noalias() += (w * e) * Jn.transpose();
-              continue;
-            }
-          }
-          const double denominator = kernel + d2;
-          const double w = kernel_squared / (denominator * denominator);
-          system.H.noalias() += w * J.transpose() * J;
-          system.g.noalias() += w * J.transpose() * r;
-        }
-        return system;
-      },
-      [](LinearSystem a, const LinearSystem& b) { return a += b; });
+  const Eigen::Vector3d origin = T_map_sensor.translation();
+  return accumulate(source_sensor, T_map_sensor, [&](const Eigen::Vector3d& p, LinearSystem& system) {
+    Eigen::Vector3d q, n;
+    double d2 = 0.0;
+    if (!map.nearest(p, &q, &d2, &n) || d2 > max_squared_distance) return;
+    const bool planar = n.squaredNorm() > 0.0;
+    if (!point_to_point_fallback && !planar) return;
+    const Eigen::Vector3d r = p - q;
+    Eigen::Matrix<double, 3, 6> J;
+    J.leftCols<3>().setIdentity();
+    J.rightCols<3>() = minus_hat(p);
+    system.squared_distance_sum += d2;
+    ++system.correspondences;
+    if (planar) {
+      const Eigen::Matrix<double, 1, 6> Jn = n.transpose() * J;
+      const double e = n.dot(r);
+      const double w = geman_mcclure_weight(kernel, e * e);
+      system.H_plane.noalias() += w * Jn.transpose() * Jn;
+      system.plane_weight_sum += w;
+      system.normal_moment.noalias() += w * n * n.transpose();
+      system.plane_squared_range_sum += w * (p - origin).squaredNorm();
+      ++system.planar;
+      if (metric == IcpMetric::kPointToPlane) {
+        system.H.noalias() += w * Jn.transpose() * Jn;
+        system.g.noalias() += (w * e) * Jn.transpose();
+        return;
+      }
+    }
+    const double w = geman_mcclure_weight(kernel, d2);
+    system.H.noalias() += w * J.transpose() * J;
+    system.g.noalias() += w * J.transpose() * r;
+  });
 }
 
 // LOAM's edge residual (Zhang & Singh 2014, eq. 2): the distance from the point to the map's
@@ -96,45 +111,29 @@ LinearSystem build_system(const VoxelHashMap& map, const std::vector<Eigen::Vect
 // information share for the degeneracy test is (I - d d^T) / 2.
 LinearSystem build_edge_system(const VoxelHashMap& map, const std::vector<Eigen::Vector3d>& source_sensor,
                                const core::SE3& T_map_sensor, double max_squared_distance, double kernel) {
-  const Eigen::Matrix3d R = T_map_sensor.rotation_matrix();
-  const Eigen::Vector3d t = T_map_sensor.translation();
-  const double kernel_squared = kernel * kernel;
-  return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, source_sensor.size(), kGrain), LinearSystem{},
-      [&](const tbb::blocked_range<std::size_t>& range, LinearSystem system) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          const Eigen::Vector3d p = R * source_sensor[i] + t;
-          Eigen::Vector3d q, d;
-          double d2 = 0.0;
-          if (!map.nearest(p, &q, &d2, nullptr, &d) || d2 > max_squared_distance || d.squaredNorm() == 0.0) continue;
-          const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - d * d.transpose();
-          const Eigen::Vector3d e = P * (p - q);
-          Eigen::Matrix<double, 3, 6> J;
-          J.leftCols<3>() = P;
-          Eigen::Matrix3d minus_hat;
-          minus_hat << 0.0, p.z(), -p.y(), -p.z(), 0.0, p.x(), p.y(), -p.x(), 0.0;  // -[p]x
-          J.rightCols<3>() = P * minus_hat;
-          const double e2 = e.squaredNorm();
-          const double denominator = kernel + e2;
-          const double w = kernel_squared / (denominator * denominator);
-          system.H.noalias() += w * J.transpose() * J;
-          system.g.noalias() += w * J.transpose() * e;
-          system.H_plane.noalias() += w * J.transpose() * J;
-          system.normal_moment.noalias() += (0.5 * w) * P;
-          system.plane_weight_sum += w;
-          system.plane_squared_range_sum += w * (p - t).squaredNorm();
-          system.squared_distance_sum += e2;
-          ++system.correspondences;
-          ++system.planar;
-        }
-        return system;
-      },
-      [](LinearSystem a, const LinearSystem& b) { return a += b; });
+  const Eigen::Vector3d origin = T_map_sensor.translation();
+  return accumulate(source_sensor, T_map_sensor, [&](const Eigen::Vector3d& p, LinearSystem& system) {
+    Eigen::Vector3d q, d;
+    double d2 = 0.0;
+    if (!map.nearest(p, &q, &d2, nullptr, &d) || d2 > max_squared_distance || d.squaredNorm() == 0.0) return;
+    const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - d * d.transpose();
+    const Eigen::Vector3d e = P * (p - q);
+    Eigen::Matrix<double, 3, 6> J;
+    J.leftCols<3>() = P;
+    J.rightCols<3>() = P * minus_hat(p);
+    const double e2 = e.squaredNorm();
+    const double w = geman_mcclure_weight(kernel, e2);
+    system.H.noalias() += w * J.transpose() * J;
+    system.g.noalias() += w * J.transpose() * e;
+    system.H_plane.noalias() += w * J.transpose() * J;
+    system.normal_moment.noalias() += (0.5 * w) * P;
+    system.plane_weight_sum += w;
+    system.plane_squared_range_sum += w * (p - origin).squaredNorm();
+    system.squared_distance_sum += e2;
+    ++system.correspondences;
+    ++system.planar;
+  });
 }
-
-}  // namespace
-
-namespace {
 
 // Gauss-Newton with the degeneracy analysis, on whatever `build(T)` linearises.
 template <class Build>

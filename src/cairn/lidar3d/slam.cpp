@@ -326,7 +326,6 @@ SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s) {
   const core::SE3 T_odom_stamp = result.odometry.T_world_sensor;
   if (!m.scan_T_odom.empty()) m.path_m += (T_odom_stamp.translation() - m.scan_T_odom.back().translation()).norm();
   m.scan_T_odom.push_back(T_odom_stamp);
-  ++summary_.scans;
 
   bool make_keyframe = m.keyframes.empty();
   if (!make_keyframe) {

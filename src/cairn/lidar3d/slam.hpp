@@ -112,7 +112,6 @@ struct LoopCandidateRecord {
 };
 
 struct LidarSlamSummary {
-  std::size_t scans = 0;
   std::size_t keyframes = 0;
   std::size_t loop_queries = 0;
   std::size_t loops_accepted = 0;
