@@ -253,11 +253,19 @@ TEST(Slam2dSimulation, GarbageScansMakeItLostThenItRecovers) {
   });
   bool recovered = false;
   for (const auto& e : run.summary.health_events) recovered = recovered || (e.from == Health::kLost && e.scan >= 960);
-  std::printf("garbage scans: %zu lost scans, %zu relocalisations, recovered %d, ATE %.4f m\n", run.summary.scans_lost,
-              run.summary.relocalisations, recovered ? 1 : 0, run.ate_m);
+  std::printf("garbage scans: %zu lost scans, %zu relocalisations, recovered %d, %zu segments, %zu merges, ATE %.4f m\n",
+              run.summary.scans_lost, run.summary.relocalisations, recovered ? 1 : 0, run.summary.segments.size(),
+              run.summary.merges.size(), run.ate_m);
+  for (const auto& e : run.summary.health_events)
+    if (e.scan >= 895 && e.scan < 1000) std::printf("  scan %zu: %s -> %s: %s\n", e.scan, std::string(to_string(e.from)).c_str(),
+                                                     std::string(to_string(e.to)).c_str(), e.reason.c_str());
   EXPECT_GE(run.summary.scans_lost, 40u);
-  EXPECT_LE(run.summary.scans_lost, 60u);
+  EXPECT_LE(run.summary.scans_lost, 70u);
   EXPECT_TRUE(recovered);
+  // Lost starts a new map segment; back among mapped walls it is found again and merged.
+  ASSERT_GE(run.summary.segments.size(), 2u);
+  EXPECT_GE(run.summary.merges.size(), 1u);
+  for (const SegmentInfo& segment : run.summary.segments) EXPECT_EQ(segment.merged_with, 0) << "segment " << segment.id;
   EXPECT_LT(run.ate_m, 0.05);
 }
 

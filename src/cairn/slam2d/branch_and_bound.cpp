@@ -66,14 +66,6 @@ PrecomputationGridStack::PrecomputationGridStack(const ProbabilityGrid& grid, co
   }
 }
 
-double PrecomputationGridStack::value(int height, long i, long j) const {
-  const Level& level = levels_[static_cast<std::size_t>(height)];
-  const long li = i - level.offset_i;
-  const long lj = j - level.offset_j;
-  if (li < 0 || lj < 0 || li >= level.width || lj >= level.height) return outside_ / 255.0;
-  return level.values[static_cast<std::size_t>(lj * level.width + li)] / 255.0;
-}
-
 std::size_t PrecomputationGridStack::memory_bytes() const {
   std::size_t bytes = 0;
   for (const auto& level : levels_) bytes += level.values.size();
@@ -121,12 +113,13 @@ BranchAndBoundResult match_branch_and_bound(const PrecomputationGridStack& stack
       c.emplace_back(static_cast<long>(std::floor(q.x() / r)), static_cast<long>(std::floor(q.y() / r)));
     }
   }
-  const double inverse_count = 1.0 / static_cast<double>(points_sensor.size());
+  // The mean of the stored bytes over the points, summed exactly in integers, / 255.
+  const double scale = 1.0 / (255.0 * static_cast<double>(points_sensor.size()));
   auto score = [&](const Candidate& c, int height) {
-    double sum = 0.0;
-    for (const auto& [i, j] : cells[static_cast<std::size_t>(c.angle_index)]) sum += stack.value(height, i + c.dx, j + c.dy);
+    std::uint64_t sum = 0;
+    for (const auto& [i, j] : cells[static_cast<std::size_t>(c.angle_index)]) sum += stack.raw_value(height, i + c.dx, j + c.dy);
     ++result.nodes_scored;
-    return sum * inverse_count;
+    return static_cast<double>(sum) * scale;
   };
   auto pose_of = [&](const Candidate& c) {
     return core::SE2(initial.so2() * core::SO2(angle_of[static_cast<std::size_t>(c.angle_index)]),

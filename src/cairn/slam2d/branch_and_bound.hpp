@@ -42,7 +42,15 @@ class PrecomputationGridStack {
   double resolution() const { return resolution_; }
   /// Max over [i, i + 2^h) x [j, j + 2^h) of cell probabilities, cell indices global
   /// (floor(p / resolution)); in [0, 1].
-  double value(int height, long i, long j) const;
+  double value(int height, long i, long j) const { return raw_value(height, i, j) / 255.0; }
+  /// The same maximum as stored: probability * 255 rounded up (scores sum these exactly).
+  std::uint8_t raw_value(int height, long i, long j) const {
+    const Level& level = levels_[static_cast<std::size_t>(height)];
+    const long li = i - level.offset_i;
+    const long lj = j - level.offset_j;
+    if (li < 0 || lj < 0 || li >= level.width || lj >= level.height) return outside_;
+    return level.values[static_cast<std::size_t>(lj * level.width + li)];
+  }
   std::size_t memory_bytes() const;
 
  private:

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <numbers>
 #include <filesystem>
 #include <memory>
 #include <numeric>
@@ -118,8 +119,34 @@ void write_map_pgm(const ProbabilityGrid& grid, const std::string& pgm_path, con
   });
 }
 
+SegmentMarks segment_marks(const Slam2d& slam, const std::vector<ScanResult>& trajectory) {
+  SegmentMarks marks;
+  const Slam2dSummary& s = slam.summary();
+  if (s.segments.size() < 2) return marks;
+  for (const SegmentInfo& segment : s.segments) {
+    if (segment.first_scan >= trajectory.size()) continue;
+    const bool merged = segment.merged_with != segment.id ||
+                        std::any_of(s.segments.begin(), s.segments.end(), [&](const SegmentInfo& other) {
+                          return other.id != segment.id && other.merged_with == segment.id;
+                        });
+    marks.starts.push_back({trajectory[segment.first_scan].T_world_laser.translation(),
+                            "S" + std::to_string(segment.id) + (merged ? "" : " unmerged"), merged});
+  }
+  const io::PoseGraph2D graph = slam.pose_graph();
+  for (const MergeEvent& merge : s.merges) {
+    for (const int c : merge.candidates) {
+      const LoopCandidate& candidate = s.candidates[static_cast<std::size_t>(c)];
+      if (candidate.rejected_by_gnc) continue;
+      marks.merges.emplace_back(graph.vertices[static_cast<std::size_t>(candidate.anchor_keyframe)].T_world_pose.translation(),
+                                graph.vertices[static_cast<std::size_t>(candidate.keyframe)].T_world_pose.translation());
+    }
+  }
+  return marks;
+}
+
 void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& trajectory,
-                   const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& loops, const std::string& path) {
+                   const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& loops, const std::string& path,
+                   const SegmentMarks& segments) {
   const Crop crop = known_crop(grid, 10);
   const int width = std::max(480, crop.width), height = crop.height;
   const int legend = 28;
@@ -172,6 +199,28 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
     cairo_line_to(cr, pb.x(), pb.y());
     cairo_stroke(cr);
   }
+  // Map segments: the matches that merged them, and where each began.
+  cairo_set_line_width(cr, 3.0);
+  cairo_set_source_rgba(cr, 0.55, 0.1, 0.75, 0.9);
+  for (const auto& [a, b] : segments.merges) {
+    const auto pa = to_image(a), pb = to_image(b);
+    cairo_move_to(cr, pa.x(), pa.y());
+    cairo_line_to(cr, pb.x(), pb.y());
+    cairo_stroke(cr);
+  }
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
+  cairo_set_font_size(cr, 13.0);
+  cairo_set_line_width(cr, 2.0);
+  for (const auto& start : segments.starts) {
+    const auto p = to_image(start.position);
+    if (start.merged) cairo_set_source_rgb(cr, 0.55, 0.1, 0.75);
+    else cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
+    cairo_new_sub_path(cr);
+    cairo_arc(cr, p.x(), p.y(), 6.0, 0.0, 2.0 * std::numbers::pi);
+    cairo_stroke(cr);
+    cairo_move_to(cr, p.x() + 8.0, p.y() - 8.0);
+    cairo_show_text(cr, start.label.c_str());
+  }
   // Legend and scale bar.
   cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, 12.0);
@@ -192,6 +241,7 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
   swatch(0.95, 0.55, 0.05, "degraded");
   swatch(0.9, 0.1, 0.1, "lost");
   swatch(0.1, 0.7, 0.2, "loop closure");
+  if (!segments.starts.empty()) swatch(0.55, 0.1, 0.75, "segment start / merge");
   // The longest round scale bar that fits beside the legend.
   double bar_m = 1.0;
   for (const double length : {10.0, 5.0, 2.0}) {
@@ -237,10 +287,10 @@ OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::siz
     loops.emplace_back(graph.vertices[static_cast<std::size_t>(edge.from)].T_world_pose.translation(),
                        graph.vertices[static_cast<std::size_t>(edge.to)].T_world_pose.translation());
   }
-  write_map_png(grid, trajectory, loops, files.map_png);
+  write_map_png(grid, trajectory, loops, files.map_png, segment_marks(slam, trajectory));
   io::write_tum(files.trajectory, to_trajectory(slam));
   io::write_output(files.scans, [&](std::ostream& out) {
-    out << "time_s,x_m,y_m,theta_rad,health,inlier_fraction,degeneracy,sigma_x_m,sigma_y_m,sigma_theta_rad,keyframe\n";
+    out << "time_s,x_m,y_m,theta_rad,health,inlier_fraction,degeneracy,sigma_x_m,sigma_y_m,sigma_theta_rad,keyframe,segment\n";
     std::string line;
     for (const ScanResult& s : trajectory) {
       line = s.time.to_seconds_string();
@@ -255,7 +305,9 @@ OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::siz
         line += ',';
         io::append_number(line, v);
       }
-      line += s.keyframe ? ",1\n" : ",0\n";
+      line += s.keyframe ? ",1," : ",0,";
+      line += std::to_string(s.segment);
+      line += '\n';
       out << line;
     }
   });
@@ -299,6 +351,11 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                        {"scans_degraded", s.scans_degraded},
                        {"scans_lost", s.scans_lost},
                        {"relocalisations", s.relocalisations},
+                       {"merge_searches", s.merge_searches},
+                       {"global_searches", s.global_searches},
+                       {"searches_skipped_by_budget", s.searches_skipped_by_budget},
+                       {"segments", s.segments.size()},
+                       {"merges", s.merges.size()},
                        {"final_health", std::string(to_string(slam.health()))}};
   report["time_s"] = {{"preprocess", s.times.preprocess_s}, {"local_match", s.times.local_match_s},
                       {"local_map", s.times.local_map_s},   {"submaps", s.times.submap_s},
@@ -322,6 +379,8 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                           {"verified", c.accepted},
                           {"rejected_by_gnc", c.rejected_by_gnc},
                           {"relocalisation", c.relocalisation},
+                          {"merge", c.merge},
+                          {"global", c.global},
                           {"reason", c.rejected_by_gnc ? std::string("rejected by GNC in the back end") : c.reason}});
   }
   report["loop_candidates"] = candidates;
@@ -334,6 +393,34 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                       {"reason", e.reason}});
   }
   report["health_events"] = events;
+  nlohmann::json segments = nlohmann::json::array();
+  for (const SegmentInfo& g : s.segments) {
+    segments.push_back({{"id", g.id},
+                        {"first_scan", g.first_scan},
+                        {"scans", g.scans},
+                        {"first_keyframe", g.first_keyframe},
+                        {"keyframes", g.keyframes},
+                        {"path_length_m", g.path_length_m},
+                        {"extent_m", {{"min", {g.min_world.x(), g.min_world.y()}}, {"max", {g.max_world.x(), g.max_world.y()}}}},
+                        {"merged_with", g.merged_with},
+                        {"started_because", g.started_because}});
+  }
+  report["segments"] = segments;
+  // Segment groups that nothing joined to segment 0: their placement rests on odometry alone.
+  nlohmann::json unmerged = nlohmann::json::array();
+  for (const SegmentInfo& g : s.segments)
+    if (g.merged_with != 0) unmerged.push_back(g.id);
+  report["segments_not_merged_with_segment_0"] = unmerged;
+  nlohmann::json merges = nlohmann::json::array();
+  for (const MergeEvent& m : s.merges) {
+    merges.push_back({{"time", m.time.to_seconds_string()},
+                      {"scan", m.scan},
+                      {"group_a", m.segment_a},
+                      {"group_b", m.segment_b},
+                      {"evidence_candidates", m.candidates},
+                      {"moved_m", m.moved_m}});
+  }
+  report["merges"] = merges;
   report["config_yaml"] = config_to_yaml(options);
   return report;
 }

@@ -10,7 +10,6 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <optional>
-#include <unordered_map>
 #include <vector>
 
 namespace cairn::slam2d {
@@ -44,12 +43,20 @@ class PointMap {
   bool empty() const { return points_.empty(); }
 
  private:
+  /// The points of one cell: order_[begin, end) (point indices in insertion order).
+  struct Cell {
+    std::uint64_t key = 0;
+    std::uint32_t begin = 0;
+    std::uint32_t end = 0;  ///< 0 marks an empty slot (a used cell has end > begin)
+  };
   std::uint64_t key(const Eigen::Vector2d& p) const;
   static std::uint64_t key(std::int64_t i, std::int64_t j);
+  const Cell* find(std::uint64_t key) const;
 
   PointMapOptions options_;
   std::vector<MapPoint> points_;
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
+  std::vector<std::uint32_t> order_;  ///< point indices grouped by cell
+  std::vector<Cell> table_;           ///< open addressing, linear probing, power-of-two size
 };
 
 }  // namespace cairn::slam2d

@@ -13,8 +13,10 @@
 #include "cairn/backend/problem.hpp"
 #include "cairn/core/assert.hpp"
 #include "cairn/core/so2.hpp"
+#include "cairn/slam2d/place_search.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 namespace cairn::slam2d {
 namespace {
@@ -33,6 +35,7 @@ struct Keyframe {
   std::vector<Eigen::Vector2d> matching;
   double path_length_m = 0.0;  ///< travelled before this keyframe (front end)
   std::size_t scan = 0;
+  int segment = 0;
 };
 
 struct Submap {
@@ -42,6 +45,31 @@ struct Submap {
   std::unique_ptr<PrecomputationGridStack> stack;
   std::unique_ptr<PointMap> points;  ///< in the anchor's frame
   Eigen::Vector2d centre_anchor = Eigen::Vector2d::Zero();
+  Eigen::Vector2d lower_anchor = Eigen::Vector2d::Zero();  ///< observed extent of its grid
+  Eigen::Vector2d upper_anchor = Eigen::Vector2d::Zero();
+  int segment = 0;
+  /// Finished without a single point (a segment closed before its submap saw anything):
+  /// never searched.
+  bool empty = false;
+};
+
+/// A verified match across two groups of segments, waiting for confirmation. `delta` moves
+/// group b's world estimates into group a's frame: delta = T_world_anchor T_anchor_keyframe
+/// T_world_keyframe^-1.
+struct PendingMerge {
+  int group_a = 0;
+  int group_b = 0;
+  core::SE2 delta;
+  std::vector<int> candidates;
+  std::vector<int> keyframes;
+};
+
+/// One search planned for a keyframe.
+struct PlannedSearch {
+  int submap = 0;
+  bool merge = false;
+  bool global = false;
+  core::SE2 T_world_guess;  ///< where the keyframe is believed to be (windowed searches)
 };
 
 struct ScanRecord {
@@ -53,6 +81,7 @@ struct ScanRecord {
   double degeneracy = 0.0;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   bool keyframe_itself = false;
+  int segment = 0;
 };
 
 struct Edge {
@@ -62,7 +91,7 @@ struct Edge {
   bool loop = false;
   int candidate = -1;  ///< index into summary.candidates
   /// Spans a scan whose match failed: odometry alone, possibly a slip or a kidnapping; kept only
-  /// to connect the graph (sigma 10 m, 3 rad) so a relocalisation loop can move it freely.
+  /// to connect the graph (segment_link_*_sigma) so a loop closure or merge can move it freely.
   bool weak = false;
   /// Covariance of the keyframe's match in the `from` frame (x, y, theta); added to the
   /// odometry sigmas when edge_covariance_from_matcher is set.
@@ -136,8 +165,27 @@ struct Slam2d::Impl {
   std::optional<std::size_t> failed_since_scan;
   std::size_t failed_since_keyframe = 0;
   double last_loop_path_m = 0.0;  ///< path length at the last accepted loop closure
+  int segment = 0;                 ///< the current map segment
+  int probation = 0;               ///< matching scans the current segment's seed still needs
+  int segment_first_keyframe = 0;  ///< where the current segment's submaps count from
+  std::vector<int> segment_parent{0};  ///< union-find over segments (root = lowest id)
+  std::vector<PendingMerge> pending_merges;
+  double search_tokens = 0.0;
+  std::size_t global_search_turn = 0;  ///< round-robin position over other groups' submaps
 
-  explicit Impl(const Slam2dOptions& o) : options(o), local_map(o.map_points) {}
+  explicit Impl(const Slam2dOptions& o) : options(o), local_map(o.map_points), search_tokens(o.search_budget_burst) {}
+
+  int group_of(int segment_id) const {
+    while (segment_parent[static_cast<std::size_t>(segment_id)] != segment_id)
+      segment_id = segment_parent[static_cast<std::size_t>(segment_id)];
+    return segment_id;
+  }
+  void join_groups(int a, int b) {
+    a = group_of(a);
+    b = group_of(b);
+    if (a == b) return;
+    segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+  }
 
   void rebuild_local_map() {
     std::vector<Eigen::Vector2d> points;
@@ -154,104 +202,198 @@ struct Slam2d::Impl {
     local_map.build(voxel_filter(points, options.filter.voxel_size_m));
   }
 
-  void finish_submap(Submap& submap) {
+  // What a submap is made of, copied out of the keyframes so it can be built in the background.
+  struct SubmapSource {
+    int submap = 0;
+    std::vector<core::SE2> T_anchor_laser;
+    std::vector<std::vector<Eigen::Vector2d>> hits, misses;
+  };
+  struct BuiltSubmap {
+    std::unique_ptr<PrecomputationGridStack> stack;
+    std::unique_ptr<PointMap> points;
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero(), lower = Eigen::Vector2d::Zero(), upper = Eigen::Vector2d::Zero();
+    bool empty = false;
+  };
+  // One search with everything it reads copied or pinned (grid stacks and point maps of finished
+  // submaps never change and live behind unique_ptrs), so it can run in the background.
+  struct SearchTask {
+    const PrecomputationGridStack* stack = nullptr;
+    const PointMap* points = nullptr;
+    std::shared_ptr<const std::vector<Eigen::Vector2d>> matching;
+    core::SE2 initial;
+    BranchAndBoundOptions window;
+    LoopCandidate header;  ///< keyframe, submap, anchor, times, merge/global filled in
+  };
+  // The keyframe's background job (Cartographer's constraint builder, Hess et al. 2016 sec. IV,
+  // made deterministic): the submaps the keyframe finished and its searches run on the other core
+  // while the front end goes on; the job is joined, and its results taken in a fixed order, when
+  // the next keyframe is made (or at finish()), so results never depend on timing.
+  struct BackgroundJob {
+    tbb::task_group group;
+    bool running = false;
+    std::size_t scan = 0;
+    core::Timestamp time;
+    std::vector<SubmapSource> sources;
+    std::vector<BuiltSubmap> built;
+    std::vector<SearchTask> searches;
+    std::vector<std::optional<LoopCandidate>> found;
+    double submap_s = 0.0, search_s = 0.0;
+  };
+  BackgroundJob job;
+
+  SubmapSource submap_source(const Submap& submap, int index) const {
+    SubmapSource source;
+    source.submap = index;
     const core::SE2 T_anchor_local = keyframes[static_cast<std::size_t>(submap.anchor)].T_local_laser.inverse();
-    ProbabilityGrid grid(options.grid);
-    std::vector<Eigen::Vector2d> points;
-    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (const int k : submap.keyframes) {
       const Keyframe& kf = keyframes[static_cast<std::size_t>(k)];
-      const core::SE2 T_anchor_laser = T_anchor_local * kf.T_local_laser;
-      std::vector<Eigen::Vector2d> all = kf.hits;
+      source.T_anchor_laser.push_back(T_anchor_local * kf.T_local_laser);
+      source.hits.push_back(kf.hits);
+      source.misses.push_back(kf.misses);
+    }
+    return source;
+  }
+
+  BuiltSubmap build_submap(const SubmapSource& source) const {
+    BuiltSubmap built;
+    ProbabilityGrid grid(options.grid);
+    std::vector<Eigen::Vector2d> points;
+    for (std::size_t i = 0; i < source.T_anchor_laser.size(); ++i) {
+      const core::SE2& T_anchor_laser = source.T_anchor_laser[i];
+      std::vector<Eigen::Vector2d> all = source.hits[i];
       std::vector<bool> hit(all.size(), true);
-      all.insert(all.end(), kf.misses.begin(), kf.misses.end());
+      all.insert(all.end(), source.misses[i].begin(), source.misses[i].end());
       hit.resize(all.size(), false);
       grid.insert(T_anchor_laser, all, hit);
-      for (const auto& p : kf.hits) points.push_back(T_anchor_laser * p);
-      centre += T_anchor_laser.translation();
+      for (const auto& p : source.hits[i]) points.push_back(T_anchor_laser * p);
+      built.centre += T_anchor_laser.translation();
     }
-    submap.centre_anchor = centre / static_cast<double>(submap.keyframes.size());
-    submap.stack = std::make_unique<PrecomputationGridStack>(grid, options.loop_search);
-    submap.points = std::make_unique<PointMap>(options.map_points);
-    submap.points->build(voxel_filter(points, options.filter.voxel_size_m));
+    built.centre /= static_cast<double>(std::max<std::size_t>(1, source.T_anchor_laser.size()));
+    if (points.empty() || !observed_extent(grid, built.lower, built.upper)) {
+      built.empty = true;
+      return built;
+    }
+    built.stack = std::make_unique<PrecomputationGridStack>(grid, options.loop_search);
+    built.points = std::make_unique<PointMap>(options.map_points);
+    built.points->build(voxel_filter(points, options.filter.voxel_size_m));
+    return built;
+  }
+
+  void install_submap(Submap& submap, BuiltSubmap&& built) {
+    submap.stack = std::move(built.stack);
+    submap.points = std::move(built.points);
+    submap.centre_anchor = built.centre;
+    submap.lower_anchor = built.lower;
+    submap.upper_anchor = built.upper;
+    submap.empty = built.empty;
     submap.finished = true;
   }
 
-  // Searches keyframe `k` against submap `s`; returns the verified (or rejected) candidate, or
-  // nothing when the search finds no pose above the minimum score. Reads the state only, so the
-  // searches of one keyframe run in parallel.
-  std::optional<LoopCandidate> search_loop(int k, int s, bool relocalisation) const {
-    const Submap& submap = submaps[static_cast<std::size_t>(s)];
+  // Finishes a submap now, on this thread (a segment closing).
+  void finish_submap(Submap& submap) {
+    const int index = static_cast<int>(&submap - submaps.data());
+    install_submap(submap, build_submap(submap_source(submap, index)));
+  }
+
+  // The search task of keyframe `k` for one planned search: window and initial pose from the
+  // current state (file comment of slam.hpp).
+  SearchTask make_search(int k, const PlannedSearch& plan, const std::shared_ptr<const std::vector<Eigen::Vector2d>>& matching) const {
+    const Submap& submap = submaps[static_cast<std::size_t>(plan.submap)];
     const Keyframe& kf = keyframes[static_cast<std::size_t>(k)];
     const Keyframe& anchor = keyframes[static_cast<std::size_t>(submap.anchor)];
-    // The drift the estimate may have accumulated relative to the submap: the path travelled
-    // since the submap, or since the last accepted loop closure when that is shorter.
-    const double path = std::min(std::abs(kf.path_length_m - anchor.path_length_m),
-                                 have_loop ? std::max(0.0, kf.path_length_m - last_loop_path_m) : 1e300);
-    BranchAndBoundOptions window = options.loop_search;
-    if (!relocalisation) {
-      window.linear_search_window_m =
+    SearchTask task;
+    task.stack = submap.stack.get();
+    task.points = submap.points.get();
+    task.matching = matching;
+    task.window = options.loop_search;
+    task.initial = anchor.T_world_laser.inverse() * plan.T_world_guess;
+    if (plan.global) {
+      global_window(submap.lower_anchor, submap.upper_anchor, 1.0, options.loop_search, task.window, task.initial);
+    } else if (!plan.merge) {
+      // A loop within one group: the window is the drift the estimate may have accumulated
+      // relative to the submap, the path travelled since the submap, or since the last accepted
+      // loop closure when that is shorter.
+      const double path = std::min(std::abs(kf.path_length_m - anchor.path_length_m),
+                                   have_loop ? std::max(0.0, kf.path_length_m - last_loop_path_m) : 1e300);
+      task.window.linear_search_window_m =
           std::min(options.loop_search.linear_search_window_m, options.loop_window_base_m + options.loop_window_drift_per_m * path);
-      window.angular_search_window_rad = std::min(options.loop_search.angular_search_window_rad,
-                                                  options.loop_angle_window_base_rad + options.loop_angle_window_drift_per_m * path);
+      task.window.angular_search_window_rad = std::min(options.loop_search.angular_search_window_rad,
+                                                       options.loop_angle_window_base_rad + options.loop_angle_window_drift_per_m * path);
     }
-    const core::SE2 initial = anchor.T_world_laser.inverse() * kf.T_world_laser;
-    LoopCandidate candidate;
-    const double min_score = relocalisation ? options.relocalisation_min_score : options.loop_min_score;
-    if (!search_and_verify(*submap.stack, *submap.points, kf.matching, initial, window, min_score, candidate)) return std::nullopt;
-    candidate.keyframe = k;
-    candidate.submap = s;
-    candidate.anchor_keyframe = submap.anchor;
-    candidate.time = kf.time;
-    candidate.anchor_time = anchor.time;
-    candidate.relocalisation = relocalisation;
+    task.header.keyframe = k;
+    task.header.submap = plan.submap;
+    task.header.anchor_keyframe = submap.anchor;
+    task.header.time = kf.time;
+    task.header.anchor_time = anchor.time;
+    task.header.merge = plan.merge || plan.global;
+    task.header.global = plan.global;
+    return task;
+  }
+
+  std::optional<LoopCandidate> run_search(const SearchTask& task) const {
+    LoopCandidate candidate = task.header;
+    if (!search_and_verify(*task.stack, *task.points, *task.matching, task.initial, task.window, options.loop_min_score, options,
+                           candidate))
+      return std::nullopt;
     return candidate;
   }
 
-  // Branch-and-bound search of `matching` in a map (grid stack + points, one frame) around
-  // `initial`, then the loop-closure verification: ICP refinement without prior (inliers, RMS,
-  // agreement with the search, degeneracy) and an ambiguity search. Fills the match fields of
-  // `candidate`; returns false when the search finds nothing above `min_score`.
-  bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map_points,
-                         const std::vector<Eigen::Vector2d>& matching, const core::SE2& initial,
-                         const BranchAndBoundOptions& window, double min_score, LoopCandidate& candidate) const {
-    const BranchAndBoundResult best = match_branch_and_bound(stack, matching, initial, min_score, window);
-    if (!best.found) return false;
-    candidate.search_window_m = window.linear_search_window_m;
-    candidate.score = best.score;
-    // Verification 1: refine by ICP against the submap's points (no prior) and check the fit.
-    IcpOptions refine = options.icp;
-    refine.prior_translation_sigma_m = 0.0;
-    const IcpResult icp = match_icp(map_points, matching, best.T_map_sensor, nullptr, refine);
-    candidate.inlier_fraction = icp.inlier_fraction;
-    candidate.rms_m = icp.rms_m;
-    candidate.degeneracy = icp.degeneracy;
-    candidate.T_anchor_keyframe = icp.T_map_sensor;
-    const double moved = (icp.T_map_sensor.translation() - best.T_map_sensor.translation()).norm();
-    if (icp.inlier_fraction < options.loop_min_inlier_fraction) {
-      candidate.reason = "ICP inlier fraction below minimum";
-    } else if (icp.rms_m > options.loop_max_rms_m) {
-      candidate.reason = "ICP residual above maximum";
-    } else if (moved > 2.0 * options.grid.resolution_m + 0.05) {
-      candidate.reason = "ICP moved away from the branch-and-bound match";
-    } else if (icp.degeneracy < options.loop_min_degeneracy) {
-      candidate.reason = "degenerate: the match does not constrain every direction (corridor)";
-    } else {
-      // Verification 2: ambiguity. Is there a pose elsewhere in the window nearly as good?
-      BranchAndBoundOptions wide = window;
-      wide.linear_search_window_m = std::max(window.linear_search_window_m, options.loop_ambiguity_window_m);
-      const BranchAndBoundResult other = match_branch_and_bound(
-          stack, matching, initial, best.score - options.loop_ambiguity_margin, wide, &best.T_map_sensor,
-          options.loop_ambiguity_distance_m, options.loop_ambiguity_angle_rad);
-      candidate.second_score = other.found ? other.score : 0.0;
-      if (other.found) {
-        candidate.reason = "ambiguous: another pose scores within the margin";
-      } else {
-        candidate.accepted = true;
-        candidate.reason = "accepted";
+  void start_job() {
+    job.running = true;
+    job.built.clear();
+    job.built.resize(job.sources.size());
+    job.found.assign(job.searches.size(), std::nullopt);
+    job.group.run([this] {
+      const auto submap_start = Clock::now();
+      tbb::parallel_for(std::size_t{0}, job.sources.size(), [&](std::size_t i) { job.built[i] = build_submap(job.sources[i]); });
+      job.submap_s = seconds_since(submap_start);
+      const auto search_start = Clock::now();
+      tbb::parallel_for(std::size_t{0}, job.searches.size(), [&](std::size_t i) { job.found[i] = run_search(job.searches[i]); });
+      job.search_s = seconds_since(search_start);
+    });
+  }
+
+  // Joins the background job and takes its results in order: finished submaps, then candidates
+  // (loop closures, merges).
+  void join_job(Slam2dSummary& summary) {
+    if (!job.running) return;
+    job.group.wait();
+    job.running = false;
+    const auto start = Clock::now();
+    summary.times.submap_s += job.submap_s;
+    summary.times.loop_search_s += job.search_s;
+    for (std::size_t i = 0; i < job.sources.size(); ++i)
+      install_submap(submaps[static_cast<std::size_t>(job.sources[i].submap)], std::move(job.built[i]));
+    for (std::size_t i = 0; i < job.found.size(); ++i) {
+      if (!job.found[i]) continue;
+      summary.candidates.push_back(*job.found[i]);
+      const int c = static_cast<int>(summary.candidates.size()) - 1;
+      LoopCandidate& candidate = summary.candidates.back();
+      if (!candidate.accepted) continue;
+      const Submap& submap = submaps[static_cast<std::size_t>(candidate.submap)];
+      const int keyframe_segment = keyframes[static_cast<std::size_t>(candidate.keyframe)].segment;
+      if (group_of(submap.segment) != group_of(keyframe_segment)) {
+        consider_merge(c, job.scan, job.time, summary);
+        continue;
       }
+      // A merge search whose groups a merge earlier in this list has joined: a loop closure if
+      // it agrees with the merged placement.
+      if (candidate.merge && !agree(implied_pose(candidate), keyframes[static_cast<std::size_t>(candidate.keyframe)].T_world_laser)) {
+        candidate.accepted = false;
+        candidate.reason = "disagrees with the merge just made";
+        continue;
+      }
+      add_loop(c, summary);
     }
-    return true;
+    job.sources.clear();
+    job.searches.clear();
+    job.found.clear();
+    job.built.clear();
+    summary.times.loop_search_s += seconds_since(start);
+  }
+
+  ~Impl() {
+    if (job.running) job.group.wait();
   }
 
   // Tracking relocalisation: searches the scan in the map of the last keyframes that carry points
@@ -278,8 +420,8 @@ struct Slam2d::Impl {
     const PrecomputationGridStack stack(grid, options.loop_search);
     PointMap map_points(options.map_points);
     map_points.build(voxel_filter(points, options.filter.voxel_size_m));
-    const bool found =
-        search_and_verify(stack, map_points, matching, predicted, options.loop_search, options.relocalisation_min_score, candidate);
+    const bool found = search_and_verify(stack, map_points, matching, predicted, options.loop_search,
+                                         options.relocalisation_min_score, options, candidate);
     if (!found || !candidate.accepted)
       return std::nullopt;
     return candidate.T_anchor_keyframe;
@@ -296,7 +438,7 @@ struct Slam2d::Impl {
       if (e.loop) {
         edge.information = information(options.loop_translation_sigma_m, options.loop_rotation_sigma_rad);
       } else if (e.weak) {
-        edge.information = information(10.0, 3.0);
+        edge.information = information(options.segment_link_translation_sigma_m, options.segment_link_rotation_sigma_rad);
       } else {
         edge.information = information(options.odometry_translation_sigma_m, options.odometry_rotation_sigma_rad);
         if (options.edge_covariance_from_matcher) {
@@ -379,6 +521,199 @@ struct Slam2d::Impl {
     failed_since_scan.reset();
   }
 
+  // Whether the budget allows a search of `cost` tokens; spends them if so.
+  bool spend(double cost, Slam2dSummary& summary) {
+    if (search_tokens < cost) {
+      ++summary.searches_skipped_by_budget;
+      return false;
+    }
+    search_tokens -= cost;
+    return true;
+  }
+
+  bool searchable(const Submap& submap, int k) const {
+    return submap.finished && !submap.empty && std::find(submap.keyframes.begin(), submap.keyframes.end(), k) == submap.keyframes.end();
+  }
+
+  Eigen::Vector2d submap_centre_world(const Submap& submap) const {
+    return keyframes[static_cast<std::size_t>(submap.anchor)].T_world_laser * submap.centre_anchor;
+  }
+
+  // The searches of keyframe `k` in priority order, within the budget (file comment of slam.hpp).
+  std::vector<PlannedSearch> plan_searches(int k, Slam2dSummary& summary) {
+    std::vector<PlannedSearch> plan;
+    const Keyframe& current = keyframes[static_cast<std::size_t>(k)];
+    const int group = group_of(current.segment);
+    std::vector<int> others;  // searchable submaps of other groups, in index order
+    for (int s = 0; s < static_cast<int>(submaps.size()); ++s) {
+      const Submap& submap = submaps[static_cast<std::size_t>(s)];
+      if (searchable(submap, k) && group_of(submap.segment) != group) others.push_back(s);
+    }
+    // (a) Merge searches, windowed: around the estimate (the odometry link) and around where each
+    // pending merge of this group places the keyframe; nearest submaps first.
+    if (!others.empty()) {
+      std::vector<std::pair<int, core::SE2>> guesses = {{-1, current.T_world_laser}};  // (target group or -1, pose)
+      for (const PendingMerge& pending : pending_merges) {
+        if (group_of(pending.group_b) == group && group_of(pending.group_a) != group)
+          guesses.emplace_back(group_of(pending.group_a), pending.delta * current.T_world_laser);
+      }
+      std::vector<std::tuple<double, int, std::size_t>> near;  // distance, submap, guess
+      for (const int s : others) {
+        const Submap& submap = submaps[static_cast<std::size_t>(s)];
+        for (std::size_t g = 0; g < guesses.size(); ++g) {
+          if (guesses[g].first >= 0 && guesses[g].first != group_of(submap.segment)) continue;
+          const double distance = (submap_centre_world(submap) - guesses[g].second.translation()).norm();
+          if (distance <= options.merge_max_distance_m) near.emplace_back(distance, s, g);
+        }
+      }
+      std::sort(near.begin(), near.end());
+      std::vector<int> chosen;
+      for (const auto& [distance, s, g] : near) {
+        if (static_cast<int>(chosen.size()) >= options.merge_searches_per_keyframe) break;
+        if (std::find(chosen.begin(), chosen.end(), s) != chosen.end()) continue;
+        if (!spend(1.0, summary)) break;
+        chosen.push_back(s);
+        plan.push_back({s, true, false, guesses[g].second});
+        ++summary.merge_searches;
+      }
+    }
+    // (b) Loop searches within the group, every n-th keyframe: the nearest finished submaps by
+    // the estimate. The nearest are usually the ones just built on the way here; keep the
+    // nearest of those and fill the rest with submaps from earlier visits.
+    if (k % options.loop_search_every_n_keyframes == 0) {
+      std::vector<std::pair<double, int>> nearby;
+      for (int s = 0; s < static_cast<int>(submaps.size()); ++s) {
+        const Submap& submap = submaps[static_cast<std::size_t>(s)];
+        if (!searchable(submap, k) || group_of(submap.segment) != group) continue;
+        const double distance = (submap_centre_world(submap) - current.T_world_laser.translation()).norm();
+        if (distance <= options.loop_max_distance_m) nearby.emplace_back(distance, s);
+      }
+      std::sort(nearby.begin(), nearby.end());
+      int taken = 0;
+      int recent = 0;
+      for (const auto& [distance, s] : nearby) {
+        if (taken >= options.loop_max_submaps_per_search) break;
+        const Keyframe& anchor = keyframes[static_cast<std::size_t>(submaps[static_cast<std::size_t>(s)].anchor)];
+        const bool is_recent = current.path_length_m - anchor.path_length_m < 2.0 * options.loop_max_distance_m;
+        if (is_recent && recent++ >= 1) continue;
+        if (!spend(1.0, summary)) break;
+        ++taken;
+        plan.push_back({s, false, false, current.T_world_laser});
+        ++summary.loop_searches;
+      }
+    }
+    // (c) One search over a whole submap of another group, round-robin: finds the place when
+    // the odometry link is wrong (a kidnapping, a long stretch without structure).
+    if (!others.empty() && (k - segment_first_keyframe) % options.global_search_every_n_keyframes == 0 &&
+        spend(options.global_search_cost, summary)) {
+      const int s = others[global_search_turn++ % others.size()];
+      plan.push_back({s, true, true, current.T_world_laser});
+      ++summary.global_searches;
+    }
+    return plan;
+  }
+
+  void add_loop(int c, Slam2dSummary& summary) {
+    const LoopCandidate& candidate = summary.candidates[static_cast<std::size_t>(c)];
+    edges.push_back({candidate.anchor_keyframe, candidate.keyframe, candidate.T_anchor_keyframe, true, c});
+    ++summary.loops_accepted;
+    ++loops_since_optimization;
+    // A loop to an earlier visit bounds the drift relative to the old map; a loop to a submap
+    // built on the way here does not.
+    const Keyframe& kf = keyframes[static_cast<std::size_t>(candidate.keyframe)];
+    if (kf.path_length_m - keyframes[static_cast<std::size_t>(candidate.anchor_keyframe)].path_length_m >= 2.0 * options.loop_max_distance_m) {
+      have_loop = true;
+      last_loop_path_m = kf.path_length_m;
+    }
+  }
+
+  // Where candidate `c` says its keyframe is, in the world frame of its submap's group.
+  core::SE2 implied_pose(const LoopCandidate& candidate) const {
+    return keyframes[static_cast<std::size_t>(candidate.anchor_keyframe)].T_world_laser * candidate.T_anchor_keyframe;
+  }
+
+  bool agree(const core::SE2& a, const core::SE2& b) const {
+    return (a.translation() - b.translation()).norm() <= options.merge_agreement_m &&
+           std::abs((a.so2().inverse() * b.so2()).angle()) <= options.merge_agreement_rad;
+  }
+
+  // A verified match across groups: confirm a pending merge, or start one.
+  void consider_merge(int c, std::size_t scan, core::Timestamp time, Slam2dSummary& summary) {
+    LoopCandidate& candidate = summary.candidates[static_cast<std::size_t>(c)];
+    const int group_a = group_of(submaps[static_cast<std::size_t>(candidate.submap)].segment);
+    const int group_b = group_of(keyframes[static_cast<std::size_t>(candidate.keyframe)].segment);
+    const core::SE2& T_world_keyframe = keyframes[static_cast<std::size_t>(candidate.keyframe)].T_world_laser;
+    const core::SE2 delta = implied_pose(candidate) * T_world_keyframe.inverse();
+    candidate.accepted = false;
+    for (std::size_t p = 0; p < pending_merges.size(); ++p) {
+      PendingMerge& pending = pending_merges[p];
+      if (group_of(pending.group_a) != group_a || group_of(pending.group_b) != group_b) continue;
+      if (std::find(pending.keyframes.begin(), pending.keyframes.end(), candidate.keyframe) != pending.keyframes.end()) continue;
+      if (!agree(pending.delta * T_world_keyframe, delta * T_world_keyframe)) continue;
+      pending.candidates.push_back(c);
+      pending.keyframes.push_back(candidate.keyframe);
+      if (static_cast<int>(pending.candidates.size()) >= options.merge_confirmations) {
+        const PendingMerge confirmed = pending;
+        merge(confirmed, scan, time, summary);
+      } else {
+        candidate.reason = "verified across segments; " + std::to_string(pending.candidates.size()) + " of " +
+                           std::to_string(options.merge_confirmations) + " agreeing matches to merge";
+      }
+      return;
+    }
+    pending_merges.push_back({group_a, group_b, delta, {c}, {candidate.keyframe}});
+    if (options.merge_confirmations <= 1) {
+      const PendingMerge confirmed = pending_merges.back();
+      merge(confirmed, scan, time, summary);
+      return;
+    }
+    candidate.reason = "verified across segments; the merge waits for an agreeing match from another keyframe";
+  }
+
+  // Joins two groups: the one without segment 0 (whose first keyframe is fixed) is moved rigidly
+  // by the confirmed placement, the matches become loop-closure edges and the graph is solved.
+  void merge(const PendingMerge& confirmed, std::size_t scan, core::Timestamp time, Slam2dSummary& summary) {
+    const int group_a = group_of(confirmed.group_a);
+    const int group_b = group_of(confirmed.group_b);
+    const bool move_b = group_of(0) != group_b;
+    const core::SE2 D = move_b ? confirmed.delta : confirmed.delta.inverse();
+    const int moved = move_b ? group_b : group_a;
+    double moved_m = 0.0;
+    for (Keyframe& kf : keyframes) {
+      if (group_of(kf.segment) != moved) continue;
+      const core::SE2 before = kf.T_world_laser;
+      kf.T_world_laser = D * kf.T_world_laser;
+      moved_m = (kf.T_world_laser.translation() - before.translation()).norm();
+    }
+    const std::string text = "accepted: merged segment group " + std::to_string(group_b) + " into " + std::to_string(group_a) +
+                             " (" + std::to_string(confirmed.candidates.size()) + " agreeing matches)";
+    for (const int c : confirmed.candidates) {
+      LoopCandidate& candidate = summary.candidates[static_cast<std::size_t>(c)];
+      candidate.accepted = true;
+      candidate.reason = text;
+      add_loop(c, summary);
+    }
+    join_groups(group_a, group_b);
+    std::erase_if(pending_merges, [&](const PendingMerge& p) { return group_of(p.group_a) == group_of(p.group_b); });
+    summary.merges.push_back({time, scan, group_a, group_b, confirmed.candidates, moved_m});
+    optimize(false, summary);
+    refresh_segments(summary);
+  }
+
+  void refresh_segments(Slam2dSummary& summary) const {
+    for (SegmentInfo& info : summary.segments) {
+      info.merged_with = group_of(info.id);
+      bool first = true;
+      for (const Keyframe& kf : keyframes) {
+        if (kf.segment != info.id) continue;
+        const Eigen::Vector2d t = kf.T_world_laser.translation();
+        info.min_world = first ? t : info.min_world.cwiseMin(t);
+        info.max_world = first ? t : info.max_world.cwiseMax(t);
+        first = false;
+      }
+    }
+  }
+
   void set_health(Health next, std::size_t scan, core::Timestamp time, const std::string& reason, Slam2dSummary& summary) {
     if (next == health) return;
     summary.health_events.push_back({time, scan, health, next, reason});
@@ -390,6 +725,7 @@ Slam2d::Slam2d(const Slam2dOptions& options) {
   std::string error;
   if (!options.is_valid(&error)) throw std::invalid_argument("invalid slam2d options: " + error);
   impl_ = std::make_unique<Impl>(options);
+  summary_.segments.push_back(SegmentInfo{});
 }
 
 Slam2d::~Slam2d() = default;
@@ -481,10 +817,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   }
   Health next = Health::kOk;
   std::string reason;
-  if (m.bad_matches_in_a_row >= o.lost_after_scans) {
-    next = Health::kLost;
-    reason = "scan matching failed " + std::to_string(m.bad_matches_in_a_row) + " times in a row; following odometry";
-  } else if (too_few_returns) {
+  if (too_few_returns) {
     next = Health::kDegraded;
     reason = "too few returns to match (" + std::to_string(points.matching.size()) + "); following odometry";
   } else if (!matched || record.inlier_fraction < o.degraded_min_inlier_fraction) {
@@ -494,25 +827,92 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
     next = Health::kDegraded;
     reason = "degenerate geometry (degeneracy " + std::to_string(record.degeneracy) + "); odometry carries the unconstrained direction";
   }
-  if (next == Health::kOk && m.health == Health::kLost) reason = "matching recovered";
+  if (next == Health::kOk && m.health == Health::kLost) reason = "matching recovered in segment " + std::to_string(m.segment);
   if (!relocalised_reason.empty()) {
     next = Health::kDegraded;  // one scan: the next one matching normally brings it back to ok
     reason = relocalised_reason;
   }
+  // Lost: map on from this scan, in a new segment (or the current one restarted when it holds
+  // too little to keep). The segment is on probation until `segment_confirm_scans` scans in a
+  // row match its map well: a seed that does not match its successors (a burst of garbage, a
+  // scan of people crowding the sensor) is dropped from the map and the next scan seeds again.
+  bool start_segment = false;  // this scan (re)seeds the current segment's map
+  const bool judged = m.have_previous && !too_few_returns;
+  const std::string segment_name = "map segment " + std::to_string(m.segment);
+  if (m.probation > 0 && judged) {
+    const bool good = matched && record.inlier_fraction >= o.degraded_min_inlier_fraction;
+    m.bad_matches_in_a_row = 0;
+    if (good && --m.probation == 0) {
+      if (next == Health::kOk) reason = segment_name + " established: " + std::to_string(o.segment_confirm_scans) + " scans matched its map";
+    } else if (good) {
+      next = Health::kLost;
+      reason = segment_name + " on probation: " + std::to_string(m.probation) + " more matching scans needed";
+    } else {
+      for (std::size_t k = static_cast<std::size_t>(m.local_map_start); k < m.keyframes.size(); ++k) {
+        m.keyframes[k].hits.clear();
+        m.keyframes[k].misses.clear();
+      }
+      next = Health::kLost;
+      start_segment = true;
+      m.probation = o.segment_confirm_scans;
+      reason = segment_name + " on probation: this scan does not match its seed; the seed is dropped and this scan seeds it";
+    }
+  } else if (m.bad_matches_in_a_row >= o.lost_after_scans) {
+    next = Health::kLost;
+    start_segment = true;
+    m.probation = o.segment_confirm_scans;
+    reason = "scan matching failed " + std::to_string(m.bad_matches_in_a_row) + " times in a row; ";
+    // The keyframes of the current segment that carry points since it (re)started.
+    int mapped = 0;
+    for (std::size_t k = static_cast<std::size_t>(m.local_map_start); k < m.keyframes.size(); ++k)
+      if (!m.keyframes[k].hits.empty()) ++mapped;
+    const int k = static_cast<int>(m.keyframes.size());
+    if (mapped >= o.min_segment_keyframes) {
+      // Close the current segment: its submaps are finished as they are (searchable from now).
+      m.join_job(summary_);
+      for (auto& submap : m.submaps)
+        if (!submap.finished) m.finish_submap(submap);
+      m.segment = static_cast<int>(summary_.segments.size());
+      m.segment_parent.push_back(m.segment);
+      m.segment_first_keyframe = k;
+      SegmentInfo info;
+      info.id = m.segment;
+      info.first_scan = scan_index;
+      info.first_keyframe = k;
+      info.merged_with = m.segment;
+      info.started_because = reason + "lost at scan " + std::to_string(scan_index);
+      summary_.segments.push_back(info);
+      reason += "new map segment " + std::to_string(m.segment) + " started from this scan";
+    } else {
+      reason += segment_name + " restarted from this scan (it had " + std::to_string(mapped) + " mapped keyframes)";
+    }
+    m.bad_matches_in_a_row = 0;
+  }
+  if (start_segment) {
+    m.local_map_start = static_cast<int>(m.keyframes.size());
+    m.failed_since_scan.reset();  // the failed stretch keeps its odometry
+  }
   m.set_health(next, scan_index, scan.time, reason, summary_);
   record.health = next;
+  record.segment = m.segment;
   if (!matched && !too_few_returns && m.have_previous) m.lost_since_keyframe = true;
   if (next == Health::kOk) ++summary_.scans_ok;
   if (next == Health::kDegraded) ++summary_.scans_degraded;
   if (next == Health::kLost) ++summary_.scans_lost;
+  SegmentInfo& segment_info = summary_.segments[static_cast<std::size_t>(m.segment)];
+  ++segment_info.scans;
 
-  if (m.have_previous) m.path_length_m += (T_local_laser.translation() - m.previous_local.translation()).norm();
+  if (m.have_previous) {
+    const double step = (T_local_laser.translation() - m.previous_local.translation()).norm();
+    m.path_length_m += step;
+    segment_info.path_length_m += step;
+  }
   m.previous_local = T_local_laser;
   m.previous_odom = scan.T_odom_laser;
   m.have_previous = true;
 
   // 3. Keyframe?
-  bool new_keyframe = m.keyframes.empty();
+  bool new_keyframe = m.keyframes.empty() || start_segment;
   if (!new_keyframe) {
     const Keyframe& last = m.keyframes.back();
     const core::SE2 delta = last.T_local_laser.inverse() * T_local_laser;
@@ -523,9 +923,9 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
     kf.time = scan.time;
     kf.T_local_laser = T_local_laser;
     // A scan that failed to match keeps its points out of the maps (it may be garbage, or
-    // placed wrong); the keyframe still carries the pose chain.
-    // Its matching points are kept: relocalisation searches them against the submaps.
-    const bool placed = matched || too_few_returns;
+    // placed wrong); the keyframe still carries the pose chain. The first scan of a (re)started
+    // segment is the segment's map. Its matching points are kept: relocalisation searches them.
+    const bool placed = matched || too_few_returns || start_segment;
     if (placed) {
       kf.hits = std::move(points.hits);
       kf.misses = std::move(points.misses);
@@ -533,6 +933,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
     kf.matching = std::move(points.matching);
     kf.path_length_m = m.path_length_m;
     kf.scan = scan_index;
+    kf.segment = m.segment;
     const int k = static_cast<int>(m.keyframes.size());
     if (k == 0) {
       kf.T_world_laser = T_local_laser;
@@ -561,103 +962,42 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
     }
     m.keyframes.push_back(std::move(kf));
     ++summary_.keyframes;
+    ++segment_info.keyframes;
     ++m.keyframes_since_optimization;
-    const auto map_start = Clock::now();
-    m.rebuild_local_map();
-    summary_.times.local_map_s += seconds_since(map_start);
-
-    // Submaps: start one every half submap; add the keyframe to the active ones.
-    const auto submap_start = Clock::now();
+    // Submaps: start one every half submap (counted from the segment's start); add the keyframe
+    // to the active ones.
     const int half = std::max(1, o.submap_keyframes / 2);
-    if (k % half == 0) {
+    if ((k - m.segment_first_keyframe) % half == 0) {
       Submap submap;
       submap.anchor = k;
+      submap.segment = m.segment;
       m.submaps.push_back(std::move(submap));
       ++summary_.submaps;
     }
-    for (auto& submap : m.submaps) {
+    // The previous keyframe's background job: its submaps become searchable, its loop closures
+    // and merges are taken now, before this keyframe plans its own.
+    m.join_job(summary_);
+    for (int s = 0; s < static_cast<int>(m.submaps.size()); ++s) {
+      Submap& submap = m.submaps[static_cast<std::size_t>(s)];
       if (submap.finished || k < submap.anchor) continue;
       submap.keyframes.push_back(k);
-      if (static_cast<int>(submap.keyframes.size()) >= o.submap_keyframes) m.finish_submap(submap);
+      if (static_cast<int>(submap.keyframes.size()) >= o.submap_keyframes) m.job.sources.push_back(m.submap_source(submap, s));
     }
-    summary_.times.submap_s += seconds_since(submap_start);
-
-    // Loop closure (or relocalisation when lost).
-    const auto loop_start = Clock::now();
-    const bool lost = m.health == Health::kLost;
-    if (lost || k % o.loop_search_every_n_keyframes == 0) {
-      const Keyframe& current = m.keyframes.back();
-      // Finished submaps not containing the keyframe, nearest first (by the current estimate).
-      std::vector<std::pair<double, int>> nearby;
-      for (int s = 0; s < static_cast<int>(m.submaps.size()); ++s) {
-        const Submap& submap = m.submaps[static_cast<std::size_t>(s)];
-        if (!submap.finished) continue;
-        if (std::find(submap.keyframes.begin(), submap.keyframes.end(), k) != submap.keyframes.end()) continue;
-        const Keyframe& anchor = m.keyframes[static_cast<std::size_t>(submap.anchor)];
-        const double distance = ((anchor.T_world_laser * submap.centre_anchor) - current.T_world_laser.translation()).norm();
-        if (!lost && distance > o.loop_max_distance_m) continue;
-        nearby.emplace_back(distance, s);
-      }
-      std::sort(nearby.begin(), nearby.end());
-      if (!lost) {
-        // The nearest submaps are usually the ones just built on the way here; keep the nearest
-        // of those and fill the rest of the budget with submaps from earlier visits.
-        std::vector<std::pair<double, int>> chosen;
-        int recent = 0;
-        for (const auto& entry : nearby) {
-          if (static_cast<int>(chosen.size()) >= o.loop_max_submaps_per_search) break;
-          const Keyframe& anchor = m.keyframes[static_cast<std::size_t>(m.submaps[static_cast<std::size_t>(entry.second)].anchor)];
-          const bool is_recent = current.path_length_m - anchor.path_length_m < 2.0 * o.loop_max_distance_m;
-          if (is_recent && recent++ >= 1) continue;
-          chosen.push_back(entry);
-        }
-        nearby = std::move(chosen);
-      }
-      // The searches are independent: run them in parallel, then take their results in order.
-      // All searches of one keyframe size their window from the state before any of them (a loop
-      // accepted by one does not narrow the windows of the others), so the run is deterministic.
-      std::vector<std::optional<LoopCandidate>> found(nearby.size());
-      tbb::parallel_for(std::size_t{0}, nearby.size(), [&](std::size_t i) { found[i] = m.search_loop(k, nearby[i].second, lost); });
-      for (std::size_t i = 0; i < nearby.size(); ++i) {
-        const int s = nearby[i].second;
-        const Submap& submap = m.submaps[static_cast<std::size_t>(s)];
-        const Keyframe& anchor = m.keyframes[static_cast<std::size_t>(submap.anchor)];
-        ++summary_.loop_searches;
-        if (!found[i]) continue;
-        summary_.candidates.push_back(*found[i]);
-        const int c = static_cast<int>(summary_.candidates.size()) - 1;
-        LoopCandidate& candidate = summary_.candidates.back();
-        if (!candidate.accepted) continue;
-        m.edges.push_back({submap.anchor, k, candidate.T_anchor_keyframe, true, c});
-        ++summary_.loops_accepted;
-        ++m.loops_since_optimization;
-        // A loop to an earlier visit bounds the drift relative to the old map; a loop to a
-        // submap built on the way here does not.
-        if (m.keyframes.back().path_length_m - anchor.path_length_m >= 2.0 * o.loop_max_distance_m) {
-          m.have_loop = true;
-          m.last_loop_path_m = m.keyframes.back().path_length_m;
-        }
-        if (lost) {
-          // Relocalised: place the keyframe where the submap says, restart the local map there.
-          ++summary_.relocalisations;
-          Keyframe& relocalised = m.keyframes.back();
-          relocalised.T_world_laser = anchor.T_world_laser * candidate.T_anchor_keyframe;
-          if (!placed) {
-            // Verified against the map: its points are trustworthy now.
-            relocalised.hits = std::move(points.hits);
-            relocalised.misses = std::move(points.misses);
-          }
-          m.local_map_start = k;
-          m.rebuild_local_map();
-          m.failed_since_scan.reset();  // placed by the submap; the stretch keeps its odometry
-          m.bad_matches_in_a_row = 0;
-          m.set_health(Health::kDegraded, scan_index, scan.time, "relocalised against submap " + std::to_string(s), summary_);
-          break;
-        }
-      }
-    }
-    summary_.times.loop_search_s += seconds_since(loop_start);
     if (m.loops_since_optimization > 0 && m.keyframes_since_optimization >= o.optimize_every_n_keyframes) m.optimize(false, summary_);
+    // Loop closure and merge searches, within the budget. A submap this keyframe finishes holds
+    // it, so it is not searched now anyway.
+    const auto plan_start = Clock::now();
+    m.search_tokens = std::min(o.search_budget_burst, m.search_tokens + o.search_budget_per_keyframe);
+    const std::vector<PlannedSearch> plan = m.plan_searches(k, summary_);
+    const auto matching = std::make_shared<const std::vector<Eigen::Vector2d>>(m.keyframes.back().matching);
+    for (const PlannedSearch& search : plan) m.job.searches.push_back(m.make_search(k, search, matching));
+    m.job.scan = scan_index;
+    m.job.time = scan.time;
+    summary_.times.loop_search_s += seconds_since(plan_start);
+    m.start_job();
+    const auto map_start = Clock::now();
+    m.rebuild_local_map();
+    summary_.times.local_map_s += seconds_since(map_start);
   }
 
   record.keyframe = static_cast<int>(m.keyframes.size()) - 1;
@@ -675,13 +1015,16 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   result.degeneracy = record.degeneracy;
   result.covariance = record.covariance;
   result.keyframe = new_keyframe;
+  result.segment = record.segment;
   return result;
 }
 
 void Slam2d::finish() {
   const auto start = Clock::now();
+  impl_->join_job(summary_);
   impl_->optimize(impl_->options.final_gnc, summary_);
   if (impl_->options.final_gnc) impl_->optimize(false, summary_);
+  impl_->refresh_segments(summary_);
   summary_.total_s += seconds_since(start);
 }
 
@@ -697,6 +1040,7 @@ std::vector<ScanResult> Slam2d::trajectory() const {
     s.degeneracy = r.degeneracy;
     s.covariance = r.covariance;
     s.keyframe = r.keyframe_itself;
+    s.segment = r.segment;
     out.push_back(s);
   }
   return out;
@@ -718,6 +1062,36 @@ ProbabilityGrid Slam2d::render_map(const ProbabilityGridOptions& options) const 
     grid.insert(kf.T_world_laser, all, hit);
   }
   return grid;
+}
+
+SavedMap2D Slam2d::export_map() const {
+  const Impl& m = *impl_;
+  SavedMap2D map;
+  map.grid = m.options.grid;
+  map.map_points = m.options.map_points;
+  map.filter = m.options.filter;
+  for (const Keyframe& kf : m.keyframes) map.keyframes.push_back({kf.time, kf.T_world_laser, kf.segment});
+  for (const Submap& submap : m.submaps) {
+    const Keyframe& anchor = m.keyframes[static_cast<std::size_t>(submap.anchor)];
+    SavedSubmap saved{anchor.T_world_laser, ProbabilityGrid(m.options.grid), {}, submap.segment, submap.anchor,
+                      static_cast<int>(submap.keyframes.size())};
+    std::vector<Eigen::Vector2d> points;
+    for (const int k : submap.keyframes) {
+      const Keyframe& kf = m.keyframes[static_cast<std::size_t>(k)];
+      if (kf.hits.empty()) continue;
+      const core::SE2 T_submap_laser = anchor.T_world_laser.inverse() * kf.T_world_laser;
+      std::vector<Eigen::Vector2d> all = kf.hits;
+      std::vector<bool> hit(all.size(), true);
+      all.insert(all.end(), kf.misses.begin(), kf.misses.end());
+      hit.resize(all.size(), false);
+      saved.grid.insert(T_submap_laser, all, hit);
+      for (const auto& p : kf.hits) points.push_back(T_submap_laser * p);
+    }
+    if (points.empty()) continue;
+    saved.points_submap = voxel_filter(points, m.options.filter.voxel_size_m);
+    map.submaps.push_back(std::move(saved));
+  }
+  return map;
 }
 
 }  // namespace cairn::slam2d

@@ -25,9 +25,25 @@
 ///    closures have arrived and `optimize_every_n_keyframes` keyframes have passed.
 ///  - Health: per scan, the match's inlier fraction and degeneracy (icp.hpp). `degraded` when the
 ///    scan constrains the pose poorly (the odometry prior then carries the unobservable
-///    direction), `lost` after `lost_after_scans` consecutive failed matches (the pose follows
-///    odometry); while lost, each keyframe tries to relocalise against the finished submaps with
-///    the loop-closure search and verification, and the local map restarts from the found pose.
+///    direction), `lost` after `lost_after_scans` consecutive failed matches.
+///  - Map segments (ORB-SLAM3's Atlas, Campos et al. T-RO 2021, sec. III; Cartographer's new
+///    trajectory per session): being lost never lasts. The scan that makes the state `lost`
+///    starts a new map segment: the local map and the submaps restart from it, so the robot keeps
+///    mapping wherever there is structure. The segment hangs from the previous one by its
+///    odometry with an inflated covariance (a weak edge, `segment_link_*_sigma`), only so the
+///    graph stays connected and the picture readable. Segments that are not yet joined by a loop
+///    closure are searched for each other (merge search, below); a verified match that a second,
+///    independent match from another keyframe confirms (same relative placement within
+///    `merge_agreement_*`) merges them: both become loop-closure edges, the newer segment is
+///    moved rigidly onto the older one and the graph is optimised. A wrong merge is as bad as a
+///    wrong loop: same verification, plus the confirmation, plus GNC at the end.
+///  - Search budget (no log can make the search quadratic): every keyframe adds
+///    `search_budget_per_keyframe` tokens to a bucket holding at most `search_budget_burst`; a
+///    windowed search costs one, a search over a whole submap (every heading) costs
+///    `global_search_cost`. Priority within a keyframe: merge searches near the estimate (or near
+///    where a pending merge says the robot is), then local loop searches (nearest first), then
+///    one global search of a submap of another segment, round-robin over them every
+///    `global_search_every_n_keyframes` keyframes. What the budget skipped is counted.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -46,6 +62,7 @@
 #include "cairn/slam2d/point_map.hpp"
 #include "cairn/slam2d/probability_grid.hpp"
 #include "cairn/slam2d/range_scan.hpp"
+#include "cairn/slam2d/saved_map.hpp"
 
 namespace cairn::slam2d {
 
@@ -105,6 +122,25 @@ struct Slam2dOptions {
   int lost_after_scans = 5;            ///< consecutive matches below lost_inlier_fraction
   double lost_inlier_fraction = 0.25;
 
+  /// Map segments and merging (see the file comment).
+  double segment_link_translation_sigma_m = 10.0;  ///< the weak edge joining a new segment
+  double segment_link_rotation_sigma_rad = 3.0;
+  /// A segment lost with fewer keyframes than this is restarted in place (no new segment).
+  int min_segment_keyframes = 3;
+  /// A (re)started segment is on probation (still `lost`) until this many scans in a row match
+  /// its map with at least degraded_min_inlier_fraction; a failure drops the seed and reseeds.
+  int segment_confirm_scans = 3;
+  int merge_searches_per_keyframe = 2;       ///< windowed merge searches, nearest submaps first
+  double merge_max_distance_m = 30.0;        ///< windowed merge searches: submap centre distance
+  int global_search_every_n_keyframes = 4;   ///< one whole-submap search per this many keyframes
+  double merge_agreement_m = 0.5;            ///< two matches agree on the relative placement ...
+  double merge_agreement_rad = 0.1;          ///< ... within these
+  int merge_confirmations = 2;               ///< agreeing matches (distinct keyframes) to merge
+  /// Search budget (see the file comment).
+  double search_budget_per_keyframe = 2.5;
+  double search_budget_burst = 40.0;
+  double global_search_cost = 8.0;
+
   /// Polled before every pose-graph optimisation and by its solver (not a configuration key):
   /// true skips the optimisation, or ends it at its last accepted step; a GNC solve cut short
   /// changes nothing. The CLI stops on SIGINT/SIGTERM this way. May be empty.
@@ -125,6 +161,7 @@ struct ScanResult {
   double degeneracy = 0.0;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  ///< of the local match, (x, y, theta)
   bool keyframe = false;
+  int segment = 0;             ///< map segment (Slam2dSummary::segments)
 };
 
 struct LoopCandidate {
@@ -143,7 +180,35 @@ struct LoopCandidate {
   bool accepted = false;          ///< passed verification and became an edge
   bool rejected_by_gnc = false;   ///< an accepted edge the back end rejected at finish()
   bool relocalisation = false;
+  bool merge = false;             ///< searched across map segments (merge search)
+  bool global = false;            ///< searched over the whole submap and every heading
   std::string reason;             ///< why rejected, or "accepted"
+};
+
+/// One map segment: a stretch of the run mapped on its own after the previous one was lost.
+struct SegmentInfo {
+  int id = 0;
+  std::size_t first_scan = 0;
+  std::size_t scans = 0;
+  int first_keyframe = 0;
+  int keyframes = 0;
+  double path_length_m = 0.0;
+  std::string started_because;    ///< empty for the first segment
+  /// The segment it ended up joined with (the lowest id of its group; itself when unmerged
+  /// with any lower segment). Filled at finish() and by merges.
+  int merged_with = 0;
+  Eigen::Vector2d min_world = Eigen::Vector2d::Zero();  ///< keyframe extent, current estimate
+  Eigen::Vector2d max_world = Eigen::Vector2d::Zero();
+};
+
+/// Two groups of segments joined by confirmed matches.
+struct MergeEvent {
+  core::Timestamp time;
+  std::size_t scan = 0;
+  int segment_a = 0;  ///< the group of the matched submap
+  int segment_b = 0;  ///< the group of the searching keyframe
+  std::vector<int> candidates;  ///< indices into Slam2dSummary::candidates (the evidence)
+  double moved_m = 0.0;         ///< how far the merged group's newest keyframe moved
 };
 
 struct HealthEvent {
@@ -159,7 +224,7 @@ struct StageTimes {
   double local_match_s = 0.0;
   double local_map_s = 0.0;
   double submap_s = 0.0;
-  double loop_search_s = 0.0;
+  double loop_search_s = 0.0;  ///< loop, merge and global searches with their verification
   double optimize_s = 0.0;
 };
 
@@ -173,6 +238,11 @@ struct Slam2dSummary {
   std::size_t loops_rejected_by_gnc = 0;
   std::size_t scans_ok = 0, scans_degraded = 0, scans_lost = 0;
   std::size_t relocalisations = 0;
+  std::size_t merge_searches = 0;
+  std::size_t global_searches = 0;
+  std::size_t searches_skipped_by_budget = 0;
+  std::vector<SegmentInfo> segments;
+  std::vector<MergeEvent> merges;
   std::vector<LoopCandidate> candidates;  ///< every verified-or-rejected candidate above min score
   std::vector<HealthEvent> health_events;
   StageTimes times;
@@ -198,6 +268,9 @@ class Slam2d {
   io::PoseGraph2D pose_graph() const;
   /// Probability grid of all keyframes at their current global poses.
   ProbabilityGrid render_map(const ProbabilityGridOptions& options) const;
+  /// The map for reuse (saved_map.hpp): every submap with keyframes that carry points, rendered
+  /// at the current global poses.
+  SavedMap2D export_map() const;
   const Slam2dSummary& summary() const { return summary_; }
   Health health() const;
 
