@@ -3,7 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <span>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "cairn/core/assert.hpp"
 
@@ -78,45 +79,53 @@ void PointMap::build(const std::vector<Eigen::Vector2d>& points) {
   }
   // Normals cell by cell: the points of a cell share their candidate neighbours (the cells within
   // `reach`), gathered once per cell in the same order a per-point scan would visit them, so the
-  // sums and the normals are exactly those of the per-point search.
+  // sums and the normals are exactly those of the per-point search. The sums are kept as the
+  // five distinct scalars of (sum q, sum q q^T).
   const double radius2 = options_.normal_radius_m * options_.normal_radius_m;
   const int reach = static_cast<int>(std::ceil(options_.normal_radius_m / options_.cell_size_m));
-  std::vector<std::uint32_t> candidates;
-  for (const Cell& cell : table_) {
-    if (cell.end == 0) continue;
-    const MapPoint& first = points_[order_[cell.begin]];
-    const auto ci = static_cast<std::int64_t>(std::floor(first.position.x() / options_.cell_size_m));
-    const auto cj = static_cast<std::int64_t>(std::floor(first.position.y() / options_.cell_size_m));
-    candidates.clear();
-    for (int di = -reach; di <= reach; ++di) {
-      for (int dj = -reach; dj <= reach; ++dj) {
-        if (const Cell* other = find(key(ci + di, cj + dj)))
-          candidates.insert(candidates.end(), order_.begin() + other->begin, order_.begin() + other->end);
+  // Cells in parallel (each point's normal is written by one task only: deterministic).
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table_.size(), 64), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<std::uint32_t> candidates;
+    for (std::size_t slot = range.begin(); slot != range.end(); ++slot) {
+      const Cell& cell = table_[slot];
+      if (cell.end == 0) continue;
+      const MapPoint& first = points_[order_[cell.begin]];
+      const auto ci = static_cast<std::int64_t>(std::floor(first.position.x() / options_.cell_size_m));
+      const auto cj = static_cast<std::int64_t>(std::floor(first.position.y() / options_.cell_size_m));
+      candidates.clear();
+      for (int di = -reach; di <= reach; ++di) {
+        for (int dj = -reach; dj <= reach; ++dj) {
+          if (const Cell* other = find(key(ci + di, cj + dj)))
+            candidates.insert(candidates.end(), order_.begin() + other->begin, order_.begin() + other->end);
+        }
+      }
+      for (std::uint32_t o = cell.begin; o < cell.end; ++o) {
+        MapPoint& point = points_[order_[o]];
+        double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
+        int count = 0;
+        for (const std::uint32_t k : candidates) {
+          const Eigen::Vector2d& q = points_[k].position;
+          if ((q - point.position).squaredNorm() > radius2) continue;
+          sx += q.x();
+          sy += q.y();
+          sxx += q.x() * q.x();
+          sxy += q.x() * q.y();
+          syy += q.y() * q.y();
+          ++count;
+        }
+        if (count < options_.normal_min_neighbours) continue;
+        const Eigen::Vector2d mean = Eigen::Vector2d(sx, sy) / count;
+        Eigen::Matrix2d outer;
+        outer << sxx, sxy, sxy, syy;
+        const Eigen::Matrix2d covariance = outer / count - mean * mean.transpose();
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
+        const double largest = eigen.eigenvalues()(1);
+        if (!(largest > 0.0) || eigen.eigenvalues()(0) > options_.normal_max_eigenvalue_ratio * largest) continue;
+        point.normal = eigen.eigenvectors().col(0).normalized();
+        point.has_normal = true;
       }
     }
-    const std::span<const std::uint32_t> members(order_.data() + cell.begin, cell.end - cell.begin);
-    for (const std::uint32_t index : members) {
-      MapPoint& point = points_[index];
-      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-      Eigen::Matrix2d outer = Eigen::Matrix2d::Zero();
-      int count = 0;
-      for (const std::uint32_t k : candidates) {
-        const Eigen::Vector2d& q = points_[k].position;
-        if ((q - point.position).squaredNorm() > radius2) continue;
-        sum += q;
-        outer += q * q.transpose();
-        ++count;
-      }
-      if (count < options_.normal_min_neighbours) continue;
-      const Eigen::Vector2d mean = sum / count;
-      const Eigen::Matrix2d covariance = outer / count - mean * mean.transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
-      const double largest = eigen.eigenvalues()(1);
-      if (!(largest > 0.0) || eigen.eigenvalues()(0) > options_.normal_max_eigenvalue_ratio * largest) continue;
-      point.normal = eigen.eigenvectors().col(0).normalized();
-      point.has_normal = true;
-    }
-  }
+  });
 }
 
 const MapPoint* PointMap::nearest(const Eigen::Vector2d& query, double max_distance_m) const {
