@@ -135,5 +135,39 @@ TEST(Odometry, NoisyOdometryDriftsAndVelocitiesMatchIncrements) {
   }
 }
 
+TEST(Trajectory, AStartHeadingIsATurnOnTheSpotBeforeDriving) {
+  const std::vector<Vector2> route = {{0, 0}, {0, 5}, {4, 5}};
+  TrajectoryOptions options;
+  options.laps = 1;
+  const auto samples = generate_trajectory(route, options, false, std::numbers::pi);
+  expect_limits_hold(samples, options);
+  EXPECT_EQ(samples.front().T_world_body.angle(), std::numbers::pi);
+  // It turns a quarter turn (to +y) where it stands, then drives.
+  std::size_t k = 0;
+  while (k < samples.size() && samples[k].T_world_body.translation().norm() == 0.0) ++k;
+  ASSERT_LT(k, samples.size());
+  EXPECT_NEAR(core::wrap_angle(samples[k - 1].T_world_body.angle() - std::numbers::pi / 2), 0.0, 1e-3);
+  EXPECT_NEAR((samples.back().T_world_body.translation() - Vector2(4, 5)).norm(), 0.0, 1e-9);
+  // Facing the first leg already: no turn, the same samples as without a start heading.
+  const auto plain = generate_trajectory(route, options, false);
+  const auto facing = generate_trajectory(route, options, false, std::numbers::pi / 2);
+  ASSERT_EQ(plain.size(), facing.size());
+  EXPECT_EQ(plain.back().T_world_body.translation(), facing.back().T_world_body.translation());
+}
+
+TEST(Odometry, ACarryIsNotSeenByTheWheels) {
+  // Two samples 10 ms apart 5 m apart: a carry; the odometry reports exactly no motion there.
+  std::vector<TrajectorySample> truth(4);
+  for (std::size_t k = 0; k < truth.size(); ++k) truth[k].stamp = core::Timestamp::from_nanoseconds(static_cast<std::int64_t>(k) * 10'000'000);
+  truth[1].T_world_body = SE2(0.01, 0.0, 0.0);
+  truth[2].T_world_body = SE2(5.0, 3.0, 1.0);
+  truth[3].T_world_body = SE2(5.0, 3.0, 1.0) * SE2(0.01, 0.0, 0.0);
+  const OdometryTrack track = simulate_odometry(truth, OdometryNoise{}, 3, {2});
+  EXPECT_EQ(track.poses[2].translation(), track.poses[1].translation());
+  EXPECT_EQ(track.poses[2].angle(), track.poses[1].angle());
+  EXPECT_EQ(track.speed_mps[2], 0.0);
+  EXPECT_NEAR((track.poses[3].translation() - track.poses[2].translation()).norm(), 0.01, 0.005);
+}
+
 }  // namespace
 }  // namespace cairn::sim

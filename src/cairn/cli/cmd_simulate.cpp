@@ -98,6 +98,109 @@ nlohmann::json parameter_json(sim::Scenario& scenario) {
   return j;
 }
 
+nlohmann::json pose_json(const core::SE2& T) { return {{"x_m", T.x()}, {"y_m", T.y()}, {"theta_rad", T.angle()}}; }
+
+nlohmann::json revisit_json(const sim::Revisit& r) {
+  return {{"scan", r.later},
+          {"earlier_scan", r.earlier},
+          {"distance_m", r.distance_m},
+          {"heading_difference_rad", r.heading_difference_rad},
+          {"time_difference_s", r.time_difference_s},
+          {"path_between_m", r.path_between_m}};
+}
+
+/// The mission scenarios' ground truth (sim/mission_truth.hpp): regions with their scan counts,
+/// doors, the segments, revisits, the longest absence, the kidnapping and the second session.
+nlohmann::json mission_json(const sim::MissionTruth& m) {
+  nlohmann::json truth;
+  nlohmann::json regions = nlohmann::json::array();
+  std::vector<std::string> names;
+  for (const auto& r : m.regions) names.push_back(r.name);
+  if (!m.outside_region.empty()) names.push_back(m.outside_region);
+  for (const auto& name : names) {
+    nlohmann::json region = {{"name", name}};
+    for (const auto& r : m.regions) {
+      if (r.name == name) {
+        region["min_world"] = {r.bounds.min.x(), r.bounds.min.y()};
+        region["max_world"] = {r.bounds.max.x(), r.bounds.max.y()};
+      }
+    }
+    if (name == m.outside_region) region["note"] = "everywhere outside the other regions";
+    std::size_t scans = 0;
+    std::size_t few = 0;
+    for (const auto& s : m.segments) {
+      if (s.region != name) continue;
+      scans += s.last_scan - s.first_scan + 1;
+      few += s.few_return_scans;
+    }
+    region["scans"] = scans;
+    region["few_return_scans"] = few;
+    regions.push_back(region);
+  }
+  truth["regions"] = regions;
+  truth["few_returns"] = {{"threshold", m.few_returns},
+                          {"definition", "a scan with fewer readings below max range than the threshold"}};
+  nlohmann::json doors = nlohmann::json::array();
+  for (const auto& d : m.doors) {
+    doors.push_back({{"name", d.name},
+                     {"center_world", {d.center.x(), d.center.y()}},
+                     {"outward_world", {d.outward.x(), d.outward.y()}},
+                     {"width_m", d.width_m}});
+  }
+  truth["doors"] = doors;
+  nlohmann::json segments = nlohmann::json::array();
+  for (const auto& s : m.segments) {
+    segments.push_back({{"region", s.region},
+                        {"scans", {s.first_scan, s.last_scan}},
+                        {"time_s", {s.start_time_s, s.end_time_s}},
+                        {"path_length_m", s.path_length_m},
+                        {"few_return_scans", s.few_return_scans}});
+  }
+  truth["segments"] = {{"file", "segments.txt"}, {"list", segments}};
+  truth["revisits"] = {{"file", "revisits.txt"},
+                       {"criterion", "for every scan, the nearest earlier scan at most max_distance_m away and at "
+                                     "least min_separation_s earlier (ground-truth body positions)"},
+                       {"max_distance_m", m.revisit_options.max_distance_m},
+                       {"min_separation_s", m.revisit_options.min_separation_s},
+                       {"scans_with_a_revisit", m.revisits.size()}};
+  if (m.absence) {
+    const auto& a = *m.absence;
+    nlohmann::json absence = {{"region", a.region},
+                              {"definition", "the longest stretch outside the region the run starts in, between two "
+                                             "stays in it"},
+                              {"left_scan", a.left_scan},
+                              {"returned_scan", a.returned_scan},
+                              {"left_time_s", a.left_time_s},
+                              {"returned_time_s", a.returned_time_s},
+                              {"duration_s", a.duration_s},
+                              {"path_length_m", a.path_length_m}};
+    if (a.first_revisit) absence["first_revisit"] = revisit_json(*a.first_revisit);
+    truth["absence"] = absence;
+  }
+  if (m.kidnap) {
+    const auto& k = *m.kidnap;
+    truth["kidnap"] = {{"file", "kidnap.txt"},
+                       {"time_before_s", static_cast<double>(k.stamp_before.nanoseconds()) / 1e9},
+                       {"time_after_s", static_cast<double>(k.stamp_after.nanoseconds()) / 1e9},
+                       {"last_scan_before", k.last_scan_before},
+                       {"first_scan_after", k.first_scan_after},
+                       {"T_world_body_before", pose_json(k.T_world_body_before)},
+                       {"T_world_body_after", pose_json(k.T_world_body_after)},
+                       {"T_odom_body_before", pose_json(k.T_odom_body_before)},
+                       {"T_odom_body_after", pose_json(k.T_odom_body_after)},
+                       {"note", "the ground truth jumps between the two times; the odometry does not move"}};
+  }
+  if (m.session) {
+    const auto& s = *m.session;
+    truth["session"] = {{"pairs_with", s.pairs_with},
+                        {"start_place", s.place},
+                        {"T_world_start", pose_json(s.T_world_start)},
+                        {"T_world_paired_start", pose_json(s.T_world_paired_start)},
+                        {"note", "same world frame as " + s.pairs_with + ": localise this run in its map"}};
+  }
+  return truth;
+}
+
 int simulate_command(const SimulateFlags& flags) {
   if (flags.list) return list_scenarios(flags);
   if (flags.scenario.empty()) return usage_error("name a scenario (cairn simulate --list shows them)");
@@ -236,6 +339,7 @@ int simulate_command(const SimulateFlags& flags) {
     }
     manifest["ground_truth"] = truth;
   }
+  if (result.mission) manifest["ground_truth"] = mission_json(*result.mission);
   manifest["files"] = file_list;
   io::write_output(out.staging_path("manifest.json"), [&](std::ostream& o) { o << manifest.dump(2) << '\n'; });
   out.commit();
@@ -260,6 +364,25 @@ int simulate_command(const SimulateFlags& flags) {
       std::printf("\ngraph: %zu nodes, %zu edges (%zu true loop closures, %zu false); %zu relations\n",
                   result.graph.graph.vertices.size(), result.graph.graph.edges.size(), true_loops, false_loops,
                   result.relations.size());
+      if (result.mission) {
+        for (const auto& s : result.mission->segments) {
+          std::printf("  %s: scans %zu-%zu (%.1f-%.1f s, %.1f m), %zu with fewer than %d returns\n", s.region.c_str(),
+                      s.first_scan, s.last_scan, s.start_time_s, s.end_time_s, s.path_length_m, s.few_return_scans,
+                      result.mission->few_returns);
+        }
+        if (result.mission->kidnap) {
+          const auto& k = *result.mission->kidnap;
+          std::printf("kidnapped between %.2f s and %.2f s (scans %zu, %zu): (%.2f, %.2f) -> (%.2f, %.2f)\n",
+                      k.stamp_before.seconds(), k.stamp_after.seconds(), k.last_scan_before, k.first_scan_after,
+                      k.T_world_body_before.x(), k.T_world_body_before.y(), k.T_world_body_after.x(),
+                      k.T_world_body_after.y());
+        }
+        if (result.mission->absence) {
+          const auto& a = *result.mission->absence;
+          std::printf("away from %s for %.1f s and %.1f m (scans %zu-%zu)\n", a.region.c_str(), a.duration_s,
+                      a.path_length_m, a.left_scan, a.returned_scan);
+        }
+      }
     }
     std::printf("dead reckoning ends %.2f m / %.2f deg off the ground truth (at most %.2f m off on the way); "
                 "%.1f %% of readings at max range\n",
@@ -275,7 +398,8 @@ int simulate_command(const SimulateFlags& flags) {
 
 Runner register_simulate(CLI::App& app) {
   auto flags = std::make_shared<SimulateFlags>();
-  app.add_option("SCENARIO", flags->scenario, "office, office-people, corridor-aliasing, open-hall, loop-building, landmarks, street-3d, street-3d-loops, "
+  app.add_option("SCENARIO", flags->scenario, "office, office-people, corridor-aliasing, open-hall, loop-building, landmarks, "
+                 "building-yard, outdoor-stretch, kidnapping, long-absence, second-session, street-3d, street-3d-loops, "
                  "garage-3d or tunnel-3d");
   app.add_option("--seed", flags->seed, "Seed of every random draw; the same seed gives the same bytes")
       ->capture_default_str();

@@ -1,5 +1,6 @@
 #include "cairn/sim/odometry.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -78,7 +79,7 @@ core::SE2 WheelOdometry::measure(const core::SE2& T_prev_next, double dt_s) {
 }
 
 OdometryTrack simulate_odometry(const std::vector<TrajectorySample>& truth, const OdometryNoise& noise,
-                                std::uint64_t seed) {
+                                std::uint64_t seed, const std::vector<std::size_t>& carried_samples) {
   CAIRN_ASSERT(noise.is_valid(nullptr), "simulate_odometry: invalid noise options (check is_valid first)");
   OdometryTrack track;
   if (truth.empty()) return track;
@@ -89,7 +90,9 @@ OdometryTrack simulate_odometry(const std::vector<TrajectorySample>& truth, cons
   track.yaw_rate_rad_s.assign(truth.size(), 0.0);
   for (std::size_t k = 1; k < truth.size(); ++k) {
     const double dt = static_cast<double>(truth[k].stamp.nanoseconds() - truth[k - 1].stamp.nanoseconds()) * 1e-9;
-    const core::SE2 true_increment = truth[k - 1].T_world_body.inverse() * truth[k].T_world_body;
+    const bool carried = std::binary_search(carried_samples.begin(), carried_samples.end(), k);
+    const core::SE2 true_increment =
+        carried ? core::SE2() : truth[k - 1].T_world_body.inverse() * truth[k].T_world_body;
     const core::SE2 measured = sensor.measure(true_increment, dt);
     track.poses.push_back(track.poses.back() * measured);
     track.speed_mps[k] = measured.x() / dt;

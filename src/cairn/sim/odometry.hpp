@@ -89,8 +89,11 @@ class WheelOdometry {
   std::size_t slip_events_ = 0;
 };
 
-/// Integrates WheelOdometry over the whole trajectory.
+/// Integrates WheelOdometry over the whole trajectory. `carried_samples` (increasing) lists the
+/// samples k whose step from k - 1 the wheels did not drive: the robot was picked up and put down
+/// elsewhere (kidnapping), so the sensor is handed the identity increment and reports exactly no
+/// motion (every noise term scales with the motion), while the ground truth jumps.
 OdometryTrack simulate_odometry(const std::vector<TrajectorySample>& truth, const OdometryNoise& noise,
-                                std::uint64_t seed);
+                                std::uint64_t seed, const std::vector<std::size_t>& carried_samples = {});
 
 }  // namespace cairn::sim

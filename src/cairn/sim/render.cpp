@@ -37,6 +37,7 @@ void render_png(const std::string& path, const World& world, const std::vector<V
   Bounds box = world.bounds();
   for (const auto* points : {&truth, &dead_reckoning}) {
     for (const auto& p : *points) {
+      if (!p.allFinite()) continue;  // a break in the path
       box.min = box.min.cwiseMin(p);
       box.max = box.max.cwiseMax(p);
     }
@@ -71,8 +72,17 @@ void render_png(const std::string& path, const World& world, const std::vector<V
     cairo_set_source_rgba(cr, r, g, b, 0.85);
     cairo_set_line_width(cr, line_width);
     cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
-    move_to(points.front());
-    for (std::size_t i = 1; i < points.size(); ++i) line_to(points[i]);
+    bool pen_down = false;
+    for (const auto& p : points) {
+      if (!p.allFinite()) {
+        pen_down = false;
+      } else if (pen_down) {
+        line_to(p);
+      } else {
+        move_to(p);
+        pen_down = true;
+      }
+    }
     cairo_stroke(cr);
   };
 
@@ -114,7 +124,7 @@ void render_png(const std::string& path, const World& world, const std::vector<V
   }
   polyline(dead_reckoning, 0.95, 0.5, 0.0, 1.5);
   polyline(truth, 0.1, 0.3, 0.9, 1.5);
-  if (!truth.empty()) {
+  if (!truth.empty() && truth.front().allFinite()) {
     const Vector2 s = to_image(truth.front());
     cairo_set_source_rgb(cr, 0.0, 0.65, 0.0);
     cairo_arc(cr, s.x(), s.y(), 5, 0, 2 * std::numbers::pi);

@@ -24,7 +24,8 @@ struct RenderOptions {
 };
 
 /// Draws and writes `path` atomically. `truth` and `dead_reckoning` are positions in the world
-/// frame (the odometry frame coincides with it at the start); either may be empty.
+/// frame (the odometry frame coincides with it at the start); either may be empty. A non-finite
+/// point (NaN) breaks the line there: the ground truth of a kidnapped robot jumps.
 /// Throws io::ParseError when the image cannot be written.
 void render_png(const std::string& path, const World& world, const std::vector<Vector2>& truth,
                 const std::vector<Vector2>& dead_reckoning, const RenderOptions& options);

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "cairn/core/assert.hpp"
@@ -45,6 +46,166 @@ void write_tum_file(const std::string& path, const std::vector<core::Timestamp>&
   io::write_tum(path, trajectory);
 }
 
+/// The mission ground truth of a finished 2D run (Scenario::is_mission); `path_m` is the driven
+/// path up to each ground-truth sample.
+MissionTruth mission_truth(const Scenario& scenario, const SimulationResult& result, const std::vector<double>& path_m) {
+  MissionTruth truth;
+  truth.regions = result.world.regions;
+  truth.outside_region = result.world.outside_region;
+  truth.doors = result.world.doors;
+  truth.few_returns = scenario.few_returns;
+  truth.revisit_options = scenario.revisits;
+  ScanTruth scans;
+  for (std::size_t i = 0; i < result.scan_samples.size(); ++i) {
+    const std::size_t k = result.scan_samples[i];
+    scans.T_world_body.push_back(result.truth[k].T_world_body);
+    // Divided, not multiplied by 1e-9: 134.2 s reads 134.2 in the manifest, not 134.20000000000002.
+    scans.times_s.push_back(static_cast<double>(result.truth[k].stamp.nanoseconds()) / 1e9);
+    scans.path_m.push_back(path_m[k]);
+    scans.returns.push_back(static_cast<int>(std::count_if(result.scans[i].begin(), result.scans[i].end(),
+                                                           [&](double r) { return r < scenario.lidar.max_range_m; })));
+  }
+  std::vector<std::size_t> breaks;
+  if (!result.carried_samples.empty()) {
+    KidnapEvent event;
+    event.first_sample_after = result.carried_samples.front();
+    event.last_sample_before = event.first_sample_after - 1;
+    // Scans are taken at samples; the first at or after the jump sees the drop place.
+    const auto first_scan = std::lower_bound(result.scan_samples.begin(), result.scan_samples.end(), event.first_sample_after);
+    event.first_scan_after = static_cast<std::size_t>(first_scan - result.scan_samples.begin());
+    event.last_scan_before = event.first_scan_after - 1;
+    const TrajectorySample& before = result.truth[event.last_sample_before];
+    const TrajectorySample& after = result.truth[event.first_sample_after];
+    event.stamp_before = before.stamp;
+    event.stamp_after = after.stamp;
+    event.T_world_body_before = before.T_world_body;
+    event.T_world_body_after = after.T_world_body;
+    event.T_odom_body_before = result.odometry.poses[event.last_sample_before];
+    event.T_odom_body_after = result.odometry.poses[event.first_sample_after];
+    truth.kidnap = event;
+    breaks.push_back(event.first_scan_after);
+  }
+  truth.segments = find_segments(result.world, scans, scenario.few_returns, breaks);
+  truth.revisits = find_revisits(scans, scenario.revisits);
+  truth.absence = find_absence(truth.segments, scenario.revisits, scans);
+  if (scenario.second_session) {
+    // The session it pairs with starts where building-yard does, facing its first leg.
+    const WorldWithRoute first = building_yard_world(scenario.office, scenario.building_yard);
+    const Vector2 leg = first.route[1] - first.route[0];
+    truth.session = SessionStart{"building-yard", scenario.session_start.place, result.truth.front().T_world_body,
+                                 core::SE2(first.route[0].x(), first.route[0].y(), std::atan2(leg.y(), leg.x()))};
+  }
+  return truth;
+}
+
+/// "problem (found X)" with X the shortest text of `value`.
+std::string found(const std::string& problem, double value) {
+  std::string text = problem + " (found ";
+  io::append_number(text, value);
+  return text + ")";
+}
+
+/// The rules of the mission scenarios' own settings (kidnap, yard, path, wings, session).
+void check_mission(const Scenario& s, std::vector<std::string>& problems) {
+  std::string text;
+  const bool office_ok = [&] {
+    std::vector<std::string> office_problems;
+    check_office_options(s.office, "office", office_problems);
+    return office_problems.empty();
+  }();
+  // Doors in a building's outer wall open on the side corridors beside the block: wide enough to
+  // drive through 0.3 m clear of the jambs on the corner arcs, and inside the block's height.
+  auto check_door = [&](double width_m, const std::string& field) {
+    if (!(width_m >= 1.2 && width_m <= s.office.block_depth_m)) {
+      problems.push_back(found(field + " must be in [1.2, office.block_depth_m]", width_m));
+    }
+  };
+  // A second floor beside the first (building 2, east wing): reported only when the first is right.
+  auto check_second_floor = [&](int rooms_per_row, double width_m, const std::string& prefix) {
+    if (!office_ok) return;
+    OfficeOptions second = s.office;
+    second.rooms_per_row = rooms_per_row;
+    second.width_m = width_m;
+    check_office_options(second, prefix, problems);
+  };
+  if (s.is_mission()) {
+    if (!s.revisits.is_valid(&text)) problems.push_back("revisits: " + text);
+    if (s.few_returns < 1 || s.few_returns > 100000) problems.push_back("segments.few_returns must be in [1, 100000]");
+  }
+  if (s.world == WorldKind::kBuildingYard || s.world == WorldKind::kOutdoorStretch || s.world == WorldKind::kTwoWings) {
+    if (s.trajectory.laps != 1) {
+      problems.push_back(s.name + " drives its route once (it ends elsewhere than it starts): trajectory.laps must be 1");
+    }
+  }
+  if (s.world == WorldKind::kBuildingYard) {
+    const BuildingYardOptions& y = s.building_yard;
+    check_door(y.door_width_m, "building_yard.door_width_m");
+    if (!(y.yard_offset_m >= 5.0 && y.yard_offset_m <= 500.0)) {
+      problems.push_back(found("building_yard.yard_offset_m must be in [5, 500]", y.yard_offset_m));
+    }
+    if (y.features < 0 || y.features > 30) problems.push_back("building_yard.features must be in [0, 30]");
+    if (s.second_session && office_ok && !OfficeFloor(s.office).place_center(s.session_start.place)) {
+      std::string names;
+      for (const auto& n : OfficeFloor(s.office).place_names()) names += (names.empty() ? "" : ", ") + n;
+      problems.push_back("session.start_place must be one of " + names + " (found '" + s.session_start.place + "')");
+    }
+  }
+  if (s.world == WorldKind::kOutdoorStretch) {
+    const OutdoorStretchOptions& o = s.outdoor;
+    if (!(o.path_length_m >= 40.0 && o.path_length_m <= 2000.0)) {
+      problems.push_back(found("outdoor.path_length_m must be in [40, 2000]", o.path_length_m));
+    }
+    check_door(o.door_width_m, "outdoor.door_width_m");
+    if (o.features < 0 || o.features > 30) problems.push_back("outdoor.features must be in [0, 30]");
+    check_second_floor(o.building_2_rooms_per_row, o.building_2_width_m, "building_2");
+  }
+  if (s.world == WorldKind::kTwoWings) {
+    const TwoWingOptions& w = s.wings;
+    check_door(w.door_width_m, "long_absence.door_width_m");
+    if (!(w.connector_length_m >= 4.0 && w.connector_length_m <= 500.0)) {
+      problems.push_back(found("long_absence.connector_length_m must be in [4, 500]", w.connector_length_m));
+    }
+    if (!(w.connector_width_m >= w.door_width_m && w.connector_width_m <= s.office.block_depth_m)) {
+      problems.push_back(found("long_absence.connector_width_m must be in [door_width_m, office.block_depth_m]",
+                               w.connector_width_m));
+    }
+    if (w.away_laps < 1 || w.away_laps > 20) problems.push_back("long_absence.away_laps must be in [1, 20]");
+    check_second_floor(w.east_wing_rooms_per_row, w.east_wing_width_m, "east_wing");
+  }
+  if (s.kidnap_enabled) {
+    if (!(s.kidnap.time_s > 0.0)) problems.push_back(found("kidnap.time_s must be > 0", s.kidnap.time_s));
+    if (office_ok && !OfficeFloor(s.office).place_center(s.kidnap.drop_place)) {
+      std::string names;
+      for (const auto& n : OfficeFloor(s.office).place_names()) names += (names.empty() ? "" : ", ") + n;
+      problems.push_back("kidnap.drop_place must be one of " + names + " (found '" + s.kidnap.drop_place + "')");
+    }
+  }
+}
+
+/// The kidnap must happen while the office laps are driven, far enough from the drop place.
+void check_kidnap_time(const Scenario& s, const WorldWithRoute& built, std::vector<std::string>& problems) {
+  const TrajectoryOptions options = s.effective_trajectory();
+  const std::vector<TrajectorySample> before = generate_trajectory(built.route, options, built.closed_route);
+  const double duration_s = before.back().stamp.seconds() - before.front().stamp.seconds();
+  if (s.kidnap.time_s >= duration_s - options.sample_period_s) {
+    std::string end;
+    io::append_number(end, std::floor(duration_s - options.sample_period_s));
+    problems.push_back(found("kidnap.time_s must be below " + end + " s, when the office laps (trajectory.laps) end",
+                             s.kidnap.time_s));
+    return;
+  }
+  const auto k = static_cast<std::size_t>(std::floor(s.kidnap.time_s / options.sample_period_s + 1e-9));
+  const Vector2 picked_up = before[std::min(k, before.size() - 1)].T_world_body.translation();
+  const Vector2 drop = *OfficeFloor(s.office).place_center(s.kidnap.drop_place);
+  const double jump_m = (drop - picked_up).norm();
+  if (jump_m < KidnapOptions::kMinimumJumpM) {
+    std::string distance;
+    io::append_number(distance, std::round(jump_m * 100.0) / 100.0);
+    problems.push_back("kidnap: at kidnap.time_s the robot is only " + distance + " m from the centre of " +
+                       s.kidnap.drop_place + "; choose another time or kidnap.drop_place (at least 3 m apart)");
+  }
+}
+
 }  // namespace
 
 bool Scenario::is_valid(std::string* why) const {
@@ -80,17 +241,7 @@ bool Scenario::is_valid(std::string* why) const {
   };
   switch (world) {
     case WorldKind::kOffice:
-      if (office.rooms_per_row < 2 || office.rooms_per_row > 20) problems.push_back("office.rooms_per_row must be in [2, 20]");
-      above(office.room_depth_m, 2.0, "office.room_depth_m");
-      above(office.corridor_width_m, 1.0, "office.corridor_width_m");
-      above(office.block_depth_m, 2.0, "office.block_depth_m");
-      above(office.door_width_m, 0.5, "office.door_width_m");
-      if (office.people < 0 || office.people > 8) problems.push_back("office.people must be in [0, 8]");
-      if (office.rooms_per_row >= 2) {
-        above(office.width_m / office.rooms_per_row, std::max(3.0, office.door_width_m + 1.0), "office.width_m / rooms_per_row");
-        above((office.width_m - 2 * office.corridor_width_m) / 3.0, office.door_width_m + 3.0,
-              "(office.width_m - 2 corridor_width_m) / 3");
-      }
+      check_office_options(office, "office", problems);
       break;
     case WorldKind::kCorridor:
       above(corridor.width_m, 1.0, "corridor.width_m");
@@ -128,11 +279,17 @@ bool Scenario::is_valid(std::string* why) const {
         problems.push_back("landmark_field.post_radius_m must be in [0, min_distance_from_route_m - 0.2)");
       }
       break;
+    case WorldKind::kBuildingYard:
+    case WorldKind::kOutdoorStretch:
+    case WorldKind::kTwoWings:
+      check_office_options(office, "office", problems);
+      break;
     case WorldKind::kStreet3D:
     case WorldKind::kGarage3D:
     case WorldKind::kTunnel3D:
       break;
   }
+  check_mission(*this, problems);
   if (world == WorldKind::kStreet3D) {
       above(street.loop_width_m, 2.0 * street.street_half_width_m + 4.0, "street.loop_width_m");
       above(street.loop_depth_m, 2.0 * street.street_half_width_m + 4.0, "street.loop_depth_m");
@@ -188,11 +345,13 @@ bool Scenario::is_valid(std::string* why) const {
   if (problems.empty()) {
     const WorldWithRoute built = build_world(*this);
     double lap_m = 0.0;
-    for (std::size_t i = 0; i < built.route.size(); ++i) lap_m += (built.route[(i + 1) % built.route.size()] - built.route[i]).norm();
+    const std::size_t legs = built.closed_route ? built.route.size() : built.route.size() - 1;
+    for (std::size_t i = 0; i < legs; ++i) lap_m += (built.route[(i + 1) % built.route.size()] - built.route[i]).norm();
     if (lap_m * trajectory.laps > 20000.0) {
       problems.push_back("the route is " + std::to_string(static_cast<long>(lap_m * trajectory.laps)) +
                          " m long (laps x lap length): at most 20000 m");
     }
+    if (problems.empty() && kidnap_enabled) check_kidnap_time(*this, built, problems);
   }
   if (why != nullptr) {
     why->clear();
@@ -212,8 +371,9 @@ TrajectoryOptions Scenario::effective_trajectory() const {
 }
 
 std::vector<std::string> scenario_names() {
-  return {"office",    "office-people",   "corridor-aliasing", "open-hall", "loop-building",
-          "landmarks", "street-3d",       "street-3d-loops",   "garage-3d", "tunnel-3d"};
+  return {"office",         "office-people",   "corridor-aliasing", "open-hall",  "loop-building",
+          "landmarks",      "building-yard",   "outdoor-stretch",   "kidnapping", "long-absence",
+          "second-session", "street-3d",       "street-3d-loops",   "garage-3d",  "tunnel-3d"};
 }
 
 std::optional<Scenario> make_scenario(std::string_view name) {
@@ -248,6 +408,39 @@ std::optional<Scenario> make_scenario(std::string_view name) {
     s.simulate_landmarks = true;
     s.description = "A rectangular loop through a field of 60 posts with known identities, seen by a "
                     "range-bearing sensor (and as small circles by the LiDAR)";
+  } else if (name == "building-yard") {
+    s.world = WorldKind::kBuildingYard;
+    s.trajectory.laps = 1;
+    s.image_pixels_per_m = 8.0;
+    s.description = "The office building with doors A (west) and B (east) to an open yard with six trees, posts "
+                    "and benches: a lap inside, out through A, round the yard 35 m from the walls (beyond the "
+                    "LiDAR's range: scans with few or no returns), in through B, then corridors mapped on the lap";
+  } else if (name == "outdoor-stretch") {
+    s.world = WorldKind::kOutdoorStretch;
+    s.trajectory.laps = 1;
+    s.image_pixels_per_m = 6.0;
+    s.description = "Two office buildings (4 and 3 rooms per row) joined by a 130 m outdoor path with four posts "
+                    "and trees: map building 1, cross, drive building 2's ring, cross back, revisit building 1";
+  } else if (name == "kidnapping") {
+    s.world = WorldKind::kOffice;
+    s.kidnap_enabled = true;
+    s.trajectory.laps = 1;
+    s.description = "The office: at kidnap.time_s the robot is carried into another room (the ground truth jumps, "
+                    "the odometry shows no motion), then leaves it and drives the ring it mapped; see kidnap.txt";
+  } else if (name == "long-absence") {
+    s.world = WorldKind::kTwoWings;
+    s.trajectory.laps = 1;
+    s.image_pixels_per_m = 12.0;
+    s.description = "Two office wings joined by a 16 m corridor: map the west wing, spend more than 5 minutes and "
+                    "200 m in the east wing, come back and revisit the west wing (the absence is in the manifest)";
+  } else if (name == "second-session") {
+    s.world = WorldKind::kBuildingYard;
+    s.second_session = true;
+    s.trajectory.laps = 1;
+    s.image_pixels_per_m = 8.0;
+    s.description = "building-yard's world (same frame, walls and features), another route: from the middle room "
+                    "facing west, the ring clockwise, through the middle room, into bottom room 1; localise it "
+                    "in a map made from building-yard";
   } else if (name == "street-3d") {
     s.world = WorldKind::kStreet3D;
     s.trajectory.laps = 1;
@@ -367,15 +560,60 @@ std::vector<Parameter> parameters(Scenario& s) {
   auto add = [&](const char* name, const char* unit, const char* description, auto* field) {
     out.push_back(Parameter{name, unit, description, field});
   };
+  // The office plan: the office itself, or the building(s) of a mission world (without people).
+  auto add_office = [&](bool with_people) {
+    add("office.rooms_per_row", "", "rooms in the bottom row and in the top row", &s.office.rooms_per_row);
+    add("office.width_m", "m", "width of the floor", &s.office.width_m);
+    add("office.room_depth_m", "m", "depth of each room row", &s.office.room_depth_m);
+    add("office.corridor_width_m", "m", "width of the ring corridor", &s.office.corridor_width_m);
+    add("office.block_depth_m", "m", "depth of the central block of three rooms", &s.office.block_depth_m);
+    add("office.door_width_m", "m", "door opening", &s.office.door_width_m);
+    if (with_people) add("office.people", "", "people walking back and forth (0-8)", &s.office.people);
+  };
   switch (s.world) {
     case WorldKind::kOffice:
-      add("office.rooms_per_row", "", "rooms in the bottom row and in the top row", &s.office.rooms_per_row);
-      add("office.width_m", "m", "width of the floor", &s.office.width_m);
-      add("office.room_depth_m", "m", "depth of each room row", &s.office.room_depth_m);
-      add("office.corridor_width_m", "m", "width of the ring corridor", &s.office.corridor_width_m);
-      add("office.block_depth_m", "m", "depth of the central block of three rooms", &s.office.block_depth_m);
-      add("office.door_width_m", "m", "door opening", &s.office.door_width_m);
-      add("office.people", "", "people walking back and forth (0-8)", &s.office.people);
+      add_office(true);
+      if (s.kidnap_enabled) {
+        add("kidnap.time_s", "s", "the robot is picked up this long after the start", &s.kidnap.time_s);
+        add("kidnap.drop_place", "", "and put down at the centre of this room (bottom-room-<i>, top-room-<i>, middle-room)",
+            &s.kidnap.drop_place);
+        add("kidnap.drop_heading_rad", "rad", "facing this way (0 = east)", &s.kidnap.drop_heading_rad);
+      }
+      break;
+    case WorldKind::kBuildingYard:
+      add_office(false);
+      add("building_yard.door_width_m", "m", "width of doors A (west wall) and B (east wall)",
+          &s.building_yard.door_width_m);
+      add("building_yard.yard_offset_m", "m", "distance from the walls to the yard legs of the route",
+          &s.building_yard.yard_offset_m);
+      add("building_yard.features", "", "trees, posts and benches in the yard (0-30)", &s.building_yard.features);
+      add("building_yard.world_seed", "", "seed of the features' places", &s.building_yard.world_seed);
+      if (s.second_session) {
+        add("session.start_place", "", "start at the centre of this room (bottom-room-<i>, top-room-<i>, middle-room)",
+            &s.session_start.place);
+        add("session.start_heading_rad", "rad", "facing this way (0 = east)", &s.session_start.heading_rad);
+      }
+      break;
+    case WorldKind::kOutdoorStretch:
+      add_office(false);
+      add("outdoor.path_length_m", "m", "distance between the buildings' facing facades", &s.outdoor.path_length_m);
+      add("outdoor.door_width_m", "m", "width of the door at each end of the path", &s.outdoor.door_width_m);
+      add("outdoor.features", "", "trees, posts and benches along the path (0-30)", &s.outdoor.features);
+      add("outdoor.world_seed", "", "seed of the features' places", &s.outdoor.world_seed);
+      add("building_2.rooms_per_row", "", "building 2: rooms per row (other sizes as office.*)",
+          &s.outdoor.building_2_rooms_per_row);
+      add("building_2.width_m", "m", "building 2: width", &s.outdoor.building_2_width_m);
+      break;
+    case WorldKind::kTwoWings:
+      add_office(false);
+      add("long_absence.away_laps", "", "laps of the east wing before going back (1-20)", &s.wings.away_laps);
+      add("long_absence.connector_length_m", "m", "length of the corridor between the wings",
+          &s.wings.connector_length_m);
+      add("long_absence.connector_width_m", "m", "its width", &s.wings.connector_width_m);
+      add("long_absence.door_width_m", "m", "width of the doors at its ends", &s.wings.door_width_m);
+      add("east_wing.rooms_per_row", "", "east wing: rooms per row (other sizes as office.*)",
+          &s.wings.east_wing_rooms_per_row);
+      add("east_wing.width_m", "m", "east wing: width", &s.wings.east_wing_width_m);
       break;
     case WorldKind::kCorridor:
       add("corridor.length_m", "m", "length of each long corridor", &s.corridor.length_m);
@@ -543,6 +781,12 @@ std::vector<Parameter> parameters(Scenario& s) {
         &rel.long_max_heading_difference_rad);
     add("relations.long_candidate_spacing_s", "s", "scans considered for long relations are this far apart",
         &rel.long_candidate_spacing_s);
+    if (s.is_mission()) {
+      add("revisits.max_distance_m", "m", "revisits.txt: scans at most this far from an earlier one",
+          &s.revisits.max_distance_m);
+      add("revisits.min_separation_s", "s", "and at least this much later", &s.revisits.min_separation_s);
+      add("segments.few_returns", "", "segments.txt counts scans with fewer returns than this", &s.few_returns);
+    }
   }
   add("image.pixels_per_m", "px/m", "scale of world.png", &s.image_pixels_per_m);
   return out;
@@ -550,16 +794,32 @@ std::vector<Parameter> parameters(Scenario& s) {
 
 WorldWithRoute build_world(const Scenario& scenario) {
   switch (scenario.world) {
-    case WorldKind::kOffice: return office_world(scenario.office);
+    case WorldKind::kOffice: {
+      WorldWithRoute office = office_world(scenario.office);
+      if (scenario.kidnap_enabled) {
+        office.regions = {{"office", OfficeFloor(scenario.office).bounds()}};
+      }
+      return office;
+    }
     case WorldKind::kCorridor: return corridor_world(scenario.corridor);
     case WorldKind::kOpenHall: return open_hall_world(scenario.open_hall);
     case WorldKind::kBuildingLoop: return building_loop_world(scenario.building);
     case WorldKind::kLandmarkField: return landmark_field_world(scenario.landmark_field);
+    case WorldKind::kBuildingYard:
+      return scenario.second_session
+                 ? building_yard_second_session(scenario.office, scenario.building_yard, scenario.session_start)
+                 : building_yard_world(scenario.office, scenario.building_yard);
+    case WorldKind::kOutdoorStretch: return outdoor_stretch_world(scenario.office, scenario.outdoor);
+    case WorldKind::kTwoWings: return two_wing_world(scenario.office, scenario.wings);
     case WorldKind::kStreet3D:
     case WorldKind::kGarage3D:
     case WorldKind::kTunnel3D: {
       const World3DWithRoute built = build_world_3d(scenario);
-      return {footprint(built.world), built.route, built.closed_route};
+      WorldWithRoute flat;
+      flat.world = footprint(built.world);
+      flat.route = built.route;
+      flat.closed_route = built.closed_route;
+      return flat;
     }
   }
   CAIRN_ASSERT(false, "build_world: unknown world kind");
@@ -583,8 +843,24 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
   result.world = build_world(scenario);
   const World& world = result.world.world;
   const TrajectoryOptions trajectory = scenario.effective_trajectory();
-  result.truth = generate_trajectory(result.world.route, trajectory, result.world.closed_route);
-  result.odometry = simulate_odometry(result.truth, scenario.odometry, Random::derive_seed(seed, kOdometryStream));
+  if (scenario.kidnap_enabled) {
+    // The office laps up to the pick-up, then, one sample later, the route from the drop place.
+    const std::vector<TrajectorySample> before =
+        generate_trajectory(result.world.route, trajectory, result.world.closed_route);
+    TrajectoryOptions after_options = trajectory;
+    after_options.laps = 1;
+    const std::vector<TrajectorySample> after =
+        generate_trajectory(route_after_drop(OfficeFloor(scenario.office), scenario.kidnap.drop_place), after_options,
+                            false, scenario.kidnap.drop_heading_rad);
+    std::size_t first_after = 0;
+    result.truth = splice_kidnap(before, after, scenario.kidnap.time_s, &first_after);
+    result.carried_samples = {first_after};
+  } else {
+    result.truth = generate_trajectory(result.world.route, trajectory, result.world.closed_route,
+                                       result.world.start_heading_rad);
+  }
+  result.odometry = simulate_odometry(result.truth, scenario.odometry, Random::derive_seed(seed, kOdometryStream),
+                                      result.carried_samples);
 
   const auto odometry_step = static_cast<std::size_t>(whole_steps(scenario.odometry_period_s, trajectory.sample_period_s));
   const auto scan_step = static_cast<std::size_t>(whole_steps(scenario.lidar.period_s, trajectory.sample_period_s));
@@ -639,7 +915,17 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
   }
 
   result.duration_s = static_cast<double>(result.truth.back().stamp.nanoseconds() - result.truth.front().stamp.nanoseconds()) * 1e-9;
-  result.path_length_m = path_length(result.truth);
+  // The driven path: a carry is not driven.
+  std::vector<double> path_m(result.truth.size(), 0.0);
+  for (std::size_t k = 1; k < result.truth.size(); ++k) {
+    const bool carried = std::binary_search(result.carried_samples.begin(), result.carried_samples.end(), k);
+    path_m[k] = path_m[k - 1] + (carried ? 0.0
+                                         : (result.truth[k].T_world_body.translation() -
+                                            result.truth[k - 1].T_world_body.translation())
+                                               .norm());
+  }
+  result.path_length_m = path_m.back();
+  if (scenario.is_mission()) result.mission = mission_truth(scenario, result, path_m);
   const core::SE2 final_error = result.truth.back().T_world_body.inverse() * result.odometry.poses.back();
   result.dead_reckoning_final_error_m = final_error.translation().norm();
   result.dead_reckoning_final_error_rad = std::abs(final_error.angle());
@@ -731,10 +1017,22 @@ std::vector<std::string> write_outputs(const SimulationResult& result, const Sce
     write_landmark_map(path_of("landmarks.csv"), result.world.world.landmarks);
     write_landmark_observations(path_of("landmark_observations.csv"), result.landmark_observations);
   }
+  if (result.mission) {
+    const std::string comment = "written by cairn simulate: scenario " + scenario.name + ", seed " + std::to_string(seed);
+    write_segments_file(path_of("segments.txt"), result.mission->segments, result.mission->few_returns, comment);
+    write_revisits_file(path_of("revisits.txt"), result.mission->revisits, result.mission->revisit_options, comment);
+    if (result.mission->kidnap) write_kidnap_file(path_of("kidnap.txt"), *result.mission->kidnap, comment);
+  }
 
   std::vector<Vector2> truth_points;
   std::vector<Vector2> odometry_points;
+  std::size_t next_carry = 0;
   for (std::size_t k = 0; k < result.truth.size(); k += 5) {
+    // The path is not drawn across a carry.
+    if (next_carry < result.carried_samples.size() && result.carried_samples[next_carry] <= k) {
+      truth_points.push_back(Vector2::Constant(std::numeric_limits<double>::quiet_NaN()));
+      ++next_carry;
+    }
     truth_points.push_back(result.truth[k].T_world_body.translation());
     odometry_points.push_back(result.odometry.poses[k].translation());
   }

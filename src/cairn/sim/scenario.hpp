@@ -13,6 +13,11 @@
 /// | open-hall         | open_hall_world             | 2    | LiDAR max range 10 m: mostly nothing seen |
 /// | loop-building     | building_loop_world         | 1    | one long loop closed at the end           |
 /// | landmarks         | landmark_field_world        | 2    | range-bearing landmarks with identities   |
+/// | building-yard     | building_yard_world         | 1    | out door A, round a blind yard, in door B |
+/// | outdoor-stretch   | outdoor_stretch_world       | 1    | two buildings, a 130 m blind path between |
+/// | kidnapping        | office_world + kidnap       | 1    | carried to another room at kidnap.time_s  |
+/// | long-absence      | two_wing_world              | 1    | back in the west wing after > 5 min away  |
+/// | second-session    | building_yard_second_session| 1    | building-yard's world, another start      |
 /// | street-3d         | street_world (3D)           | 1    | spinning 3D LiDAR, pinhole camera         |
 /// | street-3d-loops   | street_world (3D)           | 1    | 2nd lap reversed in another lane, traffic |
 /// | garage-3d         | garage_world (3D)           | 1    | periodic garage: aliasing, no true loops  |
@@ -31,6 +36,8 @@
 #include "cairn/sim/landmark_sensor.hpp"
 #include "cairn/sim/lidar_3d.hpp"
 #include "cairn/sim/lidar.hpp"
+#include "cairn/sim/mission_truth.hpp"
+#include "cairn/sim/mission_worlds.hpp"
 #include "cairn/sim/odometry.hpp"
 #include "cairn/sim/passage_worlds.hpp"
 #include "cairn/sim/relations.hpp"
@@ -43,7 +50,19 @@ namespace cairn::sim {
 
 /// The 3D worlds (kStreet3D, kGarage3D, kTunnel3D) run the 3D LiDAR and the camera instead of
 /// the 2D LiDAR, the landmark sensor, the pose graph and the relations.
-enum class WorldKind { kOffice, kCorridor, kOpenHall, kBuildingLoop, kLandmarkField, kStreet3D, kGarage3D, kTunnel3D };
+enum class WorldKind {
+  kOffice,
+  kCorridor,
+  kOpenHall,
+  kBuildingLoop,
+  kLandmarkField,
+  kBuildingYard,
+  kOutdoorStretch,
+  kTwoWings,
+  kStreet3D,
+  kGarage3D,
+  kTunnel3D
+};
 
 struct Scenario {
   std::string name;
@@ -55,6 +74,22 @@ struct Scenario {
   OpenHallOptions open_hall;
   BuildingLoopOptions building;
   LandmarkFieldOptions landmark_field;
+  /// The mission worlds (mission_worlds.hpp) build their buildings (building-yard's, building 1 of
+  /// outdoor-stretch, long-absence's west wing) from `office`, without its people.
+  BuildingYardOptions building_yard;
+  OutdoorStretchOptions outdoor;
+  TwoWingOptions wings;
+  /// second-session: building_yard's world driven from `session_start` instead of the
+  /// building-yard route; it is to be localised against a map of building-yard.
+  bool second_session = false;
+  SessionStartOptions session_start;
+  /// kidnapping: the office world; the robot is carried to kidnap.drop_place at kidnap.time_s.
+  bool kidnap_enabled = false;
+  KidnapOptions kidnap;
+  /// Mission scenarios (is_mission): revisits.txt, and segments.txt counting the scans with
+  /// fewer than `few_returns` readings below max range.
+  RevisitOptions revisits;
+  int few_returns = 10;
   StreetOptions street;
   GarageOptions garage;
   TunnelOptions tunnel;
@@ -91,6 +126,13 @@ struct Scenario {
   bool is_valid(std::string* why) const;
   /// The trajectory options after `fast_turns` is applied.
   TrajectoryOptions effective_trajectory() const;
+  /// Whether the run writes the mission ground truth (segments.txt, revisits.txt, kidnap.txt and
+  /// the manifest's ground_truth): building-yard, outdoor-stretch, kidnapping, long-absence,
+  /// second-session.
+  bool is_mission() const {
+    return kidnap_enabled || world == WorldKind::kBuildingYard || world == WorldKind::kOutdoorStretch ||
+           world == WorldKind::kTwoWings;
+  }
   /// Whether the world is 3D (street, garage, tunnel).
   bool is_3d() const { return world == WorldKind::kStreet3D || world == WorldKind::kGarage3D || world == WorldKind::kTunnel3D; }
 };
@@ -145,9 +187,15 @@ struct SimulationResult {
   /// inside the world's passage (garage, tunnel).
   std::vector<TrueLoop> true_loops;
   std::optional<PassageScans> passage_scans;
+  /// Ground-truth samples whose step from the previous one was a carry (kidnapping): the truth
+  /// jumps there, the odometry does not.
+  std::vector<std::size_t> carried_samples;
+  /// Mission scenarios: segments, revisits, absence, kidnap, second-session start.
+  std::optional<MissionTruth> mission;
 
   /// Summary numbers (also written to the manifest).
   double duration_s = 0.0;
+  /// Driven path, metres (a carry is not driven and not counted).
   double path_length_m = 0.0;
   /// |t| and |angle| of T_truth_end^-1 * T_odometry_end: how far dead reckoning ends off.
   double dead_reckoning_final_error_m = 0.0;
@@ -167,7 +215,7 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed);
 /// Writes every output file into `directory` (which must exist), atomically, and returns the
 /// file names in the order written: log.clf, log.relations, ground_truth.tum, odometry.tum,
 /// graph.g2o, graph_nodes.tum, loop_closures.csv, world.txt, [landmarks.csv,
-/// landmark_observations.csv], world.png. street-3d writes instead: velodyne/NNNNNN.bin,
+/// landmark_observations.csv], [segments.txt, revisits.txt, [kidnap.txt]], world.png. street-3d writes instead: velodyne/NNNNNN.bin,
 /// velodyne_times/NNNNNN.bin (or scans/NNNNNN.pcd), poses.txt, times.txt, ground_truth.tum,
 /// odometry.tum, camera_observations.csv, world_3d.txt, loops.txt, world.png (see
 /// docs/simulation.md). Throws io::ParseError when a file cannot be written.

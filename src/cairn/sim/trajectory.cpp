@@ -195,7 +195,7 @@ bool TrajectoryOptions::is_valid(std::string* why) const {
 }
 
 std::vector<TrajectorySample> generate_trajectory(const std::vector<Vector2>& route, const TrajectoryOptions& options,
-                                                  bool closed_route) {
+                                                  bool closed_route, std::optional<double> start_heading_rad) {
   CAIRN_ASSERT(options.is_valid(nullptr), "generate_trajectory: invalid options (check is_valid first)");
   std::vector<Vector2> points;
   for (int lap = 0; lap < options.laps; ++lap) {
@@ -251,6 +251,16 @@ std::vector<TrajectorySample> generate_trajectory(const std::vector<Vector2>& ro
     stretches.push_back(std::move(current));
     current = Stretch{};
   };
+  // A start facing elsewhere than the first leg: turn on the spot first.
+  if (start_heading_rad) {
+    const double initial_turn = core::wrap_angle(heading[0] - *start_heading_rad);
+    if (std::abs(initial_turn) > 1e-12) {
+      spins.emplace_back(points[0], *start_heading_rad, initial_turn, options.spin_yaw_rate_rad_s,
+                         options.spin_yaw_acceleration_rad_s2);
+      phases.push_back({true, spins.size() - 1, clock});
+      clock += spins.back().duration();
+    }
+  }
   for (std::size_t i = 0; i < legs; ++i) {
     const Vector2 direction(std::cos(heading[i]), std::sin(heading[i]));
     const double begin = cut[i];

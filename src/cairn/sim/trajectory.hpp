@@ -12,6 +12,7 @@
 /// The robot is a unicycle: it never moves sideways, so T_prev^-1 * T_next has y ~ 0.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,9 +61,13 @@ struct TrajectorySample {
 /// the first multiple of the period at or after arrival). `route` needs >= 2 distinct
 /// consecutive points. A closed route ends back at its first point; an open one
 /// (`closed_route` false) ends at its last point (with several laps, each lap after the first
-/// starts with a leg from the last point back to the first). Precondition: options.is_valid().
+/// starts with a leg from the last point back to the first). The robot starts facing the first
+/// leg, or, with `start_heading_rad`, facing that way and turning on the spot (the spin
+/// profile) to the first leg before it drives: a robot put down somewhere, or a session that
+/// starts where another left off. Precondition: options.is_valid().
 std::vector<TrajectorySample> generate_trajectory(const std::vector<Vector2>& route, const TrajectoryOptions& options,
-                                                  bool closed_route = true);
+                                                  bool closed_route = true,
+                                                  std::optional<double> start_heading_rad = std::nullopt);
 
 /// Path length of a sampled trajectory (sum of distances between samples), metres.
 double path_length(const std::vector<TrajectorySample>& samples);

@@ -40,94 +40,22 @@ void add_box(World& world, const Vector2& min, const Vector2& max) { world.add_r
 
 }  // namespace
 
+std::string WorldWithRoute::region_at(const Vector2& point) const {
+  for (const auto& region : regions) {
+    if ((point.array() >= region.bounds.min.array()).all() && (point.array() <= region.bounds.max.array()).all()) {
+      return region.name;
+    }
+  }
+  return outside_region;
+}
+
 WorldWithRoute office_world(const OfficeOptions& o) {
   CAIRN_ASSERT(o.rooms_per_row >= 2, "office_world: at least two rooms per row");
   WorldWithRoute result;
-  World& world = result.world;
-  world.name = "office";
-  const double W = o.width_m;
-  const double D = o.room_depth_m;
-  const double c = o.corridor_width_m;
-  const double B = o.block_depth_m;
-  const double y1 = D;              // top wall of the bottom room row
-  const double y2 = D + c;          // bottom wall of the central block
-  const double y3 = D + c + B;      // top wall of the central block
-  const double y4 = D + 2 * c + B;  // bottom wall of the top room row
-  const double y5 = 2 * D + 2 * c + B;
-  const double room_width = W / o.rooms_per_row;
-  const double block_room_width = (W - 2 * c) / 3.0;
-
-  world.add_rectangle({0, 0}, {W, y5});
-  std::vector<std::pair<double, double>> doors;
-  for (int i = 0; i < o.rooms_per_row; ++i) doors.emplace_back((i + 0.5) * room_width, o.door_width_m);
-  world.add_wall_with_gaps({0, y1}, {W, y1}, doors);
-  world.add_wall_with_gaps({0, y4}, {W, y4}, doors);
-  for (int i = 1; i < o.rooms_per_row; ++i) {
-    world.add_wall({i * room_width, 0}, {i * room_width, y1});
-    world.add_wall({i * room_width, y4}, {i * room_width, y5});
-  }
-  // Desks against the back wall of every room, off the room's centre line (the route's).
-  for (int i = 0; i < o.rooms_per_row; ++i) {
-    const double x0 = i * room_width;
-    add_box(world, {x0 + 0.5, 0.3}, {x0 + 2.1, 1.1});
-    add_box(world, {x0 + room_width - 2.1, y5 - 1.1}, {x0 + room_width - 0.5, y5 - 0.3});
-  }
-  // Central block: three rooms; the middle one has doors on both long walls (the second loop),
-  // the right one a door to the bottom corridor, the left one a door to the top corridor.
-  world.add_wall_with_gaps({c, y2}, {W - c, y2},
-                           {{1.5 * block_room_width, o.door_width_m}, {2.5 * block_room_width, o.door_width_m}});
-  world.add_wall_with_gaps({c, y3}, {W - c, y3},
-                           {{0.5 * block_room_width, o.door_width_m}, {1.5 * block_room_width, o.door_width_m}});
-  world.add_wall({c, y2}, {c, y3});
-  world.add_wall({W - c, y2}, {W - c, y3});
-  world.add_wall({c + block_room_width, y2}, {c + block_room_width, y3});
-  world.add_wall({c + 2 * block_room_width, y2}, {c + 2 * block_room_width, y3});
-  const double block_mid_y = 0.5 * (y2 + y3);
-  world.circles.push_back({{c + 0.5 * block_room_width, block_mid_y}, 0.6});
-  world.circles.push_back({{c + 2.5 * block_room_width, block_mid_y}, 0.6});
-  world.circles.push_back({{c + 1.5 * block_room_width + 2.2, block_mid_y}, 0.5});
-
-  // People: eight tracks 0.45 m from a wall (0.5 m of free space to the route's lane) or in
-  // rooms the route never enters; the first `people` of them are used.
-  const std::array<std::array<Vector2, 2>, 8> tracks = {{
-      {Vector2(1.0, y1 + 0.45), Vector2(W - 1.0, y1 + 0.45)},
-      {Vector2(c + 0.5, y3 + 0.45), Vector2(W - c - 0.5, y3 + 0.45)},
-      {Vector2(0.45, y2 + 0.5), Vector2(0.45, y3 - 0.5)},
-      {Vector2(c + 0.5, y2 - 0.45), Vector2(W - c - 0.5, y2 - 0.45)},
-      {Vector2(1.0, y4 - 0.45), Vector2(W - 1.0, y4 - 0.45)},
-      {Vector2(W - 0.45, y2 + 0.5), Vector2(W - 0.45, y3 - 0.5)},
-      {Vector2(1.0, 2.0), Vector2(room_width - 1.0, 0.8 * D)},
-      {Vector2(c + 0.7, y2 + 0.7), Vector2(c + block_room_width - 0.7, y2 + 0.7)},
-  }};
-  for (int i = 0; i < std::clamp(o.people, 0, 8); ++i) {
-    const auto& track = tracks[static_cast<std::size_t>(i)];
-    world.walkers.push_back({track[0], track[1], 0.8 + 0.1 * (i % 5), 0.25, 2.3 * i});
-  }
-
-  const double y_bottom = D + 0.5 * c;
-  const double y_top = y3 + 0.5 * c;
-  const double x_left = 0.5 * c;
-  const double x_right = W - 0.5 * c;
-  const Vector2 start(x_left + 2.5, y_bottom);
-  const double bottom_room_x = 1.5 * room_width;
-  const double top_room_x = (o.rooms_per_row - 1.5) * room_width;
-  const double middle_x = c + 1.5 * block_room_width;
-  result.route = {start,
-                  {bottom_room_x, y_bottom},
-                  {bottom_room_x, 0.5 * D},  // into a bottom room and back out
-                  {bottom_room_x, y_bottom},
-                  {x_right, y_bottom},
-                  {x_right, y_top},
-                  {top_room_x, y_top},
-                  {top_room_x, y4 + 0.5 * D},  // into a top room and back out
-                  {top_room_x, y_top},
-                  {x_left, y_top},
-                  {x_left, y_bottom},
-                  start,  // first loop closed: the ring corridor
-                  {middle_x, y_bottom},
-                  {middle_x, y_top},  // through the middle room of the block
-                  {x_left, y_top},
-                  {x_left, y_bottom}};  // second loop closes at start
+  result.world.name = "office";
+  const OfficeFloor floor(o);
+  add_office_floor(result.world, floor);
+  result.route = floor.lap_route();
   return result;
 }
 

@@ -6,48 +6,64 @@
 /// | builder                | what it is                                              | challenges SLAM with |
 /// |------------------------|---------------------------------------------------------|----------------------|
 /// | office_world           | rooms on two sides of a ring corridor around a block of  | loops, revisits,     |
-/// |                        | three rooms; optionally people walking (`people`)        | moving objects       |
-/// |                        | three rooms; the middle one has two doors (second loop)  |                      |
+/// |                        | three rooms; the middle one has two doors (second loop); | moving objects       |
+/// |                        | optionally people walking (`people`)                     |                      |
 /// | corridor_world         | two long corridors joined at the ends into a ring, with  | perceptual aliasing  |
 /// |                        | identical recessed doors at a fixed pitch on both sides  |                      |
 /// | open_hall_world        | a large empty hall with a few pillars                    | degeneracy           |
 /// | building_loop_world    | the outside of one building with recesses, trees and     | one long loop, drift |
 /// |                        | parked boxes around it                                   |                      |
 /// | landmark_field_world   | posts (circles) with identities scattered around a loop  | landmark SLAM        |
+///
+/// The office plan is office_floor.hpp's; mission_worlds.hpp builds the recovery scenarios'
+/// worlds (a yard, two buildings, two wings) from it.
 
 #include <cstdint>
+#include <optional>
+#include <string>
 #include <vector>
 
+#include "cairn/sim/office_floor.hpp"
 #include "cairn/sim/world.hpp"
 
 namespace cairn::sim {
 
+/// A named part of a world (a building, a wing, the yard), for labelling where the robot is.
+struct Region {
+  std::string name;
+  Bounds bounds;
+};
+
+/// An opening in a building's outer wall: the way between inside and outside.
+struct Doorway {
+  std::string name;
+  /// Middle of the opening on the wall line (world frame) and the unit normal pointing out.
+  Vector2 center = Vector2::Zero();
+  Vector2 outward = Vector2::UnitX();
+  double width_m = 0.0;
+};
+
 /// A world and the closed route driven through it: the robot starts at route.front() facing
 /// route[1], visits every waypoint in order and comes back to route.front() (one lap); an open
-/// route (closed_route false, some 3D worlds) ends at route.back().
+/// route (closed_route false, some 3D worlds and the mission worlds) ends at route.back().
 struct WorldWithRoute {
   World world;
   std::vector<Vector2> route;
   bool closed_route = true;
+  /// The robot's heading at the start, radians; nullopt: facing route[1]. Otherwise it turns on
+  /// the spot to route[1] before driving (second-session).
+  std::optional<double> start_heading_rad;
+  /// Named parts of the world (mission worlds); a point in none of them is in `outside_region`.
+  /// The first region holding a point names it.
+  std::vector<Region> regions;
+  std::string outside_region;
+  /// Doors in outer walls (building-yard: A and B).
+  std::vector<Doorway> doors;
+
+  /// The name of the region holding `point` (outside_region when none does).
+  std::string region_at(const Vector2& point) const;
 };
 
-struct OfficeOptions {
-  /// Rooms in the bottom row and in the top row (>= 2).
-  int rooms_per_row = 4;
-  /// Total width of the floor, metres.
-  double width_m = 28.0;
-  /// Depth of each room row (y extent), metres.
-  double room_depth_m = 5.0;
-  /// Width of the ring corridor, metres.
-  double corridor_width_m = 2.4;
-  /// Depth of the central block of three rooms, metres.
-  double block_depth_m = 6.0;
-  /// Width of every door opening, metres.
-  double door_width_m = 1.0;
-  /// People walking back and forth (0..8): along the corridors beside the robot's lane, and in
-  /// rooms the route does not enter. They do not avoid the robot, nor it them.
-  int people = 0;
-};
 WorldWithRoute office_world(const OfficeOptions& options = {});
 
 struct CorridorOptions {
