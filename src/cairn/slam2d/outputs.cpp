@@ -354,12 +354,14 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                        {"merge_searches", s.merge_searches},
                        {"global_searches", s.global_searches},
                        {"searches_skipped_by_budget", s.searches_skipped_by_budget},
+                       {"uniqueness_searches", s.uniqueness_searches},
+                       {"merges_refused_as_ambiguous", s.merges_refused_as_ambiguous},
                        {"segments", s.segments.size()},
                        {"merges", s.merges.size()},
                        {"final_health", std::string(to_string(slam.health()))}};
   report["time_s"] = {{"preprocess", s.times.preprocess_s}, {"local_match", s.times.local_match_s},
                       {"local_map", s.times.local_map_s},   {"submaps", s.times.submap_s},
-                      {"loop_search", s.times.loop_search_s}, {"optimize", s.times.optimize_s},
+                      {"loop_search", s.times.loop_search_s}, {"of_which_global_search", s.times.global_search_s}, {"optimize", s.times.optimize_s},
                       {"slam_total", s.total_s}};
   nlohmann::json candidates = nlohmann::json::array();
   for (const LoopCandidate& c : s.candidates) {

@@ -12,8 +12,9 @@ namespace cairn::slam2d {
 bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map_points,
                        const std::vector<Eigen::Vector2d>& matching, const core::SE2& initial,
                        const BranchAndBoundOptions& window, double min_score, const Slam2dOptions& options,
-                       LoopCandidate& candidate) {
-  const BranchAndBoundResult best = match_branch_and_bound(stack, matching, initial, min_score, window);
+                       LoopCandidate& candidate, const std::vector<Eigen::Vector2d>* search_points) {
+  const std::vector<Eigen::Vector2d>& searched = search_points != nullptr ? *search_points : matching;
+  const BranchAndBoundResult best = match_branch_and_bound(stack, searched, initial, min_score, window);
   if (!best.found) return false;
   candidate.search_window_m = window.linear_search_window_m;
   candidate.score = best.score;
@@ -40,7 +41,7 @@ bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map
     BranchAndBoundOptions wide = window;
     wide.linear_search_window_m = std::max(window.linear_search_window_m, options.loop_ambiguity_window_m);
     const BranchAndBoundResult other =
-        match_branch_and_bound(stack, matching, initial, best.score - options.loop_ambiguity_margin, wide, &best.T_map_sensor,
+        match_branch_and_bound(stack, searched, initial, best.score - options.loop_ambiguity_margin, wide, &best.T_map_sensor,
                                options.loop_ambiguity_distance_m, options.loop_ambiguity_angle_rad);
     candidate.second_score = other.found ? other.score : 0.0;
     if (other.found) {

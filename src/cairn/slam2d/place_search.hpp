@@ -32,10 +32,12 @@ namespace cairn::slam2d {
 /// ICP settings. Fills the match fields of `candidate` (score, second score, inliers, RMS,
 /// degeneracy, T_anchor_keyframe = the verified pose in the map's frame, accepted, reason).
 /// Returns false when the search finds nothing above `min_score` (candidate then untouched).
+/// `search_points`, when given, replaces `matching` in the two branch-and-bound searches (a
+/// range-limited subset for whole-submap searches); ICP always verifies with `matching`.
 bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map_points,
                        const std::vector<Eigen::Vector2d>& matching, const core::SE2& initial,
                        const BranchAndBoundOptions& window, double min_score, const Slam2dOptions& options,
-                       LoopCandidate& candidate);
+                       LoopCandidate& candidate, const std::vector<Eigen::Vector2d>* search_points = nullptr);
 
 /// The observed extent of `grid` (corners of its observed cells); false when none is observed.
 bool observed_extent(const ProbabilityGrid& grid, Eigen::Vector2d& lower, Eigen::Vector2d& upper);

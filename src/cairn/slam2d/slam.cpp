@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -57,11 +58,14 @@ struct Submap {
 /// group b's world estimates into group a's frame: delta = T_world_anchor T_anchor_keyframe
 /// T_world_keyframe^-1.
 struct PendingMerge {
+  int id = 0;
   int group_a = 0;
   int group_b = 0;
   core::SE2 delta;
-  std::vector<int> candidates;
+  std::vector<int> candidates;  ///< the agreeing verified matches (support)
   std::vector<int> keyframes;
+  int misses = 0;  ///< searches where it placed a keyframe that found nothing agreeing there
+  int misses_in_a_row = 0;
 };
 
 /// One search planned for a keyframe.
@@ -70,6 +74,7 @@ struct PlannedSearch {
   bool merge = false;
   bool global = false;
   core::SE2 T_world_guess;  ///< where the keyframe is believed to be (windowed searches)
+  int hypothesis = -1;      ///< the pending merge (id) whose placement this search tests
 };
 
 struct ScanRecord {
@@ -133,6 +138,18 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (loop_max_submaps_per_search < 1) problems << "loop_max_submaps_per_search must be >= 1; ";
   if (min_matching_points < 3) problems << "min_matching_points must be >= 3; ";
   if (lost_after_scans < 1) problems << "lost_after_scans must be >= 1; ";
+  if (!(segment_link_translation_sigma_m > 0.0 && segment_link_rotation_sigma_rad > 0.0)) problems << "segment link sigmas must be > 0; ";
+  if (min_segment_keyframes < 1 || segment_confirm_scans < 1) problems << "segments: min_keyframes and confirm_scans must be >= 1; ";
+  if (merge_searches_per_keyframe < 0 || merge_confirmations < 1 || merge_max_misses_in_a_row < 1)
+    problems << "segments: merge_searches_per_keyframe >= 0, merge_confirmations >= 1, merge_max_misses_in_a_row >= 1; ";
+  if (!(merge_max_distance_m >= 0.0 && merge_min_spread_m >= 0.0 && merge_min_spread_corroborated_m >= 0.0 &&
+        merge_odometry_radius_m >= 0.0 && merge_odometry_angle_rad >= 0.0 && merge_agreement_m > 0.0 && merge_agreement_rad > 0.0))
+    problems << "segments: merge distances and angles must be >= 0 (agreement > 0); ";
+  if (!(search_budget_per_keyframe > 0.0 && search_budget_burst >= 1.0 && global_search_cost >= 1.0 &&
+        global_search_max_range_m > 0.0) || global_search_every_n_keyframes < 1)
+    problems << "search_budget: per_keyframe > 0, burst >= 1, global_search_cost >= 1, global_search_max_range_m > 0, "
+                "global_search_every_n_keyframes >= 1; ";
+  if (global_search_cost > search_budget_burst) problems << "search_budget: global_search_cost must not exceed burst (never affordable); ";
   if (!(icp.point_sigma_m > 0.0) || icp.max_iterations < 1) problems << "icp: point_sigma_m > 0, max_iterations >= 1; ";
   if (!(output_map_resolution_m > 0.0)) problems << "output map resolution must be > 0; ";
   if (!(grid.resolution_m > 0.0)) problems << "grid resolution must be > 0; ";
@@ -170,8 +187,12 @@ struct Slam2d::Impl {
   int segment_first_keyframe = 0;  ///< where the current segment's submaps count from
   std::vector<int> segment_parent{0};  ///< union-find over segments (root = lowest id)
   std::vector<PendingMerge> pending_merges;
+  int next_hypothesis = 0;
+  std::map<int, double> uniqueness_blocked_until_m;  ///< per group: path before the next test
   double search_tokens = 0.0;
   std::size_t global_search_turn = 0;  ///< round-robin position over other groups' submaps
+  int keyframes_since_global = 0;
+  bool saving = false;  ///< a due whole-submap search waits for tokens: nothing else is spent
 
   explicit Impl(const Slam2dOptions& o) : options(o), local_map(o.map_points), search_tokens(o.search_budget_burst) {}
 
@@ -220,6 +241,8 @@ struct Slam2d::Impl {
     const PrecomputationGridStack* stack = nullptr;
     const PointMap* points = nullptr;
     std::shared_ptr<const std::vector<Eigen::Vector2d>> matching;
+    std::shared_ptr<const std::vector<Eigen::Vector2d>> search_points;  ///< range-limited (global searches)
+    int hypothesis = -1;
     core::SE2 initial;
     BranchAndBoundOptions window;
     LoopCandidate header;  ///< keyframe, submap, anchor, times, merge/global filled in
@@ -237,7 +260,7 @@ struct Slam2d::Impl {
     std::vector<BuiltSubmap> built;
     std::vector<SearchTask> searches;
     std::vector<std::optional<LoopCandidate>> found;
-    double submap_s = 0.0, search_s = 0.0;
+    double submap_s = 0.0, search_s = 0.0, global_s = 0.0;
   };
   BackgroundJob job;
 
@@ -309,6 +332,8 @@ struct Slam2d::Impl {
     task.initial = anchor.T_world_laser.inverse() * plan.T_world_guess;
     if (plan.global) {
       global_window(submap.lower_anchor, submap.upper_anchor, 1.0, options.loop_search, task.window, task.initial);
+      task.search_points =
+          std::make_shared<const std::vector<Eigen::Vector2d>>(within_range(*matching, options.global_search_max_range_m));
     } else if (!plan.merge) {
       // A loop within one group: the window is the drift the estimate may have accumulated
       // relative to the submap, the path travelled since the submap, or since the last accepted
@@ -327,13 +352,14 @@ struct Slam2d::Impl {
     task.header.anchor_time = anchor.time;
     task.header.merge = plan.merge || plan.global;
     task.header.global = plan.global;
+    task.hypothesis = plan.hypothesis;
     return task;
   }
 
   std::optional<LoopCandidate> run_search(const SearchTask& task) const {
     LoopCandidate candidate = task.header;
     if (!search_and_verify(*task.stack, *task.points, *task.matching, task.initial, task.window, options.loop_min_score, options,
-                           candidate))
+                           candidate, task.search_points.get()))
       return std::nullopt;
     return candidate;
   }
@@ -348,7 +374,15 @@ struct Slam2d::Impl {
       tbb::parallel_for(std::size_t{0}, job.sources.size(), [&](std::size_t i) { job.built[i] = build_submap(job.sources[i]); });
       job.submap_s = seconds_since(submap_start);
       const auto search_start = Clock::now();
-      tbb::parallel_for(std::size_t{0}, job.searches.size(), [&](std::size_t i) { job.found[i] = run_search(job.searches[i]); });
+      std::vector<double> seconds(job.searches.size(), 0.0);
+      tbb::parallel_for(std::size_t{0}, job.searches.size(), [&](std::size_t i) {
+        const auto one = Clock::now();
+        job.found[i] = run_search(job.searches[i]);
+        seconds[i] = seconds_since(one);
+      });
+      job.global_s = 0.0;
+      for (std::size_t i = 0; i < job.searches.size(); ++i)
+        if (job.searches[i].header.global) job.global_s += seconds[i];
       job.search_s = seconds_since(search_start);
     });
   }
@@ -362,6 +396,7 @@ struct Slam2d::Impl {
     const auto start = Clock::now();
     summary.times.submap_s += job.submap_s;
     summary.times.loop_search_s += job.search_s;
+    summary.times.global_search_s += job.global_s;
     for (std::size_t i = 0; i < job.sources.size(); ++i)
       install_submap(submaps[static_cast<std::size_t>(job.sources[i].submap)], std::move(job.built[i]));
     for (std::size_t i = 0; i < job.found.size(); ++i) {
@@ -385,6 +420,7 @@ struct Slam2d::Impl {
       }
       add_loop(c, summary);
     }
+    count_misses(summary);
     job.sources.clear();
     job.searches.clear();
     job.found.clear();
@@ -523,7 +559,7 @@ struct Slam2d::Impl {
 
   // Whether the budget allows a search of `cost` tokens; spends them if so.
   bool spend(double cost, Slam2dSummary& summary) {
-    if (search_tokens < cost) {
+    if (search_tokens < cost || saving) {
       ++summary.searches_skipped_by_budget;
       return false;
     }
@@ -542,6 +578,7 @@ struct Slam2d::Impl {
   // The searches of keyframe `k` in priority order, within the budget (file comment of slam.hpp).
   std::vector<PlannedSearch> plan_searches(int k, Slam2dSummary& summary) {
     std::vector<PlannedSearch> plan;
+    saving = false;
     const Keyframe& current = keyframes[static_cast<std::size_t>(k)];
     const int group = group_of(current.segment);
     std::vector<int> others;  // searchable submaps of other groups, in index order
@@ -549,35 +586,62 @@ struct Slam2d::Impl {
       const Submap& submap = submaps[static_cast<std::size_t>(s)];
       if (searchable(submap, k) && group_of(submap.segment) != group) others.push_back(s);
     }
-    // (a) Merge searches, windowed: around the estimate (the odometry link) and around where each
-    // pending merge of this group places the keyframe; nearest submaps first.
-    if (!others.empty()) {
-      std::vector<std::pair<int, core::SE2>> guesses = {{-1, current.T_world_laser}};  // (target group or -1, pose)
-      for (const PendingMerge& pending : pending_merges) {
-        if (group_of(pending.group_b) == group && group_of(pending.group_a) != group)
-          guesses.emplace_back(group_of(pending.group_a), pending.delta * current.T_world_laser);
-      }
-      std::vector<std::tuple<double, int, std::size_t>> near;  // distance, submap, guess
+    // Priorities when other groups exist: (1) test every pending merge of this group where it
+    // places the keyframe, (2) the round-robin whole-submap search (finds the place when the
+    // odometry link is wrong), (3) loop searches within the group, (4) windowed merge searches
+    // around the estimate (the odometry link). Each windowed merge search goes to the nearest
+    // submap of the other group(s).
+    std::vector<int> chosen;
+    auto nearest = [&](const core::SE2& guess, int target_group) {
+      int best = -1;
+      double best_distance = options.merge_max_distance_m;
       for (const int s : others) {
         const Submap& submap = submaps[static_cast<std::size_t>(s)];
-        for (std::size_t g = 0; g < guesses.size(); ++g) {
-          if (guesses[g].first >= 0 && guesses[g].first != group_of(submap.segment)) continue;
-          const double distance = (submap_centre_world(submap) - guesses[g].second.translation()).norm();
-          if (distance <= options.merge_max_distance_m) near.emplace_back(distance, s, g);
+        if (target_group >= 0 && group_of(submap.segment) != target_group) continue;
+        if (std::find(chosen.begin(), chosen.end(), s) != chosen.end()) continue;
+        const double distance = (submap_centre_world(submap) - guess.translation()).norm();
+        if (distance <= best_distance) {
+          best = s;
+          best_distance = distance;
         }
       }
-      std::sort(near.begin(), near.end());
-      std::vector<int> chosen;
-      for (const auto& [distance, s, g] : near) {
-        if (static_cast<int>(chosen.size()) >= options.merge_searches_per_keyframe) break;
-        if (std::find(chosen.begin(), chosen.end(), s) != chosen.end()) continue;
-        if (!spend(1.0, summary)) break;
+      return best;
+    };
+    // (2) One search over a whole submap of another group, round-robin, when due (it stays due
+    // until the budget allows it).
+    ++keyframes_since_global;
+    if (!others.empty() && keyframes_since_global >= options.global_search_every_n_keyframes) {
+      if (spend(options.global_search_cost, summary)) {
+        keyframes_since_global = 0;
+        const int s = others[global_search_turn++ % others.size()];
+        plan.push_back({s, true, true, current.T_world_laser, -1});
+        ++summary.global_searches;
+      } else {
+        saving = true;  // nothing else until the whole-submap search is paid for
+      }
+    }
+    if (!others.empty()) {
+      // (1) The pending merges of this group, best supported first, at most
+      // merge_searches_per_keyframe of them.
+      std::vector<const PendingMerge*> mine;
+      for (const PendingMerge& pending : pending_merges)
+        if (group_of(pending.group_b) == group && group_of(pending.group_a) != group) mine.push_back(&pending);
+      std::stable_sort(mine.begin(), mine.end(), [](const PendingMerge* a, const PendingMerge* b) {
+        return a->candidates.size() - static_cast<std::size_t>(a->misses) > b->candidates.size() - static_cast<std::size_t>(b->misses);
+      });
+      if (mine.size() > static_cast<std::size_t>(options.merge_searches_per_keyframe))
+        mine.resize(static_cast<std::size_t>(options.merge_searches_per_keyframe));
+      for (const PendingMerge* hypothesis : mine) {
+        const PendingMerge& pending = *hypothesis;
+        const core::SE2 guess = pending.delta * current.T_world_laser;
+        const int s = nearest(guess, group_of(pending.group_a));
+        if (s < 0 || !spend(1.0, summary)) continue;
         chosen.push_back(s);
-        plan.push_back({s, true, false, guesses[g].second});
+        plan.push_back({s, true, false, guess, pending.id});
         ++summary.merge_searches;
       }
     }
-    // (b) Loop searches within the group, every n-th keyframe: the nearest finished submaps by
+    // (3) Loop searches within the group, every n-th keyframe: the nearest finished submaps by
     // the estimate. The nearest are usually the ones just built on the way here; keep the
     // nearest of those and fill the rest with submaps from earlier visits.
     if (k % options.loop_search_every_n_keyframes == 0) {
@@ -598,17 +662,19 @@ struct Slam2d::Impl {
         if (is_recent && recent++ >= 1) continue;
         if (!spend(1.0, summary)) break;
         ++taken;
-        plan.push_back({s, false, false, current.T_world_laser});
+        plan.push_back({s, false, false, current.T_world_laser, -1});
         ++summary.loop_searches;
       }
     }
-    // (c) One search over a whole submap of another group, round-robin: finds the place when
-    // the odometry link is wrong (a kidnapping, a long stretch without structure).
-    if (!others.empty() && (k - segment_first_keyframe) % options.global_search_every_n_keyframes == 0 &&
-        spend(options.global_search_cost, summary)) {
-      const int s = others[global_search_turn++ % others.size()];
-      plan.push_back({s, true, true, current.T_world_laser});
-      ++summary.global_searches;
+    // (4) Around the estimate.
+    if (!others.empty()) {
+      for (int estimate = 0; estimate < options.merge_searches_per_keyframe; ++estimate) {
+        const int s = nearest(current.T_world_laser, -1);
+        if (s < 0 || !spend(1.0, summary)) break;
+        chosen.push_back(s);
+        plan.push_back({s, true, false, current.T_world_laser, -1});
+        ++summary.merge_searches;
+      }
     }
     return plan;
   }
@@ -645,29 +711,149 @@ struct Slam2d::Impl {
     const core::SE2& T_world_keyframe = keyframes[static_cast<std::size_t>(candidate.keyframe)].T_world_laser;
     const core::SE2 delta = implied_pose(candidate) * T_world_keyframe.inverse();
     candidate.accepted = false;
-    for (std::size_t p = 0; p < pending_merges.size(); ++p) {
-      PendingMerge& pending = pending_merges[p];
-      if (group_of(pending.group_a) != group_a || group_of(pending.group_b) != group_b) continue;
-      if (std::find(pending.keyframes.begin(), pending.keyframes.end(), candidate.keyframe) != pending.keyframes.end()) continue;
-      if (!agree(pending.delta * T_world_keyframe, delta * T_world_keyframe)) continue;
+    std::size_t p = 0;
+    for (; p < pending_merges.size(); ++p) {
+      const PendingMerge& pending = pending_merges[p];
+      if (group_of(pending.group_a) == group_a && group_of(pending.group_b) == group_b &&
+          agree(pending.delta * T_world_keyframe, delta * T_world_keyframe))
+        break;
+    }
+    if (p == pending_merges.size()) pending_merges.push_back({next_hypothesis++, group_a, group_b, delta, {}, {}, 0, 0});
+    PendingMerge& pending = pending_merges[p];
+    if (std::find(pending.keyframes.begin(), pending.keyframes.end(), candidate.keyframe) == pending.keyframes.end()) {
       pending.candidates.push_back(c);
       pending.keyframes.push_back(candidate.keyframe);
-      if (static_cast<int>(pending.candidates.size()) >= options.merge_confirmations) {
-        const PendingMerge confirmed = pending;
-        merge(confirmed, scan, time, summary);
-      } else {
-        candidate.reason = "verified across segments; " + std::to_string(pending.candidates.size()) + " of " +
-                           std::to_string(options.merge_confirmations) + " agreeing matches to merge";
-      }
+      pending.misses_in_a_row = 0;
+    }
+    // Support: agreeing matches from distinct keyframes spread over a stretch of path long enough
+    // to leave a room and see its surroundings (one room may have a twin the map holds and the
+    // true one it does not).
+    double first_m = 1e300, last_m = -1e300;
+    for (const int k : pending.keyframes) {
+      first_m = std::min(first_m, keyframes[static_cast<std::size_t>(k)].path_length_m);
+      last_m = std::max(last_m, keyframes[static_cast<std::size_t>(k)].path_length_m);
+    }
+    const double spread_m = last_m - first_m;
+    const int support = static_cast<int>(pending.candidates.size());
+    // Odometry is independent evidence: a placement close to where the segment link (odometry)
+    // puts the keyframe needs a short stretch of support; one far from it (a kidnapping, a
+    // symmetric floor plan seen from an unmapped twin) needs a long one.
+    const core::SE2 placed = delta * T_world_keyframe;
+    const bool corroborated = (placed.translation() - T_world_keyframe.translation()).norm() <= options.merge_odometry_radius_m &&
+                              std::abs(core::wrap_angle(placed.angle() - T_world_keyframe.angle())) <= options.merge_odometry_angle_rad;
+    const double needed_m = corroborated ? options.merge_min_spread_corroborated_m : options.merge_min_spread_m;
+    if (support < options.merge_confirmations || spread_m < needed_m) {
+      candidate.reason = "verified across segments; " + std::to_string(support) + " agreeing matches over " + std::to_string(spread_m) +
+                         " m of path (a merge " + (corroborated ? "near" : "away from") + " the odometry link needs " +
+                         std::to_string(options.merge_confirmations) + " over " + std::to_string(needed_m) + " m)";
       return;
     }
-    pending_merges.push_back({group_a, group_b, delta, {c}, {candidate.keyframe}});
-    if (options.merge_confirmations <= 1) {
-      const PendingMerge confirmed = pending_merges.back();
+    // Competing placements: another live hypothesis of the same groups with support of its own.
+    for (const PendingMerge& other : pending_merges) {
+      if (&other == &pending || other.candidates.size() < 2) continue;
+      if (group_of(other.group_a) != group_a || group_of(other.group_b) != group_b) continue;
+      candidate.reason = "verified across segments and confirmed, but another placement of the same segments is also "
+                         "supported (hypothesis " + std::to_string(other.id) + "); waiting until one is refuted";
+      return;
+    }
+    // The uniqueness test costs a search of every submap: after a refusal, the group waits for
+    // kUniquenessRetryM more path before the next one (linear in the path, never quadratic).
+    const double path_m = keyframes[static_cast<std::size_t>(candidate.keyframe)].path_length_m;
+    double& blocked_until_m = uniqueness_blocked_until_m[group_b];
+    if (path_m < blocked_until_m) {
+      candidate.reason = "verified across segments; confirmed, waiting to repeat the map-wide uniqueness test";
+      return;
+    }
+    // Odometry corroborates a placement near the link: a twin of the place elsewhere (farther
+    // than the odometry could be wrong) is excluded by it, the windowed verification covers the
+    // rest. Far from the link, only a place unique over the whole map is merged.
+    if (corroborated || unique_over_map(c, summary)) {
+      const PendingMerge confirmed = pending;
+      pending_merges.erase(pending_merges.begin() + static_cast<std::ptrdiff_t>(p));
       merge(confirmed, scan, time, summary);
       return;
     }
-    candidate.reason = "verified across segments; the merge waits for an agreeing match from another keyframe";
+    constexpr double kUniquenessRetryM = 5.0;
+    blocked_until_m = path_m + kUniquenessRetryM;
+    candidate.reason = "verified across segments, but the place is ambiguous over the whole map: another submap scores "
+                       "within the margin elsewhere (symmetric or repeated structure); not merged";
+    ++summary.merges_refused_as_ambiguous;
+  }
+
+  // A search that tested a pending merge's placement and found nothing agreeing there counts
+  // against it; a hypothesis missed at least twice and more often than supported is dropped.
+  void count_misses(Slam2dSummary& summary) {
+    for (std::size_t i = 0; i < job.searches.size(); ++i) {
+      const int id = job.searches[i].hypothesis;
+      if (id < 0) continue;
+      const auto it = std::find_if(pending_merges.begin(), pending_merges.end(), [&](const PendingMerge& p) { return p.id == id; });
+      if (it == pending_merges.end()) continue;
+      const std::optional<LoopCandidate>& found = job.found[i];
+      const bool supported =
+          found && found->accepted &&
+          agree(it->delta * keyframes[static_cast<std::size_t>(found->keyframe)].T_world_laser, implied_pose(*found));
+      if (supported) continue;
+      ++it->misses;
+      ++it->misses_in_a_row;
+      if ((it->misses >= 2 && it->misses > static_cast<int>(it->candidates.size())) ||
+          it->misses_in_a_row >= options.merge_max_misses_in_a_row) {
+        for (const int c : it->candidates)
+          summary.candidates[static_cast<std::size_t>(c)].reason =
+              "verified across segments, but later keyframes did not find the place where this match put them; not merged";
+        pending_merges.erase(it);
+      }
+    }
+  }
+
+  // A merge is as bad as a loop closure when wrong, and a place seen once may have a twin anywhere
+  // in the old map (a floor plan symmetric under a half turn, identical rooms): before a merge the
+  // confirming keyframe's scan is searched in every finished submap not of its own group, over
+  // the whole submap and every heading, for a pose scoring within `loop_ambiguity_margin` of the
+  // match elsewhere than where the merge would put it. Any such pose refuses the merge. Points
+  // beyond `global_search_max_range_m` are left out of these searches (a coarser angle step,
+  // Hess et al. 2016 eq. (7)), never of the verification.
+  bool unique_over_map(int c, Slam2dSummary& summary) const {
+    const LoopCandidate& candidate = summary.candidates[static_cast<std::size_t>(c)];
+    const Keyframe& kf = keyframes[static_cast<std::size_t>(candidate.keyframe)];
+    return unique_in_map(kf.matching, candidate.score, implied_pose(candidate),
+                         group_of(submaps[static_cast<std::size_t>(candidate.submap)].segment), group_of(kf.segment), summary);
+  }
+
+  // The search of unique_over_map: `matching` placed at `T_world_match` with `score`; submaps of
+  // `placed_group` exclude that place, submaps of `skipped_group` are not searched (-1: none).
+  bool unique_in_map(const std::vector<Eigen::Vector2d>& matching, double score, const core::SE2& T_world_match, int placed_group,
+                     int skipped_group, Slam2dSummary& summary) const {
+    const std::vector<Eigen::Vector2d> near = within_range(matching, options.global_search_max_range_m);
+    std::vector<int> others;
+    for (int s = 0; s < static_cast<int>(submaps.size()); ++s) {
+      const Submap& submap = submaps[static_cast<std::size_t>(s)];
+      if (submap.finished && !submap.empty && group_of(submap.segment) != skipped_group) others.push_back(s);
+    }
+    std::vector<char> competitor(others.size(), 0);
+    const double threshold = std::max(options.loop_min_score, score) - options.loop_ambiguity_margin;
+    tbb::parallel_for(std::size_t{0}, others.size(), [&](std::size_t i) {
+      const Submap& submap = submaps[static_cast<std::size_t>(others[i])];
+      BranchAndBoundOptions window;
+      core::SE2 initial;
+      global_window(submap.lower_anchor, submap.upper_anchor, 1.0, options.loop_search, window, initial);
+      const core::SE2 T_anchor_world = keyframes[static_cast<std::size_t>(submap.anchor)].T_world_laser.inverse();
+      // The place itself is excluded only in the placed group (other groups are not placed).
+      const core::SE2 excluded = T_anchor_world * T_world_match;
+      const bool same_group = group_of(submap.segment) == placed_group;
+      const BranchAndBoundResult other =
+          match_branch_and_bound(*submap.stack, near, initial, threshold, window, same_group ? &excluded : nullptr,
+                                 options.loop_ambiguity_distance_m, options.loop_ambiguity_angle_rad);
+      competitor[i] = other.found ? 1 : 0;
+    });
+    summary.uniqueness_searches += others.size();
+    return std::find(competitor.begin(), competitor.end(), 1) == competitor.end();
+  }
+
+  static std::vector<Eigen::Vector2d> within_range(const std::vector<Eigen::Vector2d>& points, double range_m) {
+    std::vector<Eigen::Vector2d> near;
+    for (const auto& p : points)
+      if (p.norm() <= range_m) near.push_back(p);
+    return near.size() >= 10 ? near : points;
   }
 
   // Joins two groups: the one without segment 0 (whose first keyframe is fixed) is moved rigidly
@@ -748,6 +934,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   bool matched = false;
   core::SE2 predicted = T_local_laser;
   Eigen::Matrix3d match_hessian = Eigen::Matrix3d::Zero();  // scan term of the accepted match
+  bool restarted = false;  // the accepted match came from an ICP restart away from the prediction
   if (m.have_previous) {
     predicted = m.previous_local * (m.previous_odom.inverse() * scan.T_odom_laser);
     T_local_laser = predicted;
@@ -759,7 +946,10 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
         for (const double offset : {-0.35, -0.2, -0.1, 0.1, 0.2, 0.35}) {
           const core::SE2 guess(predicted.so2() * core::SO2(offset), predicted.translation());
           const IcpResult alternative = match_icp(m.local_map, points.matching, guess, nullptr, o.icp);
-          if (alternative.inlier_fraction > icp.inlier_fraction + 0.1) icp = alternative;
+          if (alternative.inlier_fraction > icp.inlier_fraction + 0.1) {
+            icp = alternative;
+            restarted = true;
+          }
         }
       }
       record.inlier_fraction = icp.inlier_fraction;
@@ -784,7 +974,10 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   if (!matched && m.have_previous && static_cast<int>(points.matching.size()) >= o.min_matching_points &&
       (m.bad_matches_in_a_row < o.lost_after_scans || m.bad_matches_in_a_row % 5 == 0)) {
     LoopCandidate candidate;
-    if (const auto T = m.relocalise_locally(points.matching, T_local_laser, candidate)) {
+    // A twin of the place farther than the window is excluded by the odometry (a slip of more
+    // than the window is not one); within it the verification's ambiguity search covers it.
+    const std::optional<core::SE2> T = m.relocalise_locally(points.matching, T_local_laser, candidate);
+    if (T) {
       T_local_laser = *T;
       matched = true;
       record.inlier_fraction = candidate.inlier_fraction;
@@ -925,7 +1118,11 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
     // A scan that failed to match keeps its points out of the maps (it may be garbage, or
     // placed wrong); the keyframe still carries the pose chain. The first scan of a (re)started
     // segment is the segment's map. Its matching points are kept: relocalisation searches them.
-    const bool placed = matched || too_few_returns || start_segment;
+    // A poor match found only by restarting ICP away from the odometry prediction places the pose
+    // but not the points: half the scan disagreeing with the map after a jump is what a kidnapping
+    // into a look-alike room looks like.
+    const bool doubtful = restarted && record.inlier_fraction < o.degraded_min_inlier_fraction;
+    const bool placed = (matched && !doubtful) || too_few_returns || start_segment;
     if (placed) {
       kf.hits = std::move(points.hits);
       kf.misses = std::move(points.misses);

@@ -135,11 +135,19 @@ struct Slam2dOptions {
   int global_search_every_n_keyframes = 4;   ///< one whole-submap search per this many keyframes
   double merge_agreement_m = 0.5;            ///< two matches agree on the relative placement ...
   double merge_agreement_rad = 0.1;          ///< ... within these
-  int merge_confirmations = 2;               ///< agreeing matches (distinct keyframes) to merge
+  int merge_confirmations = 3;               ///< agreeing matches (distinct keyframes) to merge ...
+  double merge_min_spread_m = 40.0;          ///< ... spread over at least this much path, or ...
+  double merge_min_spread_corroborated_m = 2.0;  ///< ... this much when odometry agrees:
+  double merge_odometry_radius_m = 3.0;      ///< the merge moves the keyframe less than this ...
+  double merge_odometry_angle_rad = 0.3;     ///< ... and turns it less than this
+  int merge_max_misses_in_a_row = 5;         ///< a hypothesis not found this often in a row is dropped
+  /// Global searches and the merge's map-wide uniqueness test use the scan's points within this
+  /// range (a coarser angle step); verification always uses all of them.
+  double global_search_max_range_m = 10.0;
   /// Search budget (see the file comment).
   double search_budget_per_keyframe = 2.5;
   double search_budget_burst = 40.0;
-  double global_search_cost = 8.0;
+  double global_search_cost = 20.0;
 
   /// Polled before every pose-graph optimisation and by its solver (not a configuration key):
   /// true skips the optimisation, or ends it at its last accepted step; a GNC solve cut short
@@ -225,6 +233,7 @@ struct StageTimes {
   double local_map_s = 0.0;
   double submap_s = 0.0;
   double loop_search_s = 0.0;  ///< loop, merge and global searches with their verification
+  double global_search_s = 0.0;  ///< of which whole-submap searches (CPU time, summed over threads)
   double optimize_s = 0.0;
 };
 
@@ -241,6 +250,8 @@ struct Slam2dSummary {
   std::size_t merge_searches = 0;
   std::size_t global_searches = 0;
   std::size_t searches_skipped_by_budget = 0;
+  std::size_t uniqueness_searches = 0;       ///< submaps searched by merges' uniqueness tests
+  std::size_t merges_refused_as_ambiguous = 0;
   std::vector<SegmentInfo> segments;
   std::vector<MergeEvent> merges;
   std::vector<LoopCandidate> candidates;  ///< every verified-or-rejected candidate above min score
