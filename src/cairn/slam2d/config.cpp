@@ -99,8 +99,7 @@ std::vector<Key> keys(Slam2dOptions& o) {
       {"segments", "merge_max_misses_in_a_row", &o.merge_max_misses_in_a_row, "a placement not found again this often in a row is dropped"},
       {"search_budget", "per_keyframe", &o.search_budget_per_keyframe, "search tokens each keyframe adds"},
       {"search_budget", "burst", &o.search_budget_burst, "most tokens the budget holds"},
-      {"search_budget", "global_search_cost", &o.global_search_cost, "tokens of one whole-submap search (a windowed search costs 1)"},
-      {"search_budget", "global_search_every_n_keyframes", &o.global_search_every_n_keyframes, "a whole-submap search is due this often while segments are unmerged"},
+      {"search_budget", "global_search_every_n_keyframes", &o.global_search_every_n_keyframes, "one whole-submap search per this many keyframes while segments are unmerged"},
       {"search_budget", "global_search_max_range_m", &o.global_search_max_range_m, "whole-submap searches use the scan's points within this range"},
   };
 }

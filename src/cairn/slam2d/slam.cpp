@@ -145,11 +145,9 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (!(merge_max_distance_m >= 0.0 && merge_min_spread_m >= 0.0 && merge_min_spread_corroborated_m >= 0.0 &&
         merge_odometry_radius_m >= 0.0 && merge_odometry_angle_rad >= 0.0 && merge_agreement_m > 0.0 && merge_agreement_rad > 0.0))
     problems << "segments: merge distances and angles must be >= 0 (agreement > 0); ";
-  if (!(search_budget_per_keyframe > 0.0 && search_budget_burst >= 1.0 && global_search_cost >= 1.0 &&
-        global_search_max_range_m > 0.0) || global_search_every_n_keyframes < 1)
-    problems << "search_budget: per_keyframe > 0, burst >= 1, global_search_cost >= 1, global_search_max_range_m > 0, "
-                "global_search_every_n_keyframes >= 1; ";
-  if (global_search_cost > search_budget_burst) problems << "search_budget: global_search_cost must not exceed burst (never affordable); ";
+  if (!(search_budget_per_keyframe > 0.0 && search_budget_burst >= 1.0 && global_search_max_range_m > 0.0) ||
+      global_search_every_n_keyframes < 1)
+    problems << "search_budget: per_keyframe > 0, burst >= 1, global_search_max_range_m > 0, global_search_every_n_keyframes >= 1; ";
   if (!(icp.point_sigma_m > 0.0) || icp.max_iterations < 1) problems << "icp: point_sigma_m > 0, max_iterations >= 1; ";
   if (!(output_map_resolution_m > 0.0)) problems << "output map resolution must be > 0; ";
   if (!(grid.resolution_m > 0.0)) problems << "grid resolution must be > 0; ";
@@ -192,7 +190,6 @@ struct Slam2d::Impl {
   double search_tokens = 0.0;
   std::size_t global_search_turn = 0;  ///< round-robin position over other groups' submaps
   int keyframes_since_global = 0;
-  bool saving = false;  ///< a due whole-submap search waits for tokens: nothing else is spent
 
   explicit Impl(const Slam2dOptions& o) : options(o), local_map(o.map_points), search_tokens(o.search_budget_burst) {}
 
@@ -559,7 +556,7 @@ struct Slam2d::Impl {
 
   // Whether the budget allows a search of `cost` tokens; spends them if so.
   bool spend(double cost, Slam2dSummary& summary) {
-    if (search_tokens < cost || saving) {
+    if (search_tokens < cost) {
       ++summary.searches_skipped_by_budget;
       return false;
     }
@@ -578,7 +575,6 @@ struct Slam2d::Impl {
   // The searches of keyframe `k` in priority order, within the budget (file comment of slam.hpp).
   std::vector<PlannedSearch> plan_searches(int k, Slam2dSummary& summary) {
     std::vector<PlannedSearch> plan;
-    saving = false;
     const Keyframe& current = keyframes[static_cast<std::size_t>(k)];
     const int group = group_of(current.segment);
     std::vector<int> others;  // searchable submaps of other groups, in index order
@@ -586,11 +582,11 @@ struct Slam2d::Impl {
       const Submap& submap = submaps[static_cast<std::size_t>(s)];
       if (searchable(submap, k) && group_of(submap.segment) != group) others.push_back(s);
     }
-    // Priorities when other groups exist: (1) test every pending merge of this group where it
-    // places the keyframe, (2) the round-robin whole-submap search (finds the place when the
-    // odometry link is wrong), (3) loop searches within the group, (4) windowed merge searches
-    // around the estimate (the odometry link). Each windowed merge search goes to the nearest
-    // submap of the other group(s).
+    // Priorities when other groups exist: (1) test the pending merges of this group where they
+    // place the keyframe, (2) windowed merge searches around the estimate (the odometry link),
+    // (3) loop searches within the group, all from the token budget; (4) the round-robin
+    // whole-submap search (finds the place when the odometry link is wrong) at a fixed cadence.
+    // Each windowed merge search goes to the nearest submap of the other group(s).
     std::vector<int> chosen;
     auto nearest = [&](const core::SE2& guess, int target_group) {
       int best = -1;
@@ -607,19 +603,6 @@ struct Slam2d::Impl {
       }
       return best;
     };
-    // (2) One search over a whole submap of another group, round-robin, when due (it stays due
-    // until the budget allows it).
-    ++keyframes_since_global;
-    if (!others.empty() && keyframes_since_global >= options.global_search_every_n_keyframes) {
-      if (spend(options.global_search_cost, summary)) {
-        keyframes_since_global = 0;
-        const int s = others[global_search_turn++ % others.size()];
-        plan.push_back({s, true, true, current.T_world_laser, -1});
-        ++summary.global_searches;
-      } else {
-        saving = true;  // nothing else until the whole-submap search is paid for
-      }
-    }
     if (!others.empty()) {
       // (1) The pending merges of this group, best supported first, at most
       // merge_searches_per_keyframe of them.
@@ -631,13 +614,25 @@ struct Slam2d::Impl {
       });
       if (mine.size() > static_cast<std::size_t>(options.merge_searches_per_keyframe))
         mine.resize(static_cast<std::size_t>(options.merge_searches_per_keyframe));
+      // Each in the two nearest submaps where it puts the keyframe (submaps overlap by half: the
+      // place may lie at the edge of the nearest).
       for (const PendingMerge* hypothesis : mine) {
         const PendingMerge& pending = *hypothesis;
         const core::SE2 guess = pending.delta * current.T_world_laser;
-        const int s = nearest(guess, group_of(pending.group_a));
-        if (s < 0 || !spend(1.0, summary)) continue;
+        for (int test = 0; test < 2; ++test) {
+          const int s = nearest(guess, group_of(pending.group_a));
+          if (s < 0 || !spend(1.0, summary)) break;
+          chosen.push_back(s);
+          plan.push_back({s, true, false, guess, pending.id});
+          ++summary.merge_searches;
+        }
+      }
+      // (2) Around the estimate (the odometry link), merge_searches_per_keyframe searches.
+      for (int estimate = 0; estimate < options.merge_searches_per_keyframe; ++estimate) {
+        const int s = nearest(current.T_world_laser, -1);
+        if (s < 0 || !spend(1.0, summary)) break;
         chosen.push_back(s);
-        plan.push_back({s, true, false, guess, pending.id});
+        plan.push_back({s, true, false, current.T_world_laser, -1});
         ++summary.merge_searches;
       }
     }
@@ -666,15 +661,14 @@ struct Slam2d::Impl {
         ++summary.loop_searches;
       }
     }
-    // (4) Around the estimate.
-    if (!others.empty()) {
-      for (int estimate = 0; estimate < options.merge_searches_per_keyframe; ++estimate) {
-        const int s = nearest(current.T_world_laser, -1);
-        if (s < 0 || !spend(1.0, summary)) break;
-        chosen.push_back(s);
-        plan.push_back({s, true, false, current.T_world_laser, -1});
-        ++summary.merge_searches;
-      }
+    // (4) One search over a whole submap of another group every global_search_every_n_keyframes
+    // keyframes, round-robin over them, outside the token budget (a fixed cadence bounds it).
+    ++keyframes_since_global;
+    if (!others.empty() && keyframes_since_global >= options.global_search_every_n_keyframes) {
+      keyframes_since_global = 0;
+      const int s = others[global_search_turn++ % others.size()];
+      plan.push_back({s, true, true, current.T_world_laser, -1});
+      ++summary.global_searches;
     }
     return plan;
   }
@@ -783,16 +777,27 @@ struct Slam2d::Impl {
   // A search that tested a pending merge's placement and found nothing agreeing there counts
   // against it; a hypothesis missed at least twice and more often than supported is dropped.
   void count_misses(Slam2dSummary& summary) {
+    // Per hypothesis tested by this job: contradicted when every one of its tests contradicts it.
+    std::map<int, bool> contradicted;
     for (std::size_t i = 0; i < job.searches.size(); ++i) {
       const int id = job.searches[i].hypothesis;
       if (id < 0) continue;
       const auto it = std::find_if(pending_merges.begin(), pending_merges.end(), [&](const PendingMerge& p) { return p.id == id; });
       if (it == pending_merges.end()) continue;
+      // A contradiction is nothing above the minimum score where the placement says the keyframe
+      // is, or a verified match elsewhere. A match rejected for degeneracy, ambiguity or a poor
+      // fit says nothing either way (a corridor seen along its axis).
       const std::optional<LoopCandidate>& found = job.found[i];
-      const bool supported =
-          found && found->accepted &&
-          agree(it->delta * keyframes[static_cast<std::size_t>(found->keyframe)].T_world_laser, implied_pose(*found));
-      if (supported) continue;
+      const bool against =
+          !found || (found->accepted &&
+                     !agree(it->delta * keyframes[static_cast<std::size_t>(found->keyframe)].T_world_laser, implied_pose(*found)));
+      const auto [entry, fresh] = contradicted.emplace(id, against);
+      if (!fresh) entry->second = entry->second && against;
+    }
+    for (const auto& [id, against] : contradicted) {
+      if (!against) continue;
+      const auto it = std::find_if(pending_merges.begin(), pending_merges.end(), [&](const PendingMerge& p) { return p.id == id; });
+      if (it == pending_merges.end()) continue;
       ++it->misses;
       ++it->misses_in_a_row;
       if ((it->misses >= 2 && it->misses > static_cast<int>(it->candidates.size())) ||

@@ -28,22 +28,37 @@
 ///    direction), `lost` after `lost_after_scans` consecutive failed matches.
 ///  - Map segments (ORB-SLAM3's Atlas, Campos et al. T-RO 2021, sec. III; Cartographer's new
 ///    trajectory per session): being lost never lasts. The scan that makes the state `lost`
-///    starts a new map segment: the local map and the submaps restart from it, so the robot keeps
-///    mapping wherever there is structure. The segment hangs from the previous one by its
-///    odometry with an inflated covariance (a weak edge, `segment_link_*_sigma`), only so the
-///    graph stays connected and the picture readable. Segments that are not yet joined by a loop
-///    closure are searched for each other (merge search, below); a verified match that a second,
-///    independent match from another keyframe confirms (same relative placement within
-///    `merge_agreement_*`) merges them: both become loop-closure edges, the newer segment is
-///    moved rigidly onto the older one and the graph is optimised. A wrong merge is as bad as a
-///    wrong loop: same verification, plus the confirmation, plus GNC at the end.
+///    seeds a new map segment: the local map and the submaps restart from it, so the robot keeps
+///    mapping wherever there is structure. The seed is on probation (still `lost`) until
+///    `segment_confirm_scans` scans in a row match it; one that does not is dropped and the next
+///    scan seeds again (a burst of garbage never becomes a map). The segment hangs from the
+///    previous one by odometry with an inflated covariance (`segment_link_*_sigma`), so the graph
+///    stays connected; its placement is odometry only until it is merged.
+///  - Merging: segments not joined by a loop closure (groups) are searched for each other. A
+///    verified match across groups proposes a placement (the rigid move of the keyframe's group
+///    onto the matched one); later keyframes test it where it puts them. A placement is merged
+///    after `merge_confirmations` agreeing verified matches from distinct keyframes spread over
+///    `merge_min_spread_corroborated_m` of path when it agrees with the odometry link (moves the
+///    keyframe less than `merge_odometry_radius_m` / `merge_odometry_angle_rad`), or over
+///    `merge_min_spread_m` when it does not, and then only if no other supported placement of
+///    the same groups competes and the scan is unique over the whole map (no submap of another
+///    group scores within the ambiguity margin elsewhere, every heading). A placement not found
+///    again where it says `merge_max_misses_in_a_row` times is dropped. The merged group moves
+///    rigidly onto the other, the matches become loop-closure edges, the graph is solved, and
+///    GNC still has the last word at the end. A wrong merge is as bad as a wrong loop: a kidnapped
+///    robot in an unmapped twin of a mapped room (a floor plan symmetric under a half turn) sees
+///    exactly what it would see in the twin, which is why the placements odometry does not
+///    support need a long path of consistent evidence.
 ///  - Search budget (no log can make the search quadratic): every keyframe adds
 ///    `search_budget_per_keyframe` tokens to a bucket holding at most `search_budget_burst`; a
-///    windowed search costs one, a search over a whole submap (every heading) costs
-///    `global_search_cost`. Priority within a keyframe: merge searches near the estimate (or near
-///    where a pending merge says the robot is), then local loop searches (nearest first), then
-///    one global search of a submap of another segment, round-robin over them every
-///    `global_search_every_n_keyframes` keyframes. What the budget skipped is counted.
+///    windowed search costs one. Priority within a keyframe: tests of pending placements, merge
+///    searches around the estimate, then loop searches within the group (nearest first). While
+///    other groups exist, one search over a whole submap of another group (every heading, points
+///    within `global_search_max_range_m`) every `global_search_every_n_keyframes` keyframes,
+///    round-robin over them. What the budget skipped is counted.
+///  - Threads: the submaps a keyframe finishes and its searches run as one background job while
+///    the front end goes on; it is joined, and its results taken in a fixed order, when the next
+///    keyframe is made (or at finish()), so the results never depend on timing.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -132,7 +147,9 @@ struct Slam2dOptions {
   int segment_confirm_scans = 3;
   int merge_searches_per_keyframe = 2;       ///< windowed merge searches, nearest submaps first
   double merge_max_distance_m = 30.0;        ///< windowed merge searches: submap centre distance
-  int global_search_every_n_keyframes = 4;   ///< one whole-submap search per this many keyframes
+  /// While other groups exist, one whole-submap search every this many keyframes (outside the
+  /// token budget: a fixed cadence bounds it).
+  int global_search_every_n_keyframes = 8;
   double merge_agreement_m = 0.5;            ///< two matches agree on the relative placement ...
   double merge_agreement_rad = 0.1;          ///< ... within these
   int merge_confirmations = 3;               ///< agreeing matches (distinct keyframes) to merge ...
@@ -140,14 +157,13 @@ struct Slam2dOptions {
   double merge_min_spread_corroborated_m = 2.0;  ///< ... this much when odometry agrees:
   double merge_odometry_radius_m = 3.0;      ///< the merge moves the keyframe less than this ...
   double merge_odometry_angle_rad = 0.3;     ///< ... and turns it less than this
-  int merge_max_misses_in_a_row = 5;         ///< a hypothesis not found this often in a row is dropped
+  int merge_max_misses_in_a_row = 10;        ///< a placement not found this often in a row is dropped
   /// Global searches and the merge's map-wide uniqueness test use the scan's points within this
   /// range (a coarser angle step); verification always uses all of them.
   double global_search_max_range_m = 10.0;
   /// Search budget (see the file comment).
   double search_budget_per_keyframe = 2.5;
   double search_budget_burst = 40.0;
-  double global_search_cost = 20.0;
 
   /// Polled before every pose-graph optimisation and by its solver (not a configuration key):
   /// true skips the optimisation, or ends it at its last accepted step; a GNC solve cut short
