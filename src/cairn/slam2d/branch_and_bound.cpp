@@ -18,6 +18,8 @@ std::uint8_t quantise_up(double p) {
 PrecomputationGridStack::PrecomputationGridStack(const ProbabilityGrid& grid, const BranchAndBoundOptions& options)
     : resolution_(grid.resolution()) {
   CAIRN_ASSERT(options.depth >= 1 && options.depth <= 12, "branch-and-bound depth must be in [1, 12]");
+  CAIRN_ASSERT(options.angular_step_range_quantile > 0.0 && options.angular_step_range_quantile <= 1.0,
+               "angular_step_range_quantile must be in (0, 1]");
   outside_ = quantise_up(options.unknown_probability);
   // Only the observed part of the grid matters (the grid grows by doubling, mostly unknown).
   int i0 = 0, j0 = 0, i1 = -1, j1 = -1;
@@ -89,8 +91,11 @@ BranchAndBoundResult match_branch_and_bound(const PrecomputationGridStack& stack
   BranchAndBoundResult result;
   if (points_sensor.empty()) return result;
   const double r = stack.resolution();
-  double d_max = 0.0;
-  for (const auto& p : points_sensor) d_max = std::max(d_max, p.norm());
+  std::vector<double> ranges;
+  for (const auto& p : points_sensor) ranges.push_back(p.norm());
+  const auto quantile = static_cast<std::size_t>(std::ceil(options.angular_step_range_quantile * static_cast<double>(ranges.size()))) - 1;
+  std::nth_element(ranges.begin(), ranges.begin() + static_cast<std::ptrdiff_t>(quantile), ranges.end());
+  const double d_max = ranges[std::min(quantile, ranges.size() - 1)];
   // Hess 2016, eq. (7).
   const double angular_step = d_max > r ? std::acos(1.0 - r * r / (2.0 * d_max * d_max)) : 0.1;
   const int angular_steps = static_cast<int>(std::ceil(options.angular_search_window_rad / angular_step));
@@ -98,26 +103,39 @@ BranchAndBoundResult match_branch_and_bound(const PrecomputationGridStack& stack
   const int top = stack.depth() - 1;
   const long top_width = 1L << top;
 
-  // Per angle: the cell of each point at zero offset (Hess eq. (9)-(10): the discretised scan).
+  // Per angle: the cell of each point at zero offset (Hess eq. (9)-(10): the discretised scan),
+  // one flat array, angle-major.
   const int angles = 2 * angular_steps + 1;
-  std::vector<std::vector<std::pair<long, long>>> cells(static_cast<std::size_t>(angles));
+  const std::size_t n = points_sensor.size();
+  std::vector<long> cell_i(static_cast<std::size_t>(angles) * n), cell_j(static_cast<std::size_t>(angles) * n);
   std::vector<double> angle_of(static_cast<std::size_t>(angles));
   for (int a = 0; a < angles; ++a) {
     const double angle = (a - angular_steps) * angular_step;
     angle_of[static_cast<std::size_t>(a)] = angle;
     const core::SE2 T(initial.so2() * core::SO2(angle), initial.translation());
-    auto& c = cells[static_cast<std::size_t>(a)];
-    c.reserve(points_sensor.size());
-    for (const auto& p : points_sensor) {
-      const Eigen::Vector2d q = T * p;
-      c.emplace_back(static_cast<long>(std::floor(q.x() / r)), static_cast<long>(std::floor(q.y() / r)));
+    for (std::size_t k = 0; k < n; ++k) {
+      const Eigen::Vector2d q = T * points_sensor[k];
+      cell_i[static_cast<std::size_t>(a) * n + k] = static_cast<long>(std::floor(q.x() / r));
+      cell_j[static_cast<std::size_t>(a) * n + k] = static_cast<long>(std::floor(q.y() / r));
     }
   }
-  // The mean of the stored bytes over the points, summed exactly in integers, / 255.
-  const double scale = 1.0 / (255.0 * static_cast<double>(points_sensor.size()));
+  // The mean of the stored bytes over the points, summed exactly in integers, / 255 (the same
+  // arithmetic as PrecomputationGridStack::raw_value, with the level's lookups hoisted).
+  const double scale = 1.0 / (255.0 * static_cast<double>(n));
+  std::vector<PrecomputationGridStack::LevelView> levels;
+  for (int h = 0; h < stack.depth(); ++h) levels.push_back(stack.level(h));
   auto score = [&](const Candidate& c, int height) {
+    const PrecomputationGridStack::LevelView& level = levels[static_cast<std::size_t>(height)];
+    const long di = c.dx - level.offset_i, dj = c.dy - level.offset_j;
+    const long* is = cell_i.data() + static_cast<std::size_t>(c.angle_index) * n;
+    const long* js = cell_j.data() + static_cast<std::size_t>(c.angle_index) * n;
     std::uint64_t sum = 0;
-    for (const auto& [i, j] : cells[static_cast<std::size_t>(c.angle_index)]) sum += stack.raw_value(height, i + c.dx, j + c.dy);
+    for (std::size_t k = 0; k < n; ++k) {
+      const long li = is[k] + di, lj = js[k] + dj;
+      const bool inside = static_cast<unsigned long>(li) < static_cast<unsigned long>(level.width) &&
+                          static_cast<unsigned long>(lj) < static_cast<unsigned long>(level.height);
+      sum += inside ? level.values[lj * level.width + li] : level.outside;
+    }
     ++result.nodes_scored;
     return static_cast<double>(sum) * scale;
   };

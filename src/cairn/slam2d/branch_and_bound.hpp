@@ -31,6 +31,11 @@ struct BranchAndBoundOptions {
   double angular_search_window_rad = 0.5236;  ///< half-width, 30 degrees; >= 0
   int depth = 7;                           ///< precomputation grids (Cartographer's 7); >= 1
   double unknown_probability = 0.1;        ///< score of unknown cells, in [0, 1]
+  /// The angle step is Hess et al.'s eq. (7) with d_max = this quantile of the scan's ranges:
+  /// 1 (the farthest point, the paper's choice) moves no point by more than a cell between two
+  /// angles; 0.9 lets the farthest tenth move up to a few cells and halves the angles (the
+  /// ICP refinement after a search recovers the sub-step angle). In (0, 1].
+  double angular_step_range_quantile = 1.0;
 };
 
 /// The precomputation grids of one map (built once per finished submap).
@@ -52,6 +57,20 @@ class PrecomputationGridStack {
     return level.values[static_cast<std::size_t>(lj * level.width + li)];
   }
   std::size_t memory_bytes() const;
+
+  /// One level's storage, for scoring loops that hoist the lookups (raw_value's arithmetic).
+  struct LevelView {
+    const std::uint8_t* values = nullptr;
+    long offset_i = 0;
+    long offset_j = 0;
+    long width = 0;
+    long height = 0;
+    std::uint8_t outside = 0;
+  };
+  LevelView level(int height) const {
+    const Level& l = levels_[static_cast<std::size_t>(height)];
+    return {l.values.data(), l.offset_i, l.offset_j, l.width, l.height, outside_};
+  }
 
  private:
   struct Level {

@@ -12,7 +12,8 @@ namespace cairn::slam2d {
 bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map_points,
                        const std::vector<Eigen::Vector2d>& matching, const core::SE2& initial,
                        const BranchAndBoundOptions& window, double min_score, const Slam2dOptions& options,
-                       LoopCandidate& candidate, const std::vector<Eigen::Vector2d>* search_points) {
+                       LoopCandidate& candidate, const std::vector<Eigen::Vector2d>* search_points,
+                       double ambiguity_window_m, double ambiguity_window_rad) {
   const std::vector<Eigen::Vector2d>& searched = search_points != nullptr ? *search_points : matching;
   const BranchAndBoundResult best = match_branch_and_bound(stack, searched, initial, min_score, window);
   if (!best.found) return false;
@@ -39,7 +40,8 @@ bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map
   } else {
     // Verification 2: ambiguity. Is there a pose elsewhere in the window nearly as good?
     BranchAndBoundOptions wide = window;
-    wide.linear_search_window_m = std::max(window.linear_search_window_m, options.loop_ambiguity_window_m);
+    wide.linear_search_window_m = std::max({window.linear_search_window_m, options.loop_ambiguity_window_m, ambiguity_window_m});
+    wide.angular_search_window_rad = std::min(std::max(window.angular_search_window_rad, ambiguity_window_rad), std::numbers::pi);
     const BranchAndBoundResult other =
         match_branch_and_bound(stack, searched, initial, best.score - options.loop_ambiguity_margin, wide, &best.T_map_sensor,
                                options.loop_ambiguity_distance_m, options.loop_ambiguity_angle_rad);

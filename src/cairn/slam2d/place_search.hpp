@@ -34,10 +34,15 @@ namespace cairn::slam2d {
 /// Returns false when the search finds nothing above `min_score` (candidate then untouched).
 /// `search_points`, when given, replaces `matching` in the two branch-and-bound searches (a
 /// range-limited subset for whole-submap searches); ICP always verifies with `matching`.
+/// The ambiguity search spans at least `ambiguity_window_m` / `ambiguity_window_rad` (the
+/// uncertainty of the estimate the search started from, which may exceed the search window:
+/// in a building whose rooms repeat every 7 m, a 7 m window after 11 m of drift holds only the
+/// wrong room).
 bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map_points,
                        const std::vector<Eigen::Vector2d>& matching, const core::SE2& initial,
                        const BranchAndBoundOptions& window, double min_score, const Slam2dOptions& options,
-                       LoopCandidate& candidate, const std::vector<Eigen::Vector2d>* search_points = nullptr);
+                       LoopCandidate& candidate, const std::vector<Eigen::Vector2d>* search_points = nullptr,
+                       double ambiguity_window_m = 0.0, double ambiguity_window_rad = 0.0);
 
 /// The observed extent of `grid` (corners of its observed cells); false when none is observed.
 bool observed_extent(const ProbabilityGrid& grid, Eigen::Vector2d& lower, Eigen::Vector2d& upper);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <deque>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -129,6 +130,9 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (submap_keyframes < 2) problems << "submap_keyframes must be >= 2; ";
   if (loop_search_every_n_keyframes < 1) problems << "loop_search_every_n_keyframes must be >= 1; ";
   if (!(loop_ambiguity_window_m >= 0.0)) problems << "loop_ambiguity_window_m must be >= 0; ";
+  if (!(loop_search.angular_step_range_quantile > 0.0 && loop_search.angular_step_range_quantile <= 1.0))
+    problems << "loop_closure.angular_step_range_quantile must be in (0, 1]; ";
+  if (loop_search.depth < 1 || loop_search.depth > 12) problems << "loop_closure.branch_and_bound_depth must be in [1, 12]; ";
   if (!(loop_min_score > 0.0 && loop_min_score < 1.0)) problems << "loop_min_score must be in (0, 1); ";
   if (!(relocalisation_min_score > 0.0 && relocalisation_min_score < 1.0)) problems << "relocalisation_min_score must be in (0, 1); ";
   if (!(odometry_translation_sigma_m > 0.0 && odometry_rotation_sigma_rad > 0.0 && loop_translation_sigma_m > 0.0 &&
@@ -240,6 +244,8 @@ struct Slam2d::Impl {
     std::shared_ptr<const std::vector<Eigen::Vector2d>> matching;
     std::shared_ptr<const std::vector<Eigen::Vector2d>> search_points;  ///< range-limited (global searches)
     int hypothesis = -1;
+    double ambiguity_m = 0.0;  ///< the ambiguity search spans at least this (the estimate's drift)
+    double ambiguity_rad = 0.0;
     core::SE2 initial;
     BranchAndBoundOptions window;
     LoopCandidate header;  ///< keyframe, submap, anchor, times, merge/global filled in
@@ -331,16 +337,21 @@ struct Slam2d::Impl {
       global_window(submap.lower_anchor, submap.upper_anchor, 1.0, options.loop_search, task.window, task.initial);
       task.search_points =
           std::make_shared<const std::vector<Eigen::Vector2d>>(within_range(*matching, options.global_search_max_range_m));
-    } else if (!plan.merge) {
-      // A loop within one group: the window is the drift the estimate may have accumulated
-      // relative to the submap, the path travelled since the submap, or since the last accepted
-      // loop closure when that is shorter.
+    } else {
+      // The drift the estimate may have accumulated relative to the submap: the path travelled
+      // since the submap, or since the last accepted loop closure when that is shorter. A loop's
+      // window is that drift, capped; the ambiguity search of every windowed search spans the
+      // whole drift, uncapped (the true place may lie beyond the cap, a look-alike within it).
       const double path = std::min(std::abs(kf.path_length_m - anchor.path_length_m),
                                    have_loop ? std::max(0.0, kf.path_length_m - last_loop_path_m) : 1e300);
-      task.window.linear_search_window_m =
-          std::min(options.loop_search.linear_search_window_m, options.loop_window_base_m + options.loop_window_drift_per_m * path);
-      task.window.angular_search_window_rad = std::min(options.loop_search.angular_search_window_rad,
-                                                       options.loop_angle_window_base_rad + options.loop_angle_window_drift_per_m * path);
+      const double drift_m = options.loop_window_base_m + options.loop_window_drift_per_m * path;
+      const double drift_rad = options.loop_angle_window_base_rad + options.loop_angle_window_drift_per_m * path;
+      if (!plan.merge) {
+        task.window.linear_search_window_m = std::min(options.loop_search.linear_search_window_m, drift_m);
+        task.window.angular_search_window_rad = std::min(options.loop_search.angular_search_window_rad, drift_rad);
+      }
+      task.ambiguity_m = std::min(drift_m, options.loop_ambiguity_max_window_m);
+      task.ambiguity_rad = drift_rad;
     }
     task.header.keyframe = k;
     task.header.submap = plan.submap;
@@ -356,7 +367,7 @@ struct Slam2d::Impl {
   std::optional<LoopCandidate> run_search(const SearchTask& task) const {
     LoopCandidate candidate = task.header;
     if (!search_and_verify(*task.stack, *task.points, *task.matching, task.initial, task.window, options.loop_min_score, options,
-                           candidate, task.search_points.get()))
+                           candidate, task.search_points.get(), task.ambiguity_m, task.ambiguity_rad))
       return std::nullopt;
     return candidate;
   }
@@ -413,6 +424,15 @@ struct Slam2d::Impl {
       if (candidate.merge && !agree(implied_pose(candidate), keyframes[static_cast<std::size_t>(candidate.keyframe)].T_world_laser)) {
         candidate.accepted = false;
         candidate.reason = "disagrees with the merge just made";
+        continue;
+      }
+      // The search's own ambiguity test covers its submap; when the estimate may have drifted
+      // farther than the usual ambiguity window, the place must also be unique in every submap
+      // of the group within that drift (the true place may sit in a neighbouring submap).
+      const SearchTask& task = job.searches[i];
+      if (task.ambiguity_m > options.loop_ambiguity_window_m && !unique_within_drift(candidate, task, summary)) {
+        candidate.accepted = false;
+        candidate.reason = "ambiguous within the estimate's possible drift: another submap scores within the margin elsewhere";
         continue;
       }
       add_loop(c, summary);
@@ -851,6 +871,35 @@ struct Slam2d::Impl {
       competitor[i] = other.found ? 1 : 0;
     });
     summary.uniqueness_searches += others.size();
+    return std::find(competitor.begin(), competitor.end(), 1) == competitor.end();
+  }
+
+  bool unique_within_drift(const LoopCandidate& candidate, const SearchTask& task, Slam2dSummary& summary) const {
+    const Keyframe& kf = keyframes[static_cast<std::size_t>(candidate.keyframe)];
+    const int group = group_of(kf.segment);
+    const core::SE2 T_world_match = implied_pose(candidate);
+    std::vector<int> nearby;
+    for (int s = 0; s < static_cast<int>(submaps.size()); ++s) {
+      const Submap& submap = submaps[static_cast<std::size_t>(s)];
+      if (!submap.finished || submap.empty || group_of(submap.segment) != group) continue;
+      const double radius = 0.5 * (submap.upper_anchor - submap.lower_anchor).norm();
+      if ((submap_centre_world(submap) - kf.T_world_laser.translation()).norm() <= task.ambiguity_m + radius) nearby.push_back(s);
+    }
+    std::vector<char> competitor(nearby.size(), 0);
+    const double threshold = std::max(options.loop_min_score, candidate.score) - options.loop_ambiguity_margin;
+    tbb::parallel_for(std::size_t{0}, nearby.size(), [&](std::size_t i) {
+      const Submap& submap = submaps[static_cast<std::size_t>(nearby[i])];
+      const core::SE2 T_anchor_world = keyframes[static_cast<std::size_t>(submap.anchor)].T_world_laser.inverse();
+      BranchAndBoundOptions window = options.loop_search;
+      window.linear_search_window_m = task.ambiguity_m;
+      window.angular_search_window_rad = std::min(task.ambiguity_rad, std::numbers::pi);
+      const core::SE2 excluded = T_anchor_world * T_world_match;
+      const BranchAndBoundResult other =
+          match_branch_and_bound(*submap.stack, kf.matching, T_anchor_world * kf.T_world_laser, threshold, window, &excluded,
+                                 options.loop_ambiguity_distance_m, options.loop_ambiguity_angle_rad);
+      competitor[i] = other.found ? 1 : 0;
+    });
+    summary.uniqueness_searches += nearby.size();
     return std::find(competitor.begin(), competitor.end(), 1) == competitor.end();
   }
 
