@@ -21,6 +21,7 @@
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/trajectory.hpp"
 #include "cairn/slam2d/config.hpp"
+#include "cairn/slam2d/map_file.hpp"
 #include "cairn/slam2d/outputs.hpp"
 #include "cairn/slam2d/slam.hpp"
 
@@ -34,6 +35,7 @@ struct Slam2dFlags {
   std::string config;
   std::string preset = "default";
   std::string relations;
+  std::string save_map;
   std::vector<std::string> set;
   long max_scans = 0;
   bool lenient = false;
@@ -64,6 +66,8 @@ int slam2d_command(const Slam2dFlags& flags) {
   std::string error;
   if (!options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
 
+  if (!flags.save_map.empty() && io::is_standard_output(flags.save_map))
+    throw std::invalid_argument("--save-map needs a file: the map is binary and standard output carries the messages");
   // Refuse a directory of another run before the work, not after it.
   io::OutputDirectory out(flags.out, flags.overwrite);
   options.should_stop = stop_on_signal();
@@ -138,8 +142,23 @@ int slam2d_command(const Slam2dFlags& flags) {
                            {"rotation_squared_deg2", {{"mean", r.rotation_squared_deg2.mean}, {"std", r.rotation_squared_deg2.std}}}};
     if (!flags.quiet) print_relations(r, relations.size());
   }
+  // --save-map: produced before anything is committed, so the map and the directory form a set.
+  std::unique_ptr<io::OutputFile> map_file;
+  if (!flags.save_map.empty()) {
+    const slam2d::SavedMap2D saved = [&] {
+      slam2d::SavedMap2D m = slam.export_map();
+      m.source = flags.log;
+      return m;
+    }();
+    const std::string bytes = slam2d::encode_saved_map(saved);
+    report["saved_map"] = {{"file", flags.save_map}, {"bytes", bytes.size()}, {"submaps", saved.submaps.size()},
+                           {"keyframes", saved.keyframes.size()}, {"format_version", slam2d::kMapFileVersion}};
+    map_file = std::make_unique<io::OutputFile>(flags.save_map);
+    map_file->write([&](std::ostream& o) { o.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
+  }
   io::write_output(files.report, [&](std::ostream& o) { o << report.dump(2) << '\n'; });
   out.commit();
+  if (map_file) map_file->commit();
   if (!flags.quiet) {
     std::printf("%zu scans (%.0f s of data) in %.1f s: %.0f scans/s; %zu keyframes, %zu submaps\n", used, data_s, total_s,
                 report["scans_per_second"].get<double>(), summary.keyframes, summary.submaps);
@@ -152,6 +171,7 @@ int slam2d_command(const Slam2dFlags& flags) {
                 summary.times.loop_search_s, summary.times.optimize_s);
     std::printf("wrote map.png, map.pgm, map.yaml, trajectory.tum, scans.csv, graph.g2o, corrected.clf, report.json to %s%s\n",
                 flags.out.c_str(), stopped ? " (interrupted: the result so far)" : "");
+    if (map_file) std::printf("wrote the map for reuse (cairn localize2d --map) to %s\n", flags.save_map.c_str());
   }
   if (stopped) {
     if (flags.quiet) std::fprintf(stderr, "cairn slam2d: wrote the result so far to %s\n", flags.out.c_str());
@@ -171,6 +191,8 @@ Runner register_slam2d(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--set", flags->set, "Override one key: section.key=value (repeatable)");
   app.add_option("--relations", flags->relations, "Freiburg relations file: print the relations metric at the end");
+  app.add_option("--save-map", flags->save_map,
+                 "Also write the finished map (submaps, grids, poses) for cairn localize2d --map (docs/formats.md)");
   app.add_option("--max-scans", flags->max_scans, "Process only the first N scans");
   app.add_flag("--lenient", flags->lenient, "Skip malformed log records (counted) instead of stopping");
   app.add_flag("--print-config", flags->print_config, "Print the configuration in effect (YAML) and exit unless LOG is given");

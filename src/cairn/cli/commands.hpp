@@ -21,6 +21,7 @@ Runner register_optimize(CLI::App& app);
 Runner register_simulate(CLI::App& app);
 Runner register_corrupt(CLI::App& app);
 Runner register_slam2d(CLI::App& app);
+Runner register_localize2d(CLI::App& app);
 Runner register_landmarks(CLI::App& app);
 Runner register_eval(CLI::App& app);
 Runner register_ba(CLI::App& app);

@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   add(cairn::cli::register_corrupt, "corrupt", "Add random false loop closures to a pose graph (robustness experiments)");
   add(cairn::cli::register_optimize, "optimize", "Optimise a pose graph (LM / GN / dog-leg, chordal initialisation)");
   add(cairn::cli::register_slam2d, "slam2d", "2D LiDAR SLAM on a CARMEN log: map, trajectory, pose graph, report");
+  add(cairn::cli::register_localize2d, "localize2d", "Localise a CARMEN log in a map saved by slam2d --save-map: pose, health and confidence per scan, relocalisation, report");
   add(cairn::cli::register_slam3d, "slam3d", "3D LiDAR SLAM on a folder of scans (KISS-ICP-style odometry, Scan Context loops verified by ICP, GNC): trajectory, map, picture, report");
   add(cairn::cli::register_eval, "eval", "Evaluate a trajectory: APE, RPE, KITTI t_err/r_err, relations metric; tables, JSON, plots");
   add(cairn::cli::register_landmarks, "landmarks", "Landmark SLAM (EKF or graph; known, NN or JCBB association) on a simulated landmark run");
@@ -54,7 +55,7 @@ int main(int argc, char** argv) {
   // The commands with safe points stop at the first SIGINT/SIGTERM; the others end at once.
   for (const auto& [command, run] : runners) {
     const std::string name = command->get_name();
-    if (command->parsed() && (name == "slam2d" || name == "optimize" || name == "landmarks" || name == "ba")) {
+    if (command->parsed() && (name == "slam2d" || name == "localize2d" || name == "optimize" || name == "landmarks" || name == "ba")) {
       cairn::cli::use_stop_points();
     }
   }

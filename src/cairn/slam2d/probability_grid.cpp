@@ -125,6 +125,38 @@ double ProbabilityGrid::cell_probability(int i, int j) const {
   return known_[k] ? probability_of(log_odds_[k]) : 0.5;
 }
 
+float ProbabilityGrid::cell_log_odds(int i, int j) const {
+  if (i < 0 || j < 0 || i >= width_ || j >= height_) return 0.0f;
+  const std::size_t k = static_cast<std::size_t>(j * width_ + i);
+  return known_[k] ? log_odds_[k] : 0.0f;
+}
+
+ProbabilityGrid ProbabilityGrid::from_cells(const ProbabilityGridOptions& options, long offset_i, long offset_j, int width,
+                                            int height, std::vector<float> log_odds, std::vector<std::uint8_t> known) {
+  ProbabilityGrid grid(options);
+  CAIRN_ASSERT(width >= 0 && height >= 0 && (width == 0) == (height == 0), "grid size must be both zero or both positive");
+  CAIRN_ASSERT(std::labs(offset_i) < 100000000L && std::labs(offset_j) < 100000000L, "grid offset too far from the origin");
+  const std::size_t cells = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  CAIRN_ASSERT(log_odds.size() == cells && known.size() == cells, "one log-odds value and one known flag per cell");
+  for (std::size_t k = 0; k < cells; ++k) {
+    const double l = log_odds[k];
+    if (known[k] != 0) {
+      CAIRN_ASSERT(std::isfinite(l) && l >= grid.min_log_odds_ - 1e-5 && l <= grid.max_log_odds_ + 1e-5,
+                   "known cell log-odds outside the clamp bounds");
+      known[k] = 1;
+    } else {
+      CAIRN_ASSERT(l == 0.0, "unknown cells hold log-odds 0");
+    }
+  }
+  grid.offset_i_ = offset_i;
+  grid.offset_j_ = offset_j;
+  grid.width_ = width;
+  grid.height_ = height;
+  grid.log_odds_ = std::move(log_odds);
+  grid.known_ = std::move(known);
+  return grid;
+}
+
 bool ProbabilityGrid::cell_known(int i, int j) const {
   if (i < 0 || j < 0 || i >= width_ || j >= height_) return false;
   return known_[static_cast<std::size_t>(j * width_ + i)] != 0;

@@ -53,6 +53,23 @@ class ProbabilityGrid {
   /// Global index floor(x / r) of column 0 and floor(y / r) of row 0.
   long offset_i() const { return offset_i_; }
   long offset_j() const { return offset_j_; }
+  const ProbabilityGridOptions& options() const { return options_; }
+
+  /// Raw access for saving and restoring a grid (map_file.hpp). The stored log-odds of cell
+  /// (i, j), log(p / (1 - p)) as a float, within [min_log_odds(), max_log_odds()] up to float
+  /// rounding; 0 for unknown cells and outside the grid.
+  float cell_log_odds(int i, int j) const;
+  /// Clamp bounds in log-odds: log-odds of options().min_probability and max_probability.
+  double min_log_odds() const { return min_log_odds_; }
+  double max_log_odds() const { return max_log_odds_; }
+  /// A grid with the given cells, as cell_log_odds() and cell_known() would return them:
+  /// `width` x `height` cells whose column 0 / row 0 have global indices `offset_i` / `offset_j`,
+  /// row-major (index j * width + i). Unknown cells must hold log-odds 0. Preconditions
+  /// (CAIRN_ASSERT; a reader validates file data before calling): width, height >= 0 (both 0
+  /// or both > 0), |offset| < 1e8, vector sizes width * height, every known value finite and
+  /// within the clamp bounds (1e-5 of float slack).
+  static ProbabilityGrid from_cells(const ProbabilityGridOptions& options, long offset_i, long offset_j, int width,
+                                    int height, std::vector<float> log_odds, std::vector<std::uint8_t> known);
 
  private:
   void grow_to_contain(const Eigen::Vector2d& point_map);

@@ -1,0 +1,273 @@
+// `cairn localize2d LOG --map FILE --out DIR`: pure localisation of a CARMEN log in a map saved by
+// `cairn slam2d --save-map`, scan by scan through the same streaming interface a robot would use.
+// The map is never changed.
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "cairn/cli/commands.hpp"
+#include "cairn/cli/interrupt.hpp"
+#include "cairn/io/carmen_log.hpp"
+#include "cairn/io/output_file.hpp"
+#include "cairn/io/parse_error.hpp"
+#include "cairn/io/trajectory.hpp"
+#include "cairn/slam2d/config.hpp"
+#include "cairn/slam2d/localization.hpp"
+#include "cairn/slam2d/localization_outputs.hpp"
+#include "cairn/slam2d/map_file.hpp"
+
+namespace cairn::cli {
+namespace {
+
+struct Localize2dFlags {
+  std::string log;
+  std::string map;
+  std::string out;
+  std::string config;
+  std::vector<std::string> set;
+  std::string ground_truth;
+  long max_scans = 0;
+  long first_scan = 0;
+  int global_searches_per_scan = 0;
+  int confirmations = 0;
+  bool lenient = false;
+  bool quiet = false;
+  bool progress = false;
+  bool overwrite = false;
+};
+
+core::SE3 to_se3(const core::SE2& T) {
+  return core::SE3(core::SO3::from_rpy(0.0, 0.0, T.angle()), Eigen::Vector3d(T.x(), T.y(), 0.0));
+}
+
+/// Mean, RMS and maximum of a list of errors.
+nlohmann::json error_statistics(std::vector<double> errors) {
+  if (errors.empty()) return nlohmann::json();
+  double sum = 0.0, squares = 0.0;
+  for (const double e : errors) {
+    sum += e;
+    squares += e * e;
+  }
+  const double n = static_cast<double>(errors.size());
+  std::sort(errors.begin(), errors.end());
+  return {{"mean", sum / n},
+          {"rmse", std::sqrt(squares / n)},
+          {"median", errors[errors.size() / 2]},
+          {"max", errors.back()}};
+}
+
+/// Error of every localised scan against a TUM ground truth in the map's frame (no alignment:
+/// the point is to check where the localiser put the robot in the map). A scan is compared with
+/// the ground-truth pose of the nearest stamp within 0.05 s.
+nlohmann::json ground_truth_errors(const std::string& path, const std::vector<slam2d::LocalizationResult>& results,
+                                   bool quiet) {
+  const io::Trajectory truth = io::read_tum(path);
+  std::vector<double> translation_m, rotation_deg;
+  std::vector<double> translation_ok_m;
+  std::size_t wrong_relocalisations = 0, relocalisations_compared = 0, unmatched = 0;
+  for (const slam2d::LocalizationResult& r : results) {
+    if (!r.localised) continue;
+    const std::size_t after = static_cast<std::size_t>(
+        std::lower_bound(truth.stamps.begin(), truth.stamps.end(), r.time) - truth.stamps.begin());
+    std::size_t best = truth.stamps.size();
+    double best_dt = 0.05;
+    for (const std::size_t candidate : {after - 1, after}) {  // after - 1 wraps when after == 0
+      if (candidate >= truth.stamps.size()) continue;
+      const double dt = std::abs(truth.stamps[candidate].seconds() - r.time.seconds());
+      if (dt <= best_dt) {
+        best_dt = dt;
+        best = candidate;
+      }
+    }
+    if (best == truth.stamps.size()) {
+      ++unmatched;
+      continue;
+    }
+    const core::SE3 error = to_se3(r.T_map_laser).inverse() * truth.poses[best];
+    const double t = error.translation().head<2>().norm();
+    const double angle_deg = std::abs(std::atan2(error.rotation_matrix()(1, 0), error.rotation_matrix()(0, 0))) * 180.0 / M_PI;
+    translation_m.push_back(t);
+    rotation_deg.push_back(angle_deg);
+    if (r.health == slam2d::Health::kOk) translation_ok_m.push_back(t);
+    if (r.relocalised) {
+      ++relocalisations_compared;
+      if (t > 0.3 || angle_deg > 3.0) ++wrong_relocalisations;
+    }
+  }
+  if (!quiet && !translation_m.empty()) {
+    const nlohmann::json t = error_statistics(translation_m);
+    std::printf("against %s: %zu localised scans compared, translation error mean %.3f m, max %.3f m; %zu of %zu "
+                "relocalisations off by more than 0.3 m or 3 degrees\n",
+                path.c_str(), translation_m.size(), t["mean"].get<double>(), t["max"].get<double>(), wrong_relocalisations,
+                relocalisations_compared);
+  }
+  return {{"file", path},
+          {"frame", "the map's (no alignment)"},
+          {"scans_compared", translation_m.size()},
+          {"localised_scans_without_ground_truth", unmatched},
+          {"translation_error_m", error_statistics(translation_m)},
+          {"translation_error_ok_scans_m", error_statistics(translation_ok_m)},
+          {"rotation_error_deg", error_statistics(rotation_deg)},
+          {"relocalisations_compared", relocalisations_compared},
+          {"relocalisations_off_by_more_than_0.3_m_or_3_deg", wrong_relocalisations}};
+}
+
+int localize2d_command(const Localize2dFlags& flags) {
+  if (flags.log.empty()) throw std::invalid_argument("a LOG to localise is required");
+  if (flags.map.empty()) throw std::invalid_argument("--map FILE is required (write one with cairn slam2d --save-map)");
+  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
+  slam2d::Localizer2dOptions options;
+  if (!flags.config.empty()) slam2d::load_config(flags.config, options.matching);
+  for (const std::string& assignment : flags.set) slam2d::apply_setting(assignment, options.matching);
+  if (flags.global_searches_per_scan > 0) options.global_searches_per_scan = flags.global_searches_per_scan;
+  if (flags.confirmations > 0) options.confirmations = flags.confirmations;
+  std::string error;
+  if (!options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
+
+  // Refuse a directory of another run before the work, not after it.
+  io::OutputDirectory out(flags.out, flags.overwrite);
+  const auto start = std::chrono::steady_clock::now();
+  slam2d::SavedMap2D map = slam2d::read_saved_map(flags.map);
+  if (map.submaps.empty()) throw io::ParseError(flags.map, 0, "the map holds no submaps: nothing to localise in");
+  io::CarmenReadReport read_report;
+  io::CarmenReadOptions read_options;
+  read_options.skip_malformed_records = flags.lenient;
+  const io::CarmenLog log = io::read_carmen_log(flags.log, &read_report, read_options);
+  const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (log.scans.empty()) throw io::ParseError(flags.log, 0, "no laser records (FLASER, RLASER, ROBOTLASER1) in the log");
+  const std::size_t first = static_cast<std::size_t>(std::max<long>(flags.first_scan, 0));
+  if (first >= log.scans.size()) {
+    throw std::invalid_argument("--first-scan " + std::to_string(first) + " is beyond the log's " +
+                                std::to_string(log.scans.size()) + " scans");
+  }
+  std::size_t end = log.scans.size();
+  if (flags.max_scans > 0) end = std::min(end, first + static_cast<std::size_t>(flags.max_scans));
+
+  slam2d::Localizer2d localizer(std::move(map), options);
+  const bool tty_progress = !flags.quiet && !flags.progress && isatty(fileno(stderr));
+  std::vector<slam2d::LocalizationResult> results;
+  results.reserve(end - first);
+  slam2d::Health last_health = slam2d::Health::kLost;
+  for (std::size_t k = first; k < end && !interrupted(); ++k) {
+    const slam2d::LocalizationResult result = localizer.add_scan(log.scans[k]);
+    results.push_back(result);
+    if ((result.health != last_health || result.relocalised) && !flags.quiet) {
+      const auto& events = localizer.summary().health_events;
+      std::fprintf(stderr, "%s[scan %zu, t = %s] %s: %s\n", tty_progress ? "\r" : "", k,
+                   log.scans[k].time.to_seconds_string().c_str(), std::string(slam2d::to_string(result.health)).c_str(),
+                   events.empty() ? "" : events.back().reason.c_str());
+      last_health = result.health;
+    }
+    if ((tty_progress || flags.progress) && ((k - first) % 200 == 0 || k + 1 == end)) {
+      const auto& s = localizer.summary();
+      std::fprintf(stderr, "%sscan %zu / %zu  localised %zu  relocalisations %zu  %s%s", tty_progress ? "\r" : "",
+                   k - first + 1, end - first, s.scans_localised, s.relocalisations.size(),
+                   std::string(slam2d::to_string(result.health)).c_str(), tty_progress ? "   " : "\n");
+      std::fflush(stderr);
+    }
+  }
+  if (tty_progress) std::fprintf(stderr, "\n");
+  const bool stopped = interrupted();
+  const std::size_t used = results.size();
+  if (stopped) {
+    std::fprintf(stderr, "cairn localize2d: interrupted by %s after scan %zu of %zu: writing the result so far\n",
+                 interrupt_signal_name(), used, end - first);
+  }
+
+  // Outputs: trajectory.tum (localised scans only, by time), scans.csv, map.png, report.json.
+  io::Trajectory trajectory;
+  {
+    std::vector<const slam2d::LocalizationResult*> localised;
+    for (const auto& r : results)
+      if (r.localised) localised.push_back(&r);
+    std::stable_sort(localised.begin(), localised.end(),
+                     [](const auto* a, const auto* b) { return a->time < b->time; });
+    for (const auto* r : localised) {
+      if (!trajectory.stamps.empty() && !(trajectory.stamps.back() < r->time)) continue;
+      trajectory.stamps.push_back(r->time);
+      trajectory.poses.push_back(to_se3(r->T_map_laser));
+    }
+  }
+  if (!trajectory.stamps.empty()) io::write_tum(out.staging_path("trajectory.tum"), trajectory);
+  else io::write_output(out.staging_path("trajectory.tum"), [](std::ostream& o) { o << "# no scan was localised\n"; });
+  slam2d::write_localization_csv(results, out.staging_path("scans.csv"));
+  const slam2d::ProbabilityGrid grid = slam2d::render_saved_map(localizer.map(), localizer.map().grid.resolution_m);
+  slam2d::write_localization_png(grid, results, out.staging_path("map.png"));
+  const auto& summary = localizer.summary();
+  nlohmann::json report = slam2d::localization_report_json(localizer, options);
+  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report["input"] = {{"log", flags.log},
+                     {"map", flags.map},
+                     {"first_scan", first},
+                     {"scans", used},
+                     {"scans_in_log", log.scans.size()},
+                     {"read_s", read_s},
+                     {"records", read_report.records}};
+  report["interrupted"] = stopped;
+  if (stopped) {
+    report["interruption"] = {
+        {"signal", interrupt_signal_name()}, {"scans_processed", used}, {"scans_requested", end - first}};
+  }
+  report["wall_time_s"] = total_s;
+  report["scans_per_second"] = summary.total_s > 0 ? static_cast<double>(used) / summary.total_s : 0.0;
+  if (!flags.ground_truth.empty()) report["ground_truth"] = ground_truth_errors(flags.ground_truth, results, flags.quiet);
+  io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
+  out.commit();
+  if (!flags.quiet) {
+    std::printf("%zu scans in %.1f s (%.1f s localising, slowest scan %.3f s); map: %zu submaps, %zu tracking points\n", used,
+                total_s, summary.total_s, summary.max_scan_s, summary.map_submaps, summary.map_points);
+    if (summary.first_localised_scan) {
+      std::printf("localised at scan %zu; %zu of %zu scans localised (%zu ok, %zu degraded), %zu lost\n",
+                  first + *summary.first_localised_scan, summary.scans_localised, used, summary.scans_ok,
+                  summary.scans_degraded, summary.scans_lost);
+    } else {
+      std::printf("never localised: %zu scans searched without an accepted pose\n", used);
+    }
+    std::printf("search: %zu global and %zu confirmation searches, %zu verified matches, %zu relocalisations, %zu "
+                "hypotheses dropped, tracking contradicted %zu times\n",
+                summary.global_searches, summary.confirmation_searches, summary.verified_matches,
+                summary.relocalisations.size(), summary.hypotheses_dropped, summary.tracking_contradicted);
+    std::printf("wrote map.png, trajectory.tum, scans.csv, report.json to %s%s\n", flags.out.c_str(),
+                stopped ? " (interrupted: the result so far)" : "");
+  }
+  if (stopped) {
+    if (flags.quiet) std::fprintf(stderr, "cairn localize2d: wrote the result so far to %s\n", flags.out.c_str());
+    return interrupted_exit_status();
+  }
+  return 0;
+}
+
+}  // namespace
+
+Runner register_localize2d(CLI::App& app) {
+  auto flags = std::make_shared<Localize2dFlags>();
+  app.add_option("LOG", flags->log, "CARMEN log (.clf/.log, also .gz/.bz2)");
+  app.add_option("--map", flags->map, "Map file written by cairn slam2d --save-map");
+  app.add_option("--out", flags->out, "Output directory: map.png, trajectory.tum, scans.csv, report.json");
+  app.add_option("--ground-truth", flags->ground_truth,
+                 "TUM trajectory in the map's frame (e.g. cairn slam2d's trajectory.tum of the whole log): report the error");
+  app.add_option("--config", flags->config, "slam2d YAML configuration: its matching and verification keys apply");
+  app.add_option("--set", flags->set, "Override one slam2d key: section.key=value (repeatable)");
+  app.add_option("--global-searches-per-scan", flags->global_searches_per_scan,
+                 "Whole-submap searches per scan while searching (default 3)");
+  app.add_option("--confirmations", flags->confirmations,
+                 "Scans whose verified matches must agree before a pose is accepted (default 2)");
+  app.add_option("--first-scan", flags->first_scan, "Start at this scan of the log (0-based)");
+  app.add_option("--max-scans", flags->max_scans, "Process only N scans");
+  app.add_flag("--lenient", flags->lenient, "Skip malformed log records (counted) instead of stopping");
+  app.add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
+  app.add_flag("--progress", flags->progress,
+               "Progress as a line every 200 scans on stderr, also when stderr is not a terminal");
+  app.add_flag("--overwrite", flags->overwrite,
+               "Write into an --out directory that already holds files (those of the same names are replaced)");
+  return [flags]() { return localize2d_command(*flags); };
+}
+
+}  // namespace cairn::cli

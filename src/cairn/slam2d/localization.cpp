@@ -1,0 +1,700 @@
+#include "cairn/slam2d/localization.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "cairn/core/so2.hpp"
+#include "cairn/slam2d/branch_and_bound.hpp"
+#include "cairn/slam2d/icp.hpp"
+#include "cairn/slam2d/place_search.hpp"
+#include "cairn/slam2d/point_map.hpp"
+#include "cairn/slam2d/range_scan.hpp"
+
+namespace cairn::slam2d {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+std::string fixed(double value, int decimals) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(decimals);
+  s << value;
+  return s.str();
+}
+
+// A max-pooled copy of `fine`: cells `factor` times larger, each holding the largest probability
+// of its known fine cells (unknown when none is known). Scores against it bound those against
+// the fine grid from above, up to the coarser angular step (the multi-resolution idea of Olson,
+// ICRA 2009, applied across submaps).
+ProbabilityGrid max_pooled(const ProbabilityGrid& fine, int factor) {
+  ProbabilityGridOptions options = fine.options();
+  options.resolution_m *= factor;
+  int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
+  if (!fine.known_bounds(i0, j0, i1, j1)) return ProbabilityGrid(options);
+  const auto floor_div = [factor](long a) { return a >= 0 ? a / factor : -((-a + factor - 1) / factor); };
+  const long ci0 = floor_div(fine.offset_i() + i0), cj0 = floor_div(fine.offset_j() + j0);
+  const int width = static_cast<int>(floor_div(fine.offset_i() + i1) - ci0 + 1);
+  const int height = static_cast<int>(floor_div(fine.offset_j() + j1) - cj0 + 1);
+  std::vector<double> largest(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), -1.0);
+  for (int j = j0; j <= j1; ++j) {
+    for (int i = i0; i <= i1; ++i) {
+      if (!fine.cell_known(i, j)) continue;
+      const long ci = floor_div(fine.offset_i() + i) - ci0, cj = floor_div(fine.offset_j() + j) - cj0;
+      double& p = largest[static_cast<std::size_t>(cj * width + ci)];
+      p = std::max(p, fine.cell_probability(i, j));
+    }
+  }
+  std::vector<float> log_odds(largest.size(), 0.0f);
+  std::vector<std::uint8_t> known(largest.size(), 0);
+  for (std::size_t k = 0; k < largest.size(); ++k) {
+    if (largest[k] < 0.0) continue;
+    const double l = std::log(largest[k] / (1.0 - largest[k]));
+    log_odds[k] = static_cast<float>(std::clamp(l, fine.min_log_odds(), fine.max_log_odds()));
+    known[k] = 1;
+  }
+  return ProbabilityGrid::from_cells(options, ci0, cj0, width, height, std::move(log_odds), std::move(known));
+}
+
+}  // namespace
+
+bool Localizer2dOptions::is_valid(std::string* error) const {
+  std::ostringstream problems;
+  std::string matching_error;
+  if (!matching.is_valid(&matching_error)) problems << matching_error;
+  if (!(tracking_min_inlier_fraction >= 0.0 && tracking_min_inlier_fraction <= ok_min_inlier_fraction &&
+        ok_min_inlier_fraction <= 1.0))
+    problems << "need 0 <= tracking_min_inlier_fraction <= ok_min_inlier_fraction <= 1; ";
+  if (!(verification_min_inlier_fraction >= 0.0 && verification_min_inlier_fraction <= 1.0))
+    problems << "verification_min_inlier_fraction must be in [0, 1]; ";
+  if (!(verification_min_degeneracy >= 0.0 && verification_min_degeneracy <= 0.5))
+    problems << "verification_min_degeneracy must be in [0, 0.5]; ";
+  if (global_searches_per_scan < 1) problems << "global_searches_per_scan must be >= 1; ";
+  if (round_robin_searches_per_scan < 0 || round_robin_searches_per_scan > global_searches_per_scan)
+    problems << "round_robin_searches_per_scan must be in [0, global_searches_per_scan]; ";
+  if (coarse_cell_factor < 1 || coarse_cell_factor > 64) problems << "coarse_cell_factor must be in [1, 64]; ";
+  if (coarse_depth < 1 || coarse_depth > 12) problems << "coarse_depth must be in [1, 12]; ";
+  if (check_every_n_scans < 1) problems << "check_every_n_scans must be >= 1; ";
+  if (!(global_search_margin_m >= 0.0)) problems << "global_search_margin_m must be >= 0; ";
+  if (confirmations < 1) problems << "confirmations must be >= 1; ";
+  if (!(agreement_m > 0.0)) problems << "agreement_m must be > 0; ";
+  if (!(agreement_rad > 0.0)) problems << "agreement_rad must be > 0; ";
+  if (!(confirmation_window_m >= 0.0)) problems << "confirmation_window_m must be >= 0; ";
+  if (!(confirmation_window_rad >= 0.0)) problems << "confirmation_window_rad must be >= 0; ";
+  if (max_hypotheses < 1) problems << "max_hypotheses must be >= 1; ";
+  const std::string text = problems.str();
+  if (error != nullptr) *error = text;
+  return text.empty();
+}
+
+std::string_view to_string(LocalizationState state) {
+  switch (state) {
+    case LocalizationState::kSearching: return "searching";
+    case LocalizationState::kTracking: return "tracking";
+  }
+  return "unknown";
+}
+
+struct Localizer2d::Impl {
+  struct Submap {
+    core::SE2 T_world_submap;
+    std::unique_ptr<PrecomputationGridStack> stack;
+    std::unique_ptr<PrecomputationGridStack> coarse_stack;  ///< of the max-pooled grid (ranking)
+    std::unique_ptr<PointMap> points;  ///< submap frame
+    Eigen::Vector2d lower_submap = Eigen::Vector2d::Zero();  ///< observed extent, submap frame
+    Eigen::Vector2d upper_submap = Eigen::Vector2d::Zero();
+    Eigen::Vector2d path_lower_submap = Eigen::Vector2d::Zero();  ///< keyframe positions' box, submap frame
+    Eigen::Vector2d path_upper_submap = Eigen::Vector2d::Zero();
+    Eigen::Vector2d centre_world = Eigen::Vector2d::Zero();  ///< of the path box
+  };
+  /// A place the robot may be: where the odometry frame lies in the map.
+  struct Hypothesis {
+    core::SE2 T_map_odom;
+    int support = 0;                 ///< distinct scans with a verified match that agrees
+    std::size_t last_support_scan = 0;
+    std::size_t created_scan = 0;
+    int failures = 0;                ///< scans in a row that did not fit (ICP) here
+    int last_submap = -1;            ///< searchable-submap index of the last supporting match
+    bool from_tracking = false;      ///< the tracked pose when a rival ended tracking
+    std::vector<LocalizationMatch> evidence;
+  };
+
+  SavedMap2D map;
+  Localizer2dOptions options;
+  Slam2dOptions matching;  ///< options.matching with the map's filter, point-map and grid settings
+  std::vector<Submap> submaps;    ///< searchable submaps (with points and an observed grid)
+  std::vector<int> submap_index;  ///< index into map.submaps of each searchable submap
+  PointMap tracking_map;          ///< every submap's points, map frame
+  struct CoarseOptions {
+    BranchAndBoundOptions search;     ///< matching.loop_search with the coarse depth
+    double depth_resolution_m = 0.4;  ///< cell of the max-pooled grids
+  } coarse_options;
+
+  LocalizationState state = LocalizationState::kSearching;
+  Health health = Health::kLost;
+  std::size_t scan_index = 0;
+  core::SE2 T_map_laser;       ///< last pose (tracking)
+  core::SE2 previous_odom;
+  int failures_in_a_row = 0;
+  /// The prior for the search order: the map-from-odometry transform before being lost.
+  std::optional<core::SE2> prior_T_map_odom;
+  bool order_stale = true;
+  std::vector<int> spread_order;  ///< into `submaps`, farthest-point order
+  std::vector<int> search_order;  ///< into `submaps`, the current search's order
+  std::size_t next_search = 0;
+  std::size_t next_check = 0;     ///< position in spread_order of the tracking check
+  std::size_t searching_since = 0;
+  std::vector<Hypothesis> hypotheses;  ///< while searching: candidates; while tracking: rivals
+  std::size_t hypotheses_died = 0;     ///< since the current search started
+
+  Impl(SavedMap2D saved, const Localizer2dOptions& o)
+      : map(std::move(saved)), options(o), matching(o.matching), tracking_map(map.map_points) {
+    matching.filter = map.filter;
+    matching.map_points = map.map_points;
+    matching.grid = map.grid;
+    matching.loop_min_degeneracy = o.verification_min_degeneracy;
+    matching.loop_min_inlier_fraction = o.verification_min_inlier_fraction;
+    coarse_options.search = matching.loop_search;
+    coarse_options.search.depth = o.coarse_depth;
+    coarse_options.depth_resolution_m = map.grid.resolution_m * o.coarse_cell_factor;
+  }
+
+  bool agrees(const core::SE2& a, const core::SE2& b) const {
+    return (a.translation() - b.translation()).norm() <= options.agreement_m &&
+           std::abs(core::wrap_angle(a.angle() - b.angle())) <= options.agreement_rad;
+  }
+
+  // Farthest-point order over the submaps' path centres (each next submap the one farthest from
+  // those already in the order), so that the first searches sample the whole map coarsely
+  // instead of one corridor's overlapping submaps. Built once.
+  void make_spread_order() {
+    const std::size_t n = submaps.size();
+    spread_order.clear();
+    std::vector<double> distance(n, std::numeric_limits<double>::infinity());
+    std::vector<bool> taken(n, false);
+    std::size_t next = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      spread_order.push_back(static_cast<int>(next));
+      taken[next] = true;
+      std::size_t farthest = next;
+      double farthest_distance = -1.0;
+      for (std::size_t s = 0; s < n; ++s) {
+        if (taken[s]) continue;
+        distance[s] = std::min(distance[s], (submaps[s].centre_world - submaps[next].centre_world).norm());
+        if (distance[s] > farthest_distance) {
+          farthest_distance = distance[s];
+          farthest = s;
+        }
+      }
+      next = farthest;
+    }
+  }
+
+  // The order of the global search: with a prior, nearest path centre first; else the spread order.
+  void make_search_order(const core::SE2& odom) {
+    search_order = spread_order;
+    if (prior_T_map_odom) {
+      const Eigen::Vector2d at = (*prior_T_map_odom * odom).translation();
+      std::stable_sort(search_order.begin(), search_order.end(), [&](int a, int b) {
+        return (submaps[static_cast<std::size_t>(a)].centre_world - at).squaredNorm() <
+               (submaps[static_cast<std::size_t>(b)].centre_world - at).squaredNorm();
+      });
+    }
+    next_search = 0;
+    order_stale = false;
+  }
+
+  // Whether submap `s`'s observed extent holds `p_world`.
+  bool holds(int s, const Eigen::Vector2d& p_world) const {
+    const Submap& submap = submaps[static_cast<std::size_t>(s)];
+    const Eigen::Vector2d p = submap.T_world_submap.inverse() * p_world;
+    return (p.array() >= submap.lower_submap.array()).all() && (p.array() <= submap.upper_submap.array()).all();
+  }
+
+  // The searchable submap whose observed extent holds `p_world`, nearest path centre first; -1
+  // if none.
+  int submap_holding(const Eigen::Vector2d& p_world) const {
+    int best = -1;
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (std::size_t s = 0; s < submaps.size(); ++s) {
+      if (!holds(static_cast<int>(s), p_world)) continue;
+      const double d = (submaps[s].centre_world - p_world).squaredNorm();
+      if (d < best_distance) {
+        best_distance = d;
+        best = static_cast<int>(s);
+      }
+    }
+    return best;
+  }
+
+  // The whole-submap window of submap `s` (its path box plus margin, clamped to its observed
+  // extent; every heading) with `base`'s depth and unknown probability.
+  void whole_submap_window(int s, const BranchAndBoundOptions& base, BranchAndBoundOptions& window, core::SE2& initial) const {
+    const Submap& submap = submaps[static_cast<std::size_t>(s)];
+    const Eigen::Vector2d lower =
+        (submap.path_lower_submap.array() - options.global_search_margin_m).max(submap.lower_submap.array());
+    const Eigen::Vector2d upper =
+        (submap.path_upper_submap.array() + options.global_search_margin_m).min(submap.upper_submap.array());
+    global_window(lower, upper, 0.0, base, window, initial);
+  }
+
+  // The `count` submaps whose max-pooled grids score the scan best over their whole window
+  // (branch and bound on the coarse grids; each search prunes below the `count`-th best score
+  // so far, and below matching.loop_min_score), best first.
+  std::vector<int> rank_submaps(const std::vector<Eigen::Vector2d>& points, int count, Localizer2dSummary& summary) const {
+    const auto start = Clock::now();
+    const std::vector<Eigen::Vector2d> coarse_points = voxel_filter(points, 0.5 * coarse_options.depth_resolution_m);
+    std::vector<std::pair<double, int>> best;  // (score, submap), best first, at most `count`
+    for (std::size_t s = 0; s < submaps.size(); ++s) {
+      BranchAndBoundOptions window;
+      core::SE2 initial;
+      whole_submap_window(static_cast<int>(s), coarse_options.search, window, initial);
+      const double threshold = static_cast<int>(best.size()) >= count ? std::max(matching.loop_min_score, best.back().first)
+                                                                       : matching.loop_min_score;
+      const BranchAndBoundResult result =
+          match_branch_and_bound(*submaps[s].coarse_stack, coarse_points, initial, threshold, window);
+      if (!result.found) continue;
+      best.emplace_back(result.score, static_cast<int>(s));
+      std::stable_sort(best.begin(), best.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+      if (static_cast<int>(best.size()) > count) best.pop_back();
+    }
+    std::vector<int> ranked;
+    for (const auto& [score, s] : best) ranked.push_back(s);
+    ++summary.rankings;
+    summary.times.ranking_s += seconds_since(start);
+    return ranked;
+  }
+
+  // One search of `points` in submap `s`: global (the submap's path box plus margin, every
+  // heading) or windowed around `T_map_guess`; the verified pose in the map frame, or nothing.
+  std::optional<LocalizationMatch> search(int s, const std::vector<Eigen::Vector2d>& points, const core::SE2& T_map_guess,
+                                          bool global, core::Timestamp time, Localizer2dSummary& summary) {
+    const Submap& submap = submaps[static_cast<std::size_t>(s)];
+    BranchAndBoundOptions window = matching.loop_search;
+    core::SE2 initial = submap.T_world_submap.inverse() * T_map_guess;
+    if (global) {
+      whole_submap_window(s, matching.loop_search, window, initial);
+    } else {
+      window.linear_search_window_m = options.confirmation_window_m;
+      window.angular_search_window_rad = options.confirmation_window_rad;
+    }
+    LoopCandidate candidate;
+    const bool found =
+        search_and_verify(*submap.stack, *submap.points, points, initial, window, matching.loop_min_score, matching, candidate);
+    if (!found) return std::nullopt;
+    if (!candidate.accepted) {
+      ++summary.rejected_matches;
+      ++summary.rejected_by_reason[candidate.reason];
+      return std::nullopt;
+    }
+    ++summary.verified_matches;
+    LocalizationMatch match;
+    match.scan = scan_index;
+    match.time = time;
+    match.submap = submap_index[static_cast<std::size_t>(s)];
+    match.global = global;
+    match.score = candidate.score;
+    match.second_score = candidate.second_score;
+    match.inlier_fraction = candidate.inlier_fraction;
+    match.rms_m = candidate.rms_m;
+    match.degeneracy = candidate.degeneracy;
+    match.T_map_laser = submap.T_world_submap * candidate.T_anchor_keyframe;
+    return match;
+  }
+
+  // A windowed search around `T_map_guess` in `preferred` (a searchable submap index, the one
+  // that matched before) if it holds the guess, else in the submap holding it with the nearest
+  // path centre; a match that does not agree with the guess does not count.
+  std::optional<LocalizationMatch> search_near(const std::vector<Eigen::Vector2d>& points, const core::SE2& T_map_guess,
+                                               core::Timestamp time, Localizer2dSummary& summary, int preferred = -1) {
+    const auto start = Clock::now();
+    const int s = preferred >= 0 && holds(preferred, T_map_guess.translation()) ? preferred
+                                                                               : submap_holding(T_map_guess.translation());
+    std::optional<LocalizationMatch> match;
+    if (s >= 0) {
+      ++summary.confirmation_searches;
+      match = search(s, points, T_map_guess, false, time, summary);
+      if (match && !agrees(match->T_map_laser, T_map_guess)) match.reset();
+    }
+    summary.times.confirmation_search_s += seconds_since(start);
+    return match;
+  }
+
+  void add_support(Hypothesis& h, const LocalizationMatch& match, const core::SE2& odom) {
+    if (h.support == 0 || h.last_support_scan != match.scan) ++h.support;
+    h.last_support_scan = match.scan;
+    const auto it = std::find(submap_index.begin(), submap_index.end(), match.submap);
+    h.last_submap = it == submap_index.end() ? -1 : static_cast<int>(it - submap_index.begin());
+    h.T_map_odom = match.T_map_laser * odom.inverse();
+    h.evidence.push_back(match);
+  }
+
+  // A verified match of a global search: support for the hypothesis it agrees with, or a new one
+  // (while tracking: unless it agrees with the tracked pose).
+  void add_match(const LocalizationMatch& match, const core::SE2& odom, Localizer2dSummary& summary) {
+    if (state == LocalizationState::kTracking && agrees(match.T_map_laser, T_map_laser)) {
+      ++summary.tracking_checks_agreeing;
+      return;
+    }
+    for (Hypothesis& h : hypotheses) {
+      if (agrees(match.T_map_laser, h.T_map_odom * odom)) {
+        add_support(h, match, odom);
+        return;
+      }
+    }
+    if (static_cast<int>(hypotheses.size()) >= options.max_hypotheses) {
+      ++summary.hypotheses_ignored;
+      return;
+    }
+    Hypothesis h;
+    h.created_scan = scan_index;
+    add_support(h, match, odom);
+    hypotheses.push_back(std::move(h));
+    ++summary.hypotheses;
+  }
+
+  // Every hypothesis followed one scan: ICP against the map from its odometry prediction (the
+  // tracking state's match; failures in a row drop it), then a windowed, verified search around
+  // its pose for support. Hypotheses that have come to agree are merged.
+  void follow_hypotheses(const std::vector<Eigen::Vector2d>& points, const core::SE2& odom, core::Timestamp time,
+                         Localizer2dSummary& summary) {
+    const auto start = Clock::now();
+    std::vector<Hypothesis> kept;
+    for (Hypothesis& h : hypotheses) {
+      const core::SE2 predicted = h.T_map_odom * odom;
+      const IcpResult icp = match_icp(tracking_map, points, predicted, &predicted, matching.icp);
+      if (icp.inlier_fraction >= options.tracking_min_inlier_fraction) {
+        h.T_map_odom = icp.T_map_sensor * odom.inverse();
+        h.failures = 0;
+      } else if (++h.failures >= matching.lost_after_scans) {
+        ++summary.hypotheses_dropped;
+        ++hypotheses_died;
+        continue;
+      }
+      bool duplicate = false;
+      for (Hypothesis& other : kept) {
+        if (!agrees(other.T_map_odom * odom, h.T_map_odom * odom)) continue;
+        if (h.support > other.support) std::swap(h, other);
+        other.from_tracking = other.from_tracking || h.from_tracking;
+        duplicate = true;
+        break;
+      }
+      if (duplicate) {
+        ++summary.hypotheses_dropped;
+        continue;
+      }
+      kept.push_back(std::move(h));
+    }
+    hypotheses = std::move(kept);
+    summary.times.confirmation_search_s += seconds_since(start);
+    for (Hypothesis& h : hypotheses) {
+      if (const auto match = search_near(points, h.T_map_odom * odom, time, summary, h.last_submap)) add_support(h, *match, odom);
+    }
+  }
+
+  // Whole-submap searches of the submaps in `chosen`.
+  void global_searches(const std::vector<int>& chosen, const std::vector<Eigen::Vector2d>& points, const core::SE2& odom,
+                       core::Timestamp time, Localizer2dSummary& summary) {
+    const auto start = Clock::now();
+    for (const int s : chosen) {
+      const auto one_start = Clock::now();
+      ++summary.global_searches;
+      const std::optional<LocalizationMatch> match = search(s, points, core::SE2(), true, time, summary);
+      summary.max_global_search_s = std::max(summary.max_global_search_s, seconds_since(one_start));
+      if (match) add_match(*match, odom, summary);
+    }
+    summary.times.global_search_s += seconds_since(start);
+  }
+
+  // The submaps to search on this scan: the `ranked` best by coarse score, then `round_robin`
+  // more, the next ones of `order` from `position` that are not chosen yet.
+  std::vector<int> choose_submaps(const std::vector<Eigen::Vector2d>& points, int ranked, int round_robin,
+                                  const std::vector<int>& order, std::size_t& position, Localizer2dSummary& summary) {
+    std::vector<int> chosen = ranked > 0 ? rank_submaps(points, ranked, summary) : std::vector<int>{};
+    for (int k = 0; k < round_robin && !order.empty(); ++k) {
+      for (std::size_t tries = 0; tries < order.size(); ++tries) {
+        const int s = order[position++ % order.size()];
+        if (std::find(chosen.begin(), chosen.end(), s) == chosen.end()) {
+          chosen.push_back(s);
+          break;
+        }
+      }
+    }
+    return chosen;
+  }
+
+  // One scan of the search. Returns the accepted relocalisation, if any.
+  std::optional<Relocalisation> search_scan(const std::vector<Eigen::Vector2d>& points, const core::SE2& odom,
+                                            core::Timestamp time, Localizer2dSummary& summary) {
+    if (order_stale) make_search_order(odom);
+    follow_hypotheses(points, odom, time, summary);
+    global_searches(choose_submaps(points, options.global_searches_per_scan - options.round_robin_searches_per_scan,
+                                   options.round_robin_searches_per_scan, search_order, next_search, summary),
+                    points, odom, time, summary);
+    for (const Hypothesis& h : hypotheses) {
+      if (h.support < options.confirmations || h.last_support_scan != scan_index) continue;
+      if (hypotheses.size() > 1) {
+        ++summary.scans_ambiguous;
+        return std::nullopt;
+      }
+      Relocalisation relocalisation;
+      relocalisation.scan = scan_index;
+      relocalisation.time = time;
+      relocalisation.T_map_laser = h.evidence.back().T_map_laser;
+      relocalisation.searching_since_scan = searching_since;
+      relocalisation.had_prior = prior_T_map_odom.has_value();
+      relocalisation.evidence = h.evidence;
+      relocalisation.rival_hypotheses = hypotheses_died;
+      return relocalisation;
+    }
+    return std::nullopt;
+  }
+
+  // The tracking check (see the file comment). Returns the reason when tracking must end.
+  std::optional<std::string> check_tracking(const std::vector<Eigen::Vector2d>& points, const core::SE2& odom,
+                                            core::Timestamp time, double inlier_fraction, Localizer2dSummary& summary) {
+    if (!hypotheses.empty()) follow_hypotheses(points, odom, time, summary);
+    // Every check_every_n_scans scans, and every scan that few points match (a kidnapped
+    // robot's scans rarely fit the wrong place well).
+    // The periodic check takes the next submap in turn; a poorly matching scan's check the
+    // submap that the coarse ranking puts first (where the robot most likely is instead).
+    const bool poor = inlier_fraction < options.ok_min_inlier_fraction;
+    if (poor || scan_index % static_cast<std::size_t>(options.check_every_n_scans) == 0) {
+      ++summary.tracking_checks;
+      global_searches(choose_submaps(points, poor ? 1 : 0, poor ? 0 : 1, spread_order, next_check, summary), points, odom,
+                      time, summary);
+    }
+    // A match that agrees with the tracked pose is no rival.
+    std::erase_if(hypotheses, [&](const Hypothesis& h) { return agrees(h.T_map_odom * odom, T_map_laser); });
+    for (const Hypothesis& h : hypotheses) {
+      if (h.support < options.confirmations || h.last_support_scan != scan_index) continue;
+      // A confirmed rival: does the tracked pose pass the same verification?
+      if (search_near(points, T_map_laser, time, summary)) {
+        ++summary.rivals_refuted;
+        hypotheses.clear();
+        return std::nullopt;
+      }
+      const double distance = ((h.T_map_odom * odom).translation() - T_map_laser.translation()).norm();
+      return "lost: " + std::to_string(h.support) + " scans' verified matches place the robot " + fixed(distance, 2) +
+             " m from the tracked pose, which fails verification; both are followed until the scans stop fitting one";
+    }
+    return std::nullopt;
+  }
+
+  void start_searching(std::optional<core::SE2> prior) {
+    state = LocalizationState::kSearching;
+    prior_T_map_odom = prior;
+    order_stale = true;
+    hypotheses_died = 0;
+    searching_since = scan_index;
+  }
+};
+
+Localizer2d::Localizer2d(SavedMap2D map, const Localizer2dOptions& options) {
+  std::string error;
+  if (!options.is_valid(&error)) throw std::invalid_argument("invalid localisation options: " + error);
+  const auto start = Clock::now();
+  impl_ = std::make_unique<Impl>(std::move(map), options);
+  Impl& m = *impl_;
+  std::vector<Eigen::Vector2d> all_points;
+  for (std::size_t s = 0; s < m.map.submaps.size(); ++s) {
+    const SavedSubmap& saved = m.map.submaps[s];
+    Impl::Submap submap;
+    submap.T_world_submap = saved.T_world_submap;
+    if (saved.points_submap.empty() || !observed_extent(saved.grid, submap.lower_submap, submap.upper_submap)) continue;
+    // The path the map was built along, in the submap frame: where a robot that sees what the
+    // submap holds is (global searches span it plus a margin, clamped to the observed extent).
+    submap.path_lower_submap = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+    submap.path_upper_submap = -submap.path_lower_submap;
+    const std::size_t first = static_cast<std::size_t>(saved.first_keyframe);
+    const std::size_t end = std::min(m.map.keyframes.size(), first + static_cast<std::size_t>(saved.keyframe_count));
+    for (std::size_t k = first; k < end; ++k) {
+      const Eigen::Vector2d t = saved.T_world_submap.inverse() * m.map.keyframes[k].T_world_laser.translation();
+      submap.path_lower_submap = submap.path_lower_submap.cwiseMin(t);
+      submap.path_upper_submap = submap.path_upper_submap.cwiseMax(t);
+    }
+    if (first >= end) submap.path_lower_submap = submap.path_upper_submap = Eigen::Vector2d::Zero();  // the anchor
+    submap.centre_world = saved.T_world_submap * (0.5 * (submap.path_lower_submap + submap.path_upper_submap));
+    submap.stack = std::make_unique<PrecomputationGridStack>(saved.grid, m.matching.loop_search);
+    submap.coarse_stack = std::make_unique<PrecomputationGridStack>(max_pooled(saved.grid, options.coarse_cell_factor),
+                                                                    m.coarse_options.search);
+    submap.points = std::make_unique<PointMap>(m.matching.map_points);
+    submap.points->build(saved.points_submap);
+    for (const auto& p : saved.points_submap) all_points.push_back(saved.T_world_submap * p);
+    summary_.precomputation_bytes += submap.stack->memory_bytes() + submap.coarse_stack->memory_bytes();
+    m.submaps.push_back(std::move(submap));
+    m.submap_index.push_back(static_cast<int>(s));
+  }
+  if (m.submaps.empty()) throw std::invalid_argument("the map holds no submap with points: nothing to localise in");
+  // Submaps overlap (each keyframe lies in two): one voxel filter keeps the tracking map even.
+  m.tracking_map.build(voxel_filter(all_points, m.matching.filter.voxel_size_m));
+  m.make_spread_order();
+  summary_.map_submaps = m.submaps.size();
+  summary_.map_points = m.tracking_map.points().size();
+  summary_.times.setup_s = seconds_since(start);
+}
+
+Localizer2d::~Localizer2d() = default;
+
+const SavedMap2D& Localizer2d::map() const { return impl_->map; }
+
+LocalizationState Localizer2d::state() const { return impl_->state; }
+
+void Localizer2d::set_prior(const core::SE2& T_map_laser_guess, const core::SE2& T_odom_laser) {
+  impl_->prior_T_map_odom = T_map_laser_guess * T_odom_laser.inverse();
+  impl_->order_stale = true;
+}
+
+LocalizationResult Localizer2d::add_scan(const io::LaserScan& scan) {
+  Impl& m = *impl_;
+  const Slam2dOptions& o = m.matching;
+  const auto start = Clock::now();
+  const ScanPoints points = preprocess_scan(scan, o.filter);
+  summary_.times.preprocess_s += seconds_since(start);
+  const core::SE2& odom = scan.T_odom_laser;
+  LocalizationResult result;
+  result.time = scan.time;
+  result.matching_points = static_cast<int>(points.matching.size());
+  const bool enough_points = static_cast<int>(points.matching.size()) >= o.min_matching_points;
+  Health next = m.health;
+  std::string reason;
+
+  if (m.state == LocalizationState::kTracking) {
+    // 1. Tracking: odometry prediction, ICP against the map with the prediction as prior.
+    const auto track_start = Clock::now();
+    const core::SE2 predicted = m.T_map_laser * (m.previous_odom.inverse() * odom);
+    m.T_map_laser = predicted;
+    if (!enough_points) {
+      next = Health::kDegraded;
+      reason = "too few returns to match (" + std::to_string(points.matching.size()) + "); following odometry";
+    } else {
+      IcpResult icp = match_icp(m.tracking_map, points.matching, predicted, &predicted, o.icp);
+      if (icp.inlier_fraction < m.options.ok_min_inlier_fraction) {
+        // As Slam2d: the odometry may have slipped in rotation; retry from rotated guesses
+        // without the prior and keep a clearly better fit.
+        for (const double offset : {-0.35, -0.2, -0.1, 0.1, 0.2, 0.35}) {
+          const core::SE2 guess(predicted.so2() * core::SO2(offset), predicted.translation());
+          const IcpResult alternative = match_icp(m.tracking_map, points.matching, guess, nullptr, o.icp);
+          if (alternative.inlier_fraction > icp.inlier_fraction + 0.1) icp = alternative;
+        }
+      }
+      result.confidence = icp.inlier_fraction;
+      result.degeneracy = icp.degeneracy;
+      result.rms_m = icp.rms_m;
+      if (icp.inlier_fraction >= m.options.tracking_min_inlier_fraction) {
+        const Eigen::LDLT<Eigen::Matrix3d> ldlt(icp.hessian);
+        if (ldlt.info() == Eigen::Success && ldlt.isPositive() && icp.hessian.determinant() > 0.0)
+          result.covariance = icp.hessian.inverse();
+        m.T_map_laser = icp.T_map_sensor;
+        m.failures_in_a_row = 0;
+        if (icp.inlier_fraction < m.options.ok_min_inlier_fraction) {
+          next = Health::kDegraded;
+          reason = "few scan points agree with the map (inlier fraction " + fixed(icp.inlier_fraction, 3) + ")";
+        } else if (icp.degeneracy < o.degraded_min_degeneracy) {
+          next = Health::kDegraded;
+          reason = "degenerate geometry (degeneracy " + fixed(icp.degeneracy, 4) +
+                   "); odometry carries the unconstrained direction";
+        } else {
+          next = Health::kOk;
+          reason = "matching the map";
+        }
+      } else {
+        ++summary_.tracking_failures;
+        ++m.failures_in_a_row;
+        next = Health::kDegraded;
+        reason = "scan does not match the map (inlier fraction " + fixed(icp.inlier_fraction, 3) + ", " +
+                 std::to_string(m.failures_in_a_row) + " in a row); following odometry";
+        if (m.failures_in_a_row >= o.lost_after_scans) {
+          // The prior for the search: where odometry says the robot is, from the last good match.
+          m.start_searching(m.T_map_laser * odom.inverse());
+          m.hypotheses.clear();
+          next = Health::kLost;
+          reason = "lost: the scan did not match the map " + std::to_string(m.failures_in_a_row) +
+                   " times in a row; searching the whole map";
+          m.failures_in_a_row = 0;
+        }
+      }
+    }
+    summary_.times.tracking_s += seconds_since(track_start);
+    // The tracking check: a confirmed match elsewhere that the tracked pose cannot match.
+    if (m.state == LocalizationState::kTracking && enough_points) {
+      if (const auto contradiction = m.check_tracking(points.matching, odom, scan.time, result.confidence, summary_)) {
+        ++summary_.tracking_contradicted;
+        m.start_searching(m.T_map_laser * odom.inverse());
+        Impl::Hypothesis tracked;
+        tracked.T_map_odom = m.T_map_laser * odom.inverse();
+        tracked.created_scan = m.scan_index;
+        tracked.from_tracking = true;
+        m.hypotheses.insert(m.hypotheses.begin(), tracked);
+        next = Health::kLost;
+        reason = *contradiction;
+        result.covariance.setZero();
+      }
+    }
+    if (m.state == LocalizationState::kTracking) {
+      result.localised = true;
+      result.T_map_laser = m.T_map_laser;
+    } else {
+      result.confidence = 0.0;
+      result.covariance.setZero();
+    }
+  } else {
+    // 2. Searching: hypotheses followed, global searches; no pose until one is accepted.
+    next = Health::kLost;
+    reason = summary_.first_localised_scan ? "lost: searching the whole map" : "not localised yet: searching the whole map";
+    if (enough_points) {
+      if (const auto relocalisation = m.search_scan(points.matching, odom, scan.time, summary_)) {
+        const LocalizationMatch& match = relocalisation->evidence.back();
+        m.state = LocalizationState::kTracking;
+        m.T_map_laser = match.T_map_laser;
+        m.failures_in_a_row = 0;
+        m.hypotheses.clear();
+        result.localised = true;
+        result.relocalised = true;
+        result.T_map_laser = match.T_map_laser;
+        result.confidence = match.inlier_fraction;
+        result.degeneracy = match.degeneracy;
+        result.rms_m = match.rms_m;
+        next = Health::kOk;
+        std::vector<std::size_t> scans;
+        for (const auto& e : relocalisation->evidence)
+          if (scans.empty() || scans.back() != e.scan) scans.push_back(e.scan);
+        reason = std::string(summary_.first_localised_scan ? "relocalised" : "localised") + " after " +
+                 std::to_string(m.scan_index - m.searching_since + 1) + " scans of search: " +
+                 std::to_string(relocalisation->evidence.size()) + " agreeing verified matches on " +
+                 std::to_string(scans.size()) + " scans (last: submap " + std::to_string(match.submap) + ", score " +
+                 fixed(match.score, 3) + ", inlier fraction " + fixed(match.inlier_fraction, 3) + ")";
+        summary_.relocalisations.push_back(*relocalisation);
+      }
+    }
+  }
+
+  if (next != m.health || result.relocalised) {
+    summary_.health_events.push_back({scan.time, m.scan_index, m.health, next, reason});
+    m.health = next;
+  }
+  result.state = m.state;
+  result.health = next;
+  if (result.localised) {
+    ++summary_.scans_localised;
+    if (!summary_.first_localised_scan) summary_.first_localised_scan = m.scan_index;
+  }
+  if (next == Health::kOk) ++summary_.scans_ok;
+  if (next == Health::kDegraded) ++summary_.scans_degraded;
+  if (next == Health::kLost) ++summary_.scans_lost;
+  m.previous_odom = odom;
+  ++m.scan_index;
+  ++summary_.scans;
+  const double scan_s = seconds_since(start);
+  summary_.total_s += scan_s;
+  summary_.max_scan_s = std::max(summary_.max_scan_s, scan_s);
+  return result;
+}
+
+}  // namespace cairn::slam2d

@@ -1,0 +1,252 @@
+#pragma once
+/// \file
+/// Pure localisation in a saved 2D map (saved_map.hpp, map_file.hpp): scans go in one at a time
+/// as into Slam2d::add_scan (an io::LaserScan with its odometry in T_odom_laser); each returns the
+/// laser's pose in the map frame, a health state and a confidence. The map is never changed.
+///
+/// States:
+///  - Searching (health `lost`; no pose is given): at the start ("not localised yet") and after
+///    tracking failed ("lost"). Global relocalisation (Hess et al. ICRA 2016, sec. V-C:
+///    branch-and-bound over a submap's precomputation grids): every scan searches
+///    `global_searches_per_scan` submaps over their whole area (the path the map was built along
+///    plus `global_search_margin_m`, every heading; place_search.hpp's global_window) in turn:
+///    nearest first when there is a prior (the last pose before being lost, carried on by
+///    odometry), otherwise round-robin over all submaps in farthest-point order. A result counts
+///    only once it passed search_and_verify's verification (ICP inliers and residual, every
+///    direction constrained, no other pose in the submap nearly as good).
+///  - Hypotheses: a verified match that agrees with no hypothesis starts one, the
+///    map-from-odometry transform T_map_odom = T_map_laser * T_odom_laser^-1. On every
+///    following scan each hypothesis is (a) tracked as the tracking state tracks (ICP against the
+///    map from its odometry prediction; `matching.lost_after_scans` scans in a row that do not
+///    fit there drop it) and (b) checked by a windowed search around its pose: a verified match
+///    there is support. A hypothesis is accepted when verified matches on `confirmations`
+///    distinct scans support it, one of them the current scan, and no other hypothesis is alive.
+///    Zero wrong relocalisations matters more than speed: while two places both explain the
+///    scans (Intel's identical offices, one of them mapped only in part) the localiser stays
+///    `lost` until the scans stop fitting one of them.
+///  - Tracking (health `ok` or `degraded`): prediction by odometry, point-to-line ICP (icp.hpp)
+///    against one point map of every submap's points in the map frame, with the prediction as
+///    a prior, as Slam2d's local matching. `degraded` when the inlier fraction is below
+///    `ok_min_inlier_fraction`, the geometry is degenerate, or the scan has too few returns; a
+///    match below `tracking_min_inlier_fraction` is a failure (the pose follows odometry,
+///    `degraded`), and `matching.lost_after_scans` failures in a row make it `lost` and start
+///    the search. A robot carried elsewhere is caught this way when its scans stop matching
+///    where odometry says it is; when they still fit there (Intel's corridors look alike), by the
+///    tracking check: every `check_every_n_scans` scans, and on every scan whose inlier fraction
+///    is below `ok_min_inlier_fraction`, one submap is searched over its whole area; a verified match that disagrees with the tracked
+///    pose becomes a rival hypothesis, followed as above. Once confirmed, the tracked pose itself
+///    is verified (search_and_verify around it): if it passes, the rival is refuted; if not,
+///    tracking ends (`lost`) with the tracked pose kept as a hypothesis without support, so the
+///    rival is accepted only once the scans stop fitting the tracked pose.
+///
+/// Every search is bounded: per scan at most `max_hypotheses` windowed searches and ICP matches
+/// plus `global_searches_per_scan` whole-submap searches (one while tracking), so no scan costs
+/// more than that.
+
+#include <Eigen/Core>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cairn/core/se2.hpp"
+#include "cairn/core/time.hpp"
+#include "cairn/io/carmen_log.hpp"
+#include "cairn/slam2d/saved_map.hpp"
+#include "cairn/slam2d/slam.hpp"
+
+namespace cairn::slam2d {
+
+struct Localizer2dOptions {
+  /// Matching and verification shared with Slam2d, with Slam2d's defaults (one place for them):
+  /// `icp` (tracking, with the odometry prior), `loop_search` (precomputation depth, unknown
+  /// probability; the windows are set per search), `loop_min_score` (branch-and-bound score
+  /// every search must reach), `loop_max_rms_m`, `loop_ambiguity_*` (verification of every
+  /// search),
+  /// `degraded_min_degeneracy`, `min_matching_points`, `lost_after_scans` (health). The map's
+  /// own settings replace `filter`, `map_points` and `grid` (scans must be matched as the map
+  /// was built). The other fields are unused.
+  Slam2dOptions matching;
+
+  /// Tracking health. The map holds the whole place, so a right match explains most of a scan
+  /// (on Intel's second half 70 % of the tracked scans have an inlier fraction >= 0.9); a
+  /// kidnapped robot matched 25 m away still explained 50-60 % of its scans in Intel's ring
+  /// corridor. Inlier fraction below `ok_min_inlier_fraction`: degraded; below
+  /// `tracking_min_inlier_fraction`: the match failed (odometry carries the pose, degraded;
+  /// `matching.lost_after_scans` failures in a row: lost). In [0, 1], tracking <= ok.
+  double tracking_min_inlier_fraction = 0.35;
+  double ok_min_inlier_fraction = 0.7;
+
+  /// Verification: the fraction of the scan's points within the ICP inlier distance of the
+  /// submap's points, in [0, 1]. Replaces matching.loop_min_inlier_fraction (0.8): a robot in a
+  /// room the map lacks sees one like it elsewhere (Intel's offices). Measured on 60 scans spread
+  /// over Intel's second half, every submap of the first half's map searched, verified with 0.7:
+  /// the 7 wrong matches had 0.70-0.85, 42 of the 52 right ones >= 0.9; with 0.9 a right match
+  /// was found for 30 of 60 scans that lie on the map (37 with 0.85, 38 with 0.8). With 0.8 the
+  /// second half had one wrong relocalisation (inlier fraction 0.83, a mirrored room 21 m away).
+  double verification_min_inlier_fraction = 0.9;
+  /// Verification: the match must constrain every direction at least this much (icp.hpp's
+  /// degeneracy), in [0, 0.5]. Replaces matching.loop_min_degeneracy (0.1, for loop closures,
+  /// which have no second scan to confirm them). Measured on 60 scans of Intel's second half in
+  /// the map of its first half, every submap searched: 29 / 38 / 43 scans had a verified right
+  /// match with 0.1 / 0.05 / 0.03, none a verified wrong one.
+  double verification_min_degeneracy = 0.05;
+
+  /// Searching: whole-submap searches per scan at full resolution; >= 1. Of these,
+  /// `round_robin_searches_per_scan` take the next submaps in turn (nearest first with a prior,
+  /// else farthest-point order), so every submap is searched in the end; the others take the
+  /// submaps whose max-pooled grids score the scan best (branch and bound over every submap at
+  /// `coarse_cell_factor` times the cell size, which costs about as much as one full search).
+  /// Measured on 30 scans of Intel's second half: whenever a submap gave a verified right
+  /// match, one of the three best by coarse score did (rank 0 for 8 of 10 scans, at most 3).
+  int global_searches_per_scan = 3;
+  int round_robin_searches_per_scan = 1;  ///< in [0, global_searches_per_scan]
+  int coarse_cell_factor = 8;             ///< max-pooled cell = this x the map's cell (0.4 m); in [1, 64]
+  int coarse_depth = 5;                   ///< precomputation grids of the coarse search; in [1, 12]
+  /// A global search spans the path the map was built along in the submap (its keyframes'
+  /// box) plus this margin, clamped to the submap's observed extent, every heading; metres,
+  /// >= 0. Farther from the path the submap holds little of what a scan there sees.
+  double global_search_margin_m = 3.0;
+  /// Tracking check: every this many scans (and every scan with an inlier fraction below
+  /// ok_min_inlier_fraction) one whole-submap search runs while tracking; a
+  /// verified match elsewhere that is confirmed (`confirmations`) while the tracked pose fails
+  /// the same verification ends tracking (a kidnapped robot whose scans still fit where it
+  /// was). >= 1; a large value disables it in practice.
+  int check_every_n_scans = 5;
+  /// Distinct scans whose verified matches must agree before a pose is accepted; >= 1.
+  int confirmations = 2;
+  /// Two matches agree when the poses they give for the same scan (through the odometry)
+  /// differ by at most these; > 0.
+  double agreement_m = 0.3;
+  double agreement_rad = 0.1;
+  /// Confirmation search around a hypothesis' prediction: half-widths, >= 0 (the ambiguity
+  /// test still spans matching.loop_ambiguity_window_m).
+  double confirmation_window_m = 0.5;
+  double confirmation_window_rad = 0.2;
+  /// Live hypotheses at most; a verified match that would start one more is ignored (no
+  /// hypothesis is dropped to make room: that could leave a wrong one alone); >= 1.
+  int max_hypotheses = 4;
+
+  /// False with every problem when an option is out of range.
+  bool is_valid(std::string* error) const;
+};
+
+/// Searching: no pose, the global search runs. Tracking: matched against the map.
+enum class LocalizationState { kSearching, kTracking };
+std::string_view to_string(LocalizationState state);
+
+struct LocalizationResult {
+  core::Timestamp time;
+  LocalizationState state = LocalizationState::kSearching;
+  Health health = Health::kLost;
+  /// Whether T_map_laser holds a pose (tracking); false while searching: the localiser does not
+  /// guess.
+  bool localised = false;
+  core::SE2 T_map_laser;
+  /// Fraction of the scan's matching points within the ICP inlier distance of the map (0 when
+  /// not localised): how much of the scan the map explains.
+  double confidence = 0.0;
+  double degeneracy = 0.0;   ///< of the match (icp.hpp); < degraded_min_degeneracy: a corridor
+  double rms_m = 0.0;        ///< point-to-line RMS of the inliers
+  /// Covariance of the match, (x, y, theta), inverse ICP Hessian (Censi 2007; optimistic);
+  /// zero when not localised or not invertible.
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  bool relocalised = false;  ///< this scan accepted a relocalisation
+  int matching_points = 0;
+};
+
+/// A verified match found while searching (the evidence of a relocalisation).
+struct LocalizationMatch {
+  std::size_t scan = 0;
+  core::Timestamp time;
+  int submap = 0;
+  bool global = false;           ///< whole-submap search (else a confirmation search)
+  double score = 0.0;            ///< branch-and-bound score
+  double second_score = 0.0;     ///< best score elsewhere (ambiguity test)
+  double inlier_fraction = 0.0;  ///< ICP verification
+  double rms_m = 0.0;
+  double degeneracy = 0.0;
+  core::SE2 T_map_laser;         ///< the verified pose of the scan
+};
+
+struct Relocalisation {
+  std::size_t scan = 0;          ///< the scan that accepted it
+  core::Timestamp time;
+  core::SE2 T_map_laser;
+  std::size_t searching_since_scan = 0;  ///< first scan of the search that ended here
+  bool had_prior = false;        ///< searched nearest first from a pose before being lost
+  std::vector<LocalizationMatch> evidence;  ///< the agreeing matches, oldest first
+  std::size_t rival_hypotheses = 0;         ///< other hypotheses that died during the search
+};
+
+struct LocalizationTimes {
+  double preprocess_s = 0.0;
+  double tracking_s = 0.0;
+  double global_search_s = 0.0;        ///< whole-submap searches with their verification
+  double ranking_s = 0.0;              ///< coarse rankings of the submaps
+  double confirmation_search_s = 0.0;  ///< following hypotheses: ICP and windowed searches
+  double setup_s = 0.0;                ///< precomputation grids and point maps of the map
+};
+
+struct Localizer2dSummary {
+  std::size_t scans = 0;
+  std::size_t scans_ok = 0, scans_degraded = 0, scans_lost = 0;
+  std::size_t scans_localised = 0;
+  std::optional<std::size_t> first_localised_scan;
+  std::size_t global_searches = 0;
+  std::size_t rankings = 0;               ///< coarse rankings of every submap
+  std::size_t confirmation_searches = 0;
+  std::size_t verified_matches = 0;       ///< matches that passed verification
+  std::size_t rejected_matches = 0;       ///< found by branch and bound, failed verification
+  std::map<std::string, std::size_t> rejected_by_reason;  ///< place_search.hpp's reasons
+  std::size_t hypotheses = 0;             ///< created
+  std::size_t hypotheses_dropped = 0;     ///< the scans stopped fitting them (or merged with another)
+  std::size_t hypotheses_ignored = 0;     ///< verified matches not followed: max_hypotheses alive
+  std::size_t scans_ambiguous = 0;        ///< a hypothesis was confirmed but another one was alive
+  std::size_t tracking_failures = 0;      ///< tracking matches below tracking_min_inlier_fraction
+  std::size_t tracking_checks = 0;        ///< whole-submap searches while tracking
+  std::size_t tracking_checks_agreeing = 0;  ///< ... whose verified match agreed with the tracked pose
+  std::size_t tracking_contradicted = 0;  ///< tracking ended by a confirmed match elsewhere
+  std::size_t rivals_refuted = 0;         ///< confirmed matches elsewhere while the tracked pose verified
+  std::vector<Relocalisation> relocalisations;
+  std::vector<HealthEvent> health_events;
+  LocalizationTimes times;
+  double total_s = 0.0;
+  double max_scan_s = 0.0;          ///< slowest scan (setup excluded)
+  double max_global_search_s = 0.0; ///< slowest single whole-submap search
+  /// The map: submaps, points of the tracking map, memory of the precomputation grids.
+  std::size_t map_submaps = 0;
+  std::size_t map_points = 0;
+  std::size_t precomputation_bytes = 0;
+};
+
+class Localizer2d {
+ public:
+  /// Builds the search structures of `map` (precomputation grids and point maps per submap, one
+  /// point map of the whole map for tracking). Throws std::invalid_argument for invalid options
+  /// or a map without any submap holding points. The map is copied and never changed.
+  explicit Localizer2d(SavedMap2D map, const Localizer2dOptions& options = {});
+  ~Localizer2d();
+  Localizer2d(const Localizer2d&) = delete;
+  Localizer2d& operator=(const Localizer2d&) = delete;
+
+  /// Localises one scan; `scan.T_odom_laser` is its odometry (any frame, continuous).
+  LocalizationResult add_scan(const io::LaserScan& scan);
+  /// Optional: a prior for the search (where the robot was told it starts); the search then
+  /// goes nearest first from there. It is not trusted: the pose is accepted only as any other
+  /// (verified and confirmed).
+  void set_prior(const core::SE2& T_map_laser_guess, const core::SE2& T_odom_laser);
+
+  const SavedMap2D& map() const;
+  const Localizer2dSummary& summary() const { return summary_; }
+  LocalizationState state() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Localizer2dSummary summary_;
+};
+
+}  // namespace cairn::slam2d

@@ -1,0 +1,360 @@
+#include "cairn/slam2d/localization_outputs.hpp"
+
+#include <cairo.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <ostream>
+
+#include "cairn/io/number_format.hpp"
+#include "cairn/io/output_file.hpp"
+#include "cairn/io/parse_error.hpp"
+
+namespace cairn::slam2d {
+namespace {
+
+struct SurfaceDeleter {
+  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
+};
+struct ContextDeleter {
+  void operator()(cairo_t* c) const { cairo_destroy(c); }
+};
+cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
+  auto* out = static_cast<std::ostream*>(closure);
+  out->write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(length));
+  return *out ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
+}
+
+}  // namespace
+
+ProbabilityGrid render_saved_map(const SavedMap2D& map, double resolution_m) {
+  ProbabilityGridOptions options = map.grid;
+  options.resolution_m = resolution_m;
+  const ProbabilityGrid bounds_only(options);
+  // World-frame bounding box of every submap's observed cells.
+  Eigen::Vector2d lower = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d upper = -lower;
+  for (const SavedSubmap& submap : map.submaps) {
+    int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
+    if (!submap.grid.known_bounds(i0, j0, i1, j1)) continue;
+    const double r = submap.grid.resolution();
+    const Eigen::Vector2d a = submap.grid.origin() + Eigen::Vector2d(i0, j0) * r;
+    const Eigen::Vector2d b = submap.grid.origin() + Eigen::Vector2d(i1 + 1, j1 + 1) * r;
+    for (const Eigen::Vector2d& corner : {a, b, Eigen::Vector2d(a.x(), b.y()), Eigen::Vector2d(b.x(), a.y())}) {
+      const Eigen::Vector2d p = submap.T_world_submap * corner;
+      lower = lower.cwiseMin(p);
+      upper = upper.cwiseMax(p);
+    }
+  }
+  if (!(lower.array() <= upper.array()).all()) return ProbabilityGrid(options);
+  const long offset_i = static_cast<long>(std::floor(lower.x() / resolution_m));
+  const long offset_j = static_cast<long>(std::floor(lower.y() / resolution_m));
+  const int width = static_cast<int>(std::floor(upper.x() / resolution_m) - static_cast<double>(offset_i)) + 1;
+  const int height = static_cast<int>(std::floor(upper.y() / resolution_m) - static_cast<double>(offset_j)) + 1;
+  const std::size_t cells = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  std::vector<double> sum(cells, 0.0);
+  std::vector<std::uint8_t> known(cells, 0);
+  for (const SavedSubmap& submap : map.submaps) {
+    int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
+    if (!submap.grid.known_bounds(i0, j0, i1, j1)) continue;
+    const ProbabilityGrid& grid = submap.grid;
+    const double r = grid.resolution();
+    const core::SE2 T_submap_world = submap.T_world_submap.inverse();
+    // The submap's box in world cells, then every world cell centre looked up in the submap.
+    Eigen::Vector2d box_lower = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector2d box_upper = -box_lower;
+    const Eigen::Vector2d a = grid.origin() + Eigen::Vector2d(i0, j0) * r;
+    const Eigen::Vector2d b = grid.origin() + Eigen::Vector2d(i1 + 1, j1 + 1) * r;
+    for (const Eigen::Vector2d& corner : {a, b, Eigen::Vector2d(a.x(), b.y()), Eigen::Vector2d(b.x(), a.y())}) {
+      const Eigen::Vector2d p = submap.T_world_submap * corner;
+      box_lower = box_lower.cwiseMin(p);
+      box_upper = box_upper.cwiseMax(p);
+    }
+    const int wi0 = std::max(0, static_cast<int>(std::floor(box_lower.x() / resolution_m) - static_cast<double>(offset_i)));
+    const int wj0 = std::max(0, static_cast<int>(std::floor(box_lower.y() / resolution_m) - static_cast<double>(offset_j)));
+    const int wi1 = std::min(width - 1, static_cast<int>(std::floor(box_upper.x() / resolution_m) - static_cast<double>(offset_i)));
+    const int wj1 = std::min(height - 1, static_cast<int>(std::floor(box_upper.y() / resolution_m) - static_cast<double>(offset_j)));
+    for (int wj = wj0; wj <= wj1; ++wj) {
+      for (int wi = wi0; wi <= wi1; ++wi) {
+        const Eigen::Vector2d centre_world((static_cast<double>(offset_i + wi) + 0.5) * resolution_m,
+                                           (static_cast<double>(offset_j + wj) + 0.5) * resolution_m);
+        const Eigen::Vector2d p = T_submap_world * centre_world;
+        const int i = static_cast<int>(std::floor(p.x() / r) - static_cast<double>(grid.offset_i()));
+        const int j = static_cast<int>(std::floor(p.y() / r) - static_cast<double>(grid.offset_j()));
+        if (!grid.cell_known(i, j)) continue;
+        const std::size_t k = static_cast<std::size_t>(wj) * static_cast<std::size_t>(width) + static_cast<std::size_t>(wi);
+        sum[k] += static_cast<double>(grid.cell_log_odds(i, j));
+        known[k] = 1;
+      }
+    }
+  }
+  std::vector<float> log_odds(cells, 0.0f);
+  for (std::size_t k = 0; k < cells; ++k) {
+    if (known[k]) log_odds[k] = static_cast<float>(std::clamp(sum[k], bounds_only.min_log_odds(), bounds_only.max_log_odds()));
+  }
+  return ProbabilityGrid::from_cells(options, offset_i, offset_j, width, height, std::move(log_odds), std::move(known));
+}
+
+void write_localization_png(const ProbabilityGrid& grid, const std::vector<LocalizationResult>& results,
+                            const std::string& path) {
+  int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
+  if (!grid.known_bounds(i0, j0, i1, j1)) i0 = j0 = i1 = j1 = 0;
+  const int margin = 10;
+  i0 = std::max(0, i0 - margin);
+  j0 = std::max(0, j0 - margin);
+  i1 = std::min(std::max(grid.width() - 1, 0), i1 + margin);
+  j1 = std::min(std::max(grid.height() - 1, 0), j1 + margin);
+  const int map_width = i1 - i0 + 1;
+  const int width = std::max(480, map_width), height = j1 - j0 + 1;
+  const int legend = 28;
+  std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
+  if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) throw io::ParseError(path, 0, "the map is too large for a PNG");
+  unsigned char* data = cairo_image_surface_get_data(surface.get());
+  const int stride = cairo_image_surface_get_stride(surface.get());
+  cairo_surface_flush(surface.get());
+  for (int row = 0; row < height + legend; ++row) {
+    auto* pixels = reinterpret_cast<std::uint32_t*>(data + static_cast<std::ptrdiff_t>(row) * stride);
+    for (int i = 0; i < width; ++i) {
+      std::uint32_t grey = row < height ? 0xcdu : 0xffu;
+      const int gi = i + i0, gj = height - 1 - row + j0;
+      if (row < height && grid.cell_known(gi, gj))
+        grey = static_cast<std::uint32_t>(std::lround(255.0 * (1.0 - grid.cell_probability(gi, gj))));
+      pixels[i] = (grey << 16) | (grey << 8) | grey;
+    }
+  }
+  cairo_surface_mark_dirty(surface.get());
+  std::unique_ptr<cairo_t, ContextDeleter> context(cairo_create(surface.get()));
+  cairo_t* cr = context.get();
+  const double r = grid.resolution();
+  const Eigen::Vector2d origin = grid.origin() + Eigen::Vector2d(i0, j0) * r;
+  auto to_image = [&](const Eigen::Vector2d& p) {
+    return Eigen::Vector2d((p.x() - origin.x()) / r, height - (p.y() - origin.y()) / r);
+  };
+  auto colour = [&](Health h) {
+    if (h == Health::kOk) cairo_set_source_rgb(cr, 0.12, 0.35, 0.85);
+    else cairo_set_source_rgb(cr, 0.95, 0.55, 0.05);
+  };
+  // The trajectory, broken where there is no pose; a relocalisation starts a new piece.
+  cairo_set_line_width(cr, 1.5);
+  for (std::size_t k = 1; k < results.size(); ++k) {
+    const LocalizationResult& a = results[k - 1];
+    const LocalizationResult& b = results[k];
+    if (!a.localised || !b.localised || b.relocalised) continue;
+    colour(b.health);
+    const auto pa = to_image(a.T_map_laser.translation()), pb = to_image(b.T_map_laser.translation());
+    cairo_move_to(cr, pa.x(), pa.y());
+    cairo_line_to(cr, pb.x(), pb.y());
+    cairo_stroke(cr);
+  }
+  // Relocalisations: a red circle where the pose was found; where it was lost: a red cross.
+  cairo_set_line_width(cr, 2.0);
+  cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    if (results[k].relocalised) {
+      const auto p = to_image(results[k].T_map_laser.translation());
+      cairo_new_sub_path(cr);
+      cairo_arc(cr, p.x(), p.y(), 6.0, 0.0, 2.0 * std::numbers::pi);
+      cairo_stroke(cr);
+    } else if (k > 0 && results[k - 1].localised && !results[k].localised) {
+      const auto p = to_image(results[k - 1].T_map_laser.translation());
+      cairo_move_to(cr, p.x() - 5.0, p.y() - 5.0);
+      cairo_line_to(cr, p.x() + 5.0, p.y() + 5.0);
+      cairo_move_to(cr, p.x() - 5.0, p.y() + 5.0);
+      cairo_line_to(cr, p.x() + 5.0, p.y() - 5.0);
+      cairo_stroke(cr);
+    }
+  }
+  // Legend and scale bar.
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, 12.0);
+  double x = 8.0;
+  const double y = height + 18.0;
+  auto label = [&](const char* text) {
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_move_to(cr, x + 22.0, y - 3.0);
+    cairo_show_text(cr, text);
+    cairo_text_extents_t extents;
+    cairo_text_extents(cr, text, &extents);
+    x += 22.0 + extents.x_advance + 14.0;
+  };
+  for (const Health h : {Health::kOk, Health::kDegraded}) {
+    colour(h);
+    cairo_rectangle(cr, x, y - 9.0, 18.0, 4.0);
+    cairo_fill(cr);
+    label(h == Health::kOk ? "ok" : "degraded");
+  }
+  cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
+  cairo_set_line_width(cr, 2.0);
+  cairo_new_sub_path(cr);
+  cairo_arc(cr, x + 9.0, y - 7.0, 5.0, 0.0, 2.0 * std::numbers::pi);
+  cairo_stroke(cr);
+  label("(re)localised");
+  cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
+  cairo_move_to(cr, x + 4.0, y - 12.0);
+  cairo_line_to(cr, x + 14.0, y - 2.0);
+  cairo_move_to(cr, x + 4.0, y - 2.0);
+  cairo_line_to(cr, x + 14.0, y - 12.0);
+  cairo_stroke(cr);
+  label("lost");
+  double bar_m = 1.0;
+  for (const double length : {10.0, 5.0, 2.0}) {
+    if (x + length / r + 50.0 <= width) {
+      bar_m = length;
+      break;
+    }
+  }
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_rectangle(cr, x, y - 9.0, bar_m / r, 4.0);
+  cairo_fill(cr);
+  cairo_move_to(cr, x + bar_m / r + 6.0, y - 3.0);
+  cairo_show_text(cr, (std::to_string(static_cast<int>(bar_m)) + " m").c_str());
+  cairo_surface_flush(surface.get());
+  io::write_output(path, [&](std::ostream& out) {
+    if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS)
+      throw io::ParseError(path, 0, "cairo could not encode the PNG");
+  });
+}
+
+void write_localization_csv(const std::vector<LocalizationResult>& results, const std::string& path) {
+  io::write_output(path, [&](std::ostream& out) {
+    out << "time_s,state,health,localised,x_m,y_m,theta_rad,confidence,degeneracy,rms_m,sigma_x_m,sigma_y_m,"
+           "sigma_theta_rad,relocalised,matching_points\n";
+    std::string line;
+    for (const LocalizationResult& s : results) {
+      line = s.time.to_seconds_string();
+      line += ',';
+      line += to_string(s.state);
+      line += ',';
+      line += to_string(s.health);
+      line += s.localised ? ",1" : ",0";
+      // No pose while searching: empty fields, never a guess.
+      for (const double v : {s.T_map_laser.x(), s.T_map_laser.y(), s.T_map_laser.angle()}) {
+        line += ',';
+        if (s.localised) io::append_number(line, v);
+      }
+      for (const double v : {s.confidence, s.degeneracy, s.rms_m, std::sqrt(std::max(0.0, s.covariance(0, 0))),
+                             std::sqrt(std::max(0.0, s.covariance(1, 1))), std::sqrt(std::max(0.0, s.covariance(2, 2)))}) {
+        line += ',';
+        io::append_number(line, v);
+      }
+      line += s.relocalised ? ",1," : ",0,";
+      line += std::to_string(s.matching_points);
+      line += '\n';
+      out << line;
+    }
+  });
+}
+
+namespace {
+nlohmann::json pose_json(const core::SE2& T) { return nlohmann::json::array({T.x(), T.y(), T.angle()}); }
+}  // namespace
+
+nlohmann::json localization_report_json(const Localizer2d& localizer, const Localizer2dOptions& options) {
+  const Localizer2dSummary& s = localizer.summary();
+  nlohmann::json report;
+  report["summary"] = {{"scans", s.scans},
+                       {"scans_localised", s.scans_localised},
+                       {"first_localised_scan", s.first_localised_scan ? nlohmann::json(*s.first_localised_scan) : nlohmann::json()},
+                       {"scans_ok", s.scans_ok},
+                       {"scans_degraded", s.scans_degraded},
+                       {"scans_lost", s.scans_lost},
+                       {"relocalisations", s.relocalisations.size()},
+                       {"global_searches", s.global_searches},
+                       {"rankings", s.rankings},
+                       {"confirmation_searches", s.confirmation_searches},
+                       {"verified_matches", s.verified_matches},
+                       {"rejected_matches", s.rejected_matches},
+                       {"hypotheses", s.hypotheses},
+                       {"hypotheses_dropped", s.hypotheses_dropped},
+                       {"hypotheses_ignored", s.hypotheses_ignored},
+                       {"scans_ambiguous", s.scans_ambiguous},
+                       {"tracking_checks", s.tracking_checks},
+                       {"tracking_checks_agreeing", s.tracking_checks_agreeing},
+                       {"rivals_refuted", s.rivals_refuted},
+                       {"tracking_failures", s.tracking_failures},
+                       {"tracking_contradicted", s.tracking_contradicted},
+                       {"final_state", std::string(to_string(localizer.state()))}};
+  report["summary"]["rejected_by_reason"] = s.rejected_by_reason;
+  report["map"] = {{"source", localizer.map().source},
+                   {"submaps", localizer.map().submaps.size()},
+                   {"searchable_submaps", s.map_submaps},
+                   {"keyframes", localizer.map().keyframes.size()},
+                   {"tracking_points", s.map_points},
+                   {"precomputation_bytes", s.precomputation_bytes},
+                   {"grid_resolution_m", localizer.map().grid.resolution_m}};
+  report["time_s"] = {{"setup", s.times.setup_s},
+                      {"preprocess", s.times.preprocess_s},
+                      {"tracking", s.times.tracking_s},
+                      {"global_search", s.times.global_search_s},
+                      {"ranking", s.times.ranking_s},
+                      {"confirmation_search", s.times.confirmation_search_s},
+                      {"localisation_total", s.total_s},
+                      {"slowest_scan", s.max_scan_s},
+                      {"slowest_global_search", s.max_global_search_s}};
+  const Slam2dOptions& m = options.matching;
+  report["options"] = {{"global_searches_per_scan", options.global_searches_per_scan},
+                       {"round_robin_searches_per_scan", options.round_robin_searches_per_scan},
+                       {"coarse_cell_factor", options.coarse_cell_factor},
+                       {"coarse_depth", options.coarse_depth},
+                       {"global_search_margin_m", options.global_search_margin_m},
+                       {"confirmations", options.confirmations},
+                       {"agreement_m", options.agreement_m},
+                       {"agreement_rad", options.agreement_rad},
+                       {"confirmation_window_m", options.confirmation_window_m},
+                       {"confirmation_window_rad", options.confirmation_window_rad},
+                       {"max_hypotheses", options.max_hypotheses},
+                       {"tracking_min_inlier_fraction", options.tracking_min_inlier_fraction},
+                       {"ok_min_inlier_fraction", options.ok_min_inlier_fraction},
+                       {"check_every_n_scans", options.check_every_n_scans},
+                       {"min_score", m.loop_min_score},
+                       {"verification_min_inlier_fraction", options.verification_min_inlier_fraction},
+                       {"max_rms_m", m.loop_max_rms_m},
+                       {"verification_min_degeneracy", options.verification_min_degeneracy},
+                       {"ambiguity_window_m", m.loop_ambiguity_window_m},
+                       {"ambiguity_distance_m", m.loop_ambiguity_distance_m},
+                       {"ambiguity_angle_rad", m.loop_ambiguity_angle_rad},
+                       {"ambiguity_margin", m.loop_ambiguity_margin},
+                       {"degraded_min_degeneracy", m.degraded_min_degeneracy},
+                       {"min_matching_points", m.min_matching_points},
+                       {"lost_after_scans", m.lost_after_scans}};
+  nlohmann::json relocalisations = nlohmann::json::array();
+  for (const Relocalisation& r : s.relocalisations) {
+    nlohmann::json evidence = nlohmann::json::array();
+    for (const LocalizationMatch& e : r.evidence) {
+      evidence.push_back({{"scan", e.scan},
+                          {"time", e.time.to_seconds_string()},
+                          {"submap", e.submap},
+                          {"search", e.global ? "global" : "confirmation"},
+                          {"score", e.score},
+                          {"second_score", e.second_score},
+                          {"inlier_fraction", e.inlier_fraction},
+                          {"rms_m", e.rms_m},
+                          {"degeneracy", e.degeneracy},
+                          {"T_map_laser", pose_json(e.T_map_laser)}});
+    }
+    relocalisations.push_back({{"scan", r.scan},
+                               {"time", r.time.to_seconds_string()},
+                               {"T_map_laser", pose_json(r.T_map_laser)},
+                               {"searching_since_scan", r.searching_since_scan},
+                               {"scans_searched", r.scan - r.searching_since_scan + 1},
+                               {"had_prior", r.had_prior},
+                               {"rival_hypotheses_died", r.rival_hypotheses},
+                               {"evidence", evidence}});
+  }
+  report["relocalisations"] = relocalisations;
+  nlohmann::json events = nlohmann::json::array();
+  for (const HealthEvent& e : s.health_events) {
+    events.push_back({{"time", e.time.to_seconds_string()},
+                      {"scan", e.scan},
+                      {"from", std::string(to_string(e.from))},
+                      {"to", std::string(to_string(e.to))},
+                      {"reason", e.reason}});
+  }
+  report["health_events"] = events;
+  return report;
+}
+
+}  // namespace cairn::slam2d
