@@ -15,6 +15,7 @@
 #include <map>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <random>
 
 #include "cairn/eval/relations.hpp"
@@ -23,8 +24,6 @@
 #include "cairn/io/parse_error.hpp"
 #include "cairn/slam2d/localization.hpp"
 #include "cairn/slam2d/map_file.hpp"
-#include "cairn/slam2d/place_search.hpp"
-#include "cairn/slam2d/range_scan.hpp"
 #include "cairn/slam2d/slam.hpp"
 #include "test_data.hpp"
 
@@ -352,15 +351,37 @@ TEST(MapFile, MissingAndDirectoryPathsAreErrors) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Localisation on the Intel log.
+// Localizer2d.
+
+TEST(Localization, RejectsInvalidOptionsAndMapsWithoutPoints) {
+  Localizer2dOptions bad;
+  bad.confirmations = 0;
+  bad.ok_min_inlier_fraction = 0.2;  // below tracking_min_inlier_fraction
+  try {
+    Localizer2d localizer(small_map(), bad);
+    ADD_FAILURE() << "invalid options accepted";
+  } catch (const std::invalid_argument& e) {
+    // Every problem at once.
+    EXPECT_NE(std::string(e.what()).find("confirmations"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("ok_min_inlier_fraction"), std::string::npos) << e.what();
+  }
+  SavedMap2D empty = small_map();
+  for (auto& submap : empty.submaps) submap.points_submap.clear();
+  EXPECT_THROW(Localizer2d localizer(empty), std::invalid_argument);
+  EXPECT_NO_THROW(Localizer2d localizer(small_map()));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Localisation on the Intel log: the map of its first half, scans of its second half.
 
 struct IntelRuns {
   io::CarmenLog log;
-  std::size_t half = 0;     ///< the map is Slam2d on scans [0, half)
-  std::size_t end = 0;      ///< the reference covers [0, end)
+  std::size_t half = 0;  ///< the map is Slam2d on scans [0, half)
+  std::size_t end = 0;   ///< the reference covers [0, end)
   SavedMap2D map;
   /// The same Slam2d run continued to `end` and finished again: the reference poses, in the
-  /// map's frame (both start at the first scan, whose keyframe the pose graph holds fixed).
+  /// map's frame (both runs start at the first scan, whose keyframe the pose graph holds fixed;
+  /// the continued run's optimisation moves the first half by a few centimetres).
   std::vector<ScanResult> reference;
   double map_s = 0.0;
 };
@@ -371,7 +392,7 @@ const IntelRuns& intel() {
   runs = std::make_unique<IntelRuns>();
   runs->log = io::read_carmen_log(test::data_path("laser2d/intel/intel.clf.bz2").string());
   runs->half = runs->log.scans.size() / 2;
-  runs->end = std::min(runs->log.scans.size(), runs->half + (std::getenv("REFEND") ? std::strtoul(std::getenv("REFEND"), nullptr, 10) : 2700));
+  runs->end = std::min(runs->log.scans.size(), runs->half + 2500);
   const auto start = std::chrono::steady_clock::now();
   Slam2d slam;
   for (std::size_t k = 0; k < runs->half; ++k) slam.add_scan(runs->log.scans[k]);
@@ -393,147 +414,151 @@ PoseError error_of(const core::SE2& estimate, const core::SE2& reference) {
   const core::SE2 e = reference.inverse() * estimate;
   return {e.translation().norm(), std::abs(e.angle())};
 }
+// A wrong pose: farther from the reference than the two maps can differ (a few centimetres,
+// up to 0.3 m where the first half saw little).
+bool wrong(const PoseError& e) { return e.translation_m > 0.5 || e.rotation_rad > 5.0 * std::numbers::pi / 180.0; }
 
+core::SE3 lift(const core::SE2& T) {
+  return core::SE3(core::SO3::from_rpy(0.0, 0.0, T.angle()), Eigen::Vector3d(T.x(), T.y(), 0.0));
+}
+
+TEST(LocalizationIntel, MapFileRoundTrip) {
+  CAIRN_REQUIRE_DATA("laser2d/intel/intel.clf.bz2");
+  const IntelRuns& runs = intel();
+  const fs::path dir = temp_dir("intel-map");
+  const std::string path = (dir / "intel-half.cmap").string();
+  const auto start = std::chrono::steady_clock::now();
+  write_saved_map(path, runs.map);
+  const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const SavedMap2D back = read_saved_map(path);
+  const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - write_s;
+  const auto bytes = fs::file_size(path);
+  std::printf("map of the first half (%zu scans, Slam2d %.1f s): %zu submaps, %zu keyframes; file %ju bytes, written in "
+              "%.2f s, read in %.2f s\n",
+              runs.half, runs.map_s, runs.map.submaps.size(), runs.map.keyframes.size(), static_cast<std::uintmax_t>(bytes),
+              write_s, read_s);
+  expect_same_map(runs.map, back);
+  EXPECT_LT(bytes, 20u << 20);
+  fs::remove_all(dir);
+}
+
+// The second pass: the first 1,200 scans of the second half localised in the first half's map
+// from no prior (global relocalisation, then tracking), against the continued Slam2d run.
 TEST(LocalizationIntel, SecondHalfFromNoPrior) {
   CAIRN_REQUIRE_DATA("laser2d/intel/intel.clf.bz2");
   const IntelRuns& runs = intel();
-  std::printf("map of the first half (%zu scans): %zu submaps, %zu keyframes, %.1f s\n", runs.half, runs.map.submaps.size(),
-              runs.map.keyframes.size(), runs.map_s);
-  const fs::path dir = temp_dir("intel");
-  const std::string path = (dir / "intel-half.cmap").string();
-  write_saved_map(path, runs.map);
-  std::printf("map file: %ju bytes\n", static_cast<std::uintmax_t>(fs::file_size(path)));
-  const SavedMap2D loaded = read_saved_map(path);
-  fs::remove_all(dir);
-  Localizer2d localizer(loaded);
-  std::printf("setup %.2f s, %zu tracking points, %.1f MB precomputation grids\n", localizer.summary().times.setup_s,
-              localizer.summary().map_points, static_cast<double>(localizer.summary().precomputation_bytes) / 1e6);
-  std::size_t first = 0;
-  bool have_first = false;
-  double sum_t = 0.0, max_t = 0.0, sum_r = 0.0, max_r = 0.0;
-  std::size_t compared = 0, wrong = 0;
-  int hist_good[10] = {}, hist_bad[10] = {};
-  std::vector<std::pair<std::size_t, core::SE2>> localised;
-  std::map<std::size_t, Health> health_of;
-  std::map<std::size_t, double> conf_of;
-  const std::size_t end = std::getenv("END") ? runs.half + std::strtoul(std::getenv("END"), nullptr, 10) : runs.end;
+  Localizer2d localizer(runs.map);
+  const std::size_t end = std::min(runs.end, runs.half + 1200);
+  io::Trajectory estimate;
+  std::vector<std::pair<core::Timestamp, core::SE3>> localised;
+  std::vector<double> errors_m;
+  double rotation_sum_rad = 0.0;
+  std::size_t wrong_ok = 0, wrong_relocalisations = 0;
+  std::optional<std::size_t> first;
   for (std::size_t k = runs.half; k < end; ++k) {
     const LocalizationResult r = localizer.add_scan(runs.log.scans[k]);
     if (!r.localised) continue;
-    localised.emplace_back(k, r.T_map_laser);
-    health_of[k] = r.health;
-    conf_of[k] = r.confidence;
-    if (!have_first) {
-      first = k - runs.half;
-      have_first = true;
-    }
+    if (!first) first = k - runs.half;
     const PoseError e = error_of(r.T_map_laser, runs.reference[k].T_world_laser);
-    if (r.relocalised && (e.translation_m > 0.3 || e.rotation_rad > 0.05)) ++wrong;
-    {
-      const int bucket = std::min(9, static_cast<int>(r.confidence * 10));
-      if (e.translation_m < 0.2) ++hist_good[bucket]; else ++hist_bad[bucket];
-    }
-    sum_t += e.translation_m;
-    sum_r += e.rotation_rad;
-    max_t = std::max(max_t, e.translation_m);
-    max_r = std::max(max_r, e.rotation_rad);
-    ++compared;
+    errors_m.push_back(e.translation_m);
+    rotation_sum_rad += e.rotation_rad;
+    if (r.relocalised && wrong(e)) ++wrong_relocalisations;
+    if (r.health == Health::kOk && wrong(e)) ++wrong_ok;
+    localised.emplace_back(r.time, lift(r.T_map_laser));
   }
-  const auto& s = localizer.summary();
-  std::printf("localised at scan %zu of the second half; %zu of %zu scans localised; error vs the full run: mean %.3f m "
-              "%.2f deg, max %.3f m %.2f deg\n",
-              first, compared, runs.log.scans.size() - runs.half, sum_t / static_cast<double>(std::max<std::size_t>(compared, 1)),
-              sum_r / static_cast<double>(std::max<std::size_t>(compared, 1)) * 180.0 / std::numbers::pi, max_t, max_r * 180.0 / std::numbers::pi);
-  std::printf("health: %zu ok, %zu degraded, %zu lost; %zu relocalisations, %zu global searches (max %.3f s), %zu "
-              "confirmation searches, %zu hypotheses (%zu dropped); time %.2f s, max per scan %.3f s\n",
-              s.scans_ok, s.scans_degraded, s.scans_lost, s.relocalisations.size(), s.global_searches, s.max_global_search_s,
-              s.confirmation_searches, s.hypotheses, s.hypotheses_dropped, s.total_s, s.max_scan_s);
-  for (const auto& e : s.health_events) std::printf("  scan %zu: %s\n", e.scan, e.reason.c_str());
-  {
-    // Relations metric over relations whose both ends were localised, for the localiser and for
-    // the full Slam2d run (the same relations).
-    const auto relations = eval::read_relations(test::data_path("laser2d/intel/intel.relations").string());
-    io::Trajectory est, ref;
-    std::vector<std::pair<core::Timestamp, std::pair<core::SE2, core::SE2>>> rows;
-    for (const auto& [k, pose] : localised) rows.push_back({runs.log.scans[k].time, {pose, runs.reference[k].T_world_laser}});
-    std::stable_sort(rows.begin(), rows.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-    auto lift = [](const core::SE2& T) { return core::SE3(core::SO3::from_rpy(0.0, 0.0, T.angle()), Eigen::Vector3d(T.x(), T.y(), 0.0)); };
-    for (const auto& row : rows) {
-      if (!est.stamps.empty() && !(est.stamps.back() < row.first)) continue;
-      est.stamps.push_back(row.first);
-      est.poses.push_back(lift(row.second.first));
-      ref.stamps.push_back(row.first);
-      ref.poses.push_back(lift(row.second.second));
-    }
-    auto near = [&](core::Timestamp t) {
-      const auto it = std::lower_bound(est.stamps.begin(), est.stamps.end(), t);
-      double best = 1e9;
-      if (it != est.stamps.end()) best = std::min(best, std::abs(it->seconds() - t.seconds()));
-      if (it != est.stamps.begin()) best = std::min(best, std::abs(std::prev(it)->seconds() - t.seconds()));
-      return best < 0.02;
-    };
-    std::vector<eval::Relation> used;
-    for (const auto& r : relations) if (near(r.from) && near(r.to)) used.push_back(r);
-    const auto a = eval::evaluate_relations(used, est);
-    const auto b = eval::evaluate_relations(used, ref);
-    std::printf("relations (%zu with both ends localised): localiser %.4f m %.3f deg; full Slam2d run %.4f m %.3f deg\n", used.size(),
-                a.translation_absolute_m.mean, a.rotation_absolute_deg.mean, b.translation_absolute_m.mean, b.rotation_absolute_deg.mean);
+  const Localizer2dSummary& s = localizer.summary();
+  ASSERT_TRUE(first.has_value()) << "never localised";
+  std::vector<double> sorted = errors_m;
+  std::sort(sorted.begin(), sorted.end());
+  double mean = 0.0;
+  for (const double e : errors_m) mean += e / static_cast<double>(errors_m.size());
+  // The relations metric over the relations whose both ends were localised (frame-free).
+  std::stable_sort(localised.begin(), localised.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [time, pose] : localised) {
+    if (!estimate.stamps.empty() && !(estimate.stamps.back() < time)) continue;
+    estimate.stamps.push_back(time);
+    estimate.poses.push_back(pose);
   }
-  {
-    // Reference corrected locally: the full run's pose moved by the offset between the map's
-    // and the full run's pose of the nearest map keyframe (the two maps differ slightly).
-    std::map<std::int64_t, core::SE2> full_by_time;
-    for (std::size_t k = 0; k < runs.half; ++k) full_by_time.emplace(runs.log.scans[k].time.nanoseconds(), runs.reference[k].T_world_laser);
-    double sum = 0, mx = 0, sumr = 0;
-    int bad = 0;
-    for (const auto& [k, pose] : localised) {
-      std::size_t nearest = 0;
-      double d = 1e9;
-      for (std::size_t q = 0; q < runs.map.keyframes.size(); ++q) {
-        const double dk = (runs.map.keyframes[q].T_world_laser.translation() - pose.translation()).norm();
-        if (dk < d) { d = dk; nearest = q; }
-      }
-      const SavedKeyframe& kf = runs.map.keyframes[nearest];
-      const core::SE2 T_map_full = kf.T_world_laser * full_by_time.at(kf.time.nanoseconds()).inverse();
-      const PoseError e = error_of(pose, T_map_full * runs.reference[k].T_world_laser);
-      sum += e.translation_m; sumr += e.rotation_rad; mx = std::max(mx, e.translation_m);
-      if (e.translation_m > 0.2) {
-        ++bad;
-        if (std::getenv("BAD")) std::printf("   bad scan %zu: %s conf %.2f err %.2f m, nearest kf %.2f m\n", k - runs.half, std::string(to_string(health_of[k])).c_str(), conf_of[k], e.translation_m, d);
-      }
-    }
-    std::printf("locally corrected reference: mean %.3f m %.2f deg, max %.3f m, %d scans > 0.2 m\n", sum / static_cast<double>(localised.size()), sumr / static_cast<double>(localised.size()) * 57.3, mx, bad);
-  }
-  for (int b = 0; b < 10; ++b) std::printf("confidence %.1f-%.1f: %d good (< 0.2 m), %d bad\n", b / 10.0, (b + 1) / 10.0, hist_good[b], hist_bad[b]);
-  EXPECT_TRUE(have_first);
-  EXPECT_EQ(wrong, 0u);
+  auto near = [&](core::Timestamp t) {
+    const auto it = std::lower_bound(estimate.stamps.begin(), estimate.stamps.end(), t);
+    return (it != estimate.stamps.end() && std::abs(it->seconds() - t.seconds()) < 0.02) ||
+           (it != estimate.stamps.begin() && std::abs(std::prev(it)->seconds() - t.seconds()) < 0.02);
+  };
+  std::vector<eval::Relation> relations;
+  for (const auto& r : eval::read_relations(test::data_path("laser2d/intel/intel.relations").string()))
+    if (near(r.from) && near(r.to)) relations.push_back(r);
+  const eval::RelationsResult metric = eval::evaluate_relations(relations, estimate);
+  ASSERT_TRUE(metric.outcome.ok()) << metric.outcome.message;
+  std::printf("second half, scans %zu..%zu from no prior: localised at scan %zu; %zu of %zu scans localised (%zu ok, %zu "
+              "degraded), %zu relocalisations\n",
+              runs.half, end - 1, *first, s.scans_localised, s.scans, s.scans_ok, s.scans_degraded, s.relocalisations.size());
+  std::printf("error against the continued Slam2d run: mean %.3f m, median %.3f m, max %.3f m, rotation mean %.2f deg; "
+              "relations (%zu with both ends localised) %.4f m %.3f deg\n",
+              mean, sorted[sorted.size() / 2], sorted.back(),
+              rotation_sum_rad / static_cast<double>(errors_m.size()) * 180.0 / std::numbers::pi, relations.size(),
+              metric.translation_absolute_m.mean, metric.rotation_absolute_deg.mean);
+  std::printf("time: %.1f s for %zu scans (%.1f ms per scan, slowest %.0f ms); tracking %.2f s, %zu global searches %.2f s "
+              "(slowest %.0f ms), %zu rankings %.2f s; setup %.2f s\n",
+              s.total_s, s.scans, 1e3 * s.total_s / static_cast<double>(s.scans), 1e3 * s.max_scan_s, s.times.tracking_s,
+              s.global_searches, s.times.global_search_s, 1e3 * s.max_global_search_s, s.rankings, s.times.ranking_s,
+              s.times.setup_s);
+  EXPECT_LE(*first, 10u) << "global relocalisation from no prior should take a few scans";
+  EXPECT_EQ(wrong_relocalisations, 0u);
+  EXPECT_EQ(wrong_ok, 0u);
+  EXPECT_GT(s.scans_localised, s.scans * 95 / 100);
+  EXPECT_LT(mean, 0.12);
+  EXPECT_LT(metric.translation_absolute_m.mean, 0.04);
 }
 
-}  // namespace
-}  // namespace cairn::slam2d
+// Kidnapping: the robot is localised on the first 103 scans of the second half, then carried to
+// two other places of the log in turn (the odometry continues as if it had not moved). Each
+// time the localiser must say lost within a few scans, relocalise at the right place within a
+// few more, and never report an ok pose that is wrong.
+TEST(LocalizationIntel, KidnappedRobotIsRelocalised) {
+  CAIRN_REQUIRE_DATA("laser2d/intel/intel.clf.bz2");
+  const IntelRuns& runs = intel();
+  Localizer2d localizer(runs.map);
+  std::size_t wrong_ok = 0, wrong_relocalisations = 0;
+  core::SE2 T_odom_last;
+  auto feed = [&](std::size_t from, std::size_t to, const core::SE2& T_odom_fed_odom) {
+    std::optional<std::size_t> lost, relocalised;
+    for (std::size_t k = from; k < to; ++k) {
+      io::LaserScan scan = runs.log.scans[k];
+      scan.T_odom_laser = T_odom_fed_odom * scan.T_odom_laser;
+      T_odom_last = scan.T_odom_laser;
+      const LocalizationResult r = localizer.add_scan(scan);
+      const PoseError e = error_of(r.T_map_laser, runs.reference[k].T_world_laser);
+      if (r.health == Health::kLost && !lost) lost = k - from;
+      if (r.relocalised && !relocalised) relocalised = k - from;
+      if (r.relocalised && wrong(e)) ++wrong_relocalisations;
+      if (r.localised && r.health == Health::kOk && wrong(e)) ++wrong_ok;
+    }
+    return std::make_pair(lost, relocalised);
+  };
+  const auto [start_lost, start_fix] = feed(runs.half, runs.half + 103, core::SE2());
+  ASSERT_TRUE(start_fix.has_value()) << "never localised at the start";
+  for (const std::size_t b : {runs.half + 1769, runs.half + 2334}) {
+    ASSERT_LT(b + 41, runs.end);
+    // Odometry continues from the last scan fed: T_odom_fed = T_odom_last * T_odom(b - 1)^-1 * T_odom(k).
+    const core::SE2 T_odom_fed_odom = T_odom_last * runs.log.scans[b - 1].T_odom_laser.inverse();
+    const double distance =
+        (runs.reference[b].T_world_laser.translation() - localizer.map().keyframes.front().T_world_laser.translation()).norm();
+    const auto [lost, relocalised] = feed(b, b + 41, T_odom_fed_odom);
+    std::printf("kidnapped to scan %zu (%.1f m from the map's start): lost after %d scans, relocalised after %d\n", b,
+                distance, lost ? static_cast<int>(*lost) : -1, relocalised ? static_cast<int>(*relocalised) : -1);
+    ASSERT_TRUE(lost.has_value()) << "the kidnapping to scan " << b << " went unnoticed";
+    EXPECT_LE(*lost, 6u);
+    ASSERT_TRUE(relocalised.has_value()) << "not relocalised after the kidnapping to scan " << b;
+    EXPECT_LE(*relocalised, 20u);
+  }
+  const Localizer2dSummary& s = localizer.summary();
+  for (const HealthEvent& e : s.health_events)
+    if (e.to == Health::kLost || e.from == Health::kLost) std::printf("  scan %zu: %s\n", e.scan, e.reason.c_str());
+  std::printf("%zu relocalisations, %zu global searches (slowest %.0f ms), slowest scan %.0f ms\n", s.relocalisations.size(),
+              s.global_searches, 1e3 * s.max_global_search_s, 1e3 * s.max_scan_s);
+  EXPECT_EQ(wrong_relocalisations, 0u);
+  EXPECT_EQ(wrong_ok, 0u);
+}
 
-namespace cairn::slam2d {
-namespace {
-}  // namespace
-}  // namespace cairn::slam2d
-
-namespace cairn::slam2d {
-namespace {
-}  // namespace
-}  // namespace cairn::slam2d
-
-#include "cairn/slam2d/localization_outputs.hpp"
-namespace cairn::slam2d {
-namespace {
-}  // namespace
-}  // namespace cairn::slam2d
-
-namespace cairn::slam2d {
-namespace {
-}  // namespace
-}  // namespace cairn::slam2d
-
-namespace cairn::slam2d {
-namespace {
 }  // namespace
 }  // namespace cairn::slam2d

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -88,6 +89,8 @@ bool Localizer2dOptions::is_valid(std::string* error) const {
   if (!(confirmation_window_m >= 0.0)) problems << "confirmation_window_m must be >= 0; ";
   if (!(confirmation_window_rad >= 0.0)) problems << "confirmation_window_rad must be >= 0; ";
   if (max_hypotheses < 1) problems << "max_hypotheses must be >= 1; ";
+  if (!(hypothesis_drop_deficit > 0.0)) problems << "hypothesis_drop_deficit must be > 0; ";
+  if (hypothesis_drop_window_scans < 1) problems << "hypothesis_drop_window_scans must be >= 1; ";
   const std::string text = problems.str();
   if (error != nullptr) *error = text;
   return text.empty();
@@ -113,6 +116,15 @@ struct Localizer2d::Impl {
     Eigen::Vector2d path_upper_submap = Eigen::Vector2d::Zero();
     Eigen::Vector2d centre_world = Eigen::Vector2d::Zero();  ///< of the path box
   };
+  /// A place the coarse ranking found: its coarse score, submap and pose.
+  struct Ranked {
+    double score = 0.0;
+    int submap = 0;
+    core::SE2 T_map_laser;
+  };
+  /// Poses closer than this are one place (overlapping submaps see the same place).
+  static constexpr double kPlaceSeparation_m = 2.0;
+
   /// A place the robot may be: where the odometry frame lies in the map.
   struct Hypothesis {
     core::SE2 T_map_odom;
@@ -120,8 +132,9 @@ struct Localizer2d::Impl {
     std::size_t last_support_scan = 0;
     std::size_t created_scan = 0;
     int failures = 0;                ///< scans in a row that did not fit (ICP) here
+    double inlier_fraction = 0.0;    ///< of this scan's ICP match here
+    std::deque<double> deficits;     ///< best place's inlier fraction minus this one's, last scans
     int last_submap = -1;            ///< searchable-submap index of the last supporting match
-    bool from_tracking = false;      ///< the tracked pose when a rival ended tracking
     std::vector<LocalizationMatch> evidence;
   };
 
@@ -133,7 +146,7 @@ struct Localizer2d::Impl {
   PointMap tracking_map;          ///< every submap's points, map frame
   struct CoarseOptions {
     BranchAndBoundOptions search;     ///< matching.loop_search with the coarse depth
-    double depth_resolution_m = 0.4;  ///< cell of the max-pooled grids
+    double cell_m = 0.4;  ///< cell of the max-pooled grids
   } coarse_options;
 
   LocalizationState state = LocalizationState::kSearching;
@@ -151,6 +164,9 @@ struct Localizer2d::Impl {
   std::size_t next_check = 0;     ///< position in spread_order of the tracking check
   std::size_t searching_since = 0;
   std::vector<Hypothesis> hypotheses;  ///< while searching: candidates; while tracking: rivals
+  std::vector<core::SE2> refuted;      ///< T_map_odom of rivals refuted while tracking (the last 4)
+  std::vector<Ranked> ranking;         ///< the current scan's coarse ranking (places, best first)
+  static constexpr int kAlternatives = 4;  ///< places ranked per searching scan (searched or tested)
   std::size_t hypotheses_died = 0;     ///< since the current search started
 
   Impl(SavedMap2D saved, const Localizer2dOptions& o)
@@ -162,7 +178,7 @@ struct Localizer2d::Impl {
     matching.loop_min_inlier_fraction = o.verification_min_inlier_fraction;
     coarse_options.search = matching.loop_search;
     coarse_options.search.depth = o.coarse_depth;
-    coarse_options.depth_resolution_m = map.grid.resolution_m * o.coarse_cell_factor;
+    coarse_options.cell_m = map.grid.resolution_m * o.coarse_cell_factor;
   }
 
   bool agrees(const core::SE2& a, const core::SE2& b) const {
@@ -246,29 +262,38 @@ struct Localizer2d::Impl {
 
   // The `count` submaps whose max-pooled grids score the scan best over their whole window
   // (branch and bound on the coarse grids; each search prunes below the `count`-th best score
-  // so far, and below matching.loop_min_score), best first.
-  std::vector<int> rank_submaps(const std::vector<Eigen::Vector2d>& points, int count, Localizer2dSummary& summary) const {
+  // so far, and below matching.loop_min_score), best first, at most one per place: a result
+  // whose pose lies within 2 m of a better one is dropped (overlapping submaps see the same
+  // place), so that the searches go to different places, a look-alike place among them
+  // (which then becomes a rival hypothesis instead of being missed).
+  std::vector<Ranked> rank_submaps(const std::vector<Eigen::Vector2d>& points, int count, Localizer2dSummary& summary) const {
     const auto start = Clock::now();
-    const std::vector<Eigen::Vector2d> coarse_points = voxel_filter(points, 0.5 * coarse_options.depth_resolution_m);
-    std::vector<std::pair<double, int>> best;  // (score, submap), best first, at most `count`
+    const std::vector<Eigen::Vector2d> coarse_points = voxel_filter(points, 0.5 * coarse_options.cell_m);
+    std::vector<Ranked> best;  // best first, at most `count`, pairwise farther apart than the separation
     for (std::size_t s = 0; s < submaps.size(); ++s) {
       BranchAndBoundOptions window;
       core::SE2 initial;
       whole_submap_window(static_cast<int>(s), coarse_options.search, window, initial);
-      const double threshold = static_cast<int>(best.size()) >= count ? std::max(matching.loop_min_score, best.back().first)
+      // A result below the weakest kept one could only enter by replacing a weaker neighbour.
+      const double threshold = static_cast<int>(best.size()) >= count ? std::max(matching.loop_min_score, best.back().score)
                                                                        : matching.loop_min_score;
       const BranchAndBoundResult result =
           match_branch_and_bound(*submaps[s].coarse_stack, coarse_points, initial, threshold, window);
       if (!result.found) continue;
-      best.emplace_back(result.score, static_cast<int>(s));
-      std::stable_sort(best.begin(), best.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+      const Ranked entry{result.score, static_cast<int>(s), submaps[s].T_world_submap * result.T_map_sensor};
+      const auto near = [&](const Ranked& other) {
+        return (other.T_map_laser.translation() - entry.T_map_laser.translation()).norm() < kPlaceSeparation_m;
+      };
+      if (std::any_of(best.begin(), best.end(), [&](const Ranked& other) { return near(other) && other.score >= entry.score; }))
+        continue;
+      std::erase_if(best, near);
+      best.push_back(entry);
+      std::stable_sort(best.begin(), best.end(), [](const Ranked& a, const Ranked& b) { return a.score > b.score; });
       if (static_cast<int>(best.size()) > count) best.pop_back();
     }
-    std::vector<int> ranked;
-    for (const auto& [score, s] : best) ranked.push_back(s);
     ++summary.rankings;
     summary.times.ranking_s += seconds_since(start);
-    return ranked;
+    return best;
   }
 
   // One search of `points` in submap `s`: global (the submap's path box plus margin, every
@@ -338,9 +363,13 @@ struct Localizer2d::Impl {
   // A verified match of a global search: support for the hypothesis it agrees with, or a new one
   // (while tracking: unless it agrees with the tracked pose).
   void add_match(const LocalizationMatch& match, const core::SE2& odom, Localizer2dSummary& summary) {
-    if (state == LocalizationState::kTracking && agrees(match.T_map_laser, T_map_laser)) {
-      ++summary.tracking_checks_agreeing;
-      return;
+    if (state == LocalizationState::kTracking) {
+      if (agrees(match.T_map_laser, T_map_laser)) {
+        ++summary.tracking_checks_agreeing;
+        return;
+      }
+      for (const core::SE2& T_map_odom : refuted)
+        if (agrees(match.T_map_laser, T_map_odom * odom)) return;  // refuted before
     }
     for (Hypothesis& h : hypotheses) {
       if (agrees(match.T_map_laser, h.T_map_odom * odom)) {
@@ -369,6 +398,7 @@ struct Localizer2d::Impl {
     for (Hypothesis& h : hypotheses) {
       const core::SE2 predicted = h.T_map_odom * odom;
       const IcpResult icp = match_icp(tracking_map, points, predicted, &predicted, matching.icp);
+      h.inlier_fraction = icp.inlier_fraction;
       if (icp.inlier_fraction >= options.tracking_min_inlier_fraction) {
         h.T_map_odom = icp.T_map_sensor * odom.inverse();
         h.failures = 0;
@@ -381,7 +411,6 @@ struct Localizer2d::Impl {
       for (Hypothesis& other : kept) {
         if (!agrees(other.T_map_odom * odom, h.T_map_odom * odom)) continue;
         if (h.support > other.support) std::swap(h, other);
-        other.from_tracking = other.from_tracking || h.from_tracking;
         duplicate = true;
         break;
       }
@@ -392,6 +421,27 @@ struct Localizer2d::Impl {
       kept.push_back(std::move(h));
     }
     hypotheses = std::move(kept);
+    // Among several places, one that explains clearly less of the scans than the best over the
+    // last scans is dropped (an accumulated likelihood-ratio test in its simplest form: a small
+    // asymmetry of a symmetric building, seen for a while, decides).
+    if (hypotheses.size() > 1) {
+      double best = 0.0;
+      for (const Hypothesis& h : hypotheses) best = std::max(best, h.inlier_fraction);
+      std::vector<Hypothesis> better;
+      for (Hypothesis& h : hypotheses) {
+        h.deficits.push_back(best - h.inlier_fraction);
+        if (static_cast<int>(h.deficits.size()) > options.hypothesis_drop_window_scans) h.deficits.pop_front();
+        double deficit = 0.0;
+        for (const double d : h.deficits) deficit += d;
+        if (deficit >= options.hypothesis_drop_deficit) {
+          ++summary.hypotheses_dropped;
+          ++hypotheses_died;
+          continue;
+        }
+        better.push_back(std::move(h));
+      }
+      hypotheses = std::move(better);
+    }
     summary.times.confirmation_search_s += seconds_since(start);
     for (Hypothesis& h : hypotheses) {
       if (const auto match = search_near(points, h.T_map_odom * odom, time, summary, h.last_submap)) add_support(h, *match, odom);
@@ -416,7 +466,13 @@ struct Localizer2d::Impl {
   // more, the next ones of `order` from `position` that are not chosen yet.
   std::vector<int> choose_submaps(const std::vector<Eigen::Vector2d>& points, int ranked, int round_robin,
                                   const std::vector<int>& order, std::size_t& position, Localizer2dSummary& summary) {
-    std::vector<int> chosen = ranked > 0 ? rank_submaps(points, ranked, summary) : std::vector<int>{};
+    std::vector<int> chosen;
+    if (ranked > 0) {
+      // Rank a few more places than are searched: the others are the look-alikes the
+      // acceptance test checks (unique_fit).
+      ranking = rank_submaps(points, std::max(ranked, kAlternatives), summary);
+      for (std::size_t k = 0; k < ranking.size() && static_cast<int>(k) < ranked; ++k) chosen.push_back(ranking[k].submap);
+    }
     for (int k = 0; k < round_robin && !order.empty(); ++k) {
       for (std::size_t tries = 0; tries < order.size(); ++tries) {
         const int s = order[position++ % order.size()];
@@ -433,6 +489,7 @@ struct Localizer2d::Impl {
   std::optional<Relocalisation> search_scan(const std::vector<Eigen::Vector2d>& points, const core::SE2& odom,
                                             core::Timestamp time, Localizer2dSummary& summary) {
     if (order_stale) make_search_order(odom);
+    ranking.clear();
     follow_hypotheses(points, odom, time, summary);
     global_searches(choose_submaps(points, options.global_searches_per_scan - options.round_robin_searches_per_scan,
                                    options.round_robin_searches_per_scan, search_order, next_search, summary),
@@ -441,6 +498,21 @@ struct Localizer2d::Impl {
       if (h.support < options.confirmations || h.last_support_scan != scan_index) continue;
       if (hypotheses.size() > 1) {
         ++summary.scans_ambiguous;
+        return std::nullopt;
+      }
+      if (const auto look_alike = other_fitting_place(points, h.evidence.back().T_map_laser, summary)) {
+        // The whole map explains the scan as well elsewhere (a symmetric building): follow that
+        // place too, accept nothing until the scans stop fitting one of them.
+        ++summary.scans_ambiguous;
+        ++summary.look_alikes;
+        LocalizationMatch match = h.evidence.back();
+        match.global = true;
+        match.T_map_laser = *look_alike;
+        Hypothesis rival;
+        rival.created_scan = scan_index;
+        rival.T_map_odom = *look_alike * odom.inverse();
+        hypotheses.push_back(std::move(rival));
+        ++summary.hypotheses;
         return std::nullopt;
       }
       Relocalisation relocalisation;
@@ -456,16 +528,50 @@ struct Localizer2d::Impl {
     return std::nullopt;
   }
 
+  // The uniqueness test before a pose is accepted: each other place of this scan's coarse
+  // ranking (farther than kPlaceSeparation_m from `T_map_accepted`) is refined by branch and
+  // bound in a small window of its submap and then by ICP against the whole map without a prior;
+  // a place where the map explains the scan as well as a verified match must (inlier fraction,
+  // residual, degeneracy) is returned. Per-submap verification cannot see such a look-alike:
+  // its ambiguity test spans one submap.
+  std::optional<core::SE2> other_fitting_place(const std::vector<Eigen::Vector2d>& points, const core::SE2& T_map_accepted,
+                                               Localizer2dSummary& summary) {
+    const auto start = Clock::now();
+    std::optional<core::SE2> found;
+    IcpOptions icp_options = matching.icp;
+    icp_options.prior_translation_sigma_m = 0.0;  // no prior: the fit decides
+    for (const Ranked& place : ranking) {
+      if ((place.T_map_laser.translation() - T_map_accepted.translation()).norm() < kPlaceSeparation_m) continue;
+      const Submap& submap = submaps[static_cast<std::size_t>(place.submap)];
+      BranchAndBoundOptions window = matching.loop_search;
+      window.linear_search_window_m = coarse_options.cell_m;  // the coarse pose's cell
+      window.angular_search_window_rad = options.confirmation_window_rad;
+      const BranchAndBoundResult fine = match_branch_and_bound(
+          *submap.stack, points, submap.T_world_submap.inverse() * place.T_map_laser, matching.loop_min_score, window);
+      ++summary.uniqueness_tests;
+      if (!fine.found) continue;
+      const IcpResult fit =
+          match_icp(tracking_map, points, submap.T_world_submap * fine.T_map_sensor, nullptr, icp_options);
+      if (fit.inlier_fraction >= options.verification_min_inlier_fraction && fit.rms_m <= matching.loop_max_rms_m &&
+          fit.degeneracy >= options.verification_min_degeneracy &&
+          (fit.T_map_sensor.translation() - T_map_accepted.translation()).norm() >= kPlaceSeparation_m) {
+        found = fit.T_map_sensor;
+        break;
+      }
+    }
+    summary.times.confirmation_search_s += seconds_since(start);
+    return found;
+  }
+
   // The tracking check (see the file comment). Returns the reason when tracking must end.
   std::optional<std::string> check_tracking(const std::vector<Eigen::Vector2d>& points, const core::SE2& odom,
-                                            core::Timestamp time, double inlier_fraction, Localizer2dSummary& summary) {
+                                            core::Timestamp time, const IcpResult& tracked, Localizer2dSummary& summary) {
     if (!hypotheses.empty()) follow_hypotheses(points, odom, time, summary);
-    // Every check_every_n_scans scans, and every scan that few points match (a kidnapped
-    // robot's scans rarely fit the wrong place well).
-    // The periodic check takes the next submap in turn; a poorly matching scan's check the
-    // submap that the coarse ranking puts first (where the robot most likely is instead).
-    const bool poor = inlier_fraction < options.ok_min_inlier_fraction;
-    if (poor || scan_index % static_cast<std::size_t>(options.check_every_n_scans) == 0) {
+    // Every check_every_n_scans scans: the next submap in turn, or when few points match (a
+    // kidnapped robot's scans rarely fit the wrong place well) the submap the coarse ranking
+    // puts first, where the robot most likely is instead.
+    const bool poor = tracked.inlier_fraction < options.ok_min_inlier_fraction;
+    if (scan_index % static_cast<std::size_t>(options.check_every_n_scans) == 0) {
       ++summary.tracking_checks;
       global_searches(choose_submaps(points, poor ? 1 : 0, poor ? 0 : 1, spread_order, next_check, summary), points, odom,
                       time, summary);
@@ -474,21 +580,29 @@ struct Localizer2d::Impl {
     std::erase_if(hypotheses, [&](const Hypothesis& h) { return agrees(h.T_map_odom * odom, T_map_laser); });
     for (const Hypothesis& h : hypotheses) {
       if (h.support < options.confirmations || h.last_support_scan != scan_index) continue;
-      // A confirmed rival: does the tracked pose pass the same verification?
-      if (search_near(points, T_map_laser, time, summary)) {
+      // A confirmed rival: does the whole map explain the scan at the tracked pose as well as a
+      // verified match must (this scan's tracking match: inlier fraction, residual,
+      // degeneracy)? No ambiguity test: continuity has already chosen between places that look
+      // alike, such as the two halves of a symmetric building.
+      if (tracked.inlier_fraction >= options.verification_min_inlier_fraction && tracked.rms_m <= matching.loop_max_rms_m &&
+          tracked.degeneracy >= options.verification_min_degeneracy) {
         ++summary.rivals_refuted;
+        for (const Hypothesis& rival : hypotheses) refuted.push_back(rival.T_map_odom);
+        while (refuted.size() > 4) refuted.erase(refuted.begin());
         hypotheses.clear();
         return std::nullopt;
       }
       const double distance = ((h.T_map_odom * odom).translation() - T_map_laser.translation()).norm();
       return "lost: " + std::to_string(h.support) + " scans' verified matches place the robot " + fixed(distance, 2) +
-             " m from the tracked pose, which fails verification; both are followed until the scans stop fitting one";
+             " m from the tracked pose, where the map explains less of the scan (inlier fraction " +
+             fixed(tracked.inlier_fraction, 3) + "); both are followed until the scans stop fitting one";
     }
     return std::nullopt;
   }
 
   void start_searching(std::optional<core::SE2> prior) {
     state = LocalizationState::kSearching;
+    refuted.clear();
     prior_T_map_odom = prior;
     order_stale = true;
     hypotheses_died = 0;
@@ -570,20 +684,18 @@ LocalizationResult Localizer2d::add_scan(const io::LaserScan& scan) {
     const auto track_start = Clock::now();
     const core::SE2 predicted = m.T_map_laser * (m.previous_odom.inverse() * odom);
     m.T_map_laser = predicted;
+    IcpResult tracked_match;
     if (!enough_points) {
       next = Health::kDegraded;
+      result.dead_reckoning = true;
       reason = "too few returns to match (" + std::to_string(points.matching.size()) + "); following odometry";
     } else {
-      IcpResult icp = match_icp(m.tracking_map, points.matching, predicted, &predicted, o.icp);
-      if (icp.inlier_fraction < m.options.ok_min_inlier_fraction) {
-        // As Slam2d: the odometry may have slipped in rotation; retry from rotated guesses
-        // without the prior and keep a clearly better fit.
-        for (const double offset : {-0.35, -0.2, -0.1, 0.1, 0.2, 0.35}) {
-          const core::SE2 guess(predicted.so2() * core::SO2(offset), predicted.translation());
-          const IcpResult alternative = match_icp(m.tracking_map, points.matching, guess, nullptr, o.icp);
-          if (alternative.inlier_fraction > icp.inlier_fraction + 0.1) icp = alternative;
-        }
-      }
+      // Unlike Slam2d, no retry from rotated guesses without the prior when few points match:
+      // against a whole building's map such a retry found another corridor (Intel's second
+      // half: a 1.1 m jump, then 30 scans 2 m off). A slipped odometry makes the match fail
+      // instead, and the search finds the robot again.
+      const IcpResult icp = match_icp(m.tracking_map, points.matching, predicted, &predicted, o.icp);
+      tracked_match = icp;
       result.confidence = icp.inlier_fraction;
       result.degeneracy = icp.degeneracy;
       result.rms_m = icp.rms_m;
@@ -608,6 +720,7 @@ LocalizationResult Localizer2d::add_scan(const io::LaserScan& scan) {
         ++summary_.tracking_failures;
         ++m.failures_in_a_row;
         next = Health::kDegraded;
+        result.dead_reckoning = true;
         reason = "scan does not match the map (inlier fraction " + fixed(icp.inlier_fraction, 3) + ", " +
                  std::to_string(m.failures_in_a_row) + " in a row); following odometry";
         if (m.failures_in_a_row >= o.lost_after_scans) {
@@ -624,13 +737,12 @@ LocalizationResult Localizer2d::add_scan(const io::LaserScan& scan) {
     summary_.times.tracking_s += seconds_since(track_start);
     // The tracking check: a confirmed match elsewhere that the tracked pose cannot match.
     if (m.state == LocalizationState::kTracking && enough_points) {
-      if (const auto contradiction = m.check_tracking(points.matching, odom, scan.time, result.confidence, summary_)) {
+      if (const auto contradiction = m.check_tracking(points.matching, odom, scan.time, tracked_match, summary_)) {
         ++summary_.tracking_contradicted;
         m.start_searching(m.T_map_laser * odom.inverse());
         Impl::Hypothesis tracked;
         tracked.T_map_odom = m.T_map_laser * odom.inverse();
         tracked.created_scan = m.scan_index;
-        tracked.from_tracking = true;
         m.hypotheses.insert(m.hypotheses.begin(), tracked);
         next = Health::kLost;
         reason = *contradiction;
@@ -642,6 +754,7 @@ LocalizationResult Localizer2d::add_scan(const io::LaserScan& scan) {
       result.T_map_laser = m.T_map_laser;
     } else {
       result.confidence = 0.0;
+      result.dead_reckoning = false;
       result.covariance.setZero();
     }
   } else {

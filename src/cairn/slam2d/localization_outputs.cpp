@@ -221,7 +221,7 @@ void write_localization_png(const ProbabilityGrid& grid, const std::vector<Local
 void write_localization_csv(const std::vector<LocalizationResult>& results, const std::string& path) {
   io::write_output(path, [&](std::ostream& out) {
     out << "time_s,state,health,localised,x_m,y_m,theta_rad,confidence,degeneracy,rms_m,sigma_x_m,sigma_y_m,"
-           "sigma_theta_rad,relocalised,matching_points\n";
+           "sigma_theta_rad,relocalised,dead_reckoning,matching_points\n";
     std::string line;
     for (const LocalizationResult& s : results) {
       line = s.time.to_seconds_string();
@@ -240,7 +240,8 @@ void write_localization_csv(const std::vector<LocalizationResult>& results, cons
         line += ',';
         io::append_number(line, v);
       }
-      line += s.relocalised ? ",1," : ",0,";
+      line += s.relocalised ? ",1" : ",0";
+      line += s.dead_reckoning ? ",1," : ",0,";
       line += std::to_string(s.matching_points);
       line += '\n';
       out << line;
@@ -271,6 +272,8 @@ nlohmann::json localization_report_json(const Localizer2d& localizer, const Loca
                        {"hypotheses_dropped", s.hypotheses_dropped},
                        {"hypotheses_ignored", s.hypotheses_ignored},
                        {"scans_ambiguous", s.scans_ambiguous},
+                       {"uniqueness_tests", s.uniqueness_tests},
+                       {"look_alikes", s.look_alikes},
                        {"tracking_checks", s.tracking_checks},
                        {"tracking_checks_agreeing", s.tracking_checks_agreeing},
                        {"rivals_refuted", s.rivals_refuted},
@@ -306,6 +309,8 @@ nlohmann::json localization_report_json(const Localizer2d& localizer, const Loca
                        {"confirmation_window_m", options.confirmation_window_m},
                        {"confirmation_window_rad", options.confirmation_window_rad},
                        {"max_hypotheses", options.max_hypotheses},
+                       {"hypothesis_drop_deficit", options.hypothesis_drop_deficit},
+                       {"hypothesis_drop_window_scans", options.hypothesis_drop_window_scans},
                        {"tracking_min_inlier_fraction", options.tracking_min_inlier_fraction},
                        {"ok_min_inlier_fraction", options.ok_min_inlier_fraction},
                        {"check_every_n_scans", options.check_every_n_scans},
