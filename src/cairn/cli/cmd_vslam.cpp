@@ -1,0 +1,418 @@
+// `cairn vslam FOLDER --out DIR`: stereo (KITTI odometry layout) or RGB-D (TUM layout) visual
+// SLAM, fed one frame at a time through the interface a robot would use (vslam/visual_slam.hpp).
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include "cairn/cli/commands.hpp"
+#include "cairn/cli/interrupt.hpp"
+#include "cairn/eval/ape.hpp"
+#include "cairn/eval/rpe.hpp"
+#include "cairn/io/image_sequence.hpp"
+#include "cairn/io/output_file.hpp"
+#include "cairn/io/parse_error.hpp"
+#include "cairn/io/point_cloud.hpp"
+#include "cairn/io/trajectory.hpp"
+#include "cairn/vision/features.hpp"
+#include "cairn/viz/render.hpp"
+#include "cairn/vslam/visual_slam.hpp"
+
+namespace cairn::cli {
+namespace {
+
+struct VslamFlags {
+  std::string folder;
+  std::string out;
+  std::string camera;
+  std::string calib;
+  std::string ground_truth;
+  int features = 0;
+  long max_frames = 0;
+  long feature_frame = -1;
+  bool no_local_ba = false;
+  bool quiet = false;
+  bool progress = false;
+  bool overwrite = false;
+};
+
+// The published calibrations of TUM's three Kinects (vision.in.tum.de "Intrinsic Camera
+// Calibration of the Kinect"; the same numbers as ORB-SLAM2's TUM1/2/3.yaml), colour camera,
+// depth 5000 units per metre, ORB-SLAM2's bf = 40 for the virtual baseline.
+io::CameraCalibration tum_preset(const std::string& name) {
+  io::CameraCalibration c;
+  if (name == "tum-fr1") {
+    c = {517.306408, 516.469215, 318.643040, 255.313989, 0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
+  } else if (name == "tum-fr2") {
+    c = {520.908620, 521.007327, 325.141442, 249.701764, 0.231222, -0.784899, -0.003257, -0.000105, 0.917205};
+  } else if (name == "tum-fr3") {
+    c = {535.4, 539.2, 320.1, 247.6};
+  } else {
+    throw std::invalid_argument("--camera must be tum-fr1, tum-fr2 or tum-fr3 (or give --calib FILE)");
+  }
+  c.width = 640;
+  c.height = 480;
+  c.depth_units_per_m = 5000.0;
+  c.virtual_baseline_m = 40.0 / c.fx;
+  return c;
+}
+
+// A calibration YAML: fx, fy, cx, cy required; k1 k2 p1 p2 k3, width, height, baseline_m,
+// depth_units_per_m, virtual_baseline_m optional. Unknown keys are errors (a typo must not
+// silently leave a zero).
+io::CameraCalibration read_calibration_yaml(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw io::ParseError(path, 0, "cannot open the calibration file");
+  } catch (const YAML::Exception& e) {
+    throw io::ParseError(path, static_cast<std::size_t>(e.mark.line + 1), "not valid YAML: " + e.msg);
+  }
+  if (!root.IsMap()) throw io::ParseError(path, 0, "expected a YAML map of calibration keys (fx, fy, cx, cy, ...)");
+  io::CameraCalibration c;
+  const std::vector<std::pair<const char*, double*>> keys{
+      {"fx", &c.fx}, {"fy", &c.fy}, {"cx", &c.cx}, {"cy", &c.cy}, {"k1", &c.k1}, {"k2", &c.k2}, {"p1", &c.p1}, {"p2", &c.p2},
+      {"k3", &c.k3}, {"baseline_m", &c.baseline_m}, {"depth_units_per_m", &c.depth_units_per_m},
+      {"virtual_baseline_m", &c.virtual_baseline_m}};
+  for (const auto& entry : root) {
+    const std::string key = entry.first.as<std::string>();
+    const std::size_t line = static_cast<std::size_t>(entry.first.Mark().line + 1);
+    auto it = std::find_if(keys.begin(), keys.end(), [&](const auto& k) { return key == k.first; });
+    try {
+      if (it != keys.end()) *it->second = entry.second.as<double>();
+      else if (key == "width") c.width = entry.second.as<int>();
+      else if (key == "height") c.height = entry.second.as<int>();
+      else throw io::ParseError(path, line, "unknown key \"" + key + "\" (expected fx, fy, cx, cy, k1, k2, p1, p2, k3, width, height, baseline_m, depth_units_per_m, virtual_baseline_m)");
+    } catch (const YAML::Exception&) {
+      throw io::ParseError(path, line, "\"" + key + "\" must be a number");
+    }
+  }
+  for (const char* required : {"fx", "fy", "cx", "cy"}) {
+    if (!root[required]) throw io::ParseError(path, 0, std::string("missing required key \"") + required + "\"");
+  }
+  if (const std::string p = c.problems(); !p.empty()) throw io::ParseError(path, 0, p);
+  return c;
+}
+
+nlohmann::json stats_json(const eval::Statistics& s) {
+  return {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median}, {"max", s.max}, {"count", s.count}};
+}
+
+struct Spread {
+  double median = 0.0, mean = 0.0, max = 0.0;
+};
+Spread spread(std::vector<double> v) {
+  Spread s;
+  if (v.empty()) return s;
+  std::sort(v.begin(), v.end());
+  s.median = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  s.mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+  s.max = v.back();
+  return s;
+}
+nlohmann::json ms_json(const std::vector<double>& seconds) {
+  std::vector<double> ms;
+  for (const double s : seconds) ms.push_back(1e3 * s);
+  const Spread s = spread(ms);
+  return {{"median", s.median}, {"mean", s.mean}, {"max", s.max}};
+}
+
+int vslam_command(const VslamFlags& flags) {
+  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
+  const std::string layout = io::detect_image_layout(flags.folder);
+  io::ImageSequence seq = layout == "kitti" ? io::read_kitti_stereo(flags.folder) : io::read_tum_rgbd(flags.folder);
+  if (!flags.calib.empty() && !flags.camera.empty()) throw std::invalid_argument("give --camera or --calib, not both");
+  if (!flags.calib.empty()) {
+    io::CameraCalibration c = read_calibration_yaml(flags.calib);
+    if (seq.kind == io::SequenceKind::kStereo && !(c.baseline_m > 0.0)) c.baseline_m = seq.calibration.baseline_m;
+    seq.calibration = c;
+  } else if (!flags.camera.empty()) {
+    seq.calibration = tum_preset(flags.camera);
+  } else if (!seq.calibration_from_dataset) {
+    throw std::invalid_argument("a " + seq.layout + " folder has no calibration: give --camera tum-fr1|tum-fr2|tum-fr3 or --calib FILE");
+  }
+  std::size_t n = seq.frames.size();
+  if (flags.max_frames > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_frames));
+  io::Trajectory ground_truth;
+  std::string ground_truth_path;
+  if (!flags.ground_truth.empty()) {
+    ground_truth = io::read_tum(flags.ground_truth);
+    ground_truth_path = flags.ground_truth;
+  } else if (seq.ground_truth) {
+    ground_truth = *seq.ground_truth;
+    ground_truth_path = seq.ground_truth_path;
+  }
+
+  vslam::VisualSlamOptions options;
+  options.orb.features = flags.features > 0 ? flags.features : (seq.kind == io::SequenceKind::kStereo ? 2000 : 1000);
+  if (seq.kind == io::SequenceKind::kRgbd) options.close_depth_baselines = 40.0;  // ORB-SLAM2 TUM*.yaml ThDepth
+  options.local_ba = !flags.no_local_ba;
+  if (!flags.quiet) {
+    std::fprintf(stderr, "cairn vslam: %s %s, %zu frames, fx %.2f, %s %.4f m%s\n", seq.layout.c_str(),
+                 std::string(io::to_string(seq.kind)).c_str(), n, seq.calibration.fx,
+                 seq.kind == io::SequenceKind::kStereo ? "baseline" : "virtual baseline",
+                 seq.kind == io::SequenceKind::kStereo ? seq.calibration.baseline_m : seq.calibration.virtual_baseline_m,
+                 seq.calibration.has_distortion() ? ", distorted (keypoints undistorted)" : "");
+    for (const std::string& note : seq.notes) std::fprintf(stderr, "cairn vslam: %s\n", note.c_str());
+  }
+
+  io::OutputDirectory out(flags.out, flags.overwrite);
+  vslam::VisualSlam slam(seq.calibration, seq.kind, options);
+  std::vector<vslam::FrameResult> results;
+  std::vector<double> read_s;
+  const bool tty = !flags.quiet && !flags.progress && isatty(fileno(stderr));
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t feature_frame = flags.feature_frame >= 0 ? static_cast<std::size_t>(flags.feature_frame) : n / 2;
+  cv::Mat feature_image;
+  std::vector<cv::KeyPoint> feature_keypoints;
+  std::vector<signed char> feature_states;
+  vslam::TrackingHealth last_health = vslam::TrackingHealth::kOk;
+  int width = seq.calibration.width, height = seq.calibration.height;
+  for (std::size_t k = 0; k < n && !interrupted(); ++k) {
+    const io::ImageFrame& frame = seq.frames[k];
+    const auto read_start = std::chrono::steady_clock::now();
+    const cv::Mat image = vision::read_gray_image(frame.image, width, height);
+    width = image.cols;
+    height = image.rows;
+    vslam::FrameResult r;
+    if (seq.kind == io::SequenceKind::kStereo) {
+      const cv::Mat right = vision::read_gray_image(frame.right_image, width, height);
+      read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
+      r = slam.add_stereo(frame.time, image, right);
+    } else {
+      const cv::Mat depth = vision::read_depth_image(frame.depth_image, width, height);
+      read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
+      r = slam.add_rgbd(frame.time, image, depth);
+    }
+    if (k == feature_frame) {
+      feature_image = image;
+      feature_keypoints = r.keypoints;
+      feature_states = r.keypoint_states;
+    }
+    r.keypoints.clear();
+    r.keypoint_states.clear();
+    if (!flags.quiet && r.health != last_health) {
+      std::fprintf(stderr, "%s[frame %zu] %s%s%s\n", tty ? "\r" : "", k, std::string(vslam::to_string(r.health)).c_str(),
+                   r.note.empty() ? "" : ": ", r.note.c_str());
+      last_health = r.health;
+    }
+    if ((tty || flags.progress) && (k % 10 == 0 || k + 1 == n)) {
+      std::fprintf(stderr, "%sframe %zu / %zu  %.0f ms  %d inliers  %zu keyframes%s", tty ? "\r" : "", k + 1, n, 1e3 * r.times.total_s,
+                   r.inliers, slam.summary().keyframes, tty ? "   " : "\n");
+      std::fflush(stderr);
+    }
+    results.push_back(std::move(r));
+  }
+  if (tty) std::fprintf(stderr, "\n");
+  const bool stopped = interrupted();
+  if (stopped) std::fprintf(stderr, "cairn vslam: interrupted by %s after %zu frames: writing the result so far\n", interrupt_signal_name(), results.size());
+  if (results.empty()) throw std::runtime_error("no frame was processed");
+  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // Trajectories (every frame, at the final keyframe poses) and keyframes.
+  const std::vector<core::SE3> poses = slam.trajectory();
+  io::Trajectory trajectory;
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    trajectory.stamps.push_back(results[k].time);
+    trajectory.poses.push_back(poses[k]);
+  }
+  io::write_output(out.staging_path("trajectory.tum"), [&](std::ostream& o) { io::write_tum(o, trajectory); });
+  io::write_output(out.staging_path("trajectory.kitti"), [&](std::ostream& o) { io::write_kitti(o, trajectory); });
+  io::Trajectory keyframes;
+  for (const std::size_t k : slam.keyframe_frames()) {
+    keyframes.stamps.push_back(results[k].time);
+    keyframes.poses.push_back(poses[k]);
+  }
+  io::write_output(out.staging_path("keyframes.tum"), [&](std::ostream& o) { io::write_tum(o, keyframes); });
+  std::vector<Eigen::Vector3f> map_points;
+  for (const Eigen::Vector3d& p : slam.map_points()) map_points.push_back(p.cast<float>());
+  io::write_output(out.staging_path("map_points.ply"), [&](std::ostream& o) {
+    io::write_ply(o, map_points, "cairn vslam map points, world = the first camera (x right, y down, z forward)");
+  });
+  io::write_output(out.staging_path("frames.csv"), [&](std::ostream& o) {
+    o << "frame,time_s,health,tracked,keyframe,features,stereo_points,first_stage_matches,used_reference,inliers,inlier_ratio,"
+         "sigma_position_m,features_ms,stereo_ms,tracking_ms,mapping_ms,total_ms,note\n";
+    for (const auto& r : results) {
+      o << r.frame << ',' << r.time.to_seconds_string() << ',' << vslam::to_string(r.health) << ',' << (r.tracked ? 1 : 0) << ','
+        << (r.keyframe ? 1 : 0) << ',' << r.features << ',' << r.stereo_points << ',' << r.motion_matches << ','
+        << (r.used_reference ? 1 : 0) << ',' << r.inliers << ',' << r.inlier_ratio << ',' << r.sigma_position_m << ','
+        << 1e3 * r.times.features_s << ',' << 1e3 * r.times.stereo_s << ',' << 1e3 * r.times.tracking_s << ','
+        << 1e3 * r.times.mapping_s << ',' << 1e3 * r.times.total_s << ",\"" << r.note << "\"\n";
+    }
+  });
+
+  // Evaluation against the ground truth, when there is one.
+  nlohmann::json evaluation = nullptr;
+  viz::Figure figure;
+  figure.title = "cairn vslam: " + seq.folder;
+  figure.width_px = 1000;
+  figure.height_px = 800;
+  viz::Axes axes;
+  axes.title = "top view (x right, z forward of the first camera)";
+  axes.x_label = "x [m]";
+  axes.y_label = "z [m]";
+  axes.equal_aspect = true;
+  if (!ground_truth.poses.empty()) {
+    eval::ApeOptions ape_options;
+    ape_options.alignment.method = eval::AlignmentMethod::kSE3;
+    ape_options.association.max_time_difference_s = 0.02;
+    const eval::ApeResult ape = eval::evaluate_ape(ground_truth, trajectory, ape_options);
+    eval::RpeOptions rpe_options;
+    rpe_options.association = ape_options.association;
+    const eval::RpeResult rpe_t = eval::evaluate_rpe(ground_truth, trajectory, rpe_options);
+    rpe_options.relation = eval::PoseRelation::kRotationAngleDeg;
+    const eval::RpeResult rpe_r = eval::evaluate_rpe(ground_truth, trajectory, rpe_options);
+    evaluation = {{"ground_truth", ground_truth_path}};
+    if (ape.outcome.ok()) {
+      evaluation["ate_se3_aligned_m"] = stats_json(ape.statistics);
+      // The ground truth drawn in the estimate's frame: T_est = alignment^-1 * T_gt.
+      viz::Series gt;
+      gt.label = "ground truth (SE(3)-aligned)";
+      gt.color = viz::kBlack;
+      gt.dashed = true;
+      viz::Series est;
+      est.label = "cairn vslam";
+      for (std::size_t i = 0; i < ape.reference.size(); ++i) {
+        gt.x.push_back(ape.reference[i](0, 3));
+        gt.y.push_back(ape.reference[i](2, 3));
+        est.x.push_back(ape.estimate[i](0, 3));
+        est.y.push_back(ape.estimate[i](2, 3));
+      }
+      axes.title = "top view, estimate SE(3)-aligned to the ground truth (x, z of the ground truth's frame)";
+      axes.series.push_back(gt);
+      axes.series.push_back(est);
+      // Drift at the end with no alignment, both trajectories re-based on their first pair.
+      const Eigen::Matrix4d d_ref = ape.reference.front().inverse() * ape.reference.back();
+      const Eigen::Matrix4d aligned_first = ape.estimate.front();
+      const Eigen::Matrix4d d_est = aligned_first.inverse() * ape.estimate.back();
+      evaluation["end_point_drift_m"] = (d_ref.block<3, 1>(0, 3) - d_est.block<3, 1>(0, 3)).norm();
+      double path = 0.0;
+      for (std::size_t i = 1; i < ape.reference.size(); ++i) path += (ape.reference[i].block<3, 1>(0, 3) - ape.reference[i - 1].block<3, 1>(0, 3)).norm();
+      evaluation["path_length_m"] = path;
+      evaluation["frames_compared"] = ape.reference.size();
+    } else {
+      evaluation["ate_error"] = ape.outcome.message;
+    }
+    if (rpe_t.outcome.ok()) evaluation["rpe_1_frame_translation_m"] = stats_json(rpe_t.statistics);
+    if (rpe_r.outcome.ok()) evaluation["rpe_1_frame_rotation_deg"] = stats_json(rpe_r.statistics);
+  }
+  if (axes.series.empty()) {
+    viz::Series est;
+    est.label = "cairn vslam";
+    for (const auto& T : trajectory.poses) {
+      est.x.push_back(T.translation().x());
+      est.y.push_back(T.translation().z());
+    }
+    axes.series.push_back(est);
+  }
+  figure.panels.push_back(axes);
+  const viz::RenderResult png = viz::render(figure, viz::ImageFormat::kPng);
+  if (!png.ok) throw std::runtime_error("cannot draw trajectory.png: " + png.message);
+  io::write_output(out.staging_path("trajectory.png"), [&](std::ostream& o) { o << png.bytes; });
+  if (!feature_image.empty()) {
+    const std::string bytes = vision::draw_features_png(feature_image, feature_keypoints, feature_states,
+                                                          "frame " + std::to_string(feature_frame));
+    io::write_output(out.staging_path("features.png"), [&](std::ostream& o) { o << bytes; });
+  }
+
+  // Report.
+  const vslam::VisualSlamSummary& s = slam.summary();
+  std::vector<double> tracking, features_s, total, mapping;
+  for (const auto& r : results) {
+    tracking.push_back(r.times.stereo_s + r.times.tracking_s);
+    features_s.push_back(r.times.features_s);
+    mapping.push_back(r.times.mapping_s);
+    total.push_back(r.times.total_s);
+  }
+  nlohmann::json report;
+  report["input"] = {{"folder", seq.folder},
+                     {"layout", seq.layout},
+                     {"kind", std::string(io::to_string(seq.kind))},
+                     {"frames_listed", seq.frames.size()},
+                     {"frames_processed", results.size()},
+                     {"times_from_file", seq.times_from_file},
+                     {"notes", seq.notes},
+                     {"calibration",
+                      {{"fx", seq.calibration.fx}, {"fy", seq.calibration.fy}, {"cx", seq.calibration.cx}, {"cy", seq.calibration.cy},
+                       {"distortion", {seq.calibration.k1, seq.calibration.k2, seq.calibration.p1, seq.calibration.p2, seq.calibration.k3}},
+                       {"baseline_m", seq.calibration.baseline_m}, {"virtual_baseline_m", seq.calibration.virtual_baseline_m},
+                       {"depth_units_per_m", seq.calibration.depth_units_per_m},
+                       {"source", !flags.calib.empty() ? flags.calib : (!flags.camera.empty() ? "preset " + flags.camera : "dataset")}}}};
+  report["options"] = {{"features", options.orb.features},
+                       {"scale_factor", options.orb.scale_factor},
+                       {"levels", options.orb.levels},
+                       {"fast_thresholds", {options.orb.initial_fast_threshold, options.orb.min_fast_threshold}},
+                       {"close_depth_baselines", options.close_depth_baselines},
+                       {"lost_below_inliers", options.lost_below_inliers},
+                       {"degraded_below_inliers", options.degraded_below_inliers},
+                       {"local_ba", options.local_ba}};
+  report["summary"] = {{"frames", s.frames},
+                       {"ok", s.frames_ok},
+                       {"degraded", s.frames_degraded},
+                       {"lost", s.frames_lost},
+                       {"keyframes", s.keyframes},
+                       {"map_points_created", s.map_points},
+                       {"map_points_culled", s.map_points_culled},
+                       {"map_points", map_points.size()},
+                       {"local_bundle_adjustments", s.local_bas},
+                       {"reference_fallbacks", s.reference_fallbacks},
+                       {"interrupted", stopped}};
+  report["timing"] = {{"total_s", total_s},
+                      {"per_frame_ms", ms_json(total)},
+                      {"features_ms", ms_json(features_s)},
+                      {"tracking_ms", ms_json(tracking)},
+                      {"mapping_ms", ms_json(mapping)},
+                      {"image_read_ms", ms_json(read_s)},
+                      {"local_ba_s", s.local_ba_s},
+                      {"threads", "ORB of the two images in parallel; everything else on one thread"}};
+  report["evaluation"] = evaluation;
+  report["not_implemented"] = {"loop closure and relocalisation (bag of words)", "monocular", "the Atlas (new map when lost)",
+                               "triangulation between keyframes, map-point fusion, keyframe culling"};
+  io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
+  out.commit();
+
+  if (!flags.quiet) {
+    std::printf("%zu frames: %zu ok, %zu degraded, %zu lost; %zu keyframes, %zu map points; per frame median %.1f ms "
+                "(tracking %.1f ms, ORB %.1f ms, mapping %.1f ms)\n",
+                s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.keyframes, map_points.size(), spread(total).median * 1e3,
+                spread(tracking).median * 1e3, spread(features_s).median * 1e3, spread(mapping).median * 1e3);
+    if (!evaluation.is_null() && evaluation.contains("ate_se3_aligned_m")) {
+      std::printf("against %s: ATE (SE(3)-aligned) RMSE %.4f m; end-point drift %.3f m over %.1f m; RPE (1 frame) RMSE %.4f m, "
+                  "%.4f deg\n",
+                  ground_truth_path.c_str(), evaluation["ate_se3_aligned_m"]["rmse"].get<double>(),
+                  evaluation["end_point_drift_m"].get<double>(), evaluation["path_length_m"].get<double>(),
+                  evaluation.value("rpe_1_frame_translation_m", nlohmann::json{{"rmse", NAN}})["rmse"].get<double>(),
+                  evaluation.value("rpe_1_frame_rotation_deg", nlohmann::json{{"rmse", NAN}})["rmse"].get<double>());
+    }
+    std::printf("wrote %s\n", flags.out.c_str());
+  }
+  return stopped ? 130 : 0;
+}
+
+}  // namespace
+
+Runner register_vslam(CLI::App& app) {
+  auto flags = std::make_shared<VslamFlags>();
+  CLI::App* cmd = &app;
+  cmd->add_option("folder", flags->folder, "KITTI odometry folder (calib.txt, image_0/1 or image_l/r) or TUM RGB-D folder")->required();
+  cmd->add_option("--out", flags->out, "Output directory (trajectory.tum/.kitti, keyframes.tum, map_points.ply, frames.csv, report.json, trajectory.png, features.png)");
+  cmd->add_option("--camera", flags->camera, "Calibration preset for TUM RGB-D: tum-fr1, tum-fr2, tum-fr3");
+  cmd->add_option("--calib", flags->calib, "Calibration YAML (fx, fy, cx, cy, k1..k3, p1, p2, baseline_m, depth_units_per_m, virtual_baseline_m)");
+  cmd->add_option("--ground-truth", flags->ground_truth, "TUM-format ground truth (default: the dataset's poses.txt / groundtruth.txt)");
+  cmd->add_option("--features", flags->features, "ORB features per image (default 2000 stereo, 1000 RGB-D, as ORB-SLAM2)");
+  cmd->add_option("--max-frames", flags->max_frames, "Process at most N frames");
+  cmd->add_option("--feature-frame", flags->feature_frame, "Frame drawn in features.png (default: the middle one)");
+  cmd->add_flag("--no-local-ba", flags->no_local_ba, "Skip local bundle adjustment (visual odometry only)");
+  cmd->add_flag("-q,--quiet", flags->quiet, "No progress or summary");
+  cmd->add_flag("--progress", flags->progress, "Progress lines even when stderr is not a terminal");
+  cmd->add_flag("--overwrite", flags->overwrite, "Replace an existing output directory's files");
+  return [flags] { return vslam_command(*flags); };
+}
+
+}  // namespace cairn::cli

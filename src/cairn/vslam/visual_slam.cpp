@@ -1,0 +1,1111 @@
+#include "cairn/vslam/visual_slam.hpp"
+
+#include <tbb/parallel_invoke.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/features2d.hpp>
+#include <set>
+#include <unordered_map>
+
+#include "cairn/backend/least_squares.hpp"
+#include "cairn/backend/reprojection_factors.hpp"
+
+namespace cairn::vslam {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// A factor whose residual and Jacobians are scaled by sqrt(information) = 1 / sigma of the
+// keypoint's level (ORB-SLAM2's invLevelSigma2 information), optionally with the point held
+// fixed inside it (motion-only BA: the factor then has the pose as its only variable).
+class ScaledFactor final : public backend::Factor {
+ public:
+  ScaledFactor(std::unique_ptr<backend::Factor> inner, double sqrt_information, const Eigen::Vector3d* fixed_point = nullptr)
+      : inner_(std::move(inner)), weight_(sqrt_information), fixed_(fixed_point != nullptr) {
+    if (fixed_point) point_ = *fixed_point;
+  }
+  int residual_size() const override { return inner_->residual_size(); }
+  bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
+    const int m = inner_->residual_size();
+    bool ok;
+    if (fixed_) {
+      const double* v[2] = {values[0], point_.data()};
+      double* j[2] = {jacobians ? jacobians[0] : nullptr, nullptr};
+      ok = inner_->evaluate(v, residual, jacobians ? j : nullptr);
+    } else {
+      ok = inner_->evaluate(values, residual, jacobians);
+    }
+    if (!ok) return false;
+    for (int i = 0; i < m; ++i) residual[i] *= weight_;
+    if (jacobians) {
+      const int blocks = fixed_ ? 1 : 2;
+      const int sizes[2] = {6, 3};
+      for (int b = 0; b < blocks; ++b) {
+        if (!jacobians[b]) continue;
+        for (int i = 0; i < m * sizes[b]; ++i) jacobians[b][i] *= weight_;
+      }
+    }
+    return true;
+  }
+
+ private:
+  std::unique_ptr<backend::Factor> inner_;
+  double weight_;
+  bool fixed_;
+  Eigen::Vector3d point_ = Eigen::Vector3d::Zero();
+};
+
+constexpr int kGridCols = 64;
+constexpr int kGridRows = 48;
+
+struct FrameData {
+  std::size_t index = 0;
+  core::Timestamp time;
+  std::vector<cv::KeyPoint> keypoints;
+  std::vector<Eigen::Vector2d> undistorted;
+  std::vector<double> u_right, depth;
+  cv::Mat descriptors;
+  std::vector<int> map_point;  // id or -1
+  std::vector<char> outlier;
+  std::vector<std::vector<int>> grid;
+  core::SE3 T_world_camera;
+  std::size_t size() const { return keypoints.size(); }
+};
+
+struct MapPoint {
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
+  cv::Mat descriptor;  // 1 x 32
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double min_distance = 0.0, max_distance = 0.0;
+  std::map<int, int> observations;  // keyframe id -> keypoint index
+  int first_keyframe = 0;
+  int reference_keyframe = 0;
+  int visible = 1, found = 1;
+  bool bad = false;
+  std::size_t last_frame_seen = static_cast<std::size_t>(-1);  // already in the frame's matches
+  std::size_t last_local_frame = static_cast<std::size_t>(-1);
+  // Projection cache of the current local-map search.
+  double proj_u = 0, proj_v = 0, proj_ur = 0, view_cos = 0;
+  int predicted_level = 0;
+};
+
+struct KeyFrame {
+  int id = 0;
+  FrameData frame;
+  bool bad = false;
+};
+
+}  // namespace
+
+struct VisualSlam::Impl {
+  io::CameraCalibration camera;
+  io::SequenceKind kind;
+  VisualSlamOptions options;
+  VisualSlamSummary* summary = nullptr;
+  vision::OrbExtractor orb;
+  double bf = 0.0;            // fx * baseline (virtual for RGB-D)
+  double close_depth_m = 0.0; // ThDepth in metres
+  double min_x = 0, max_x = 0, min_y = 0, max_y = 0;
+  double cell_w_inv = 0, cell_h_inv = 0;
+  int width = 0, height = 0;
+  std::vector<double> scales, inv_sigma2;
+
+  std::vector<MapPoint> points;
+  std::vector<KeyFrame> keyframes;
+  std::vector<int> recent_points;
+  FrameData last;
+  bool have_last = false;
+  bool have_velocity = false;
+  core::SE3 velocity;  // T_last_current of the last step: T_current = T_last * velocity
+  int reference_keyframe = -1;
+  int last_keyframe_frame = 0;
+  std::size_t frames = 0;
+  bool lost = false;
+  // Per frame: reference keyframe and the pose relative to it, for the final trajectory.
+  std::vector<std::pair<int, core::SE3>> relative;
+
+  Impl(const io::CameraCalibration& c, io::SequenceKind k, const VisualSlamOptions& o)
+      : camera(c), kind(k), options(o), orb(o.orb) {
+    const double baseline = kind == io::SequenceKind::kStereo ? camera.baseline_m : camera.virtual_baseline_m;
+    bf = camera.fx * baseline;
+    close_depth_m = options.close_depth_baselines * baseline;
+    double s = 1.0;
+    for (int l = 0; l < options.orb.levels; ++l) {
+      scales.push_back(s);
+      inv_sigma2.push_back(1.0 / (s * s));
+      s *= options.orb.scale_factor;
+    }
+  }
+
+  void set_image_size(int w, int h) {
+    if (width != 0) return;
+    width = w;
+    height = h;
+    std::vector<cv::KeyPoint> corners{cv::KeyPoint(0.f, 0.f, 1.f), cv::KeyPoint(static_cast<float>(w), 0.f, 1.f),
+                                      cv::KeyPoint(0.f, static_cast<float>(h), 1.f),
+                                      cv::KeyPoint(static_cast<float>(w), static_cast<float>(h), 1.f)};
+    const auto u = vision::undistort_keypoints(corners, camera);
+    min_x = std::min(u[0].x(), u[2].x());
+    max_x = std::max(u[1].x(), u[3].x());
+    min_y = std::min(u[0].y(), u[1].y());
+    max_y = std::max(u[2].y(), u[3].y());
+    cell_w_inv = kGridCols / (max_x - min_x);
+    cell_h_inv = kGridRows / (max_y - min_y);
+  }
+
+  bool cell_of(double x, double y, int& cx, int& cy) const {
+    cx = static_cast<int>(std::floor((x - min_x) * cell_w_inv));
+    cy = static_cast<int>(std::floor((y - min_y) * cell_h_inv));
+    return cx >= 0 && cx < kGridCols && cy >= 0 && cy < kGridRows;
+  }
+
+  void build_grid(FrameData& f) const {
+    f.grid.assign(kGridCols * kGridRows, {});
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      int cx, cy;
+      if (cell_of(f.undistorted[i].x(), f.undistorted[i].y(), cx, cy)) f.grid[static_cast<std::size_t>(cy * kGridCols + cx)].push_back(static_cast<int>(i));
+    }
+  }
+
+  std::vector<int> features_in_area(const FrameData& f, double x, double y, double r, int min_level, int max_level) const {
+    std::vector<int> out;
+    const int x0 = std::max(0, static_cast<int>(std::floor((x - r - min_x) * cell_w_inv)));
+    const int x1 = std::min(kGridCols - 1, static_cast<int>(std::ceil((x + r - min_x) * cell_w_inv)));
+    const int y0 = std::max(0, static_cast<int>(std::floor((y - r - min_y) * cell_h_inv)));
+    const int y1 = std::min(kGridRows - 1, static_cast<int>(std::ceil((y + r - min_y) * cell_h_inv)));
+    if (x0 > x1 || y0 > y1) return out;
+    for (int cy = y0; cy <= y1; ++cy) {
+      for (int cx = x0; cx <= x1; ++cx) {
+        for (const int i : f.grid[static_cast<std::size_t>(cy * kGridCols + cx)]) {
+          const cv::KeyPoint& kp = f.keypoints[static_cast<std::size_t>(i)];
+          if (kp.octave < min_level || kp.octave > max_level) continue;
+          const Eigen::Vector2d& u = f.undistorted[static_cast<std::size_t>(i)];
+          if (std::abs(u.x() - x) < r && std::abs(u.y() - y) < r) out.push_back(i);
+        }
+      }
+    }
+    return out;
+  }
+
+  bool project(const core::SE3& T_camera_world, const Eigen::Vector3d& p_world, double& u, double& v, double& ur, double& z) const {
+    const Eigen::Vector3d p = T_camera_world * p_world;
+    z = p.z();
+    if (!(z > 1e-6)) return false;
+    u = camera.fx * p.x() / z + camera.cx;
+    v = camera.fy * p.y() / z + camera.cy;
+    ur = u - bf / z;
+    return u >= min_x && u < max_x && v >= min_y && v < max_y;
+  }
+
+  int predict_level(const MapPoint& mp, double distance) const {
+    const double ratio = mp.max_distance / distance;
+    int level = static_cast<int>(std::ceil(std::log(ratio) / std::log(options.orb.scale_factor)));
+    return std::clamp(level, 0, options.orb.levels - 1);
+  }
+
+  Eigen::Vector3d unproject(const FrameData& f, std::size_t i) const {
+    const double z = f.depth[i];
+    const Eigen::Vector3d p_camera((f.undistorted[i].x() - camera.cx) * z / camera.fx, (f.undistorted[i].y() - camera.cy) * z / camera.fy, z);
+    return f.T_world_camera * p_camera;
+  }
+
+  // --- Frames ---------------------------------------------------------------------------------
+
+  FrameData make_frame(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo) const {
+    FrameData f;
+    f.index = frames;
+    f.time = time;
+    f.keypoints = std::move(left.keypoints);
+    f.descriptors = left.descriptors;
+    f.undistorted = vision::undistort_keypoints(f.keypoints, camera);
+    f.u_right = stereo.u_right;
+    f.depth = stereo.depth_m;
+    f.map_point.assign(f.size(), -1);
+    f.outlier.assign(f.size(), 0);
+    build_grid(f);
+    return f;
+  }
+
+  // --- Map points -----------------------------------------------------------------------------
+
+  void update_normal_and_depth(MapPoint& mp) {
+    if (mp.observations.empty()) return;
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    for (const auto& [kf, idx] : mp.observations) {
+      const Eigen::Vector3d d = mp.p_world - keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera.translation();
+      normal += d.normalized();
+    }
+    mp.normal = normal.normalized();
+    const KeyFrame& ref = keyframes[static_cast<std::size_t>(mp.reference_keyframe)];
+    auto it = mp.observations.find(mp.reference_keyframe);
+    if (it == mp.observations.end()) it = mp.observations.begin();
+    const KeyFrame& r = it->first == mp.reference_keyframe ? ref : keyframes[static_cast<std::size_t>(it->first)];
+    const double distance = (mp.p_world - r.frame.T_world_camera.translation()).norm();
+    const int level = r.frame.keypoints[static_cast<std::size_t>(it->second)].octave;
+    mp.max_distance = distance * scales[static_cast<std::size_t>(level)];
+    mp.min_distance = mp.max_distance / scales.back();
+  }
+
+  // The observation's descriptor with the least median distance to the others (ORB-SLAM2
+  // MapPoint::ComputeDistinctiveDescriptors).
+  void update_descriptor(MapPoint& mp) {
+    std::vector<const unsigned char*> d;
+    for (const auto& [kf, idx] : mp.observations) d.push_back(keyframes[static_cast<std::size_t>(kf)].frame.descriptors.ptr(idx));
+    if (d.empty()) return;
+    if (d.size() <= 2) {
+      mp.descriptor = cv::Mat(1, 32, CV_8U, const_cast<unsigned char*>(d.front())).clone();
+      return;
+    }
+    std::size_t best = 0;
+    int best_median = 1 << 30;
+    for (std::size_t i = 0; i < d.size(); ++i) {
+      std::vector<int> dist;
+      for (std::size_t j = 0; j < d.size(); ++j) dist.push_back(vision::descriptor_distance(d[i], d[j]));
+      std::nth_element(dist.begin(), dist.begin() + static_cast<std::ptrdiff_t>((dist.size() - 1) / 2), dist.end());
+      const int median = dist[(dist.size() - 1) / 2];
+      if (median < best_median) {
+        best_median = median;
+        best = i;
+      }
+    }
+    mp.descriptor = cv::Mat(1, 32, CV_8U, const_cast<unsigned char*>(d[best])).clone();
+  }
+
+  int observation_weight(const MapPoint& mp) const {
+    int n = 0;
+    for (const auto& [kf, idx] : mp.observations) n += keyframes[static_cast<std::size_t>(kf)].frame.u_right[static_cast<std::size_t>(idx)] >= 0 ? 2 : 1;
+    return n;
+  }
+
+  void erase_observation(int point, int kf) {
+    MapPoint& mp = points[static_cast<std::size_t>(point)];
+    auto it = mp.observations.find(kf);
+    if (it == mp.observations.end()) return;
+    FrameData& f = keyframes[static_cast<std::size_t>(kf)].frame;
+    if (f.map_point[static_cast<std::size_t>(it->second)] == point) f.map_point[static_cast<std::size_t>(it->second)] = -1;
+    mp.observations.erase(it);
+    if (mp.observations.empty() || observation_weight(mp) <= 1) {
+      set_bad(point);
+    } else if (mp.reference_keyframe == kf) {
+      mp.reference_keyframe = mp.observations.begin()->first;
+    }
+  }
+
+  void set_bad(int point) {
+    MapPoint& mp = points[static_cast<std::size_t>(point)];
+    if (mp.bad) return;
+    mp.bad = true;
+    for (const auto& [kf, idx] : mp.observations) {
+      FrameData& f = keyframes[static_cast<std::size_t>(kf)].frame;
+      if (f.map_point[static_cast<std::size_t>(idx)] == point) f.map_point[static_cast<std::size_t>(idx)] = -1;
+    }
+    mp.observations.clear();
+    ++summary->map_points_culled;
+  }
+
+  // --- Matching -------------------------------------------------------------------------------
+
+  // ORB-SLAM2 ORBmatcher::SearchByProjection(CurrentFrame, LastFrame, th, bMono) without the
+  // rotation-histogram check (stereo and RGB-D do not use it).
+  int search_from_last(FrameData& current, const FrameData& previous, double radius_px) {
+    const core::SE3 T_cw = current.T_world_camera.inverse();
+    int matches = 0;
+    for (std::size_t i = 0; i < previous.size(); ++i) {
+      const int id = previous.map_point[i];
+      if (id < 0 || previous.outlier[i]) continue;
+      const MapPoint& mp = points[static_cast<std::size_t>(id)];
+      if (mp.bad) continue;
+      double u, v, ur, z;
+      if (!project(T_cw, mp.p_world, u, v, ur, z)) continue;
+      const int level = previous.keypoints[i].octave;
+      const double r = radius_px * scales[static_cast<std::size_t>(level)];
+      const std::vector<int> candidates = features_in_area(current, u, v, r, std::max(0, level - 1), level + 1);
+      int best = 256, best_j = -1;
+      for (const int j : candidates) {
+        const auto sj = static_cast<std::size_t>(j);
+        if (current.map_point[sj] >= 0) continue;
+        if (current.u_right[sj] >= 0 && std::abs(ur - current.u_right[sj]) > r) continue;
+        const int d = vision::descriptor_distance(mp.descriptor.ptr(), current.descriptors.ptr(j));
+        if (d < best) {
+          best = d;
+          best_j = j;
+        }
+      }
+      if (best_j >= 0 && best <= options.max_descriptor_distance) {
+        current.map_point[static_cast<std::size_t>(best_j)] = id;
+        ++matches;
+      }
+    }
+    return matches;
+  }
+
+  // Brute-force matching against the reference keyframe's points with a ratio test: the
+  // fallback when the prediction fails (ORB-SLAM2 TrackReferenceKeyFrame uses bag of words).
+  int search_reference(FrameData& current, const KeyFrame& kf) {
+    std::vector<int> ids;
+    cv::Mat descriptors;
+    for (std::size_t i = 0; i < kf.frame.size(); ++i) {
+      const int id = kf.frame.map_point[i];
+      if (id < 0 || points[static_cast<std::size_t>(id)].bad) continue;
+      ids.push_back(id);
+      descriptors.push_back(points[static_cast<std::size_t>(id)].descriptor);
+    }
+    if (ids.empty() || current.descriptors.rows == 0) return 0;
+    cv::BFMatcher matcher(cv::NORM_HAMMING);
+    std::vector<std::vector<cv::DMatch>> knn;
+    matcher.knnMatch(current.descriptors, descriptors, knn, 2);
+    std::vector<int> taken(ids.size(), -1);
+    std::vector<float> taken_distance(ids.size(), 1e9f);
+    for (const auto& m : knn) {
+      if (m.empty() || static_cast<double>(m[0].distance) > options.max_descriptor_distance / 2.0) continue;
+      if (m.size() > 1 && static_cast<double>(m[0].distance) > options.reference_match_ratio * static_cast<double>(m[1].distance)) continue;
+      const auto t = static_cast<std::size_t>(m[0].trainIdx);
+      if (m[0].distance < taken_distance[t]) {
+        taken[t] = m[0].queryIdx;
+        taken_distance[t] = m[0].distance;
+      }
+    }
+    int matches = 0;
+    for (std::size_t t = 0; t < ids.size(); ++t) {
+      if (taken[t] < 0) continue;
+      current.map_point[static_cast<std::size_t>(taken[t])] = ids[t];
+      ++matches;
+    }
+    return matches;
+  }
+
+  // PnP with RANSAC (OpenCV's solvePnPRansac, EPnP minimal sets; Lepetit et al. 2009) on the
+  // frame's map-point matches: the starting pose when there is no prediction. Matches that are
+  // not RANSAC inliers are dropped. Returns the inliers (0 when it fails).
+  int pnp_ransac(FrameData& f) const {
+    std::vector<cv::Point3d> object;
+    std::vector<cv::Point2d> image;
+    std::vector<std::size_t> index;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      if (f.map_point[i] < 0) continue;
+      const Eigen::Vector3d& p = points[static_cast<std::size_t>(f.map_point[i])].p_world;
+      object.emplace_back(p.x(), p.y(), p.z());
+      image.emplace_back(f.undistorted[i].x(), f.undistorted[i].y());
+      index.push_back(i);
+    }
+    if (object.size() < 6) return 0;
+    const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    bool ok = false;
+    try {
+      ok = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 200, 3.0f, 0.99, inliers, cv::SOLVEPNP_EPNP);
+    } catch (const cv::Exception&) {
+      ok = false;
+    }
+    if (!ok || inliers.size() < 6) {
+      std::fill(f.map_point.begin(), f.map_point.end(), -1);
+      return 0;
+    }
+    cv::Matx33d R;
+    cv::Rodrigues(rvec, R);
+    Eigen::Matrix4d T_camera_world = Eigen::Matrix4d::Identity();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) T_camera_world(r, c) = R(r, c);
+      T_camera_world(r, 3) = tvec.at<double>(r);
+    }
+    f.T_world_camera = core::SE3::from_matrix(T_camera_world).inverse();
+    std::vector<char> keep(index.size(), 0);
+    for (const int k : inliers) keep[static_cast<std::size_t>(k)] = 1;
+    for (std::size_t k = 0; k < index.size(); ++k) {
+      if (!keep[k]) f.map_point[index[k]] = -1;
+    }
+    return static_cast<int>(inliers.size());
+  }
+
+  // --- Motion-only bundle adjustment (ORB-SLAM2 Optimizer::PoseOptimization) ------------------
+
+  double chi2_of(const FrameData& f, std::size_t i, const core::SE3& T_cw) const {
+    const MapPoint& mp = points[static_cast<std::size_t>(f.map_point[i])];
+    const Eigen::Vector3d p = T_cw * mp.p_world;
+    if (!(p.z() > 1e-6)) return std::numeric_limits<double>::infinity();
+    const double u = camera.fx * p.x() / p.z() + camera.cx, v = camera.fy * p.y() / p.z() + camera.cy;
+    double e2 = (u - f.undistorted[i].x()) * (u - f.undistorted[i].x()) + (v - f.undistorted[i].y()) * (v - f.undistorted[i].y());
+    if (f.u_right[i] >= 0) {
+      const double ur = u - bf / p.z();
+      e2 += (ur - f.u_right[i]) * (ur - f.u_right[i]);
+    }
+    return e2 * inv_sigma2[static_cast<std::size_t>(f.keypoints[i].octave)];
+  }
+
+  std::unique_ptr<backend::Factor> observation_factor(const FrameData& f, std::size_t i) const {
+    const backend::PinholeIntrinsics K{camera.fx, camera.fy, camera.cx, camera.cy};
+    const double baseline = bf / camera.fx;
+    if (f.u_right[i] >= 0) {
+      return std::make_unique<backend::StereoReprojectionFactor>(K, baseline, f.undistorted[i].x(), f.undistorted[i].y(), f.u_right[i]);
+    }
+    return std::make_unique<backend::PinholeReprojectionFactor>(K, f.undistorted[i].x(), f.undistorted[i].y());
+  }
+
+  // Returns the inliers; marks outliers in f.outlier; sets f.T_world_camera.
+  int optimize_pose(FrameData& f, double* sigma_position_m = nullptr) {
+    std::vector<std::size_t> matched;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      f.outlier[i] = 0;
+      if (f.map_point[i] >= 0) matched.push_back(i);
+    }
+    if (matched.size() < 3) return 0;
+    const core::SE3 initial = f.T_world_camera;
+    core::SE3 T = initial;
+    backend::LeastSquaresOptions lso;
+    lso.linear_solver = backend::LinearSolverType::kSparseNormalCholesky;
+    lso.max_iterations = 10;
+    lso.threads = 1;
+    int inliers = 0;
+    for (int round = 0; round < 4; ++round) {
+      backend::LeastSquaresProblem problem;
+      double pose[7];
+      backend::se3_to_values(initial, pose);  // every round starts from the prediction, as ORB-SLAM2
+      const int var = problem.add_variable(pose, backend::se3_manifold());
+      for (const std::size_t i : matched) {
+        if (f.outlier[i]) continue;
+        const bool stereo = f.u_right[i] >= 0;
+        const double sqrt_info = 1.0 / scales[static_cast<std::size_t>(f.keypoints[i].octave)];
+        backend::FactorLoss loss;
+        if (round < 2) loss = {backend::RobustKernel::kHuber, std::sqrt(stereo ? options.chi2_stereo : options.chi2_mono)};
+        problem.add_factor(std::make_unique<ScaledFactor>(observation_factor(f, i), sqrt_info,
+                                                          &points[static_cast<std::size_t>(f.map_point[i])].p_world),
+                           {var}, loss);
+      }
+      if (problem.num_factors() < 3) break;
+      const backend::LeastSquaresSummary s = backend::solve(problem, lso);
+      if (s.is_solution_usable()) T = backend::se3_from_values(pose);
+      const core::SE3 T_cw = T.inverse();
+      inliers = 0;
+      for (const std::size_t i : matched) {
+        const double chi2 = chi2_of(f, i, T_cw);
+        const double threshold = f.u_right[i] >= 0 ? options.chi2_stereo : options.chi2_mono;
+        f.outlier[i] = chi2 > threshold ? 1 : 0;
+        if (!f.outlier[i]) ++inliers;
+      }
+      if (round == 3 && sigma_position_m && inliers >= 3) {
+        // Covariance of the pose at the solution, from the inliers only.
+        backend::LeastSquaresProblem cp;
+        double cpose[7];
+        backend::se3_to_values(T, cpose);
+        const int cv = cp.add_variable(cpose, backend::se3_manifold());
+        for (const std::size_t i : matched) {
+          if (f.outlier[i]) continue;
+          cp.add_factor(std::make_unique<ScaledFactor>(observation_factor(f, i), 1.0 / scales[static_cast<std::size_t>(f.keypoints[i].octave)],
+                                                       &points[static_cast<std::size_t>(f.map_point[i])].p_world),
+                        {cv});
+        }
+        const backend::MarginalCovariances c = backend::marginal_covariances(cp, {cv}, 1);
+        if (c.ok) {
+          // Tangent (rho, phi) on the right: the position block in the camera frame; its
+          // largest eigenvalue is frame-independent. Pixel noise of 1 px at level 0 assumed.
+          const Eigen::Matrix3d P = c.blocks[0].topLeftCorner<3, 3>();
+          *sigma_position_m = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P).eigenvalues().maxCoeff()));
+        }
+      }
+    }
+    f.T_world_camera = T;
+    return inliers;
+  }
+
+  void drop_outliers(FrameData& f) {
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      if (f.map_point[i] >= 0 && f.outlier[i]) {
+        f.map_point[i] = -1;
+        f.outlier[i] = 0;
+      }
+    }
+  }
+
+  // --- Local map (ORB-SLAM2 Tracking::TrackLocalMap) ------------------------------------------
+
+  int track_local_map(FrameData& f, double* sigma_position_m, int* given) {
+    // Keyframes sharing points with the frame, most shared first.
+    std::unordered_map<int, int> shared;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const int id = f.map_point[i];
+      if (id < 0) continue;
+      MapPoint& mp = points[static_cast<std::size_t>(id)];
+      if (mp.bad) {
+        f.map_point[i] = -1;
+        continue;
+      }
+      mp.last_frame_seen = f.index;
+      for (const auto& [kf, idx] : mp.observations) ++shared[kf];
+    }
+    std::vector<std::pair<int, int>> ranked;
+    for (const auto& [kf, n] : shared) ranked.emplace_back(n, kf);
+    std::sort(ranked.begin(), ranked.end(), std::greater<>());
+    if (!ranked.empty()) reference_keyframe = ranked.front().second;
+    if (ranked.size() > static_cast<std::size_t>(options.local_map_keyframes)) ranked.resize(static_cast<std::size_t>(options.local_map_keyframes));
+    // Project the local map's points that the frame has not matched yet.
+    const core::SE3 T_cw = f.T_world_camera.inverse();
+    const Eigen::Vector3d center = f.T_world_camera.translation();
+    const double th = kind == io::SequenceKind::kRgbd ? 3.0 * options.local_search_radius_px : options.local_search_radius_px;
+    for (const auto& [n, kf] : ranked) {
+      for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
+        if (id < 0) continue;
+        MapPoint& mp = points[static_cast<std::size_t>(id)];
+        if (mp.bad || mp.last_frame_seen == f.index || mp.last_local_frame == f.index) continue;
+        mp.last_local_frame = f.index;
+        double u, v, ur, z;
+        if (!project(T_cw, mp.p_world, u, v, ur, z)) continue;
+        const Eigen::Vector3d po = mp.p_world - center;
+        const double distance = po.norm();
+        if (distance < 0.8 * mp.min_distance || distance > 1.2 * mp.max_distance) continue;
+        const double view_cos = po.dot(mp.normal) / distance;
+        if (view_cos < 0.5) continue;
+        ++mp.visible;
+        const int level = predict_level(mp, distance);
+        const double r = (view_cos > 0.998 ? 2.5 : 4.0) * th * scales[static_cast<std::size_t>(level)];
+        const std::vector<int> candidates = features_in_area(f, u, v, r, level - 1, level);
+        int best = 256, second = 256, best_level = -1, second_level = -1, best_j = -1;
+        for (const int j : candidates) {
+          const auto sj = static_cast<std::size_t>(j);
+          if (f.map_point[sj] >= 0) continue;
+          if (f.u_right[sj] >= 0 && std::abs(ur - f.u_right[sj]) > r) continue;
+          const int d = vision::descriptor_distance(mp.descriptor.ptr(), f.descriptors.ptr(j));
+          if (d < best) {
+            second = best;
+            second_level = best_level;
+            best = d;
+            best_level = f.keypoints[sj].octave;
+            best_j = j;
+          } else if (d < second) {
+            second = d;
+            second_level = f.keypoints[sj].octave;
+          }
+        }
+        if (best_j < 0 || best > options.max_descriptor_distance) continue;
+        if (best_level == second_level && best > options.local_match_ratio * second) continue;
+        f.map_point[static_cast<std::size_t>(best_j)] = id;
+      }
+    }
+    int matched = 0;
+    for (std::size_t i = 0; i < f.size(); ++i) matched += f.map_point[i] >= 0 ? 1 : 0;
+    *given = matched;
+    const int inliers = optimize_pose(f, sigma_position_m);
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      if (f.map_point[i] >= 0 && !f.outlier[i]) ++points[static_cast<std::size_t>(f.map_point[i])].found;
+    }
+    drop_outliers(f);
+    return inliers;
+  }
+
+  // --- Keyframes and local mapping ------------------------------------------------------------
+
+  bool need_keyframe(const FrameData& f, int inliers) const {
+    if (reference_keyframe < 0) return true;
+    const KeyFrame& ref = keyframes[static_cast<std::size_t>(reference_keyframe)];
+    // The reference keyframe's points seen by enough keyframes (a stereo observation counts 2).
+    const int min_obs = keyframes.size() <= 2 ? 2 : 3;
+    int reference_points = 0;
+    for (const int id : ref.frame.map_point) {
+      if (id >= 0 && !points[static_cast<std::size_t>(id)].bad && observation_weight(points[static_cast<std::size_t>(id)]) >= min_obs) ++reference_points;
+    }
+    int tracked_close = 0, untracked_close = 0;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      if (f.depth[i] > 0 && f.depth[i] < close_depth_m) {
+        if (f.map_point[i] >= 0) ++tracked_close;
+        else ++untracked_close;
+      }
+    }
+    const bool need_close = tracked_close < options.keyframe_close_tracked && untracked_close > options.keyframe_close_untracked;
+    const bool c1 = static_cast<int>(f.index) - last_keyframe_frame >= options.keyframe_max_frames;
+    const bool c2 = (inliers < options.keyframe_tracked_ratio * reference_points || need_close) && inliers > options.lost_below_inliers;
+    return c2 || (c1 && inliers > options.lost_below_inliers);
+  }
+
+  void insert_keyframe(FrameData& f) {
+    KeyFrame kf;
+    kf.id = static_cast<int>(keyframes.size());
+    kf.frame = f;
+    // New points from stereo/depth, nearest first: every close one, at least min_new_points.
+    std::vector<std::pair<double, std::size_t>> by_depth;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      if (f.depth[i] > 0) by_depth.emplace_back(f.depth[i], i);
+    }
+    std::sort(by_depth.begin(), by_depth.end());
+    keyframes.push_back(std::move(kf));
+    KeyFrame& k = keyframes.back();
+    int created_or_seen = 0;
+    for (const auto& [z, i] : by_depth) {
+      if (k.frame.map_point[i] < 0) {
+        MapPoint mp;
+        mp.p_world = unproject(k.frame, i);
+        mp.descriptor = k.frame.descriptors.row(static_cast<int>(i)).clone();
+        mp.first_keyframe = mp.reference_keyframe = k.id;
+        mp.observations[k.id] = static_cast<int>(i);
+        points.push_back(std::move(mp));
+        const int id = static_cast<int>(points.size()) - 1;
+        k.frame.map_point[i] = id;
+        f.map_point[i] = id;
+        update_normal_and_depth(points.back());
+        recent_points.push_back(id);
+        ++summary->map_points;
+      }
+      ++created_or_seen;
+      // The first keyframe takes every stereo point (ORB-SLAM2 StereoInitialization).
+      if (k.id > 0 && z > close_depth_m && created_or_seen > options.min_new_points) break;
+    }
+    // Observations of the points the frame tracked.
+    for (std::size_t i = 0; i < k.frame.size(); ++i) {
+      const int id = k.frame.map_point[i];
+      if (id < 0) continue;
+      MapPoint& mp = points[static_cast<std::size_t>(id)];
+      if (mp.bad) {
+        k.frame.map_point[i] = -1;
+        continue;
+      }
+      if (!mp.observations.count(k.id)) {
+        mp.observations[k.id] = static_cast<int>(i);
+        update_normal_and_depth(mp);
+        update_descriptor(mp);
+      }
+    }
+    reference_keyframe = k.id;
+    last_keyframe_frame = static_cast<int>(f.index);
+    ++summary->keyframes;
+  }
+
+  // ORB-SLAM2 LocalMapping::MapPointCulling (stereo: 3 observations, a stereo one counting 2).
+  void cull_points() {
+    const int current = static_cast<int>(keyframes.size()) - 1;
+    std::vector<int> keep;
+    for (const int id : recent_points) {
+      MapPoint& mp = points[static_cast<std::size_t>(id)];
+      if (mp.bad) continue;
+      if (static_cast<double>(mp.found) / mp.visible < 0.25) {
+        set_bad(id);
+      } else if (current - mp.first_keyframe >= 2 && observation_weight(mp) <= 3) {
+        set_bad(id);
+      } else if (current - mp.first_keyframe < 3) {
+        keep.push_back(id);
+      }
+    }
+    recent_points = std::move(keep);
+  }
+
+  // ORB-SLAM2 Optimizer::LocalBundleAdjustment on the engine.
+  void local_bundle_adjustment() {
+    const auto start = Clock::now();
+    const int current = static_cast<int>(keyframes.size()) - 1;
+    // Covisible keyframes of the current one.
+    std::unordered_map<int, int> shared;
+    for (const int id : keyframes[static_cast<std::size_t>(current)].frame.map_point) {
+      if (id < 0 || points[static_cast<std::size_t>(id)].bad) continue;
+      for (const auto& [kf, idx] : points[static_cast<std::size_t>(id)].observations) {
+        if (kf != current) ++shared[kf];
+      }
+    }
+    std::vector<std::pair<int, int>> ranked;
+    for (const auto& [kf, n] : shared) {
+      if (n >= options.min_covisible_points) ranked.emplace_back(n, kf);
+    }
+    std::sort(ranked.begin(), ranked.end(), std::greater<>());
+    if (ranked.size() > static_cast<std::size_t>(options.max_local_ba_keyframes)) ranked.resize(static_cast<std::size_t>(options.max_local_ba_keyframes));
+    std::set<int> local{current};
+    for (const auto& [n, kf] : ranked) local.insert(kf);
+    std::set<int> local_points;
+    for (const int kf : local) {
+      for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
+        if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) local_points.insert(id);
+      }
+    }
+    std::set<int> fixed;
+    for (const int id : local_points) {
+      for (const auto& [kf, idx] : points[static_cast<std::size_t>(id)].observations) {
+        if (!local.count(kf)) fixed.insert(kf);
+      }
+    }
+    if (local.size() < 2 && fixed.empty()) return;
+    std::map<int, std::array<double, 7>> pose_values;
+    std::map<int, int> pose_var;
+    backend::LeastSquaresProblem problem;
+    auto add_pose = [&](int kf, bool constant) {
+      auto& v = pose_values[kf];
+      backend::se3_to_values(keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera, v.data());
+      pose_var[kf] = problem.add_variable(v.data(), backend::se3_manifold());
+      if (constant || kf == 0) problem.set_constant(pose_var[kf]);
+    };
+    for (const int kf : local) add_pose(kf, false);
+    for (const int kf : fixed) add_pose(kf, true);
+    std::unordered_map<int, Eigen::Vector3d> point_values;
+    point_values.reserve(local_points.size());
+    struct Edge {
+      int point, kf, idx;
+    };
+    std::vector<Edge> edges;
+    std::unordered_map<int, int> point_var;
+    for (const int id : local_points) {
+      point_values[id] = points[static_cast<std::size_t>(id)].p_world;
+    }
+    for (const int id : local_points) {
+      point_var[id] = problem.add_variable(point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
+      for (const auto& [kf, idx] : points[static_cast<std::size_t>(id)].observations) edges.push_back({id, kf, idx});
+    }
+    auto build = [&](backend::LeastSquaresProblem& p, const std::vector<char>& is_outlier, bool robust) {
+      for (std::size_t e = 0; e < edges.size(); ++e) {
+        if (is_outlier[e]) continue;
+        const Edge& edge = edges[e];
+        const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
+        const auto i = static_cast<std::size_t>(edge.idx);
+        const bool stereo = f.u_right[i] >= 0;
+        backend::FactorLoss loss;
+        if (robust) loss = {backend::RobustKernel::kHuber, std::sqrt(stereo ? options.chi2_stereo : options.chi2_mono)};
+        p.add_factor(std::make_unique<ScaledFactor>(observation_factor(f, i), 1.0 / scales[static_cast<std::size_t>(f.keypoints[i].octave)]),
+                     {pose_var[edge.kf], point_var[edge.point]}, loss);
+      }
+    };
+    std::vector<char> is_outlier(edges.size(), 0);
+    build(problem, is_outlier, true);
+    backend::LeastSquaresOptions lso;
+    lso.linear_solver = backend::LinearSolverType::kSparseSchur;
+    lso.max_iterations = 5;
+    lso.threads = 1;
+    backend::solve(problem, lso);
+    auto edge_chi2 = [&](const Edge& edge, const core::SE3& T_wc, const Eigen::Vector3d& p_world) {
+      const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
+      const auto i = static_cast<std::size_t>(edge.idx);
+      const Eigen::Vector3d p = T_wc.inverse() * p_world;
+      if (!(p.z() > 1e-6)) return std::numeric_limits<double>::infinity();
+      const double u = camera.fx * p.x() / p.z() + camera.cx, v = camera.fy * p.y() / p.z() + camera.cy;
+      double e2 = (u - f.undistorted[i].x()) * (u - f.undistorted[i].x()) + (v - f.undistorted[i].y()) * (v - f.undistorted[i].y());
+      if (f.u_right[i] >= 0) e2 += (u - bf / p.z() - f.u_right[i]) * (u - bf / p.z() - f.u_right[i]);
+      return e2 * inv_sigma2[static_cast<std::size_t>(f.keypoints[i].octave)];
+    };
+    auto classify = [&]() {
+      for (std::size_t e = 0; e < edges.size(); ++e) {
+        const Edge& edge = edges[e];
+        const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
+        const double threshold = f.u_right[static_cast<std::size_t>(edge.idx)] >= 0 ? options.chi2_stereo : options.chi2_mono;
+        is_outlier[e] = edge_chi2(edge, backend::se3_from_values(pose_values[edge.kf].data()), point_values[edge.point]) > threshold ? 1 : 0;
+      }
+    };
+    classify();
+    {
+      // The second pass without the outliers and without the robust kernel, from where the first
+      // ended (ORB-SLAM2 sets the outliers' level to 1 and removes the kernels).
+      backend::LeastSquaresProblem second;
+      std::map<int, int> second_pose;
+      for (auto& [kf, v] : pose_values) {
+        second_pose[kf] = second.add_variable(v.data(), backend::se3_manifold());
+        if (fixed.count(kf) || kf == 0) second.set_constant(second_pose[kf]);
+      }
+      std::swap(pose_var, second_pose);
+      for (const int id : local_points) {
+        point_var[id] = second.add_variable(point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
+      }
+      build(second, is_outlier, false);
+      lso.max_iterations = 10;
+      backend::solve(second, lso);
+    }
+    classify();
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      if (is_outlier[e]) erase_observation(edges[e].point, edges[e].kf);
+    }
+    for (const int kf : local) {
+      if (kf != 0) keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera = backend::se3_from_values(pose_values[kf].data());
+    }
+    for (const int id : local_points) {
+      MapPoint& mp = points[static_cast<std::size_t>(id)];
+      if (mp.bad) continue;
+      mp.p_world = point_values[id];
+      update_normal_and_depth(mp);
+    }
+    ++summary->local_bas;
+    summary->local_ba_s += seconds_since(start);
+  }
+
+  // --- One frame ------------------------------------------------------------------------------
+
+  FrameResult track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, FrameTimes times,
+                    Clock::time_point start) {
+    FrameResult result;
+    result.frame = frames;
+    result.time = time;
+    result.features = static_cast<int>(left.keypoints.size());
+    result.stereo_points = static_cast<int>(stereo.matched);
+    const auto tracking_start = Clock::now();
+    FrameData f = make_frame(time, left, stereo);
+    bool mapped = false;
+    if (keyframes.empty()) {
+      if (result.stereo_points < options.min_new_points) {
+        result.note = "too few stereo/depth points to start a map (" + std::to_string(result.stereo_points) + ")";
+        result.health = TrackingHealth::kLost;
+        times.tracking_s = seconds_since(tracking_start);
+      } else {
+        f.T_world_camera = core::SE3();
+        times.tracking_s = seconds_since(tracking_start);
+        const auto mapping_start = Clock::now();
+        insert_keyframe(f);
+        times.mapping_s = seconds_since(mapping_start);
+        result.tracked = true;
+        result.health = TrackingHealth::kOk;
+        result.keyframe = true;
+        result.inliers = static_cast<int>(std::count_if(f.map_point.begin(), f.map_point.end(), [](int id) { return id >= 0; }));
+        result.inlier_ratio = 1.0;
+        mapped = true;
+      }
+      if (!mapped) {
+        relative.emplace_back(-1, core::SE3());
+        result.times = times;
+        result.times.total_s = seconds_since(start);
+        ++frames;
+        return result;
+      }
+    } else {
+      // Stage 1: the previous frame's points at the constant-velocity prediction.
+      f.T_world_camera = have_velocity && !lost ? last.T_world_camera * velocity : last.T_world_camera;
+      int matches = 0;
+      if (have_last && have_velocity && !lost) {
+        matches = search_from_last(f, last, options.motion_search_radius_px);
+        if (matches < options.min_motion_matches) {
+          std::fill(f.map_point.begin(), f.map_point.end(), -1);
+          matches = search_from_last(f, last, 2.0 * options.motion_search_radius_px);
+        }
+      }
+      int inliers = 0;
+      if (matches >= options.min_motion_matches) {
+        inliers = optimize_pose(f);
+        drop_outliers(f);
+      }
+      if (inliers < std::max(30, matches / 2)) {
+        // The prediction explains too little (fast motion, or no prediction): the reference
+        // keyframe's points by descriptor, a PnP RANSAC pose, then the same optimisation; the
+        // better of the two is kept.
+        // When lost, the most recent keyframes are tried too (a bounded stand-in for ORB-SLAM2's
+        // bag-of-words relocalisation over the whole map).
+        std::vector<int> candidates{reference_keyframe >= 0 ? reference_keyframe : static_cast<int>(keyframes.size()) - 1};
+        if (lost) {
+          for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && candidates.size() < 9; --kf) {
+            if (kf != candidates.front()) candidates.push_back(kf);
+          }
+        }
+        for (const int kf : candidates) {
+          FrameData alternative = f;
+          std::fill(alternative.map_point.begin(), alternative.map_point.end(), -1);
+          alternative.T_world_camera = keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera;
+          int alternative_matches = search_reference(alternative, keyframes[static_cast<std::size_t>(kf)]);
+          ++summary->reference_fallbacks;
+          int alternative_inliers = 0;
+          if (alternative_matches >= 15) alternative_matches = pnp_ransac(alternative);
+          if (alternative_matches >= 15) {
+            alternative_inliers = optimize_pose(alternative);
+            drop_outliers(alternative);
+          }
+          if (alternative_inliers > inliers) {
+            f = std::move(alternative);
+            inliers = alternative_inliers;
+            matches = alternative_matches;
+            result.used_reference = true;
+          }
+          if (inliers >= 30) break;
+        }
+      }
+      result.motion_matches = matches;
+      int given = 0;
+      if (inliers >= 10) {
+        // The local map must not make the frame worse than the first stage left it (wrong
+        // matches from a poorly predicted projection): then the first stage's result stands.
+        FrameData first_stage = f;
+        const int first_inliers = inliers;
+        inliers = track_local_map(f, &result.sigma_position_m, &given);
+        if (inliers < first_inliers / 2) {
+          f = std::move(first_stage);
+          inliers = first_inliers;
+          given = first_inliers;
+          result.note = "local-map matches contradicted the first stage; its pose kept";
+        }
+      }
+      result.inliers = inliers;
+      result.inlier_ratio = given > 0 ? static_cast<double>(inliers) / given : 0.0;
+      times.tracking_s = seconds_since(tracking_start);
+      if (inliers < options.lost_below_inliers) {
+        result.health = TrackingHealth::kLost;
+        result.tracked = false;
+        result.note = "only " + std::to_string(inliers) + " inlier map-point matches (lost below " +
+                      std::to_string(options.lost_below_inliers) + "): pose from the motion model";
+        f.T_world_camera = have_velocity ? last.T_world_camera * velocity : last.T_world_camera;
+        lost = true;
+      } else {
+        result.tracked = true;
+        lost = false;
+        if (inliers < options.degraded_below_inliers) {
+          result.health = TrackingHealth::kDegraded;
+          result.note = std::to_string(inliers) + " inlier matches (degraded below " + std::to_string(options.degraded_below_inliers) + ")";
+        } else {
+          result.health = TrackingHealth::kOk;
+        }
+        if (need_keyframe(f, inliers)) {
+          const auto mapping_start = Clock::now();
+          insert_keyframe(f);
+          cull_points();
+          if (options.local_ba) local_bundle_adjustment();
+          times.mapping_s = seconds_since(mapping_start);
+          result.keyframe = true;
+        }
+      }
+    }
+    result.keypoints = f.keypoints;
+    result.keypoint_states.resize(f.size());
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      result.keypoint_states[i] = static_cast<signed char>(f.map_point[i] >= 0 ? 2 : (f.depth[i] > 0 ? 1 : 0));
+    }
+    if (result.tracked) {
+      if (have_last) {
+        velocity = last.T_world_camera.inverse() * f.T_world_camera;
+        have_velocity = true;
+      }
+      last = std::move(f);
+      have_last = true;
+      const KeyFrame& ref = keyframes[static_cast<std::size_t>(reference_keyframe)];
+      relative.emplace_back(reference_keyframe, ref.frame.T_world_camera.inverse() * last.T_world_camera);
+      result.T_world_camera = last.T_world_camera;
+    } else {
+      // Keep the last tracked frame and its points for the next attempt; report the guess.
+      const KeyFrame& ref = keyframes[static_cast<std::size_t>(std::max(reference_keyframe, 0))];
+      relative.emplace_back(ref.id, ref.frame.T_world_camera.inverse() * f.T_world_camera);
+      result.T_world_camera = f.T_world_camera;
+      if (have_last) {
+        last.T_world_camera = f.T_world_camera;
+        have_velocity = false;
+      }
+    }
+    result.times = times;
+    result.times.total_s = seconds_since(start);
+    ++frames;
+    return result;
+  }
+};
+
+std::string VisualSlamOptions::problems() const {
+  std::string out;
+  auto add = [&](const std::string& p) { out += (out.empty() ? "" : "; ") + p; };
+  if (const std::string p = orb.problems(); !p.empty()) add(p);
+  if (!(close_depth_baselines > 0.0)) add("close_depth_baselines must be > 0");
+  if (min_new_points < 1) add("min_new_points must be >= 1");
+  if (!(motion_search_radius_px > 0.0) || !(local_search_radius_px > 0.0)) add("search radii must be > 0");
+  if (max_descriptor_distance < 1 || max_descriptor_distance > 256) add("max_descriptor_distance must be in [1, 256]");
+  if (!(local_match_ratio > 0.0 && local_match_ratio <= 1.0) || !(reference_match_ratio > 0.0 && reference_match_ratio <= 1.0)) {
+    add("match ratios must be in (0, 1]");
+  }
+  if (lost_below_inliers < 3 || degraded_below_inliers < lost_below_inliers) add("need 3 <= lost_below_inliers <= degraded_below_inliers");
+  if (!(keyframe_tracked_ratio > 0.0 && keyframe_tracked_ratio <= 1.0)) add("keyframe_tracked_ratio must be in (0, 1]");
+  if (keyframe_max_frames < 1) add("keyframe_max_frames must be >= 1");
+  if (max_local_ba_keyframes < 1 || local_map_keyframes < 1) add("keyframe counts must be >= 1");
+  if (!(chi2_mono > 0.0) || !(chi2_stereo > 0.0)) add("chi2 thresholds must be > 0");
+  return out;
+}
+
+std::string_view to_string(TrackingHealth health) {
+  switch (health) {
+    case TrackingHealth::kOk: return "ok";
+    case TrackingHealth::kDegraded: return "degraded";
+    case TrackingHealth::kLost: return "lost";
+  }
+  return "?";
+}
+
+VisualSlam::VisualSlam(const io::CameraCalibration& camera, io::SequenceKind kind, const VisualSlamOptions& options)
+    : options_(options) {
+  if (const std::string p = options.problems(); !p.empty()) throw std::invalid_argument("visual SLAM options: " + p);
+  if (const std::string p = camera.problems(); !p.empty()) throw std::invalid_argument("camera calibration: " + p);
+  if (kind == io::SequenceKind::kMonocular) throw std::invalid_argument("monocular visual SLAM is not implemented yet (stereo and RGB-D are)");
+  if (kind == io::SequenceKind::kStereo && !(camera.baseline_m > 0.0)) throw std::invalid_argument("stereo needs a positive baseline");
+  if (kind == io::SequenceKind::kRgbd && (!(camera.depth_units_per_m > 0.0) || !(camera.virtual_baseline_m > 0.0))) {
+    throw std::invalid_argument("RGB-D needs depth_units_per_m and virtual_baseline_m > 0");
+  }
+  impl_ = std::make_unique<Impl>(camera, kind, options);
+  impl_->summary = &summary_;
+}
+
+VisualSlam::~VisualSlam() = default;
+
+namespace {
+void count(VisualSlamSummary& s, const FrameResult& r) {
+  ++s.frames;
+  if (r.health == TrackingHealth::kOk) ++s.frames_ok;
+  else if (r.health == TrackingHealth::kDegraded) ++s.frames_degraded;
+  else ++s.frames_lost;
+}
+void check_gray(const cv::Mat& image, const char* what) {
+  if (image.empty() || image.type() != CV_8UC1) throw std::invalid_argument(std::string(what) + " must be a non-empty 8-bit grey image");
+}
+}  // namespace
+
+FrameResult VisualSlam::add_stereo(core::Timestamp time, const cv::Mat& left, const cv::Mat& right) {
+  if (impl_->kind != io::SequenceKind::kStereo) throw std::logic_error("add_stereo on an RGB-D VisualSlam");
+  check_gray(left, "the left image");
+  check_gray(right, "the right image");
+  if (left.size() != right.size()) throw std::invalid_argument("the left and right images differ in size");
+  impl_->set_image_size(left.cols, left.rows);
+  if (left.cols != impl_->width || left.rows != impl_->height) throw std::invalid_argument("the image size changed within the sequence");
+  const auto start = Clock::now();
+  FrameTimes times;
+  vision::Features fl, fr;
+  tbb::parallel_invoke([&] { fl = impl_->orb.extract(left); }, [&] { fr = impl_->orb.extract(right); });
+  times.features_s = seconds_since(start);
+  const auto stereo_start = Clock::now();
+  const vision::StereoMatches stereo = vision::match_stereo(fl, fr, impl_->camera, options_.stereo);
+  times.stereo_s = seconds_since(stereo_start);
+  FrameResult r = impl_->track(time, fl, stereo, times, start);
+  count(summary_, r);
+  return r;
+}
+
+FrameResult VisualSlam::add_rgbd(core::Timestamp time, const cv::Mat& gray, const cv::Mat& depth) {
+  if (impl_->kind != io::SequenceKind::kRgbd) throw std::logic_error("add_rgbd on a stereo VisualSlam");
+  check_gray(gray, "the image");
+  if (depth.type() != CV_16UC1 || depth.size() != gray.size()) throw std::invalid_argument("the depth image must be 16-bit, the image's size");
+  impl_->set_image_size(gray.cols, gray.rows);
+  if (gray.cols != impl_->width || gray.rows != impl_->height) throw std::invalid_argument("the image size changed within the sequence");
+  const auto start = Clock::now();
+  FrameTimes times;
+  vision::Features f = impl_->orb.extract(gray);
+  times.features_s = seconds_since(start);
+  const auto stereo_start = Clock::now();
+  const std::vector<Eigen::Vector2d> undistorted = vision::undistort_keypoints(f.keypoints, impl_->camera);
+  const vision::StereoMatches stereo = vision::depth_from_rgbd(f.keypoints, undistorted, depth, impl_->camera);
+  times.stereo_s = seconds_since(stereo_start);
+  FrameResult r = impl_->track(time, f, stereo, times, start);
+  count(summary_, r);
+  return r;
+}
+
+std::vector<core::SE3> VisualSlam::trajectory() const {
+  std::vector<core::SE3> out;
+  out.reserve(impl_->relative.size());
+  for (const auto& [kf, T_kf_frame] : impl_->relative) {
+    out.push_back(kf < 0 ? core::SE3() : impl_->keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera * T_kf_frame);
+  }
+  return out;
+}
+
+std::vector<core::SE3> VisualSlam::keyframe_poses() const {
+  std::vector<core::SE3> out;
+  for (const auto& kf : impl_->keyframes) out.push_back(kf.frame.T_world_camera);
+  return out;
+}
+
+std::vector<std::size_t> VisualSlam::keyframe_frames() const {
+  std::vector<std::size_t> out;
+  for (const auto& kf : impl_->keyframes) out.push_back(kf.frame.index);
+  return out;
+}
+
+std::vector<Eigen::Vector3d> VisualSlam::map_points() const {
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& mp : impl_->points) {
+    if (!mp.bad) out.push_back(mp.p_world);
+  }
+  return out;
+}
+
+}  // namespace cairn::vslam

@@ -1,0 +1,138 @@
+#pragma once
+/// \file
+/// Stereo and RGB-D visual SLAM after ORB-SLAM2 (Mur-Artal & Tardos, "ORB-SLAM2: an Open-Source SLAM
+/// System for Monocular, Stereo and RGB-D Cameras", T-RO 2017), fed one frame at a time:
+///
+/// * tracking (Sec. III-B/C, ORB-SLAM2 Tracking.cc): ORB features, stereo matches (or depth), the
+///   previous frame's map points projected with a constant-velocity prediction and matched in a
+///   radius, motion-only bundle adjustment (4 rounds of 10 iterations, Huber at the chi^2 95 %
+///   thresholds 5.991 / 7.815, outliers dropped between rounds), then the local map (the points of
+///   the keyframes that share points with the frame) projected and matched, and a second motion-only
+///   BA; when the prediction finds too few matches, brute-force descriptor matching against the
+///   reference keyframe's points replaces it (ORB-SLAM2 uses bag-of-words there);
+/// * keyframes (NeedNewKeyFrame, stereo rules): when the frame tracks fewer than 75 % of the
+///   reference keyframe's points or too few close points; a keyframe creates map points from its
+///   stereo/depth points (every close one, at least the 100 nearest);
+/// * local mapping (LocalMapping.cc), run synchronously: map-point culling (found / visible < 0.25,
+///   or seen by too few keyframes after two keyframes), local bundle adjustment on the least-squares
+///   engine (backend/least_squares.hpp; keyframe poses and points, points eliminated by Schur,
+///   the covisible keyframes free, the others that see their points fixed; 5 iterations, outliers
+///   removed, 10 more), outlier observations erased.
+///
+/// Poses are T_world_camera, world = the first frame's camera (x right, y down, z forward).
+/// Not in this version (docs/vslam.md): triangulation between keyframes, fusion of duplicate map
+/// points, keyframe culling, bag-of-words loop closure and relocalisation, monocular, the Atlas.
+
+#include <Eigen/Core>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "cairn/core/se3.hpp"
+#include "cairn/core/time.hpp"
+#include "cairn/io/image_sequence.hpp"
+#include "cairn/vision/features.hpp"
+
+namespace cairn::vslam {
+
+struct VisualSlamOptions {
+  vision::OrbOptions orb;  ///< ORB-SLAM2: 2000 features for KITTI, 1000 for TUM (cairn vslam sets this)
+  vision::StereoOptions stereo;
+  /// Points nearer than this many baselines are "close" (ORB-SLAM2's ThDepth: 35 for KITTI, 40
+  /// for TUM; in RGB-D the virtual baseline counts).
+  double close_depth_baselines = 35.0;
+  int min_new_points = 100;              ///< a new keyframe creates at least this many points (nearest first)
+  double motion_search_radius_px = 7.0;  ///< TrackWithMotionModel's th for stereo, x level scale
+  double local_search_radius_px = 1.0;   ///< SearchLocalPoints' th (x 2.5 or 4 by viewing angle, x level scale)
+  int max_descriptor_distance = 100;     ///< ORB-SLAM's TH_HIGH
+  double local_match_ratio = 0.8;        ///< best / second best at the same level
+  double reference_match_ratio = 0.7;    ///< brute-force fallback against the reference keyframe
+  int min_motion_matches = 20;           ///< fewer: widen the radius, then the fallback
+  int degraded_below_inliers = 50;       ///< `degraded` below (ORB-SLAM2 needs 30 to stay tracking)
+  int lost_below_inliers = 15;           ///< `lost` below (the seed: ORB-SLAM3 fails below ~15)
+  double keyframe_tracked_ratio = 0.75;  ///< new keyframe when inliers < this x the reference keyframe's points
+  int keyframe_close_tracked = 100;      ///< ... or fewer tracked close points than this
+  int keyframe_close_untracked = 70;     ///<     while more untracked close points than this
+  int keyframe_max_frames = 10;          ///< and at least one keyframe per this many frames (the frame rate)
+  int max_local_ba_keyframes = 20;       ///< covisible keyframes optimised (most shared points first)
+  int min_covisible_points = 15;         ///< keyframes sharing fewer points are not covisible
+  int local_map_keyframes = 40;          ///< keyframes whose points make the local map
+  double chi2_mono = 5.991;              ///< 2 DOF, 95 %
+  double chi2_stereo = 7.815;            ///< 3 DOF, 95 %
+  bool local_ba = true;
+  /// Empty when usable, else every problem.
+  std::string problems() const;
+};
+
+enum class TrackingHealth { kOk, kDegraded, kLost };
+std::string_view to_string(TrackingHealth health);
+
+struct FrameTimes {
+  double features_s = 0.0;  ///< ORB on both images (in parallel for stereo)
+  double stereo_s = 0.0;    ///< stereo matching or depth lookup
+  double tracking_s = 0.0;  ///< motion model / reference, pose optimisation, local map
+  double mapping_s = 0.0;   ///< keyframe insertion, culling, local BA (synchronous)
+  double total_s = 0.0;
+};
+
+struct FrameResult {
+  std::size_t frame = 0;
+  core::Timestamp time;
+  bool tracked = false;  ///< false: the pose is the motion model's guess (health lost)
+  TrackingHealth health = TrackingHealth::kLost;
+  core::SE3 T_world_camera;
+  int features = 0;
+  int stereo_points = 0;       ///< keypoints with a stereo match or depth
+  int motion_matches = 0;      ///< matches of the first stage (prediction or reference)
+  bool used_reference = false; ///< the first stage fell back to the reference keyframe
+  int inliers = 0;             ///< map-point matches after the local map's pose optimisation
+  double inlier_ratio = 0.0;   ///< inliers / matches given to that optimisation
+  bool keyframe = false;
+  double sigma_position_m = 0.0;  ///< sqrt of the largest eigenvalue of the position covariance
+  FrameTimes times;
+  std::string note;  ///< why lost / degraded
+  /// The frame's keypoints and what became of each: 0 unmatched, 1 stereo/depth point only,
+  /// 2 matched to a map point (an inlier of the pose). For pictures; the caller may drop them.
+  std::vector<cv::KeyPoint> keypoints;
+  std::vector<signed char> keypoint_states;
+};
+
+struct VisualSlamSummary {
+  std::size_t frames = 0, frames_ok = 0, frames_degraded = 0, frames_lost = 0;
+  std::size_t keyframes = 0, map_points = 0, map_points_culled = 0;
+  std::size_t local_bas = 0, reference_fallbacks = 0;
+  double local_ba_s = 0.0;
+};
+
+class VisualSlam {
+ public:
+  VisualSlam(const io::CameraCalibration& camera, io::SequenceKind kind, const VisualSlamOptions& options = {});
+  ~VisualSlam();
+  VisualSlam(const VisualSlam&) = delete;
+  VisualSlam& operator=(const VisualSlam&) = delete;
+
+  /// A rectified stereo pair (8-bit grey, same size).
+  FrameResult add_stereo(core::Timestamp time, const cv::Mat& left, const cv::Mat& right);
+  /// A grey image and its registered 16-bit depth image.
+  FrameResult add_rgbd(core::Timestamp time, const cv::Mat& gray, const cv::Mat& depth);
+
+  /// Every frame's pose, through its reference keyframe at the keyframe's current (bundle-
+  /// adjusted) pose, as ORB-SLAM2 writes its trajectory.
+  std::vector<core::SE3> trajectory() const;
+  std::vector<core::SE3> keyframe_poses() const;
+  std::vector<std::size_t> keyframe_frames() const;
+  /// The good map points in the world frame.
+  std::vector<Eigen::Vector3d> map_points() const;
+  const VisualSlamSummary& summary() const { return summary_; }
+  const VisualSlamOptions& options() const { return options_; }
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+  VisualSlamOptions options_;
+  VisualSlamSummary summary_;
+};
+
+}  // namespace cairn::vslam

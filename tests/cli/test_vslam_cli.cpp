@@ -1,0 +1,66 @@
+// `cairn vslam` end to end: the files it writes, the report's facts, clear errors for folders
+// that are not sequences or lack a calibration.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_runner.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Result = cairn::test::CliResult;
+using cairn::test::slurp;
+
+fs::path scratch() { return cairn::test::scratch_folder("vslam_cli"); }
+Result run(const std::string& args) { return cairn::test::run_command(CAIRN_BINARY, args, scratch() / "stderr.txt"); }
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+TEST(VslamCli, KittiStereoWritesEveryOutput) {
+  CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/calib.txt");
+  const fs::path out = scratch() / "kitti";
+  fs::remove_all(out);
+  const Result r = run("vslam " + quoted(cairn::test::data_path("visual/kitti_extract_seq2")) + " --max-frames 12 --out " + quoted(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* name : {"trajectory.tum", "trajectory.kitti", "keyframes.tum", "map_points.ply", "frames.csv", "report.json",
+                           "trajectory.png", "features.png"}) {
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  }
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["input"]["frames_processed"], 12);
+  EXPECT_EQ(report["summary"]["lost"], 0);
+  EXPECT_GT(report["summary"]["map_points"].get<int>(), 500);
+  ASSERT_TRUE(report["evaluation"].is_object());
+  EXPECT_LT(report["evaluation"]["rpe_1_frame_rotation_deg"]["rmse"].get<double>(), 0.3);
+  EXPECT_NE(r.err.find("no times.txt"), std::string::npos) << r.err;
+  // Refused without --overwrite, before any work.
+  const Result again = run("vslam " + quoted(cairn::test::data_path("visual/kitti_extract_seq2")) + " --max-frames 2 --out " + quoted(out));
+  EXPECT_EQ(again.status, 1);
+  EXPECT_NE(again.err.find("--overwrite"), std::string::npos) << again.err;
+}
+
+TEST(VslamCli, FoldersThatAreNotSequencesOrLackACalibrationAreRefused) {
+  const fs::path empty = scratch() / "empty";
+  fs::create_directories(empty);
+  Result r = run("vslam " + quoted(empty) + " --out " + quoted(scratch() / "x"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("not a known image sequence"), std::string::npos) << r.err;
+  CAIRN_REQUIRE_DATA("visual/tum_fr1_desk_every4th/associations.txt");
+  r = run("vslam " + quoted(cairn::test::data_path("visual/tum_fr1_desk_every4th")) + " --out " + quoted(scratch() / "x"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("--camera tum-fr1"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(scratch() / "x"));
+  const fs::path calib = scratch() / "calib.yaml";
+  std::ofstream(calib) << "fx: 500\nfy: 500\ncx: 320\ncy: abc\n";
+  r = run("vslam " + quoted(cairn::test::data_path("visual/tum_fr1_desk_every4th")) + " --calib " + quoted(calib) + " --out " +
+          quoted(scratch() / "x"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("calib.yaml:4: \"cy\" must be a number"), std::string::npos) << r.err;
+}
+
+}  // namespace
