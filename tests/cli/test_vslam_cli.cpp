@@ -63,4 +63,34 @@ TEST(VslamCli, FoldersThatAreNotSequencesOrLackACalibrationAreRefused) {
   EXPECT_NE(r.err.find("calib.yaml:4: \"cy\" must be a number"), std::string::npos) << r.err;
 }
 
+TEST(VocabularyCli, TrainDescribeAndUseAVocabulary) {
+  CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/image_l");
+  const fs::path voc = scratch() / "kitti.voc";
+  Result r = run("vocabulary train " + quoted(cairn::test::data_path("visual/kitti_extract_seq2/image_l")) + " --every 5 -L 3 --out " +
+                 quoted(voc));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("trained on 11 images"), std::string::npos) << r.out;  // images 0, 5, ..., 50
+  r = run("vocabulary info " + quoted(voc));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("k=10 L=3"), std::string::npos) << r.out;
+  // A flipped byte: the checksum says so.
+  std::string bytes = slurp(voc);
+  bytes[bytes.size() / 2] = static_cast<char>(bytes[bytes.size() / 2] ^ 0x10);
+  const fs::path bad = scratch() / "bad.voc";
+  std::ofstream(bad, std::ios::binary) << bytes;
+  r = run("vocabulary info " + quoted(bad));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("bad.voc"), std::string::npos) << r.err;
+  // Used by vslam on TUM (other images than it was trained on): the report says so.
+  CAIRN_REQUIRE_DATA("visual/tum_fr1_desk_every4th/associations.txt");
+  const fs::path out = scratch() / "tum";
+  fs::remove_all(out);
+  r = run("vslam " + quoted(cairn::test::data_path("visual/tum_fr1_desk_every4th")) + " --camera tum-fr1 --vocabulary " + quoted(voc) +
+          " --max-frames 20 --out " + quoted(out) + " -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["place_recognition"]["vocabulary"], voc.string());
+  EXPECT_NE(report["place_recognition"]["vocabulary_description"].get<std::string>().find("trained on 11 images"), std::string::npos);
+}
+
 }  // namespace

@@ -32,6 +32,7 @@ struct VslamFlags {
   std::string camera;
   std::string calib;
   std::string ground_truth;
+  std::string vocabulary;
   int features = 0;
   long max_frames = 0;
   long feature_frame = -1;
@@ -153,6 +154,12 @@ int vslam_command(const VslamFlags& flags) {
   options.orb.features = flags.features > 0 ? flags.features : (seq.kind == io::SequenceKind::kStereo ? 2000 : 1000);
   if (seq.kind == io::SequenceKind::kRgbd) options.close_depth_baselines = 40.0;  // ORB-SLAM2 TUM*.yaml ThDepth
   options.local_ba = !flags.no_local_ba;
+  if (!flags.vocabulary.empty()) {
+    options.vocabulary = std::make_shared<const vision::Vocabulary>(vision::Vocabulary::load(flags.vocabulary));
+    if (!flags.quiet) std::fprintf(stderr, "cairn vslam: vocabulary %s: %s\n", flags.vocabulary.c_str(), options.vocabulary->description().c_str());
+  } else if (!flags.quiet) {
+    std::fprintf(stderr, "cairn vslam: no --vocabulary: no loop closure; relocalisation tries the 8 most recent keyframes only\n");
+  }
   if (!flags.quiet) {
     std::fprintf(stderr, "cairn vslam: %s %s, %zu frames, fx %.2f, %s %.4f m%s\n", seq.layout.c_str(),
                  std::string(io::to_string(seq.kind)).c_str(), n, seq.calibration.fx,
@@ -217,17 +224,23 @@ int vslam_command(const VslamFlags& flags) {
 
   // Trajectories (every frame, at the final keyframe poses) and keyframes.
   const std::vector<core::SE3> poses = slam.trajectory();
-  io::Trajectory trajectory;
+  // TUM: the tracked frames only (a lost frame has no pose, as ORB-SLAM2's SaveTrajectoryTUM);
+  // KITTI: one line per frame as its devkit needs, a lost frame carrying the motion model's guess.
+  io::Trajectory trajectory, every_frame;
   for (std::size_t k = 0; k < results.size(); ++k) {
+    every_frame.stamps.push_back(results[k].time);
+    every_frame.poses.push_back(poses[k]);
+    if (!results[k].tracked) continue;
     trajectory.stamps.push_back(results[k].time);
     trajectory.poses.push_back(poses[k]);
   }
+  if (trajectory.poses.empty()) throw std::runtime_error("no frame was tracked: nothing to write (see the messages above)");
   io::write_output(out.staging_path("trajectory.tum"), [&](std::ostream& o) { io::write_tum(o, trajectory); });
-  io::write_output(out.staging_path("trajectory.kitti"), [&](std::ostream& o) { io::write_kitti(o, trajectory); });
+  io::write_output(out.staging_path("trajectory.kitti"), [&](std::ostream& o) { io::write_kitti(o, every_frame); });
   io::Trajectory keyframes;
   for (const std::size_t k : slam.keyframe_frames()) {
     keyframes.stamps.push_back(results[k].time);
-    keyframes.poses.push_back(poses[k]);
+    keyframes.poses.push_back(poses[k]);  // keyframes are tracked frames
   }
   io::write_output(out.staging_path("keyframes.tum"), [&](std::ostream& o) { io::write_tum(o, keyframes); });
   std::vector<Eigen::Vector3f> map_points;
@@ -236,11 +249,11 @@ int vslam_command(const VslamFlags& flags) {
     io::write_ply(o, map_points, "cairn vslam map points, world = the first camera (x right, y down, z forward)");
   });
   io::write_output(out.staging_path("frames.csv"), [&](std::ostream& o) {
-    o << "frame,time_s,health,tracked,keyframe,features,stereo_points,first_stage_matches,used_reference,inliers,inlier_ratio,"
+    o << "frame,time_s,health,tracked,keyframe,relocalised,loop_closed,features,stereo_points,first_stage_matches,used_reference,inliers,inlier_ratio,"
          "sigma_position_m,features_ms,stereo_ms,tracking_ms,mapping_ms,total_ms,note\n";
     for (const auto& r : results) {
       o << r.frame << ',' << r.time.to_seconds_string() << ',' << vslam::to_string(r.health) << ',' << (r.tracked ? 1 : 0) << ','
-        << (r.keyframe ? 1 : 0) << ',' << r.features << ',' << r.stereo_points << ',' << r.motion_matches << ','
+        << (r.keyframe ? 1 : 0) << ',' << (r.relocalised ? 1 : 0) << ',' << (r.loop_closed ? 1 : 0) << ',' << r.features << ',' << r.stereo_points << ',' << r.motion_matches << ','
         << (r.used_reference ? 1 : 0) << ',' << r.inliers << ',' << r.inlier_ratio << ',' << r.sigma_position_m << ','
         << 1e3 * r.times.features_s << ',' << 1e3 * r.times.stereo_s << ',' << 1e3 * r.times.tracking_s << ','
         << 1e3 * r.times.mapping_s << ',' << 1e3 * r.times.total_s << ",\"" << r.note << "\"\n";
@@ -372,15 +385,40 @@ int vslam_command(const VslamFlags& flags) {
                       {"local_ba_s", s.local_ba_s},
                       {"threads", "ORB of the two images in parallel; everything else on one thread"}};
   report["evaluation"] = evaluation;
-  report["not_implemented"] = {"loop closure and relocalisation (bag of words)", "monocular", "the Atlas (new map when lost)",
+  report["place_recognition"] = {{"vocabulary", flags.vocabulary.empty() ? nlohmann::json(nullptr) : nlohmann::json(flags.vocabulary)},
+                                 {"vocabulary_description", options.vocabulary ? options.vocabulary->description() : ""},
+                                 {"loop_queries", s.loop_queries},
+                                 {"loops_accepted", s.loops_accepted},
+                                 {"relocalisations", s.relocalisations},
+                                 {"map_points_fused", s.map_points_fused},
+                                 {"global_bundle_adjustments", s.global_bas},
+                                 {"loop_s", s.loop_s},
+                                 {"global_ba_s", s.global_ba_s},
+                                 {"candidates", nlohmann::json::array()}};
+  for (const vslam::LoopRecord& l : s.loops) {
+    report["place_recognition"]["candidates"].push_back({{"keyframe", l.keyframe},
+                                                         {"frame", l.frame},
+                                                         {"candidate_keyframe", l.candidate},
+                                                         {"candidate_frame", l.candidate_frame},
+                                                         {"score", l.score},
+                                                         {"min_covisible_score", l.min_covisible_score},
+                                                         {"consistency", l.consistency},
+                                                         {"pnp_inliers", l.pnp_inliers},
+                                                         {"matches", l.matches},
+                                                         {"decision", l.decision},
+                                                         {"reason", l.reason},
+                                                         {"correction_m", l.correction_m},
+                                                         {"correction_deg", l.correction_deg}});
+  }
+  report["not_implemented"] = {"monocular", "the Atlas (new map when lost)",
                                "triangulation between keyframes, map-point fusion, keyframe culling"};
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
   out.commit();
 
   if (!flags.quiet) {
-    std::printf("%zu frames: %zu ok, %zu degraded, %zu lost; %zu keyframes, %zu map points; per frame median %.1f ms "
+    std::printf("%zu frames: %zu ok, %zu degraded, %zu lost; %zu relocalisations, %zu loops closed; %zu keyframes, %zu map points; per frame median %.1f ms "
                 "(tracking %.1f ms, ORB %.1f ms, mapping %.1f ms)\n",
-                s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.keyframes, map_points.size(), spread(total).median * 1e3,
+                s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loops_accepted, s.keyframes, map_points.size(), spread(total).median * 1e3,
                 spread(tracking).median * 1e3, spread(features_s).median * 1e3, spread(mapping).median * 1e3);
     if (!evaluation.is_null() && evaluation.contains("ate_se3_aligned_m")) {
       std::printf("against %s: ATE (SE(3)-aligned) RMSE %.4f m; end-point drift %.3f m over %.1f m; RPE (1 frame) RMSE %.4f m, "
@@ -405,6 +443,7 @@ Runner register_vslam(CLI::App& app) {
   cmd->add_option("--camera", flags->camera, "Calibration preset for TUM RGB-D: tum-fr1, tum-fr2, tum-fr3");
   cmd->add_option("--calib", flags->calib, "Calibration YAML (fx, fy, cx, cy, k1..k3, p1, p2, baseline_m, depth_units_per_m, virtual_baseline_m)");
   cmd->add_option("--ground-truth", flags->ground_truth, "TUM-format ground truth (default: the dataset's poses.txt / groundtruth.txt)");
+  cmd->add_option("--vocabulary", flags->vocabulary, "Bag-of-words vocabulary (cairn vocabulary train, or DBoW2 .txt/.yml): loop closure and relocalisation");
   cmd->add_option("--features", flags->features, "ORB features per image (default 2000 stereo, 1000 RGB-D, as ORB-SLAM2)");
   cmd->add_option("--max-frames", flags->max_frames, "Process at most N frames");
   cmd->add_option("--feature-frame", flags->feature_frame, "Frame drawn in features.png (default: the middle one)");

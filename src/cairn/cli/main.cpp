@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   add(cairn::cli::register_localize2d, "localize2d", "Localise a CARMEN log in a map saved by slam2d --save-map: pose, health and confidence per scan, relocalisation, report");
   add(cairn::cli::register_slam3d, "slam3d", "3D LiDAR SLAM on a folder of scans (KISS-ICP-style odometry, Scan Context loops verified by ICP, GNC): trajectory, map, picture, report");
   add(cairn::cli::register_vslam, "vslam", "Stereo (KITTI layout) or RGB-D (TUM layout) visual SLAM on an image folder: trajectory, keyframes, map points, pictures, report");
+  add(cairn::cli::register_vocabulary, "vocabulary", "Train (hierarchical k-means++ on ORB descriptors) or describe a bag-of-words vocabulary for cairn vslam's place recognition");
   add(cairn::cli::register_eval, "eval", "Evaluate a trajectory: APE, RPE, KITTI t_err/r_err, relations metric; tables, JSON, plots");
   add(cairn::cli::register_landmarks, "landmarks", "Landmark SLAM (EKF or graph; known, NN or JCBB association) on a simulated landmark run");
   add(cairn::cli::register_ba, "ba", "Bundle adjustment of a BAL problem (points eliminated by Schur complement)");

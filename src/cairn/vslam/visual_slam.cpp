@@ -13,6 +13,9 @@
 #include <unordered_map>
 
 #include "cairn/backend/least_squares.hpp"
+#include "cairn/backend/optimizer.hpp"
+#include "cairn/backend/problem.hpp"
+#include "cairn/io/pose_graph.hpp"
 #include "cairn/backend/reprojection_factors.hpp"
 
 namespace cairn::vslam {
@@ -88,17 +91,14 @@ struct MapPoint {
   int reference_keyframe = 0;
   int visible = 1, found = 1;
   bool bad = false;
-  std::size_t last_frame_seen = static_cast<std::size_t>(-1);  // already in the frame's matches
-  std::size_t last_local_frame = static_cast<std::size_t>(-1);
-  // Projection cache of the current local-map search.
-  double proj_u = 0, proj_v = 0, proj_ur = 0, view_cos = 0;
-  int predicted_level = 0;
+  std::uint64_t last_search = 0;  // search_by_projection's stamp: considered already
 };
 
 struct KeyFrame {
   int id = 0;
   FrameData frame;
   bool bad = false;
+  vision::BowVector bow;  // empty without a vocabulary
 };
 
 }  // namespace
@@ -127,6 +127,11 @@ struct VisualSlam::Impl {
   int last_keyframe_frame = 0;
   std::size_t frames = 0;
   bool lost = false;
+  std::uint64_t search_stamp = 0;
+  // Place recognition.
+  vision::BowDatabase database;
+  int last_loop_keyframe = 0;
+  std::vector<std::pair<std::set<int>, int>> consistent_groups;  // ORB-SLAM2 mvConsistentGroups
   // Per frame: reference keyframe and the pose relative to it, for the final trajectory.
   std::vector<std::pair<int, core::SE3>> relative;
 
@@ -345,13 +350,13 @@ struct VisualSlam::Impl {
     return matches;
   }
 
-  // Brute-force matching against the reference keyframe's points with a ratio test: the
-  // fallback when the prediction fails (ORB-SLAM2 TrackReferenceKeyFrame uses bag of words).
-  int search_reference(FrameData& current, const KeyFrame& kf) {
+  // Brute-force descriptor matching of the frame's keypoints against the points `ids` with a
+  // ratio test and TH_LOW (50): the matcher of the reference fallback, relocalisation and loop
+  // verification (ORB-SLAM2 restricts these to keypoints in the same bag-of-words node instead).
+  int match_brute_force(FrameData& current, const std::vector<int>& point_ids) {
     std::vector<int> ids;
     cv::Mat descriptors;
-    for (std::size_t i = 0; i < kf.frame.size(); ++i) {
-      const int id = kf.frame.map_point[i];
+    for (const int id : point_ids) {
       if (id < 0 || points[static_cast<std::size_t>(id)].bad) continue;
       ids.push_back(id);
       descriptors.push_back(points[static_cast<std::size_t>(id)].descriptor);
@@ -365,6 +370,7 @@ struct VisualSlam::Impl {
     for (const auto& m : knn) {
       if (m.empty() || static_cast<double>(m[0].distance) > options.max_descriptor_distance / 2.0) continue;
       if (m.size() > 1 && static_cast<double>(m[0].distance) > options.reference_match_ratio * static_cast<double>(m[1].distance)) continue;
+      if (current.map_point[static_cast<std::size_t>(m[0].queryIdx)] >= 0) continue;
       const auto t = static_cast<std::size_t>(m[0].trainIdx);
       if (m[0].distance < taken_distance[t]) {
         taken[t] = m[0].queryIdx;
@@ -379,6 +385,8 @@ struct VisualSlam::Impl {
     }
     return matches;
   }
+
+  int search_reference(FrameData& current, const KeyFrame& kf) { return match_brute_force(current, kf.frame.map_point); }
 
   // PnP with RANSAC (OpenCV's solvePnPRansac, EPnP minimal sets; Lepetit et al. 2009) on the
   // frame's map-point matches: the starting pose when there is no prediction. Matches that are
@@ -525,6 +533,61 @@ struct VisualSlam::Impl {
 
   // --- Local map (ORB-SLAM2 Tracking::TrackLocalMap) ------------------------------------------
 
+  // Projects the points `ids` (repeats allowed) at f's pose and matches each to the best
+  // unmatched keypoint near its projection (ORB-SLAM2 ORBmatcher::SearchByProjection(Frame,
+  // vector<MapPoint*>, th) after Frame::isInFrustum): in front, inside the image, within the
+  // point's scale-invariance distances, viewed within 60 degrees of its mean viewing direction;
+  // radius th x (2.5 or 4 by viewing angle) x the predicted level's scale; the best descriptor
+  // within TH_HIGH and, when the second best is on the same level, better than ratio x it.
+  // Points the frame already holds are skipped. Returns the new matches.
+  int search_by_projection(FrameData& f, const std::vector<int>& ids, double th, bool count_visible) {
+    ++search_stamp;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      if (f.map_point[i] >= 0) points[static_cast<std::size_t>(f.map_point[i])].last_search = search_stamp;
+    }
+    const core::SE3 T_cw = f.T_world_camera.inverse();
+    const Eigen::Vector3d center = f.T_world_camera.translation();
+    int matches = 0;
+    for (const int id : ids) {
+      MapPoint& mp = points[static_cast<std::size_t>(id)];
+      if (mp.bad || mp.last_search == search_stamp) continue;
+      mp.last_search = search_stamp;
+      double u, v, ur, z;
+      if (!project(T_cw, mp.p_world, u, v, ur, z)) continue;
+      const Eigen::Vector3d po = mp.p_world - center;
+      const double distance = po.norm();
+      if (distance < 0.8 * mp.min_distance || distance > 1.2 * mp.max_distance) continue;
+      const double view_cos = po.dot(mp.normal) / distance;
+      if (view_cos < 0.5) continue;
+      if (count_visible) ++mp.visible;
+      const int level = predict_level(mp, distance);
+      const double r = (view_cos > 0.998 ? 2.5 : 4.0) * th * scales[static_cast<std::size_t>(level)];
+      const std::vector<int> candidates = features_in_area(f, u, v, r, level - 1, level);
+      int best = 256, second = 256, best_level = -1, second_level = -1, best_j = -1;
+      for (const int j : candidates) {
+        const auto sj = static_cast<std::size_t>(j);
+        if (f.map_point[sj] >= 0) continue;
+        if (f.u_right[sj] >= 0 && std::abs(ur - f.u_right[sj]) > r) continue;
+        const int d = vision::descriptor_distance(mp.descriptor.ptr(), f.descriptors.ptr(j));
+        if (d < best) {
+          second = best;
+          second_level = best_level;
+          best = d;
+          best_level = f.keypoints[sj].octave;
+          best_j = j;
+        } else if (d < second) {
+          second = d;
+          second_level = f.keypoints[sj].octave;
+        }
+      }
+      if (best_j < 0 || best > options.max_descriptor_distance) continue;
+      if (best_level == second_level && best > options.local_match_ratio * second) continue;
+      f.map_point[static_cast<std::size_t>(best_j)] = id;
+      ++matches;
+    }
+    return matches;
+  }
+
   int track_local_map(FrameData& f, double* sigma_position_m, int* given) {
     // Keyframes sharing points with the frame, most shared first.
     std::unordered_map<int, int> shared;
@@ -536,7 +599,6 @@ struct VisualSlam::Impl {
         f.map_point[i] = -1;
         continue;
       }
-      mp.last_frame_seen = f.index;
       for (const auto& [kf, idx] : mp.observations) ++shared[kf];
     }
     std::vector<std::pair<int, int>> ranked;
@@ -545,48 +607,14 @@ struct VisualSlam::Impl {
     if (!ranked.empty()) reference_keyframe = ranked.front().second;
     if (ranked.size() > static_cast<std::size_t>(options.local_map_keyframes)) ranked.resize(static_cast<std::size_t>(options.local_map_keyframes));
     // Project the local map's points that the frame has not matched yet.
-    const core::SE3 T_cw = f.T_world_camera.inverse();
-    const Eigen::Vector3d center = f.T_world_camera.translation();
-    const double th = kind == io::SequenceKind::kRgbd ? 3.0 * options.local_search_radius_px : options.local_search_radius_px;
+    std::vector<int> ids;
     for (const auto& [n, kf] : ranked) {
       for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
-        if (id < 0) continue;
-        MapPoint& mp = points[static_cast<std::size_t>(id)];
-        if (mp.bad || mp.last_frame_seen == f.index || mp.last_local_frame == f.index) continue;
-        mp.last_local_frame = f.index;
-        double u, v, ur, z;
-        if (!project(T_cw, mp.p_world, u, v, ur, z)) continue;
-        const Eigen::Vector3d po = mp.p_world - center;
-        const double distance = po.norm();
-        if (distance < 0.8 * mp.min_distance || distance > 1.2 * mp.max_distance) continue;
-        const double view_cos = po.dot(mp.normal) / distance;
-        if (view_cos < 0.5) continue;
-        ++mp.visible;
-        const int level = predict_level(mp, distance);
-        const double r = (view_cos > 0.998 ? 2.5 : 4.0) * th * scales[static_cast<std::size_t>(level)];
-        const std::vector<int> candidates = features_in_area(f, u, v, r, level - 1, level);
-        int best = 256, second = 256, best_level = -1, second_level = -1, best_j = -1;
-        for (const int j : candidates) {
-          const auto sj = static_cast<std::size_t>(j);
-          if (f.map_point[sj] >= 0) continue;
-          if (f.u_right[sj] >= 0 && std::abs(ur - f.u_right[sj]) > r) continue;
-          const int d = vision::descriptor_distance(mp.descriptor.ptr(), f.descriptors.ptr(j));
-          if (d < best) {
-            second = best;
-            second_level = best_level;
-            best = d;
-            best_level = f.keypoints[sj].octave;
-            best_j = j;
-          } else if (d < second) {
-            second = d;
-            second_level = f.keypoints[sj].octave;
-          }
-        }
-        if (best_j < 0 || best > options.max_descriptor_distance) continue;
-        if (best_level == second_level && best > options.local_match_ratio * second) continue;
-        f.map_point[static_cast<std::size_t>(best_j)] = id;
+        if (id >= 0) ids.push_back(id);
       }
     }
+    const double th = kind == io::SequenceKind::kRgbd ? 3.0 * options.local_search_radius_px : options.local_search_radius_px;
+    search_by_projection(f, ids, th, true);
     int matched = 0;
     for (std::size_t i = 0; i < f.size(); ++i) matched += f.map_point[i] >= 0 ? 1 : 0;
     *given = matched;
@@ -692,26 +720,40 @@ struct VisualSlam::Impl {
     recent_points = std::move(keep);
   }
 
-  // ORB-SLAM2 Optimizer::LocalBundleAdjustment on the engine.
-  void local_bundle_adjustment() {
-    const auto start = Clock::now();
-    const int current = static_cast<int>(keyframes.size()) - 1;
-    // Covisible keyframes of the current one.
+  // Keyframes sharing at least `min_shared` good points with keyframe `kf`, most first.
+  std::vector<std::pair<int, int>> covisible(int kf, int min_shared) const {
     std::unordered_map<int, int> shared;
-    for (const int id : keyframes[static_cast<std::size_t>(current)].frame.map_point) {
+    for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
       if (id < 0 || points[static_cast<std::size_t>(id)].bad) continue;
-      for (const auto& [kf, idx] : points[static_cast<std::size_t>(id)].observations) {
-        if (kf != current) ++shared[kf];
+      for (const auto& [other, idx] : points[static_cast<std::size_t>(id)].observations) {
+        if (other != kf) ++shared[other];
       }
     }
     std::vector<std::pair<int, int>> ranked;
-    for (const auto& [kf, n] : shared) {
-      if (n >= options.min_covisible_points) ranked.emplace_back(n, kf);
+    for (const auto& [other, n] : shared) {
+      if (n >= min_shared) ranked.emplace_back(n, other);
     }
     std::sort(ranked.begin(), ranked.end(), std::greater<>());
+    return ranked;
+  }
+
+  // ORB-SLAM2 Optimizer::LocalBundleAdjustment: the newest keyframe and its covisible ones.
+  void local_bundle_adjustment() {
+    const auto start = Clock::now();
+    const int current = static_cast<int>(keyframes.size()) - 1;
+    std::vector<std::pair<int, int>> ranked = covisible(current, options.min_covisible_points);
     if (ranked.size() > static_cast<std::size_t>(options.max_local_ba_keyframes)) ranked.resize(static_cast<std::size_t>(options.max_local_ba_keyframes));
     std::set<int> local{current};
     for (const auto& [n, kf] : ranked) local.insert(kf);
+    bundle_adjustment(local, 5, 10);
+    ++summary->local_bas;
+    summary->local_ba_s += seconds_since(start);
+  }
+
+  // Bundle adjustment on the engine of the keyframes `local` (free, but keyframe 0) and every
+  // point they see, the other keyframes that see those points fixed; `first` LM iterations with
+  // Huber, chi^2 outliers removed, `second` more without the kernel, outlier observations erased.
+  void bundle_adjustment(const std::set<int>& local, int first, int second_iterations) {
     std::set<int> local_points;
     for (const int kf : local) {
       for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
@@ -767,7 +809,7 @@ struct VisualSlam::Impl {
     build(problem, is_outlier, true);
     backend::LeastSquaresOptions lso;
     lso.linear_solver = backend::LinearSolverType::kSparseSchur;
-    lso.max_iterations = 5;
+    lso.max_iterations = first;
     lso.threads = 1;
     backend::solve(problem, lso);
     auto edge_chi2 = [&](const Edge& edge, const core::SE3& T_wc, const Eigen::Vector3d& p_world) {
@@ -803,7 +845,7 @@ struct VisualSlam::Impl {
         point_var[id] = second.add_variable(point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
       }
       build(second, is_outlier, false);
-      lso.max_iterations = 10;
+      lso.max_iterations = second_iterations;
       backend::solve(second, lso);
     }
     classify();
@@ -819,8 +861,220 @@ struct VisualSlam::Impl {
       mp.p_world = point_values[id];
       update_normal_and_depth(mp);
     }
-    ++summary->local_bas;
-    summary->local_ba_s += seconds_since(start);
+  }
+
+  // --- Place recognition: loop closure (ORB-SLAM2 LoopClosing) -------------------------------
+
+  // Replaces point `old_id` by `new_id` everywhere (ORB-SLAM2 MapPoint::Replace): its
+  // observations move to the new point where the keyframe does not see that one already.
+  void replace_point(int old_id, int new_id) {
+    if (old_id == new_id) return;
+    MapPoint& old_point = points[static_cast<std::size_t>(old_id)];
+    MapPoint& new_point = points[static_cast<std::size_t>(new_id)];
+    for (const auto& [kf, idx] : old_point.observations) {
+      FrameData& f = keyframes[static_cast<std::size_t>(kf)].frame;
+      if (!new_point.observations.count(kf)) {
+        new_point.observations[kf] = idx;
+        f.map_point[static_cast<std::size_t>(idx)] = new_id;
+      } else {
+        f.map_point[static_cast<std::size_t>(idx)] = -1;
+      }
+    }
+    new_point.visible += old_point.visible;
+    new_point.found += old_point.found;
+    old_point.observations.clear();
+    old_point.bad = true;
+    for (int& id : last.map_point) {
+      if (id == old_id) id = new_id;
+    }
+    ++summary->map_points_fused;
+  }
+
+  // Geometric verification of a loop candidate (stereo / RGB-D: SE(3), ORB-SLAM2 ComputeSim3
+  // with the scale fixed): the keyframe's keypoints matched to the candidate's points, a PnP
+  // RANSAC pose, the motion-only BA, then the points of the candidate and its covisible
+  // keyframes projected at that pose and the BA again. `probe` gets the keyframe at the pose
+  // the candidate's part of the map gives it, with its matches to that part.
+  bool verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe) {
+    probe = keyframes[static_cast<std::size_t>(current)].frame;
+    std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
+    std::fill(probe.outlier.begin(), probe.outlier.end(), 0);
+    const int matches = match_brute_force(probe, keyframes[static_cast<std::size_t>(candidate)].frame.map_point);
+    if (matches < options.loop_min_pnp_inliers) {
+      record.reason = std::to_string(matches) + " descriptor matches to the candidate's points (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
+      return false;
+    }
+    record.pnp_inliers = pnp_ransac(probe);
+    if (record.pnp_inliers < options.loop_min_pnp_inliers) {
+      record.reason = "PnP RANSAC: " + std::to_string(record.pnp_inliers) + " inliers of " + std::to_string(matches) + " (< " +
+                      std::to_string(options.loop_min_pnp_inliers) + ")";
+      return false;
+    }
+    optimize_pose(probe);
+    drop_outliers(probe);
+    std::vector<int> ids;
+    std::vector<std::pair<int, int>> group = covisible(candidate, options.min_covisible_points);
+    if (group.size() > 10) group.resize(10);
+    group.emplace_back(0, candidate);
+    for (const auto& [n, kf] : group) {
+      for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
+        if (id >= 0) ids.push_back(id);
+      }
+    }
+    search_by_projection(probe, ids, 3.0, false);
+    record.matches = optimize_pose(probe);
+    drop_outliers(probe);
+    if (record.matches < options.loop_min_matches) {
+      record.reason = "after projecting the candidate's neighbourhood: " + std::to_string(record.matches) +
+                      " inlier matches (< " + std::to_string(options.loop_min_matches) + ")";
+      return false;
+    }
+    return true;
+  }
+
+  // Loop correction (ORB-SLAM2 CorrectLoop, stereo: SE(3)): the pose graph of every keyframe
+  // (consecutive keyframes, covisibility edges of >= 100 shared points, the loop edge; unit
+  // information as ORB-SLAM2's essential graph; keyframe 0 fixed) optimised on the back end;
+  // points follow their reference keyframe; the keyframe's loop matches fuse its points into the
+  // old ones; then a global bundle adjustment.
+  void correct_loop(int current, int candidate, const FrameData& probe, LoopRecord& record) {
+    const std::size_t n = keyframes.size();
+    std::vector<core::SE3> old_poses(n);
+    for (std::size_t k = 0; k < n; ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
+    const core::SE3 T_loop = probe.T_world_camera;
+    const core::SE3 change = old_poses[static_cast<std::size_t>(current)].inverse() * T_loop;
+    record.correction_m = change.translation().norm();
+    record.correction_deg = Eigen::AngleAxisd(change.rotation_matrix()).angle() * 180.0 / 3.14159265358979323846;
+    io::PoseGraph3D graph;
+    for (std::size_t k = 0; k < n; ++k) graph.vertices.push_back({static_cast<std::int64_t>(k), old_poses[k]});
+    auto add_edge = [&](int a, int b, const core::SE3& T_a_b) {
+      io::GraphEdge<core::SE3> e;
+      e.from = a;
+      e.to = b;
+      e.T_from_to = T_a_b;
+      graph.edges.push_back(e);
+    };
+    for (std::size_t k = 1; k < n; ++k) add_edge(static_cast<int>(k) - 1, static_cast<int>(k), old_poses[k - 1].inverse() * old_poses[k]);
+    for (std::size_t k = 0; k < n; ++k) {
+      for (const auto& [shared, other] : covisible(static_cast<int>(k), 100)) {
+        if (other < static_cast<int>(k) - 1) add_edge(other, static_cast<int>(k), old_poses[static_cast<std::size_t>(other)].inverse() * old_poses[k]);
+      }
+    }
+    add_edge(candidate, current, old_poses[static_cast<std::size_t>(candidate)].inverse() * T_loop);
+    graph.fixed.push_back(0);
+    backend::Problem3D problem = backend::make_problem(graph, "vslam essential graph");
+    backend::OptimizerOptions solver;
+    solver.max_iterations = 20;
+    solver.function_tolerance = 1e-9;
+    solver.threads = 1;
+    backend::optimize(problem, solver);
+    for (std::size_t k = 0; k < n; ++k) keyframes[k].frame.T_world_camera = problem.T_world_pose[k];
+    for (MapPoint& mp : points) {
+      if (mp.bad) continue;
+      const auto r = static_cast<std::size_t>(mp.reference_keyframe);
+      mp.p_world = keyframes[r].frame.T_world_camera * (old_poses[r].inverse() * mp.p_world);
+    }
+    if (reference_keyframe >= 0) {
+      const auto r = static_cast<std::size_t>(reference_keyframe);
+      last.T_world_camera = keyframes[r].frame.T_world_camera * (old_poses[r].inverse() * last.T_world_camera);
+    }
+    // Fuse: the keyframe's keypoints matched to the old part of the map take its points.
+    KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
+    for (std::size_t i = 0; i < probe.size(); ++i) {
+      const int loop_id = probe.map_point[i];
+      if (loop_id < 0 || points[static_cast<std::size_t>(loop_id)].bad) continue;
+      const int own = kf.frame.map_point[i];
+      if (own == loop_id) continue;
+      if (own >= 0 && !points[static_cast<std::size_t>(own)].bad) {
+        replace_point(own, loop_id);
+      } else if (!points[static_cast<std::size_t>(loop_id)].observations.count(current)) {
+        points[static_cast<std::size_t>(loop_id)].observations[current] = static_cast<int>(i);
+        kf.frame.map_point[i] = loop_id;
+      }
+      update_descriptor(points[static_cast<std::size_t>(loop_id)]);
+      update_normal_and_depth(points[static_cast<std::size_t>(loop_id)]);
+    }
+    if (options.global_ba_after_loop) {
+      const auto start = Clock::now();
+      std::set<int> all;
+      for (std::size_t k = 0; k < n; ++k) all.insert(static_cast<int>(k));
+      bundle_adjustment(all, 10, 10);
+      ++summary->global_bas;
+      summary->global_ba_s += seconds_since(start);
+    }
+  }
+
+  // ORB-SLAM2 LoopClosing::DetectLoop: candidates from the database scoring at least as well as
+  // the keyframe's worst covisible neighbour and sharing at least 80 % of the best candidate's
+  // words, kept only when their covisibility group was also a candidate group for the previous
+  // loop_consistency - 1 keyframes; then verified, best score first.
+  void detect_and_close_loop(FrameResult& result) {
+    if (!options.vocabulary) return;
+    const auto start = Clock::now();
+    const int current = static_cast<int>(keyframes.size()) - 1;
+    KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
+    kf.bow = options.vocabulary->transform(kf.frame.descriptors);
+    const bool too_early = current < 2 * options.loop_min_keyframes_apart || current < last_loop_keyframe + options.loop_min_keyframes_apart;
+    if (!options.loop_closure || too_early) {
+      database.add(static_cast<std::uint32_t>(current), kf.bow);
+      summary->loop_s += seconds_since(start);
+      return;
+    }
+    ++summary->loop_queries;
+    const std::vector<std::pair<int, int>> neighbours = covisible(current, options.min_covisible_points);
+    double min_score = 1.0;
+    std::vector<std::uint32_t> exclude{static_cast<std::uint32_t>(current)};
+    for (const auto& [shared, k] : neighbours) {
+      min_score = std::min(min_score, vision::Vocabulary::score(kf.bow, keyframes[static_cast<std::size_t>(k)].bow));
+      exclude.push_back(static_cast<std::uint32_t>(k));
+    }
+    for (int k = std::max(0, current - options.loop_min_keyframes_apart); k < current; ++k) exclude.push_back(static_cast<std::uint32_t>(k));
+    const std::vector<vision::BowDatabase::Result> results = database.query(kf.bow, 20, exclude);
+    database.add(static_cast<std::uint32_t>(current), kf.bow);
+    int max_common = 0;
+    for (const auto& r : results) max_common = std::max(max_common, r.common_words);
+    std::vector<std::pair<std::set<int>, int>> groups;
+    std::vector<std::tuple<double, int, int>> consistent;  // score, candidate, consistency
+    for (const auto& r : results) {
+      if (r.score < min_score || r.common_words < 0.8 * max_common) continue;
+      const int candidate = static_cast<int>(r.id);
+      std::set<int> group{candidate};
+      for (const auto& [shared, k] : covisible(candidate, options.min_covisible_points)) group.insert(k);
+      int consistency = 0;
+      for (const auto& [previous, count] : consistent_groups) {
+        const bool shares = std::any_of(group.begin(), group.end(), [&](int k) { return previous.count(k) > 0; });
+        if (shares) consistency = std::max(consistency, count + 1);
+      }
+      groups.emplace_back(group, consistency);
+      if (consistency + 1 >= options.loop_consistency) consistent.emplace_back(r.score, candidate, consistency + 1);
+    }
+    consistent_groups = std::move(groups);
+    std::sort(consistent.begin(), consistent.end(), std::greater<>());
+    for (const auto& [score, candidate, consistency] : consistent) {
+      LoopRecord record;
+      record.keyframe = static_cast<std::size_t>(current);
+      record.candidate = static_cast<std::size_t>(candidate);
+      record.frame = kf.frame.index;
+      record.candidate_frame = keyframes[static_cast<std::size_t>(candidate)].frame.index;
+      record.score = score;
+      record.min_covisible_score = min_score;
+      record.consistency = consistency;
+      FrameData probe;
+      if (verify_loop(current, candidate, record, probe)) {
+        record.decision = "accepted";
+        record.reason = std::to_string(record.matches) + " inlier matches to the candidate's neighbourhood";
+        correct_loop(current, candidate, probe, record);
+        summary->loops.push_back(record);
+        ++summary->loops_accepted;
+        result.loop_closed = true;
+        last_loop_keyframe = current;
+        consistent_groups.clear();
+        break;
+      }
+      record.decision = "rejected";
+      summary->loops.push_back(record);
+    }
+    summary->loop_s += seconds_since(start);
   }
 
   // --- One frame ------------------------------------------------------------------------------
@@ -845,6 +1099,7 @@ struct VisualSlam::Impl {
         times.tracking_s = seconds_since(tracking_start);
         const auto mapping_start = Clock::now();
         insert_keyframe(f);
+        detect_and_close_loop(result);
         times.mapping_s = seconds_since(mapping_start);
         result.tracked = true;
         result.health = TrackingHealth::kOk;
@@ -864,11 +1119,14 @@ struct VisualSlam::Impl {
       // Stage 1: the previous frame's points at the constant-velocity prediction.
       f.T_world_camera = have_velocity && !lost ? last.T_world_camera * velocity : last.T_world_camera;
       int matches = 0;
+      const bool was_lost = lost;
       if (have_last && have_velocity && !lost) {
-        matches = search_from_last(f, last, options.motion_search_radius_px);
+        // ORB-SLAM2 TrackWithMotionModel: th 7 for stereo, 15 for RGB-D.
+        const double radius = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px : options.motion_search_radius_rgbd_px;
+        matches = search_from_last(f, last, radius);
         if (matches < options.min_motion_matches) {
           std::fill(f.map_point.begin(), f.map_point.end(), -1);
-          matches = search_from_last(f, last, 2.0 * options.motion_search_radius_px);
+          matches = search_from_last(f, last, 2.0 * radius);
         }
       }
       int inliers = 0;
@@ -883,7 +1141,13 @@ struct VisualSlam::Impl {
         // When lost, the most recent keyframes are tried too (a bounded stand-in for ORB-SLAM2's
         // bag-of-words relocalisation over the whole map).
         std::vector<int> candidates{reference_keyframe >= 0 ? reference_keyframe : static_cast<int>(keyframes.size()) - 1};
-        if (lost) {
+        if (lost && options.vocabulary && database.size() > 0) {
+          // Relocalisation (ORB-SLAM2 Tracking::Relocalization): the keyframes the database
+          // ranks best for this frame's words.
+          for (const auto& r : database.query(options.vocabulary->transform(f.descriptors), 8)) {
+            if (static_cast<int>(r.id) != candidates.front()) candidates.push_back(static_cast<int>(r.id));
+          }
+        } else if (lost) {
           for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && candidates.size() < 9; --kf) {
             if (kf != candidates.front()) candidates.push_back(kf);
           }
@@ -927,15 +1191,26 @@ struct VisualSlam::Impl {
       result.inliers = inliers;
       result.inlier_ratio = given > 0 ? static_cast<double>(inliers) / given : 0.0;
       times.tracking_s = seconds_since(tracking_start);
+      if (was_lost && inliers >= options.lost_below_inliers && inliers < options.relocalisation_min_inliers) {
+        result.note = "relocalisation candidate with " + std::to_string(inliers) + " inliers (< " +
+                      std::to_string(options.relocalisation_min_inliers) + " needed after being lost): still lost";
+        inliers = 0;
+      }
       if (inliers < options.lost_below_inliers) {
         result.health = TrackingHealth::kLost;
         result.tracked = false;
-        result.note = "only " + std::to_string(inliers) + " inlier map-point matches (lost below " +
-                      std::to_string(options.lost_below_inliers) + "): pose from the motion model";
+        if (result.note.empty()) {
+          result.note = "only " + std::to_string(inliers) + " inlier map-point matches (lost below " +
+                        std::to_string(options.lost_below_inliers) + "): pose from the motion model";
+        }
         f.T_world_camera = have_velocity ? last.T_world_camera * velocity : last.T_world_camera;
         lost = true;
       } else {
         result.tracked = true;
+        if (was_lost) {
+          result.relocalised = true;
+          ++summary->relocalisations;
+        }
         lost = false;
         if (inliers < options.degraded_below_inliers) {
           result.health = TrackingHealth::kDegraded;
@@ -948,6 +1223,7 @@ struct VisualSlam::Impl {
           insert_keyframe(f);
           cull_points();
           if (options.local_ba) local_bundle_adjustment();
+          detect_and_close_loop(result);
           times.mapping_s = seconds_since(mapping_start);
           result.keyframe = true;
         }
@@ -1001,6 +1277,10 @@ std::string VisualSlamOptions::problems() const {
   if (keyframe_max_frames < 1) add("keyframe_max_frames must be >= 1");
   if (max_local_ba_keyframes < 1 || local_map_keyframes < 1) add("keyframe counts must be >= 1");
   if (!(chi2_mono > 0.0) || !(chi2_stereo > 0.0)) add("chi2 thresholds must be > 0");
+  if (!(motion_search_radius_rgbd_px > 0.0)) add("motion_search_radius_rgbd_px must be > 0");
+  if (loop_min_keyframes_apart < 1 || loop_consistency < 1) add("loop_min_keyframes_apart and loop_consistency must be >= 1");
+  if (loop_min_pnp_inliers < 6 || loop_min_matches < loop_min_pnp_inliers) add("need 6 <= loop_min_pnp_inliers <= loop_min_matches");
+  if (relocalisation_min_inliers < lost_below_inliers) add("relocalisation_min_inliers must be >= lost_below_inliers");
   return out;
 }
 

@@ -33,6 +33,7 @@
 #include "cairn/core/time.hpp"
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/vision/features.hpp"
+#include "cairn/vision/vocabulary.hpp"
 
 namespace cairn::vslam {
 
@@ -44,6 +45,11 @@ struct VisualSlamOptions {
   double close_depth_baselines = 35.0;
   int min_new_points = 100;              ///< a new keyframe creates at least this many points (nearest first)
   double motion_search_radius_px = 7.0;  ///< TrackWithMotionModel's th for stereo, x level scale
+  /// ... and for RGB-D. ORB-SLAM2 uses 15 for every non-stereo sensor; on TUM fr1/desk at every
+  /// 4th frame (the only RGB-D data here) 15 kept 61 of 149 frames tracked, 7 kept 114
+  /// (2026-11-25, docs/vslam.md): the wider radius let in wrong matches that held the keyframe
+  /// rule back until the map no longer covered the view.
+  double motion_search_radius_rgbd_px = 7.0;
   double local_search_radius_px = 1.0;   ///< SearchLocalPoints' th (x 2.5 or 4 by viewing angle, x level scale)
   int max_descriptor_distance = 100;     ///< ORB-SLAM's TH_HIGH
   double local_match_ratio = 0.8;        ///< best / second best at the same level
@@ -61,6 +67,17 @@ struct VisualSlamOptions {
   double chi2_mono = 5.991;              ///< 2 DOF, 95 %
   double chi2_stereo = 7.815;            ///< 3 DOF, 95 %
   bool local_ba = true;
+  /// Place recognition for loop closure and relocalisation (DBoW2-style, vision/vocabulary.hpp);
+  /// null = neither (tracking loss then tries the 8 most recent keyframes only). It must not have
+  /// been trained on the images it is used on.
+  std::shared_ptr<const vision::Vocabulary> vocabulary;
+  bool loop_closure = true;
+  int loop_min_keyframes_apart = 10;   ///< no loop with the last 10 keyframes, none within 10 of the last loop (ORB-SLAM2)
+  int loop_consistency = 3;            ///< consecutive keyframes whose candidates agree (ORB-SLAM2 mnCovisibilityConsistencyTh)
+  int loop_min_pnp_inliers = 20;       ///< descriptor matches to, and PnP RANSAC inliers of, the candidate's points (ORB-SLAM2 ComputeSim3: 20 and 20)
+  int loop_min_matches = 40;           ///< map-point matches after projecting the candidate's neighbourhood (ORB-SLAM2: 40)
+  int relocalisation_min_inliers = 50; ///< ORB-SLAM2 Relocalization: 50
+  bool global_ba_after_loop = true;    ///< a full bundle adjustment after each loop correction
   /// Empty when usable, else every problem.
   std::string problems() const;
 };
@@ -89,6 +106,8 @@ struct FrameResult {
   int inliers = 0;             ///< map-point matches after the local map's pose optimisation
   double inlier_ratio = 0.0;   ///< inliers / matches given to that optimisation
   bool keyframe = false;
+  bool relocalised = false;  ///< the pose came from a place-recognition match after being lost
+  bool loop_closed = false;  ///< this frame's keyframe closed a loop
   double sigma_position_m = 0.0;  ///< sqrt of the largest eigenvalue of the position covariance
   FrameTimes times;
   std::string note;  ///< why lost / degraded
@@ -98,11 +117,29 @@ struct FrameResult {
   std::vector<signed char> keypoint_states;
 };
 
+/// One loop candidate and what became of it.
+struct LoopRecord {
+  std::size_t keyframe = 0;   ///< the querying keyframe (index)
+  std::size_t candidate = 0;  ///< the candidate keyframe
+  std::size_t frame = 0, candidate_frame = 0;
+  double score = 0.0;         ///< BoW L1 score
+  double min_covisible_score = 0.0;  ///< the query's lowest score with its covisible keyframes
+  int consistency = 0;        ///< consecutive keyframes with agreeing candidates
+  int pnp_inliers = 0, matches = 0;
+  std::string decision;       ///< "accepted" or "rejected"
+  std::string reason;
+  double correction_m = 0.0, correction_deg = 0.0;  ///< how far the keyframe moved (accepted)
+};
+
 struct VisualSlamSummary {
   std::size_t frames = 0, frames_ok = 0, frames_degraded = 0, frames_lost = 0;
   std::size_t keyframes = 0, map_points = 0, map_points_culled = 0;
   std::size_t local_bas = 0, reference_fallbacks = 0;
   double local_ba_s = 0.0;
+  std::size_t loop_queries = 0, loops_accepted = 0, relocalisations = 0, global_bas = 0;
+  std::size_t map_points_fused = 0;
+  double loop_s = 0.0, global_ba_s = 0.0;
+  std::vector<LoopRecord> loops;  ///< every candidate that reached verification, and why
 };
 
 class VisualSlam {
