@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <map>
 #include <numeric>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -226,19 +227,29 @@ int vslam_command(const VslamFlags& flags) {
   const std::vector<core::SE3> poses = slam.trajectory();
   // TUM: the tracked frames only (a lost frame has no pose, as ORB-SLAM2's SaveTrajectoryTUM);
   // KITTI: one line per frame as its devkit needs, a lost frame carrying the motion model's guess.
+  // Frames of map segments that never merged with the main map (the one of the first keyframe)
+  // are in frames of their own: trajectory_map_<segment>.tum.
+  const std::vector<int> segments = slam.frame_segments();
+  const int main_segment = slam.main_segment();
   io::Trajectory trajectory, every_frame;
+  std::map<int, io::Trajectory> other_maps;
   for (std::size_t k = 0; k < results.size(); ++k) {
     every_frame.stamps.push_back(results[k].time);
     every_frame.poses.push_back(poses[k]);
-    if (!results[k].tracked) continue;
-    trajectory.stamps.push_back(results[k].time);
-    trajectory.poses.push_back(poses[k]);
+    if (!results[k].tracked || segments[k] < 0) continue;
+    io::Trajectory& t = segments[k] == main_segment ? trajectory : other_maps[segments[k]];
+    t.stamps.push_back(results[k].time);
+    t.poses.push_back(poses[k]);
   }
   if (trajectory.poses.empty()) throw std::runtime_error("no frame was tracked: nothing to write (see the messages above)");
   io::write_output(out.staging_path("trajectory.tum"), [&](std::ostream& o) { io::write_tum(o, trajectory); });
+  for (const auto& [id, t] : other_maps) {
+    io::write_output(out.staging_path("trajectory_map_" + std::to_string(id) + ".tum"), [&](std::ostream& o) { io::write_tum(o, t); });
+  }
   io::write_output(out.staging_path("trajectory.kitti"), [&](std::ostream& o) { io::write_kitti(o, every_frame); });
   io::Trajectory keyframes;
   for (const std::size_t k : slam.keyframe_frames()) {
+    if (segments[k] != main_segment) continue;  // keyframes of the main map, as trajectory.tum
     keyframes.stamps.push_back(results[k].time);
     keyframes.poses.push_back(poses[k]);  // keyframes are tracked frames
   }
@@ -249,11 +260,12 @@ int vslam_command(const VslamFlags& flags) {
     io::write_ply(o, map_points, "cairn vslam map points, world = the first camera (x right, y down, z forward)");
   });
   io::write_output(out.staging_path("frames.csv"), [&](std::ostream& o) {
-    o << "frame,time_s,health,tracked,keyframe,relocalised,loop_closed,features,stereo_points,first_stage_matches,used_reference,inliers,inlier_ratio,"
+    o << "frame,time_s,health,tracked,segment,keyframe,relocalised,loop_closed,new_map,features,stereo_points,first_stage_matches,used_reference,inliers,inlier_ratio,"
          "sigma_position_m,features_ms,stereo_ms,tracking_ms,mapping_ms,total_ms,note\n";
     for (const auto& r : results) {
       o << r.frame << ',' << r.time.to_seconds_string() << ',' << vslam::to_string(r.health) << ',' << (r.tracked ? 1 : 0) << ','
-        << (r.keyframe ? 1 : 0) << ',' << (r.relocalised ? 1 : 0) << ',' << (r.loop_closed ? 1 : 0) << ',' << r.features << ',' << r.stereo_points << ',' << r.motion_matches << ','
+        << segments[r.frame] << ',' << (r.keyframe ? 1 : 0) << ',' << (r.relocalised ? 1 : 0) << ',' << (r.loop_closed ? 1 : 0) << ','
+        << (r.new_map ? 1 : 0) << ',' << r.features << ',' << r.stereo_points << ',' << r.motion_matches << ','
         << (r.used_reference ? 1 : 0) << ',' << r.inliers << ',' << r.inlier_ratio << ',' << r.sigma_position_m << ','
         << 1e3 * r.times.features_s << ',' << 1e3 * r.times.stereo_s << ',' << 1e3 * r.times.tracking_s << ','
         << 1e3 * r.times.mapping_s << ',' << 1e3 * r.times.total_s << ",\"" << r.note << "\"\n";
@@ -384,6 +396,20 @@ int vslam_command(const VslamFlags& flags) {
                       {"image_read_ms", ms_json(read_s)},
                       {"local_ba_s", s.local_ba_s},
                       {"threads", "ORB of the two images in parallel; everything else on one thread"}};
+  {
+    nlohmann::json maps = nlohmann::json::array();
+    std::map<int, std::size_t> frames_in;
+    for (std::size_t k = 0; k < results.size(); ++k) {
+      if (results[k].tracked && segments[k] >= 0) ++frames_in[segments[k]];
+    }
+    for (const auto& [id, count] : frames_in) {
+      maps.push_back({{"segment", id},
+                      {"main", id == main_segment},
+                      {"tracked_frames", count},
+                      {"trajectory", id == main_segment ? "trajectory.tum" : "trajectory_map_" + std::to_string(id) + ".tum"}});
+    }
+    report["maps"] = maps;
+  }
   report["evaluation"] = evaluation;
   report["place_recognition"] = {{"vocabulary", flags.vocabulary.empty() ? nlohmann::json(nullptr) : nlohmann::json(flags.vocabulary)},
                                  {"vocabulary_description", options.vocabulary ? options.vocabulary->description() : ""},
@@ -391,6 +417,8 @@ int vslam_command(const VslamFlags& flags) {
                                  {"loops_accepted", s.loops_accepted},
                                  {"relocalisations", s.relocalisations},
                                  {"map_points_fused", s.map_points_fused},
+                                 {"maps_started", s.maps_started},
+                                 {"maps_merged", s.maps_merged},
                                  {"global_bundle_adjustments", s.global_bas},
                                  {"loop_s", s.loop_s},
                                  {"global_ba_s", s.global_ba_s},
@@ -405,6 +433,7 @@ int vslam_command(const VslamFlags& flags) {
                                                          {"consistency", l.consistency},
                                                          {"pnp_inliers", l.pnp_inliers},
                                                          {"matches", l.matches},
+                                                         {"merge", l.merge},
                                                          {"decision", l.decision},
                                                          {"reason", l.reason},
                                                          {"correction_m", l.correction_m},
@@ -416,9 +445,10 @@ int vslam_command(const VslamFlags& flags) {
   out.commit();
 
   if (!flags.quiet) {
-    std::printf("%zu frames: %zu ok, %zu degraded, %zu lost; %zu relocalisations, %zu loops closed; %zu keyframes, %zu map points; per frame median %.1f ms "
+    std::printf("%zu frames: %zu ok, %zu degraded, %zu lost; %zu relocalisations, %zu loops closed, %zu new maps (%zu merged); %zu keyframes, %zu map points; per frame median %.1f ms "
                 "(tracking %.1f ms, ORB %.1f ms, mapping %.1f ms)\n",
-                s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loops_accepted, s.keyframes, map_points.size(), spread(total).median * 1e3,
+                s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loops_accepted, s.maps_started, s.maps_merged,
+                s.keyframes, map_points.size(), spread(total).median * 1e3,
                 spread(tracking).median * 1e3, spread(features_s).median * 1e3, spread(mapping).median * 1e3);
     if (!evaluation.is_null() && evaluation.contains("ate_se3_aligned_m")) {
       std::printf("against %s: ATE (SE(3)-aligned) RMSE %.4f m; end-point drift %.3f m over %.1f m; RPE (1 frame) RMSE %.4f m, "

@@ -98,6 +98,8 @@ struct KeyFrame {
   int id = 0;
   FrameData frame;
   bool bad = false;
+  int segment = 0;              // the map segment it was created in
+  bool starts_segment = false;  // the first keyframe of a segment: no odometry link to the one before
   vision::BowVector bow;  // empty without a vocabulary
 };
 
@@ -132,6 +134,15 @@ struct VisualSlam::Impl {
   vision::BowDatabase database;
   int last_loop_keyframe = 0;
   std::vector<std::pair<std::set<int>, int>> consistent_groups;  // ORB-SLAM2 mvConsistentGroups
+  // The Atlas: map segments, merged by union-find.
+  int segment = 0;
+  std::vector<int> segment_parent{0};
+  int lost_frames = 0;
+  int find(int s) const {
+    while (segment_parent[static_cast<std::size_t>(s)] != s) s = segment_parent[static_cast<std::size_t>(s)];
+    return s;
+  }
+  int segment_of(int kf) const { return find(keyframes[static_cast<std::size_t>(kf)].segment); }
   // Per frame: reference keyframe and the pose relative to it, for the final trajectory.
   std::vector<std::pair<int, core::SE3>> relative;
 
@@ -650,10 +661,12 @@ struct VisualSlam::Impl {
     return c2 || (c1 && inliers > options.lost_below_inliers);
   }
 
-  void insert_keyframe(FrameData& f) {
+  void insert_keyframe(FrameData& f, bool starts_segment = false) {
     KeyFrame kf;
     kf.id = static_cast<int>(keyframes.size());
     kf.frame = f;
+    kf.segment = segment;
+    kf.starts_segment = starts_segment || kf.id == 0;
     // New points from stereo/depth, nearest first: every close one, at least min_new_points.
     std::vector<std::pair<double, std::size_t>> by_depth;
     for (std::size_t i = 0; i < f.size(); ++i) {
@@ -679,8 +692,8 @@ struct VisualSlam::Impl {
         ++summary->map_points;
       }
       ++created_or_seen;
-      // The first keyframe takes every stereo point (ORB-SLAM2 StereoInitialization).
-      if (k.id > 0 && z > close_depth_m && created_or_seen > options.min_new_points) break;
+      // The first keyframe of a map takes every stereo point (ORB-SLAM2 StereoInitialization).
+      if (!k.starts_segment && z > close_depth_m && created_or_seen > options.min_new_points) break;
     }
     // Observations of the points the frame tracked.
     for (std::size_t i = 0; i < k.frame.size(); ++i) {
@@ -947,14 +960,20 @@ struct VisualSlam::Impl {
     record.correction_deg = Eigen::AngleAxisd(change.rotation_matrix()).angle() * 180.0 / 3.14159265358979323846;
     io::PoseGraph3D graph;
     for (std::size_t k = 0; k < n; ++k) graph.vertices.push_back({static_cast<std::int64_t>(k), old_poses[k]});
-    auto add_edge = [&](int a, int b, const core::SE3& T_a_b) {
+    auto add_edge = [&](int a, int b, const core::SE3& T_a_b, double weight = 1.0) {
       io::GraphEdge<core::SE3> e;
       e.from = a;
       e.to = b;
       e.T_from_to = T_a_b;
+      e.information *= weight;
       graph.edges.push_back(e);
     };
-    for (std::size_t k = 1; k < n; ++k) add_edge(static_cast<int>(k) - 1, static_cast<int>(k), old_poses[k - 1].inverse() * old_poses[k]);
+    // Consecutive keyframes; into the first keyframe of a segment the link is only the motion
+    // model's guess across the lost stretch: a weight of 1e-6 keeps the graph connected without
+    // holding the segments where the guess put them.
+    for (std::size_t k = 1; k < n; ++k) {
+      add_edge(static_cast<int>(k) - 1, static_cast<int>(k), old_poses[k - 1].inverse() * old_poses[k], keyframes[k].starts_segment ? 1e-6 : 1.0);
+    }
     for (std::size_t k = 0; k < n; ++k) {
       for (const auto& [shared, other] : covisible(static_cast<int>(k), 100)) {
         if (other < static_cast<int>(k) - 1) add_edge(other, static_cast<int>(k), old_poses[static_cast<std::size_t>(other)].inverse() * old_poses[k]);
@@ -1014,8 +1033,12 @@ struct VisualSlam::Impl {
     const int current = static_cast<int>(keyframes.size()) - 1;
     KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
     kf.bow = options.vocabulary->transform(kf.frame.descriptors);
+    // Loops within a segment wait for enough keyframes since the start and the last loop; a
+    // merge with another segment may come at any keyframe.
     const bool too_early = current < 2 * options.loop_min_keyframes_apart || current < last_loop_keyframe + options.loop_min_keyframes_apart;
-    if (!options.loop_closure || too_early) {
+    bool other_segments = false;
+    for (const KeyFrame& other : keyframes) other_segments = other_segments || segment_of(other.id) != segment_of(current);
+    if (!options.loop_closure || (too_early && !other_segments)) {
       database.add(static_cast<std::uint32_t>(current), kf.bow);
       summary->loop_s += seconds_since(start);
       return;
@@ -1038,6 +1061,7 @@ struct VisualSlam::Impl {
     for (const auto& r : results) {
       if (r.score < min_score || r.common_words < 0.8 * max_common) continue;
       const int candidate = static_cast<int>(r.id);
+      if (too_early && segment_of(candidate) == segment_of(current)) continue;
       std::set<int> group{candidate};
       for (const auto& [shared, k] : covisible(candidate, options.min_covisible_points)) group.insert(k);
       int consistency = 0;
@@ -1059,11 +1083,18 @@ struct VisualSlam::Impl {
       record.score = score;
       record.min_covisible_score = min_score;
       record.consistency = consistency;
+      record.merge = segment_of(candidate) != segment_of(current);
       FrameData probe;
       if (verify_loop(current, candidate, record, probe)) {
         record.decision = "accepted";
         record.reason = std::to_string(record.matches) + " inlier matches to the candidate's neighbourhood";
         correct_loop(current, candidate, probe, record);
+        if (record.merge) {
+          // The segment being tracked joins the candidate's (the older one keeps its id).
+          const int a = segment_of(current), b = segment_of(candidate);
+          segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+          ++summary->maps_merged;
+        }
         summary->loops.push_back(record);
         ++summary->loops_accepted;
         result.loop_closed = true;
@@ -1205,7 +1236,30 @@ struct VisualSlam::Impl {
         }
         f.T_world_camera = have_velocity ? last.T_world_camera * velocity : last.T_world_camera;
         lost = true;
+        ++lost_frames;
+        if (options.new_map_after_lost_frames > 0 && lost_frames >= options.new_map_after_lost_frames &&
+            result.stereo_points >= options.min_new_points) {
+          // The Atlas: a new map segment from this frame, where the motion model put it.
+          segment = static_cast<int>(segment_parent.size());
+          segment_parent.push_back(segment);
+          const auto mapping_start = Clock::now();
+          std::fill(f.map_point.begin(), f.map_point.end(), -1);
+          insert_keyframe(f, true);
+          detect_and_close_loop(result);
+          times.mapping_s = seconds_since(mapping_start);
+          ++summary->maps_started;
+          result.new_map = true;
+          result.keyframe = true;
+          result.tracked = true;
+          result.health = TrackingHealth::kDegraded;
+          result.note = "lost for " + std::to_string(lost_frames) + " frames: new map segment " + std::to_string(segment) + " started";
+          result.inliers = 0;
+          lost = false;
+          lost_frames = 0;
+          have_velocity = false;
+        }
       } else {
+        lost_frames = 0;
         result.tracked = true;
         if (was_lost) {
           result.relocalised = true;
@@ -1235,10 +1289,12 @@ struct VisualSlam::Impl {
       result.keypoint_states[i] = static_cast<signed char>(f.map_point[i] >= 0 ? 2 : (f.depth[i] > 0 ? 1 : 0));
     }
     if (result.tracked) {
-      if (have_last) {
+      if (have_last && !result.new_map) {
         velocity = last.T_world_camera.inverse() * f.T_world_camera;
         have_velocity = true;
       }
+      // Tracking may have relocalised into another segment, or a merge may have renamed it.
+      segment = segment_of(reference_keyframe);
       last = std::move(f);
       have_last = true;
       const KeyFrame& ref = keyframes[static_cast<std::size_t>(reference_keyframe)];
@@ -1254,6 +1310,7 @@ struct VisualSlam::Impl {
         have_velocity = false;
       }
     }
+    result.segment = segment;
     result.times = times;
     result.times.total_s = seconds_since(start);
     ++frames;
@@ -1281,6 +1338,7 @@ std::string VisualSlamOptions::problems() const {
   if (loop_min_keyframes_apart < 1 || loop_consistency < 1) add("loop_min_keyframes_apart and loop_consistency must be >= 1");
   if (loop_min_pnp_inliers < 6 || loop_min_matches < loop_min_pnp_inliers) add("need 6 <= loop_min_pnp_inliers <= loop_min_matches");
   if (relocalisation_min_inliers < lost_below_inliers) add("relocalisation_min_inliers must be >= lost_below_inliers");
+  if (new_map_after_lost_frames < 0) add("new_map_after_lost_frames must be >= 0");
   return out;
 }
 
@@ -1367,6 +1425,15 @@ std::vector<core::SE3> VisualSlam::trajectory() const {
   }
   return out;
 }
+
+std::vector<int> VisualSlam::frame_segments() const {
+  std::vector<int> out;
+  out.reserve(impl_->relative.size());
+  for (const auto& [kf, T] : impl_->relative) out.push_back(kf < 0 ? -1 : impl_->segment_of(kf));
+  return out;
+}
+
+int VisualSlam::main_segment() const { return impl_->keyframes.empty() ? 0 : impl_->segment_of(0); }
 
 std::vector<core::SE3> VisualSlam::keyframe_poses() const {
   std::vector<core::SE3> out;

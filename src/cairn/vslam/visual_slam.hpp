@@ -78,6 +78,11 @@ struct VisualSlamOptions {
   int loop_min_matches = 40;           ///< map-point matches after projecting the candidate's neighbourhood (ORB-SLAM2: 40)
   int relocalisation_min_inliers = 50; ///< ORB-SLAM2 Relocalization: 50
   bool global_ba_after_loop = true;    ///< a full bundle adjustment after each loop correction
+  /// The Atlas (ORB-SLAM3, Campos et al. 2021, Sec. IV): after this many lost frames in a row, a
+  /// frame with enough stereo/depth points starts a new map segment (its own keyframes and
+  /// points, placed where the motion model guessed, with no constraint to the old ones); a
+  /// verified loop between segments merges them (the same verification as a loop). 0 = never.
+  int new_map_after_lost_frames = 3;
   /// Empty when usable, else every problem.
   std::string problems() const;
 };
@@ -108,6 +113,8 @@ struct FrameResult {
   bool keyframe = false;
   bool relocalised = false;  ///< the pose came from a place-recognition match after being lost
   bool loop_closed = false;  ///< this frame's keyframe closed a loop
+  bool new_map = false;      ///< this frame started a new map segment after being lost
+  int segment = 0;           ///< the map segment the frame was tracked in (at that time)
   double sigma_position_m = 0.0;  ///< sqrt of the largest eigenvalue of the position covariance
   FrameTimes times;
   std::string note;  ///< why lost / degraded
@@ -128,6 +135,7 @@ struct LoopRecord {
   int pnp_inliers = 0, matches = 0;
   std::string decision;       ///< "accepted" or "rejected"
   std::string reason;
+  bool merge = false;         ///< the candidate lies in another map segment: accepting it merges the two
   double correction_m = 0.0, correction_deg = 0.0;  ///< how far the keyframe moved (accepted)
 };
 
@@ -138,6 +146,7 @@ struct VisualSlamSummary {
   double local_ba_s = 0.0;
   std::size_t loop_queries = 0, loops_accepted = 0, relocalisations = 0, global_bas = 0;
   std::size_t map_points_fused = 0;
+  std::size_t maps_started = 0, maps_merged = 0;  ///< segments beyond the first; merges of two
   double loop_s = 0.0, global_ba_s = 0.0;
   std::vector<LoopRecord> loops;  ///< every candidate that reached verification, and why
 };
@@ -159,6 +168,10 @@ class VisualSlam {
   std::vector<core::SE3> trajectory() const;
   std::vector<core::SE3> keyframe_poses() const;
   std::vector<std::size_t> keyframe_frames() const;
+  /// Per frame, the map segment it belongs to now (merges applied; the segment of keyframe 0 is
+  /// the main map, main_segment()); -1 for a frame before the first keyframe.
+  std::vector<int> frame_segments() const;
+  int main_segment() const;
   /// The good map points in the world frame.
   std::vector<Eigen::Vector3d> map_points() const;
   const VisualSlamSummary& summary() const { return summary_; }
