@@ -14,6 +14,7 @@
 
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
+#include "cairn/cli/spread.hpp"
 #include "cairn/cli/trajectory_files.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -50,26 +51,6 @@ struct Slam3dFlags {
   bool progress = false;
   bool overwrite = false;
 };
-
-struct Spread {
-  double median = 0.0, mean = 0.0, max = 0.0;
-};
-Spread spread(std::vector<double> values) {
-  Spread s;
-  if (values.empty()) return s;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  s.median = n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-  s.mean = std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(n);
-  s.max = values.back();
-  return s;
-}
-nlohmann::json spread_json_ms(const std::vector<double>& seconds) {
-  std::vector<double> ms;
-  for (double s : seconds) ms.push_back(1e3 * s);
-  const Spread s = spread(ms);
-  return {{"median", s.median}, {"mean", s.mean}, {"max", s.max}};
-}
 
 nlohmann::json pose_json(const core::SE3& T) {
   const Eigen::Quaterniond& q = T.unit_quaternion();

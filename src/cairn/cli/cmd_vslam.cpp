@@ -13,6 +13,7 @@
 
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
+#include "cairn/cli/spread.hpp"
 #include "cairn/eval/ape.hpp"
 #include "cairn/eval/rpe.hpp"
 #include "cairn/io/image_sequence.hpp"
@@ -104,25 +105,6 @@ io::CameraCalibration read_calibration_yaml(const std::string& path) {
 
 nlohmann::json stats_json(const eval::Statistics& s) {
   return {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median}, {"max", s.max}, {"count", s.count}};
-}
-
-struct Spread {
-  double median = 0.0, mean = 0.0, max = 0.0;
-};
-Spread spread(std::vector<double> v) {
-  Spread s;
-  if (v.empty()) return s;
-  std::sort(v.begin(), v.end());
-  s.median = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-  s.mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
-  s.max = v.back();
-  return s;
-}
-nlohmann::json ms_json(const std::vector<double>& seconds) {
-  std::vector<double> ms;
-  for (const double s : seconds) ms.push_back(1e3 * s);
-  const Spread s = spread(ms);
-  return {{"median", s.median}, {"mean", s.mean}, {"max", s.max}};
 }
 
 int vslam_command(const VslamFlags& flags) {
@@ -389,11 +371,11 @@ int vslam_command(const VslamFlags& flags) {
                        {"reference_fallbacks", s.reference_fallbacks},
                        {"interrupted", stopped}};
   report["timing"] = {{"total_s", total_s},
-                      {"per_frame_ms", ms_json(total)},
-                      {"features_ms", ms_json(features_s)},
-                      {"tracking_ms", ms_json(tracking)},
-                      {"mapping_ms", ms_json(mapping)},
-                      {"image_read_ms", ms_json(read_s)},
+                      {"per_frame_ms", spread_json_ms(total)},
+                      {"features_ms", spread_json_ms(features_s)},
+                      {"tracking_ms", spread_json_ms(tracking)},
+                      {"mapping_ms", spread_json_ms(mapping)},
+                      {"image_read_ms", spread_json_ms(read_s)},
                       {"local_ba_s", s.local_ba_s},
                       {"threads", "ORB of the two images in parallel; everything else on one thread"}};
   {

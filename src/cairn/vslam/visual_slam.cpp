@@ -445,9 +445,11 @@ struct VisualSlam::Impl {
 
   // --- Motion-only bundle adjustment (ORB-SLAM2 Optimizer::PoseOptimization) ------------------
 
-  double chi2_of(const FrameData& f, std::size_t i, const core::SE3& T_cw) const {
-    const MapPoint& mp = points[static_cast<std::size_t>(f.map_point[i])];
-    const Eigen::Vector3d p = T_cw * mp.p_world;
+  // chi^2 of keypoint i of f observing p_world from T_camera_world: the squared reprojection
+  // error (u, v and, with stereo/depth, u_right) times the level's information (ORB-SLAM2's
+  // chi2() of its edges); infinite behind the camera.
+  double chi2(const FrameData& f, std::size_t i, const core::SE3& T_cw, const Eigen::Vector3d& p_world) const {
+    const Eigen::Vector3d p = T_cw * p_world;
     if (!(p.z() > 1e-6)) return std::numeric_limits<double>::infinity();
     const double u = camera.fx * p.x() / p.z() + camera.cx, v = camera.fy * p.y() / p.z() + camera.cy;
     double e2 = (u - f.undistorted[i].x()) * (u - f.undistorted[i].x()) + (v - f.undistorted[i].y()) * (v - f.undistorted[i].y());
@@ -456,6 +458,9 @@ struct VisualSlam::Impl {
       e2 += (ur - f.u_right[i]) * (ur - f.u_right[i]);
     }
     return e2 * inv_sigma2[static_cast<std::size_t>(f.keypoints[i].octave)];
+  }
+  double chi2_of(const FrameData& f, std::size_t i, const core::SE3& T_cw) const {
+    return chi2(f, i, T_cw, points[static_cast<std::size_t>(f.map_point[i])].p_world);
   }
 
   std::unique_ptr<backend::Factor> observation_factor(const FrameData& f, std::size_t i) const {
@@ -826,14 +831,7 @@ struct VisualSlam::Impl {
     lso.threads = 1;
     backend::solve(problem, lso);
     auto edge_chi2 = [&](const Edge& edge, const core::SE3& T_wc, const Eigen::Vector3d& p_world) {
-      const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
-      const auto i = static_cast<std::size_t>(edge.idx);
-      const Eigen::Vector3d p = T_wc.inverse() * p_world;
-      if (!(p.z() > 1e-6)) return std::numeric_limits<double>::infinity();
-      const double u = camera.fx * p.x() / p.z() + camera.cx, v = camera.fy * p.y() / p.z() + camera.cy;
-      double e2 = (u - f.undistorted[i].x()) * (u - f.undistorted[i].x()) + (v - f.undistorted[i].y()) * (v - f.undistorted[i].y());
-      if (f.u_right[i] >= 0) e2 += (u - bf / p.z() - f.u_right[i]) * (u - bf / p.z() - f.u_right[i]);
-      return e2 * inv_sigma2[static_cast<std::size_t>(f.keypoints[i].octave)];
+      return chi2(keyframes[static_cast<std::size_t>(edge.kf)].frame, static_cast<std::size_t>(edge.idx), T_wc.inverse(), p_world);
     };
     auto classify = [&]() {
       for (std::size_t e = 0; e < edges.size(); ++e) {
