@@ -1,7 +1,10 @@
 #include "synthetic_world.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 namespace cairn::test {
@@ -19,6 +22,58 @@ std::uint64_t mix(std::uint64_t x) {
 
 // 16 bits of h starting at `shift`, as a number in [0, 1).
 double unit(std::uint64_t h, int shift) { return static_cast<double>((h >> shift) & 0xFFFFu) / 65536.0; }
+
+// The procedural texture, cell by cell: a "Mondrian" of 0.2 m cells, each a random background
+// grey with three random rectangles or discs of random grey on it (later shapes cover earlier
+// ones). A cell's shapes are kept, since neighbouring samples mostly fall into the same cell.
+class TextureCell {
+ public:
+  double value(std::uint64_t seed, double u, double v) {
+    const double cu = std::floor(u / kCell), cv = std::floor(v / kCell);
+    const auto i = static_cast<std::int64_t>(cu), j = static_cast<std::int64_t>(cv);
+    if (!valid_ || seed != seed_ || i != i_ || j != j_) build(seed, i, j);
+    const double x = u / kCell - cu, y = v / kCell - cv;
+    double value = background_;
+    for (const Shape& s : shapes_) {
+      const double dx = x - s.centre_x, dy = y - s.centre_y;
+      if (s.rectangle ? (std::abs(dx) < s.half_x && std::abs(dy) < s.half_y) : (dx * dx + dy * dy < s.half_x * s.half_x)) value = s.grey;
+    }
+    return value;
+  }
+
+ private:
+  static constexpr double kCell = 0.2;
+  struct Shape {
+    double centre_x, centre_y, half_x, half_y, grey;
+    bool rectangle;
+  };
+
+  void build(std::uint64_t seed, std::int64_t i, std::int64_t j) {
+    valid_ = true;
+    seed_ = seed;
+    i_ = i;
+    j_ = j;
+    const std::uint64_t h = mix(mix(seed) ^ mix(static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ull +
+                                                static_cast<std::uint64_t>(j) * 0xC2B2AE3D27D4EB4Full + 0x165667B19E3779F9ull));
+    background_ = 25.0 + 205.0 * unit(h, 0);
+    for (std::size_t k = 0; k < shapes_.size(); ++k) {
+      const std::uint64_t s = mix(h + k + 1);
+      Shape& shape = shapes_[k];
+      shape.centre_x = 0.1 + 0.8 * unit(s, 0);
+      shape.centre_y = 0.1 + 0.8 * unit(s, 16);
+      shape.half_x = 0.06 + 0.3 * unit(s, 32);
+      shape.half_y = 0.06 + 0.3 * unit(s, 48);
+      shape.grey = 15.0 + 225.0 * unit(h, 16 * static_cast<int>(k + 1));
+      shape.rectangle = (s & 1u) != 0;
+    }
+  }
+
+  bool valid_ = false;
+  std::uint64_t seed_ = 0;
+  std::int64_t i_ = 0, j_ = 0;
+  double background_ = 0.0;
+  std::array<Shape, 3> shapes_{};
+};
 
 // The two in-plane axes of a surface normal to `axis`.
 int axis_u(int axis) { return axis == 0 ? 2 : 0; }
@@ -57,34 +112,83 @@ std::vector<Plane> planes_of(const std::vector<Surface>& surfaces) {
   return planes;
 }
 
-int nearest_hit(const std::vector<Plane>& planes, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t_out) {
+// The surfaces that can appear in the camera's view: a rectangle whose four corners all lie
+// outside one of the frustum's four side planes (or behind the camera) cannot.
+std::vector<Plane> planes_in_view(const std::vector<Surface>& surfaces, const core::SE3& T_world_camera, const StereoCamera& camera) {
+  const core::SE3 T_camera_world = T_world_camera.inverse();
+  // Pixel bounds of the image as slopes x/z and y/z, half a pixel of margin.
+  const double x_low = (-0.5 - camera.cx) / camera.fx, x_high = (static_cast<double>(camera.width) - 0.5 - camera.cx) / camera.fx;
+  const double y_low = (-0.5 - camera.cy) / camera.fy, y_high = (static_cast<double>(camera.height) - 0.5 - camera.cy) / camera.fy;
+  std::vector<Surface> visible;
+  for (const Surface& s : surfaces) {
+    const int a = axis_u(s.normal_axis), b = axis_v(s.normal_axis);
+    std::array<Eigen::Vector3d, 4> corners;
+    for (int c = 0; c < 4; ++c) {
+      Eigen::Vector3d p = s.lower;
+      p[a] = (c & 1) ? s.upper[a] : s.lower[a];
+      p[b] = (c & 2) ? s.upper[b] : s.lower[b];
+      corners[static_cast<std::size_t>(c)] = T_camera_world * p;
+    }
+    auto all = [&](auto&& outside) {
+      for (const Eigen::Vector3d& p : corners) {
+        if (!outside(p)) return false;
+      }
+      return true;
+    };
+    if (all([](const Eigen::Vector3d& p) { return p.z() <= 0.0; }) ||
+        all([&](const Eigen::Vector3d& p) { return p.x() < x_low * p.z(); }) ||
+        all([&](const Eigen::Vector3d& p) { return p.x() > x_high * p.z(); }) ||
+        all([&](const Eigen::Vector3d& p) { return p.y() < y_low * p.z(); }) ||
+        all([&](const Eigen::Vector3d& p) { return p.y() > y_high * p.z(); })) {
+      continue;
+    }
+    visible.push_back(s);
+  }
+  return planes_of(visible);
+}
+
+// The nearest plane hit by the ray o + t d (t > 0), -1 for none. `first` (a plane index or -1)
+// is tried first: neighbouring pixels mostly hit the same plane, and a near hit found early
+// lets the others be rejected without a division.
+int nearest_hit(const std::vector<Plane>& planes, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t_out, int first = -1) {
   int best = -1;
   double best_t = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < planes.size(); ++i) {
+  auto test = [&](std::size_t i) {
     const Plane& p = planes[i];
     const double da = d[p.axis];
-    if (std::abs(da) < 1e-12) continue;
-    const double t = (p.position - o[p.axis]) / da;
-    if (t <= 1e-6 || t >= best_t) continue;
+    const double num = p.position - o[p.axis];
+    // t = num / da in (1e-6, best_t), without dividing.
+    if (da > 1e-12) {
+      if (num <= 1e-6 * da || num >= best_t * da) return;
+    } else if (da < -1e-12) {
+      if (num >= 1e-6 * da || num <= best_t * da) return;
+    } else {
+      return;
+    }
+    const double t = num / da;
     const double a = o[p.a] + t * d[p.a];
-    if (a < p.a_low || a > p.a_high) continue;
+    if (a < p.a_low || a > p.a_high) return;
     const double b = o[p.b] + t * d[p.b];
-    if (b < p.b_low || b > p.b_high) continue;
+    if (b < p.b_low || b > p.b_high) return;
     best = static_cast<int>(i);
     best_t = t;
+  };
+  if (first >= 0) test(static_cast<std::size_t>(first));
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    if (static_cast<int>(i) != first) test(i);
   }
   *t_out = best_t;
   return best;
 }
 
 // The texture of plane p where the ray (o, d) meets its plane; `fallback` when it does not.
-double shade(const Plane& p, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double fallback) {
+double shade(const Plane& p, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double fallback, TextureCell& cell) {
   if (!p.textured) return p.grey;
   const double da = d[p.axis];
   if (std::abs(da) < 1e-12) return fallback;
   const double t = (p.position - o[p.axis]) / da;
   if (t <= 0.0) return fallback;
-  return texture_value(p.seed, o[p.a] + t * d[p.a] - p.origin_a, o[p.b] + t * d[p.b] - p.origin_b);
+  return cell.value(p.seed, o[p.a] + t * d[p.a] - p.origin_a, o[p.b] + t * d[p.b] - p.origin_b);
 }
 
 template <typename PixelFunction>
@@ -119,26 +223,8 @@ io::CameraCalibration StereoCamera::calibration() const {
 }
 
 double texture_value(std::uint64_t seed, double u, double v) {
-  // A "Mondrian" texture: cells of 0.2 m, each a random background with three random rectangles
-  // or discs of random grey on it (later shapes cover earlier ones).
-  constexpr double kCell = 0.2;
-  const double cu = std::floor(u / kCell), cv = std::floor(v / kCell);
-  const double x = u / kCell - cu, y = v / kCell - cv;
-  const auto i = static_cast<std::uint64_t>(static_cast<std::int64_t>(cu));
-  const auto j = static_cast<std::uint64_t>(static_cast<std::int64_t>(cv));
-  const std::uint64_t h = mix(mix(seed) ^ mix(i * 0x9E3779B97F4A7C15ull + j * 0xC2B2AE3D27D4EB4Full + 0x165667B19E3779F9ull));
-  double value = 25.0 + 205.0 * unit(h, 0);
-  for (std::uint64_t k = 1; k <= 3; ++k) {
-    const std::uint64_t s = mix(h + k);
-    const double centre_x = 0.1 + 0.8 * unit(s, 0), centre_y = 0.1 + 0.8 * unit(s, 16);
-    const double half_x = 0.06 + 0.3 * unit(s, 32), half_y = 0.06 + 0.3 * unit(s, 48);
-    const std::uint64_t g = mix(s);
-    const double grey = 15.0 + 225.0 * unit(g, 0);
-    const double dx = x - centre_x, dy = y - centre_y;
-    const bool inside = (g >> 20) & 1u ? (std::abs(dx) < half_x && std::abs(dy) < half_y) : (dx * dx + dy * dy < half_x * half_x);
-    if (inside) value = grey;
-  }
-  return value;
+  TextureCell cell;
+  return cell.value(seed, u, v);
 }
 
 void SyntheticWorld::add_wall(int normal_axis, const Eigen::Vector3d& lower, const Eigen::Vector3d& upper,
@@ -212,30 +298,41 @@ void SyntheticWorld::add_corridor_z(const Eigen::Vector3d& lower, const Eigen::V
   }
 }
 
-int SyntheticWorld::cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t) const {
-  return nearest_hit(planes_of(surfaces_), o, d, t);
-}
-
 cv::Mat SyntheticWorld::render(const core::SE3& T_world_camera, const StereoCamera& camera) const {
-  const std::vector<Plane> planes = planes_of(surfaces_);
+  const std::vector<Plane> planes = planes_in_view(surfaces_, T_world_camera, camera);
   cv::Mat image(camera.height, camera.width, CV_8UC1, cv::Scalar(0));
-  for_each_pixel(T_world_camera, camera, [&](int u, int v, const Eigen::Vector3d& o, const Eigen::Matrix3d& R) {
-    const double uc = static_cast<double>(u), vc = static_cast<double>(v);
-    double t = 0.0;
-    const int hit = nearest_hit(planes, o, ray(R, camera, uc, vc), &t);
-    if (hit < 0) return;
-    const Plane& p = planes[static_cast<std::size_t>(hit)];
-    double sum = 0.0;
-    if (!p.textured) {
-      sum = 4.0 * p.grey;
-    } else {
-      const double centre = shade(p, o, ray(R, camera, uc, vc), 0.0);
-      for (const double du : {-0.25, 0.25}) {
-        for (const double dv : {-0.25, 0.25}) sum += shade(p, o, ray(R, camera, uc + du, vc + dv), centre);
+  const Eigen::Matrix3d R = T_world_camera.rotation_matrix();
+  const Eigen::Vector3d o = T_world_camera.translation();
+  // Ray of pixel (u, v): R (x, y, 1) = x R.col(0) + y R.col(1) + R.col(2); the 2 x 2 sub-pixel
+  // samples sit a quarter pixel off the centre.
+  const Eigen::Vector3d step_u = R.col(0) / camera.fx, step_v = R.col(1) / camera.fy;
+  const std::array<Eigen::Vector3d, 4> offsets{-0.25 * step_u - 0.25 * step_v, 0.25 * step_u - 0.25 * step_v,
+                                               -0.25 * step_u + 0.25 * step_v, 0.25 * step_u + 0.25 * step_v};
+  TextureCell cell;
+  int previous = -1;
+  for (int v = 0; v < camera.height; ++v) {
+    unsigned char* row = image.ptr<unsigned char>(v);
+    const Eigen::Vector3d row_start = R.col(2) - camera.cx * step_u + (static_cast<double>(v) - camera.cy) * step_v;
+    for (int u = 0; u < camera.width; ++u) {
+      const Eigen::Vector3d d = row_start + static_cast<double>(u) * step_u;
+      double t = 0.0;
+      const int hit = nearest_hit(planes, o, d, &t, previous);
+      previous = hit;
+      if (hit < 0) continue;
+      const Plane& p = planes[static_cast<std::size_t>(hit)];
+      double sum = 0.0;
+      if (!p.textured) {
+        sum = 4.0 * p.grey;
+      } else {
+        // A sub-pixel ray nearly parallel to the plane takes the texture where the centre ray hits.
+        for (const Eigen::Vector3d& offset : offsets) {
+          const double value = shade(p, o, d + offset, -1.0, cell);
+          sum += value >= 0.0 ? value : shade(p, o, d, 128.0, cell);
+        }
       }
+      row[u] = static_cast<unsigned char>(std::clamp(std::lround(sum / 4.0), 0L, 255L));
     }
-    image.at<unsigned char>(v, u) = static_cast<unsigned char>(std::clamp(std::lround(sum / 4.0), 0L, 255L));
-  });
+  }
   return image;
 }
 
@@ -245,7 +342,7 @@ std::pair<cv::Mat, cv::Mat> SyntheticWorld::render_stereo(const core::SE3& T_wor
 }
 
 cv::Mat SyntheticWorld::render_depth(const core::SE3& T_world_camera, const StereoCamera& camera) const {
-  const std::vector<Plane> planes = planes_of(surfaces_);
+  const std::vector<Plane> planes = planes_in_view(surfaces_, T_world_camera, camera);
   cv::Mat depth(camera.height, camera.width, CV_16UC1, cv::Scalar(0));
   for_each_pixel(T_world_camera, camera, [&](int u, int v, const Eigen::Vector3d& o, const Eigen::Matrix3d& R) {
     double t = 0.0;
@@ -257,7 +354,7 @@ cv::Mat SyntheticWorld::render_depth(const core::SE3& T_world_camera, const Ster
 }
 
 double SyntheticWorld::textured_fraction(const core::SE3& T_world_camera, const StereoCamera& camera) const {
-  const std::vector<Plane> planes = planes_of(surfaces_);
+  const std::vector<Plane> planes = planes_in_view(surfaces_, T_world_camera, camera);
   std::size_t textured = 0;
   for_each_pixel(T_world_camera, camera, [&](int u, int v, const Eigen::Vector3d& o, const Eigen::Matrix3d& R) {
     double t = 0.0;
@@ -268,10 +365,10 @@ double SyntheticWorld::textured_fraction(const core::SE3& T_world_camera, const 
 }
 
 core::SE3 camera_pose(const Eigen::Vector3d& position, double yaw_rad, double pitch_rad) {
-  // Yaw about the world y axis (down); pitch about the camera x axis, negative angle looks up
-  // with y down, hence the sign.
+  // Yaw about the world y axis (down): Ry(yaw) z = (sin yaw, 0, cos yaw). Pitch about the camera
+  // x axis: Rx(pitch) z = (0, -sin pitch, cos pitch), up for a positive pitch since y points down.
   const Eigen::Matrix3d yaw = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  const Eigen::Matrix3d pitch = Eigen::AngleAxisd(-pitch_rad, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Matrix3d pitch = Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitX()).toRotationMatrix();
   return core::SE3(core::SO3::from_matrix(yaw * pitch), position);
 }
 

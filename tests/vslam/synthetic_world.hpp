@@ -89,10 +89,6 @@ class SyntheticWorld {
   double textured_fraction(const core::SE3& T_world_camera, const StereoCamera& camera) const;
 
  private:
-  // Index of the nearest surface hit by the ray (origin o, direction d), -1 for none; t its
-  // parameter (the camera-frame z when d is R * (x, y, 1)).
-  int cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t) const;
-
   std::vector<Surface> surfaces_;
 };
 

@@ -421,8 +421,8 @@ int vslam_command(const VslamFlags& flags) {
                                                          {"correction_m", l.correction_m},
                                                          {"correction_deg", l.correction_deg}});
   }
-  report["not_implemented"] = {"monocular", "the Atlas (new map when lost)",
-                               "triangulation between keyframes, map-point fusion, keyframe culling"};
+  report["not_implemented"] = {"monocular", "Sim(3) loops", "fusion of duplicate points outside loop closures", "keyframe culling",
+                               "local mapping in its own thread"};
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
   out.commit();
 

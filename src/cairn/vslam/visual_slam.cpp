@@ -720,6 +720,125 @@ struct VisualSlam::Impl {
     ++summary->keyframes;
   }
 
+  // ORB-SLAM2 LocalMapping::CreateNewMapPoints: the newest keyframe's unmatched keypoints are
+  // matched to those of its 10 most covisible keyframes (descriptor within TH_LOW, the best one
+  // within 3.84 sigma^2 of the epipolar line; ORB-SLAM2 restricts the search to bag-of-words
+  // nodes, here every unmatched keypoint is compared) and triangulated (linear, Hartley &
+  // Zisserman 12.2) when the rays' parallax beats the stereo parallax, else taken from the view
+  // with the better stereo depth; kept when in front of both cameras, within the chi^2
+  // thresholds in both, and at consistent scales (distance ratio within 1.5 x scale factor of
+  // the octave ratio). Returns the points created.
+  int triangulate_new_points(int current) {
+    std::vector<std::pair<int, int>> neighbours = covisible(current, 1);
+    if (neighbours.size() > static_cast<std::size_t>(options.triangulation_keyframes)) neighbours.resize(static_cast<std::size_t>(options.triangulation_keyframes));
+    const double stereo_baseline = bf / camera.fx;
+    const double ratio_factor = 1.5 * options.orb.scale_factor;
+    const Eigen::Matrix3d K = (Eigen::Matrix3d() << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).finished();
+    const Eigen::Matrix3d K_inv = K.inverse();
+    int created = 0;
+    for (const auto& [shared, k2_id] : neighbours) {
+      const KeyFrame& k2 = keyframes[static_cast<std::size_t>(k2_id)];
+      const FrameData& f1 = keyframes[static_cast<std::size_t>(current)].frame;
+      const FrameData& f2 = k2.frame;
+      const Eigen::Vector3d O1 = f1.T_world_camera.translation(), O2 = f2.T_world_camera.translation();
+      if ((O2 - O1).norm() < stereo_baseline) continue;  // ORB-SLAM2: no triangulation below the stereo baseline
+      const core::SE3 T1_cw = f1.T_world_camera.inverse(), T2_cw = f2.T_world_camera.inverse();
+      // Fundamental matrix of x1^T F12 x2 = 0: F12 = K^-T [t12]x R12 K^-1, T12 = T1_cw T2_wc.
+      const core::SE3 T12 = T1_cw * f2.T_world_camera;
+      const Eigen::Vector3d t = T12.translation();
+      Eigen::Matrix3d tx;
+      tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+      const Eigen::Matrix3d F12 = K_inv.transpose() * tx * T12.rotation_matrix() * K_inv;
+      std::vector<int> taken_by(f2.size(), -1);
+      std::vector<int> taken_distance(f2.size(), 256);
+      for (std::size_t i1 = 0; i1 < f1.size(); ++i1) {
+        if (f1.map_point[i1] >= 0) continue;
+        const Eigen::Vector3d x1(f1.undistorted[i1].x(), f1.undistorted[i1].y(), 1.0);
+        const Eigen::Vector3d line = F12.transpose() * x1;  // epipolar line in image 2: x2^T (F12^T x1) = 0
+        const double line_norm2 = line.x() * line.x() + line.y() * line.y();
+        if (!(line_norm2 > 0.0)) continue;
+        int best = 256, second = 256, best_i2 = -1;
+        for (std::size_t i2 = 0; i2 < f2.size(); ++i2) {
+          if (f2.map_point[i2] >= 0) continue;
+          const int level2 = f2.keypoints[i2].octave;
+          if (std::abs(level2 - f1.keypoints[i1].octave) > 1) continue;
+          const double d = line.x() * f2.undistorted[i2].x() + line.y() * f2.undistorted[i2].y() + line.z();
+          if (d * d / line_norm2 >= 3.84 * scales[static_cast<std::size_t>(level2)] * scales[static_cast<std::size_t>(level2)]) continue;
+          const int dist = vision::descriptor_distance(f1.descriptors.ptr(static_cast<int>(i1)), f2.descriptors.ptr(static_cast<int>(i2)));
+          if (dist < best) {
+            second = best;
+            best = dist;
+            best_i2 = static_cast<int>(i2);
+          } else if (dist < second) {
+            second = dist;
+          }
+        }
+        // TH_LOW, and a ratio test along the epipolar band: without ORB-SLAM2's bag-of-words
+        // nodes the band holds many look-alikes (repeated texture, forward motion).
+        if (best_i2 < 0 || best > options.max_descriptor_distance / 2 || best > options.triangulation_match_ratio * second) continue;
+        if (best >= taken_distance[static_cast<std::size_t>(best_i2)]) continue;
+        taken_by[static_cast<std::size_t>(best_i2)] = static_cast<int>(i1);
+        taken_distance[static_cast<std::size_t>(best_i2)] = best;
+      }
+      for (std::size_t i2 = 0; i2 < f2.size(); ++i2) {
+        const int signed_i1 = taken_by[i2];
+        if (signed_i1 < 0) continue;
+        const auto i1 = static_cast<std::size_t>(signed_i1);
+        const Eigen::Vector3d xn1 = K_inv * Eigen::Vector3d(f1.undistorted[i1].x(), f1.undistorted[i1].y(), 1.0);
+        const Eigen::Vector3d xn2 = K_inv * Eigen::Vector3d(f2.undistorted[i2].x(), f2.undistorted[i2].y(), 1.0);
+        const Eigen::Vector3d ray1 = f1.T_world_camera.rotation_matrix() * xn1, ray2 = f2.T_world_camera.rotation_matrix() * xn2;
+        const double cos_rays = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
+        const bool stereo1 = f1.depth[i1] > 0, stereo2 = f2.depth[i2] > 0;
+        const double cos_stereo1 = stereo1 ? std::cos(2.0 * std::atan2(stereo_baseline / 2.0, f1.depth[i1])) : 2.0;
+        const double cos_stereo2 = stereo2 ? std::cos(2.0 * std::atan2(stereo_baseline / 2.0, f2.depth[i2])) : 2.0;
+        const double cos_stereo = std::min(cos_stereo1, cos_stereo2);
+        Eigen::Vector3d X;
+        if (cos_rays < cos_stereo && cos_rays > 0.0 && (stereo1 || stereo2 || cos_rays < 0.9998)) {
+          // Linear triangulation: A X = 0 from x cross (P X) = 0 in both views.
+          const Eigen::Matrix<double, 3, 4> P1 = T1_cw.matrix3x4(), P2 = T2_cw.matrix3x4();
+          Eigen::Matrix4d A;
+          A.row(0) = xn1.x() * P1.row(2) - P1.row(0);
+          A.row(1) = xn1.y() * P1.row(2) - P1.row(1);
+          A.row(2) = xn2.x() * P2.row(2) - P2.row(0);
+          A.row(3) = xn2.y() * P2.row(2) - P2.row(1);
+          const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(A, Eigen::ComputeFullV).matrixV().col(3);
+          if (std::abs(h(3)) < 1e-12) continue;
+          X = h.head<3>() / h(3);
+        } else if (stereo1 && cos_stereo1 < cos_stereo2) {
+          X = unproject(f1, i1);
+        } else if (stereo2 && cos_stereo2 < cos_stereo1) {
+          X = unproject(f2, i2);
+        } else {
+          continue;  // too little parallax either way
+        }
+        if (!((T1_cw * X).z() > 0.0) || !((T2_cw * X).z() > 0.0)) continue;
+        if (chi2(f1, i1, T1_cw, X) > (stereo1 ? options.chi2_stereo : options.chi2_mono)) continue;
+        if (chi2(f2, i2, T2_cw, X) > (stereo2 ? options.chi2_stereo : options.chi2_mono)) continue;
+        const double dist1 = (X - O1).norm(), dist2 = (X - O2).norm();
+        if (dist1 <= 0.0 || dist2 <= 0.0) continue;
+        const double ratio_dist = dist2 / dist1;
+        const double ratio_octave = scales[static_cast<std::size_t>(f1.keypoints[i1].octave)] / scales[static_cast<std::size_t>(f2.keypoints[i2].octave)];
+        if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor) continue;
+        MapPoint mp;
+        mp.p_world = X;
+        mp.descriptor = f1.descriptors.row(static_cast<int>(i1)).clone();
+        mp.first_keyframe = mp.reference_keyframe = current;
+        mp.observations[current] = static_cast<int>(i1);
+        mp.observations[k2_id] = static_cast<int>(i2);
+        points.push_back(std::move(mp));
+        const int id = static_cast<int>(points.size()) - 1;
+        keyframes[static_cast<std::size_t>(current)].frame.map_point[i1] = id;
+        keyframes[static_cast<std::size_t>(k2_id)].frame.map_point[i2] = id;
+        update_normal_and_depth(points.back());
+        update_descriptor(points.back());
+        recent_points.push_back(id);
+        ++summary->map_points;
+        ++created;
+      }
+    }
+    return created;
+  }
+
   // ORB-SLAM2 LocalMapping::MapPointCulling (stereo: 3 observations, a stereo one counting 2).
   void cull_points() {
     const int current = static_cast<int>(keyframes.size()) - 1;
@@ -1274,6 +1393,7 @@ struct VisualSlam::Impl {
           const auto mapping_start = Clock::now();
           insert_keyframe(f);
           cull_points();
+          if (options.triangulation_keyframes > 0) triangulate_new_points(static_cast<int>(keyframes.size()) - 1);
           if (options.local_ba) local_bundle_adjustment();
           detect_and_close_loop(result);
           times.mapping_s = seconds_since(mapping_start);
@@ -1337,6 +1457,8 @@ std::string VisualSlamOptions::problems() const {
   if (loop_min_pnp_inliers < 6 || loop_min_matches < loop_min_pnp_inliers) add("need 6 <= loop_min_pnp_inliers <= loop_min_matches");
   if (relocalisation_min_inliers < lost_below_inliers) add("relocalisation_min_inliers must be >= lost_below_inliers");
   if (new_map_after_lost_frames < 0) add("new_map_after_lost_frames must be >= 0");
+  if (triangulation_keyframes < 0) add("triangulation_keyframes must be >= 0");
+  if (!(triangulation_match_ratio > 0.0 && triangulation_match_ratio <= 1.0)) add("triangulation_match_ratio must be in (0, 1]");
   return out;
 }
 
