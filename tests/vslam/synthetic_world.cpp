@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <future>
 #include <limits>
 
 namespace cairn::test {
@@ -337,8 +338,11 @@ cv::Mat SyntheticWorld::render(const core::SE3& T_world_camera, const StereoCame
 }
 
 std::pair<cv::Mat, cv::Mat> SyntheticWorld::render_stereo(const core::SE3& T_world_left, const StereoCamera& camera) const {
+  // The right image on a second thread: the two renderings share nothing but const data.
   const core::SE3 T_left_right(core::SO3(), Eigen::Vector3d(camera.baseline_m, 0.0, 0.0));
-  return {render(T_world_left, camera), render(T_world_left * T_left_right, camera)};
+  std::future<cv::Mat> right = std::async(std::launch::async, [&] { return render(T_world_left * T_left_right, camera); });
+  cv::Mat left = render(T_world_left, camera);
+  return {left, right.get()};
 }
 
 cv::Mat SyntheticWorld::render_depth(const core::SE3& T_world_camera, const StereoCamera& camera) const {

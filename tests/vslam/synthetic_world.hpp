@@ -9,7 +9,7 @@
 /// identical wherever they stand (aliasing), and a surface with `texture.textured == false` is a
 /// flat grey (no corner at all). The texture is a "Mondrian" of 0.2 m cells, each with a random
 /// background and three random rectangles or discs of random grey: every cell has corners and
-/// T-junctions at several scales, so FAST finds corners from 0.5 m to ~10 m, and the ORB
+/// T-junctions at several scales (ORB finds its 2000 features in a room view), and the ORB
 /// descriptors of different seeds differ.
 ///
 /// Frames: world and camera as cairn's (camera x right, y down, z forward); the world's y axis

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "cairn/eval/ape.hpp"
 #include "cairn/eval/rpe.hpp"
@@ -89,12 +90,44 @@ TEST(VisualSlamKitti, TriangulationBetweenKeyframesAddsPointsAndSteadiesRotation
   EXPECT_LT(rotation[1], 0.08);
 }
 
+// Monocular on the KITTI left images: two-view initialisation (homography or essential matrix),
+// then tracking at an unobservable scale: judged after Sim(3) alignment over the tracked frames.
+TEST(VisualSlamKitti, MonocularInitialisesAndTracksUpToScale) {
+  CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/calib.txt");
+  const io::ImageSequence seq = io::read_kitti_stereo(test::data_path("visual/kitti_extract_seq2").string());
+  VisualSlam slam(seq.calibration, io::SequenceKind::kMonocular);
+  std::vector<FrameResult> results;
+  std::optional<std::size_t> initialised;
+  for (const io::ImageFrame& frame : seq.frames) {
+    results.push_back(slam.add_monocular(frame.time, vision::read_gray_image(frame.image)));
+    if (results.back().tracked && !initialised) {
+      initialised = results.back().frame;
+      std::printf("%s\n", results.back().note.c_str());
+    }
+  }
+  ASSERT_TRUE(initialised.has_value()) << "never initialised";
+  io::Trajectory tracked, truth;
+  const std::vector<core::SE3> poses = slam.trajectory();
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    if (!results[k].tracked) continue;
+    tracked.poses.push_back(poses[k]);
+    truth.poses.push_back(seq.ground_truth->poses[k]);
+  }
+  eval::ApeOptions sim3;
+  sim3.alignment.method = eval::AlignmentMethod::kSim3;
+  const eval::ApeResult ape = eval::evaluate_ape(truth, tracked, sim3);
+  ASSERT_TRUE(ape.outcome.ok()) << ape.outcome.message;
+  std::printf("monocular: initialised at frame %zu, %zu of %zu frames tracked, ATE Sim(3)-aligned %.3f m (scale %.2f)\n", *initialised,
+              tracked.size(), results.size(), ape.statistics.rmse, ape.alignment.scale);
+  EXPECT_GE(tracked.size(), 25u);
+  EXPECT_LT(ape.statistics.rmse, 0.3);
+}
+
 TEST(VisualSlam, RefusesBadCalibrationsAndImages) {
   io::CameraCalibration camera;
   EXPECT_THROW(VisualSlam(camera, io::SequenceKind::kStereo), std::invalid_argument);  // fx = 0
   camera.fx = camera.fy = 500.0;
   EXPECT_THROW(VisualSlam(camera, io::SequenceKind::kStereo), std::invalid_argument);  // no baseline
-  EXPECT_THROW(VisualSlam(camera, io::SequenceKind::kMonocular), std::invalid_argument);
   camera.baseline_m = 0.1;
   VisualSlam slam(camera, io::SequenceKind::kStereo);
   const cv::Mat a(100, 200, CV_8UC1, cv::Scalar(0)), b(100, 201, CV_8UC1, cv::Scalar(0)), c(100, 200, CV_8UC3);

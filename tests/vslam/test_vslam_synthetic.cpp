@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -217,10 +218,12 @@ TEST(VisualSlamSynthetic, TracksATexturedCorridorAgainstExactGroundTruth) {
   std::printf("corridor: %zu / %zu frames tracked; translation RMSE %.4f m, max %.4f m, final %.4f m (%.3f %% of %.0f m); "
               "max rotation error %.3f deg\n",
               tracked, truth.size(), rmse, max_error, final_error, 100.0 * final_error / path_m, path_m, max_rotation_deg);
+  // Measured (2026-11-25, three runs while visual_slam.cpp changed): RMSE 0.014-0.019 m, final
+  // 0.025-0.031 m, max rotation error 0.14-0.42 deg. Limits about 2.5 x that.
   EXPECT_EQ(tracked, truth.size());
-  EXPECT_LT(rmse, 1.0);
-  EXPECT_LT(final_error, 1.0);
-  EXPECT_LT(max_rotation_deg, 10.0);
+  EXPECT_LT(rmse, 0.05);
+  EXPECT_LT(final_error, 0.08);
+  EXPECT_LT(max_rotation_deg, 1.0);
 }
 
 // The yaw of a camera_pose (rotation about the world y axis).
@@ -238,9 +241,10 @@ int print_loops_and_count_false(const SlamRun& run) {
   for (const LoopRecord& loop : run.slam->summary().loops) {
     const double metres = (run.truth[loop.frame].translation() - run.truth[loop.candidate_frame].translation()).norm();
     std::printf("  loop candidate frame %zu -> %zu: score %.3f (min covisible %.3f), consistency %d, %d PnP inliers, %d matches, "
-                "%s (%s); true distance %.2f m\n",
+                "%s (%s), correction %.3f m %.2f deg; true z %.2f -> %.2f m, true distance %.2f m\n",
                 loop.frame, loop.candidate_frame, loop.score, loop.min_covisible_score, loop.consistency, loop.pnp_inliers, loop.matches,
-                loop.decision.c_str(), loop.reason.c_str(), metres);
+                loop.decision.c_str(), loop.reason.c_str(), loop.correction_m, loop.correction_deg, run.truth[loop.frame].translation().z(),
+                run.truth[loop.candidate_frame].translation().z(), metres);
     if (loop.decision == "accepted" && metres > 1.0) ++false_loops;
   }
   return false_loops;
@@ -250,17 +254,19 @@ TEST(VisualSlamSynthetic, NoLoopClosureBetweenIdenticalRooms) {
   const SyntheticWorld world = aliasing_world(11, 21);
   VisualSlamOptions options;
   options.vocabulary = training_vocabulary();
-  // In room A 1 m from its entrance, look 60 deg left and back, walk through room A, corridor 1
-  // and into room B along the middle (yaw swaying +-10 deg with a 5 m period), and at 1 m into
-  // room B look 60 deg left and back again: in room B the camera takes exactly the room-relative
-  // poses it had in room A. (The look-around makes the keyframes that loop detection waits for:
-  // it queries from the 20th keyframe on.)
+  // From corridor 0 into room A; 1 m in, look 60 deg left, 60 deg right and ahead again; walk
+  // through room A, corridor 1 and into room B along the middle (yaw swaying +-10 deg with a 5 m
+  // period), and 1 m into room B look around the same way: in room B the camera takes exactly
+  // the room-relative poses it had in room A. (Corridor 0 and the look-around make the keyframes
+  // loop detection waits for: it queries from the 20th keyframe on.)
   const auto look_around = [](double z) {
     std::vector<core::SE3> poses = test::turn(Eigen::Vector3d(0.0, 0.0, z), 0.0, -60.0 * kDeg, 6.0 * kDeg);
-    test::append(poses, test::turn(Eigen::Vector3d(0.0, 0.0, z), -60.0 * kDeg, 0.0, 6.0 * kDeg));
+    test::append(poses, test::turn(Eigen::Vector3d(0.0, 0.0, z), -60.0 * kDeg, 60.0 * kDeg, 6.0 * kDeg));
+    test::append(poses, test::turn(Eigen::Vector3d(0.0, 0.0, z), 60.0 * kDeg, 0.0, 6.0 * kDeg));
     return poses;
   };
-  std::vector<core::SE3> truth = look_around(1.0);
+  std::vector<core::SE3> truth = test::walk(Eigen::Vector3d(0.0, 0.0, -3.5), Eigen::Vector3d(0.0, 0.0, 1.0), 0.2);
+  test::append(truth, look_around(1.0));
   test::append(truth, test::walk(Eigen::Vector3d(0.0, 0.0, 1.0), Eigen::Vector3d(0.0, 0.0, 11.0), 0.2, 0.0, 10.0 * kDeg, 0.0, 5.0));
   const std::size_t entering_b = truth.size() - 1;
   test::append(truth, look_around(11.0));
@@ -278,6 +284,10 @@ TEST(VisualSlamSynthetic, NoLoopClosureBetweenIdenticalRooms) {
   std::printf("aliasing, A -> B: %d accepted loops between places more than 1 m apart\n", false_loops);
   // Not vacuous: place recognition was asked in room B.
   EXPECT_GT(run.slam->summary().loop_queries, 0u);
+  // The requirement. On 2026-11-25 this FAILS: frame 102 (corridor 1, 1.2 m before room
+  // B, looking in) was joined to frame 12 (corridor 0, 1.15 m before room A, looking in) with 111
+  // PnP inliers and 400 matches, and the map was corrected by 10.0 m. The two views differ only in the
+  // corridor walls at the image borders; the loop's verification sees the room's points only.
   EXPECT_EQ(false_loops, 0);
 }
 
@@ -291,7 +301,7 @@ TEST(VisualSlamSynthetic, ReportsWhetherARealRevisitClosesALoop) {
   test::append(truth, test::turn(Eigen::Vector3d(0.0, 0.0, 7.0), yaw_of(truth.back()), kPi, 10.0 * kDeg));
   test::append(truth, test::walk(Eigen::Vector3d(0.0, 0.0, 7.0), Eigen::Vector3d(0.0, 0.0, 1.5), 0.2, kPi));
   test::append(truth, test::turn(Eigen::Vector3d(0.0, 0.0, 1.5), kPi, 2.0 * kPi, 10.0 * kDeg));
-  test::append(truth, test::walk(Eigen::Vector3d(0.0, 0.0, 1.5), Eigen::Vector3d(0.0, 0.0, 3.5), 0.2, 2.0 * kPi));
+  test::append(truth, test::walk(Eigen::Vector3d(0.0, 0.0, 1.5), Eigen::Vector3d(0.0, 0.0, 6.0), 0.2, 2.0 * kPi));
   const SlamRun run = run_stereo(world, truth, options);
   print_summary("revisit A", run);
   const int false_loops = print_loops_and_count_false(run);
@@ -305,13 +315,42 @@ TEST(VisualSlamSynthetic, ReportsWhetherARealRevisitClosesALoop) {
   std::size_t worst = 0, worst_online = 0;
   for (std::size_t k = 0; k < truth.size(); ++k) {
     const double e = position_error(run, k, estimate[k]), online = position_error(run, k, run.results[k].T_world_camera);
-    if (e > max_error) max_error = e, worst = k;
-    if (online > max_online_error) max_online_error = online, worst_online = k;
+    if (run.results[k].keyframe) {
+      std::printf("  keyframe at frame %3zu: %-8s loop %d error %.3f m (final trajectory), %.3f m (as reported)\n", k,
+                  health_name(run.results[k].health), run.results[k].loop_closed ? 1 : 0, e, online);
+    }
+    if (e > max_error) {
+      max_error = e;
+      worst = k;
+    }
+    if (online > max_online_error) {
+      max_online_error = online;
+      worst_online = k;
+    }
+  }
+  // After the (first) loop closure, as reported frame by frame.
+  std::size_t loop_frame = truth.size();
+  for (std::size_t k = 0; k < truth.size() && loop_frame == truth.size(); ++k) {
+    if (run.results[k].loop_closed) loop_frame = k;
+  }
+  double max_error_after_loop = 0.0;
+  for (std::size_t k = loop_frame + 1; k < truth.size(); ++k) {
+    max_error_after_loop = std::max(max_error_after_loop, position_error(run, k, run.results[k].T_world_camera));
   }
   std::printf("revisit A: %zu / %zu tracked, %d true loops accepted, %d false; max position error %.3f m (frame %zu) in the final "
-              "trajectory, %.3f m (frame %zu) as reported frame by frame\n",
-              tracked, truth.size(), true_loops, false_loops, max_error, worst, max_online_error, worst_online);
+              "trajectory, %.3f m (frame %zu) as reported frame by frame; loop closed at frame %zu, after it max error %.3f m "
+              "over %zu frames\n",
+              tracked, truth.size(), true_loops, false_loops, max_error, worst, max_online_error, worst_online, loop_frame,
+              max_error_after_loop, truth.size() - std::min(truth.size(), loop_frame + 1));
+  EXPECT_EQ(tracked, truth.size());
   EXPECT_EQ(false_loops, 0);
+  // The revisit is found (in every run so far, 2026-11-25: frame 105 or 106 -> 16 or 18, true
+  // distance 0.15-0.55 m) and removes the drift of the two turns: measured 0.43 m before the loop,
+  // at most 0.011 m after it. (The final trajectory() keeps 0.43 m at the loop frame itself and 0.1 m at
+  // some keyframes: their entries are not corrected with the rest; printed above.)
+  EXPECT_GE(true_loops, 1);
+  EXPECT_LT(loop_frame + 1, truth.size());
+  EXPECT_LT(max_error_after_loop, 0.05);
 }
 
 // --- c. A texture-less wall fills the view ------------------------------------------------------
@@ -358,9 +397,15 @@ TEST(VisualSlamSynthetic, FailsLoudlyFacingABlankWall) {
     max_error_after = std::max(max_error_after, position_error(run, k, run.results[k].T_world_camera));
   }
   std::printf("blank wall: %zu blank frames (%zu reported ok), %zu ok frames off by > 0.5 m; recovered at frame %zu (%zu frames "
-              "after the last blank one), %zu of the %zu frames from there tracked, max error %.3f m\n",
-              blank, blank_ok, wrong_ok, recovered_at, recovered_at - last_blank, tracked_after, truth.size() - recovered_at,
-              max_error_after);
+              "after the last blank one, relocalised %d, new map %d), %zu of the %zu frames from there tracked, max error %.3f m\n",
+              blank, blank_ok, wrong_ok, recovered_at, recovered_at - last_blank, run.results[recovered_at].relocalised ? 1 : 0,
+              run.results[recovered_at].new_map ? 1 : 0, tracked_after, truth.size() - recovered_at, max_error_after);
+  // Recovery, the desired behaviour, is what it does (2026-11-25): relocalised 2 frames after the
+  // last blank one (11 % of the view textured again), every later frame tracked, error <= 0.025 m.
+  EXPECT_GT(recovered_at, 0u);
+  EXPECT_LE(recovered_at - last_blank, 5u);
+  EXPECT_EQ(tracked_after, truth.size() - recovered_at);
+  EXPECT_LT(max_error_after, 0.1);
 }
 
 // --- d. Kidnapped into the look-alike room -----------------------------------------------------
@@ -405,8 +450,15 @@ TEST(VisualSlamSynthetic, CountsWrongRelocalisationsAfterAKidnapIntoTheLookAlike
   std::printf("kidnap: before the jump %zu / %zu tracked, max error %.3f m; after it, %zu frames: %zu lost, %zu tracked where "
               "they are, %zu tracked more than 1 m off (%zu of them flagged relocalised)\n",
               tracked_before, jump, max_error_before, truth.size() - jump, lost, right, wrong, wrong_relocalised);
+  // Room A is tracked (measured: every frame, max error 0.007 m), and the jump itself is not
+  // silently absorbed: the first frame in room B is not reported ok.
   EXPECT_EQ(tracked_before, jump);
-  EXPECT_LT(max_error_before, 1.0);
+  EXPECT_LT(max_error_before, 0.05);
+  EXPECT_NE(run.results[jump].health, TrackingHealth::kOk);
+  // Not asserted: zero wrong relocalisations. Measured (2026-11-25): the frame after the jump is
+  // relocalised into room A (0.06 m from the look-alike place there, 9.98 m from the truth) and the
+  // 15 frames after it are tracked on, all about 10 m off. With rooms this alike no camera can
+  // tell them apart; only the door views differ.
 }
 
 }  // namespace

@@ -39,6 +39,7 @@ struct VslamFlags {
   long max_frames = 0;
   long feature_frame = -1;
   bool no_local_ba = false;
+  bool mono = false;
   bool quiet = false;
   bool progress = false;
   bool overwrite = false;
@@ -121,6 +122,7 @@ int vslam_command(const VslamFlags& flags) {
   } else if (!seq.calibration_from_dataset) {
     throw std::invalid_argument("a " + seq.layout + " folder has no calibration: give --camera tum-fr1|tum-fr2|tum-fr3 or --calib FILE");
   }
+  const io::SequenceKind kind = flags.mono ? io::SequenceKind::kMonocular : seq.kind;
   std::size_t n = seq.frames.size();
   if (flags.max_frames > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_frames));
   io::Trajectory ground_truth;
@@ -134,7 +136,8 @@ int vslam_command(const VslamFlags& flags) {
   }
 
   vslam::VisualSlamOptions options;
-  options.orb.features = flags.features > 0 ? flags.features : (seq.kind == io::SequenceKind::kStereo ? 2000 : 1000);
+  // ORB-SLAM2's settings: 2000 for KITTI (stereo and monocular), 1000 for TUM.
+  options.orb.features = flags.features > 0 ? flags.features : (seq.layout == "kitti" ? 2000 : 1000);
   if (seq.kind == io::SequenceKind::kRgbd) options.close_depth_baselines = 40.0;  // ORB-SLAM2 TUM*.yaml ThDepth
   options.local_ba = !flags.no_local_ba;
   if (!flags.vocabulary.empty()) {
@@ -144,8 +147,9 @@ int vslam_command(const VslamFlags& flags) {
     std::fprintf(stderr, "cairn vslam: no --vocabulary: no loop closure; relocalisation tries the 8 most recent keyframes only\n");
   }
   if (!flags.quiet) {
-    std::fprintf(stderr, "cairn vslam: %s %s, %zu frames, fx %.2f, %s %.4f m%s\n", seq.layout.c_str(),
-                 std::string(io::to_string(seq.kind)).c_str(), n, seq.calibration.fx,
+    std::fprintf(stderr, "cairn vslam: %s %s%s, %zu frames, fx %.2f, %s %.4f m%s\n", seq.layout.c_str(),
+                 std::string(io::to_string(kind)).c_str(), flags.mono ? " (the left / colour images only; scale unobservable)" : "", n,
+                 seq.calibration.fx,
                  seq.kind == io::SequenceKind::kStereo ? "baseline" : "virtual baseline",
                  seq.kind == io::SequenceKind::kStereo ? seq.calibration.baseline_m : seq.calibration.virtual_baseline_m,
                  seq.calibration.has_distortion() ? ", distorted (keypoints undistorted)" : "");
@@ -153,7 +157,7 @@ int vslam_command(const VslamFlags& flags) {
   }
 
   io::OutputDirectory out(flags.out, flags.overwrite);
-  vslam::VisualSlam slam(seq.calibration, seq.kind, options);
+  vslam::VisualSlam slam(seq.calibration, kind, options);
   std::vector<vslam::FrameResult> results;
   std::vector<double> read_s;
   const bool tty = !flags.quiet && !flags.progress && isatty(fileno(stderr));
@@ -163,6 +167,8 @@ int vslam_command(const VslamFlags& flags) {
   std::vector<cv::KeyPoint> feature_keypoints;
   std::vector<signed char> feature_states;
   vslam::TrackingHealth last_health = vslam::TrackingHealth::kOk;
+  std::string last_note;
+  int messages = 0;
   int width = seq.calibration.width, height = seq.calibration.height;
   for (std::size_t k = 0; k < n && !interrupted(); ++k) {
     const io::ImageFrame& frame = seq.frames[k];
@@ -171,7 +177,10 @@ int vslam_command(const VslamFlags& flags) {
     width = image.cols;
     height = image.rows;
     vslam::FrameResult r;
-    if (seq.kind == io::SequenceKind::kStereo) {
+    if (kind == io::SequenceKind::kMonocular) {
+      read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
+      r = slam.add_monocular(frame.time, image);
+    } else if (seq.kind == io::SequenceKind::kStereo) {
       const cv::Mat right = vision::read_gray_image(frame.right_image, width, height);
       read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
       r = slam.add_stereo(frame.time, image, right);
@@ -187,11 +196,16 @@ int vslam_command(const VslamFlags& flags) {
     }
     r.keypoints.clear();
     r.keypoint_states.clear();
-    if (!flags.quiet && r.health != last_health) {
+    // Health changes, and events (a new note while not ok: initialisation steps, new maps); at most
+    // 100 such lines, the rest are in frames.csv.
+    const bool changed = r.health != last_health || (r.health != vslam::TrackingHealth::kOk && r.note != last_note);
+    if (!flags.quiet && changed && messages < 100) {
       std::fprintf(stderr, "%s[frame %zu] %s%s%s\n", tty ? "\r" : "", k, std::string(vslam::to_string(r.health)).c_str(),
                    r.note.empty() ? "" : ": ", r.note.c_str());
-      last_health = r.health;
+      if (++messages == 100) std::fprintf(stderr, "cairn vslam: further health messages are only in frames.csv\n");
     }
+    last_health = r.health;
+    last_note = r.note;
     if ((tty || flags.progress) && (k % 10 == 0 || k + 1 == n)) {
       std::fprintf(stderr, "%sframe %zu / %zu  %.0f ms  %d inliers  %zu keyframes%s", tty ? "\r" : "", k + 1, n, 1e3 * r.times.total_s,
                    r.inliers, slam.summary().keyframes, tty ? "   " : "\n");
@@ -267,7 +281,7 @@ int vslam_command(const VslamFlags& flags) {
   axes.equal_aspect = true;
   if (!ground_truth.poses.empty()) {
     eval::ApeOptions ape_options;
-    ape_options.alignment.method = eval::AlignmentMethod::kSE3;
+    ape_options.alignment.method = kind == io::SequenceKind::kMonocular ? eval::AlignmentMethod::kSim3 : eval::AlignmentMethod::kSE3;
     ape_options.association.max_time_difference_s = 0.02;
     const eval::ApeResult ape = eval::evaluate_ape(ground_truth, trajectory, ape_options);
     eval::RpeOptions rpe_options;
@@ -277,10 +291,11 @@ int vslam_command(const VslamFlags& flags) {
     const eval::RpeResult rpe_r = eval::evaluate_rpe(ground_truth, trajectory, rpe_options);
     evaluation = {{"ground_truth", ground_truth_path}};
     if (ape.outcome.ok()) {
-      evaluation["ate_se3_aligned_m"] = stats_json(ape.statistics);
+      evaluation[kind == io::SequenceKind::kMonocular ? "ate_sim3_aligned_m" : "ate_se3_aligned_m"] = stats_json(ape.statistics);
+      if (kind == io::SequenceKind::kMonocular) evaluation["sim3_scale"] = ape.alignment.scale;
       // The ground truth drawn in the estimate's frame: T_est = alignment^-1 * T_gt.
       viz::Series gt;
-      gt.label = "ground truth (SE(3)-aligned)";
+      gt.label = kind == io::SequenceKind::kMonocular ? "ground truth (estimate Sim(3)-aligned)" : "ground truth (estimate SE(3)-aligned)";
       gt.color = viz::kBlack;
       gt.dashed = true;
       viz::Series est;
@@ -291,7 +306,8 @@ int vslam_command(const VslamFlags& flags) {
         est.x.push_back(ape.estimate[i](0, 3));
         est.y.push_back(ape.estimate[i](2, 3));
       }
-      axes.title = "top view, estimate SE(3)-aligned to the ground truth (x, z of the ground truth's frame)";
+      axes.title = std::string("top view, estimate ") + (kind == io::SequenceKind::kMonocular ? "Sim(3)" : "SE(3)") +
+                   "-aligned to the ground truth (x, z of the ground truth's frame)";
       axes.series.push_back(gt);
       axes.series.push_back(est);
       // Drift at the end with no alignment, both trajectories re-based on their first pair.
@@ -340,7 +356,7 @@ int vslam_command(const VslamFlags& flags) {
   nlohmann::json report;
   report["input"] = {{"folder", seq.folder},
                      {"layout", seq.layout},
-                     {"kind", std::string(io::to_string(seq.kind))},
+                     {"kind", std::string(io::to_string(kind))},
                      {"frames_listed", seq.frames.size()},
                      {"frames_processed", results.size()},
                      {"times_from_file", seq.times_from_file},
@@ -421,7 +437,7 @@ int vslam_command(const VslamFlags& flags) {
                                                          {"correction_m", l.correction_m},
                                                          {"correction_deg", l.correction_deg}});
   }
-  report["not_implemented"] = {"monocular", "Sim(3) loops", "fusion of duplicate points outside loop closures", "keyframe culling",
+  report["not_implemented"] = {"monocular loop closure (Sim(3)) and new map segments", "Sim(3) loops", "fusion of duplicate points outside loop closures", "keyframe culling",
                                "local mapping in its own thread"};
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
   out.commit();
@@ -432,6 +448,10 @@ int vslam_command(const VslamFlags& flags) {
                 s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loops_accepted, s.maps_started, s.maps_merged,
                 s.keyframes, map_points.size(), spread(total).median * 1e3,
                 spread(tracking).median * 1e3, spread(features_s).median * 1e3, spread(mapping).median * 1e3);
+    if (!evaluation.is_null() && evaluation.contains("ate_sim3_aligned_m")) {
+      std::printf("against %s: ATE (Sim(3)-aligned, scale %.4f: monocular scale is not observable) RMSE %.4f m\n", ground_truth_path.c_str(),
+                  evaluation["sim3_scale"].get<double>(), evaluation["ate_sim3_aligned_m"]["rmse"].get<double>());
+    }
     if (!evaluation.is_null() && evaluation.contains("ate_se3_aligned_m")) {
       std::printf("against %s: ATE (SE(3)-aligned) RMSE %.4f m; end-point drift %.3f m over %.1f m; RPE (1 frame) RMSE %.4f m, "
                   "%.4f deg\n",
@@ -459,6 +479,7 @@ Runner register_vslam(CLI::App& app) {
   cmd->add_option("--features", flags->features, "ORB features per image (default 2000 stereo, 1000 RGB-D, as ORB-SLAM2)");
   cmd->add_option("--max-frames", flags->max_frames, "Process at most N frames");
   cmd->add_option("--feature-frame", flags->feature_frame, "Frame drawn in features.png (default: the middle one)");
+  cmd->add_flag("--mono", flags->mono, "Monocular: the left (KITTI) or colour (TUM) images only; the scale is not observable");
   cmd->add_flag("--no-local-ba", flags->no_local_ba, "Skip local bundle adjustment (visual odometry only)");
   cmd->add_flag("-q,--quiet", flags->quiet, "No progress or summary");
   cmd->add_flag("--progress", flags->progress, "Progress lines even when stderr is not a terminal");

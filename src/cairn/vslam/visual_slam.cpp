@@ -105,12 +105,18 @@ struct KeyFrame {
 
 }  // namespace
 
+vision::OrbOptions doubled(vision::OrbOptions o) {
+  o.features *= 2;
+  return o;
+}
+
 struct VisualSlam::Impl {
   io::CameraCalibration camera;
   io::SequenceKind kind;
   VisualSlamOptions options;
   VisualSlamSummary* summary = nullptr;
   vision::OrbExtractor orb;
+  vision::OrbExtractor orb_initialisation;  // monocular, until initialised: twice the features (ORB-SLAM2 mpIniORBextractor)
   double bf = 0.0;            // fx * baseline (virtual for RGB-D)
   double close_depth_m = 0.0; // ThDepth in metres
   double min_x = 0, max_x = 0, min_y = 0, max_y = 0;
@@ -147,7 +153,7 @@ struct VisualSlam::Impl {
   std::vector<std::pair<int, core::SE3>> relative;
 
   Impl(const io::CameraCalibration& c, io::SequenceKind k, const VisualSlamOptions& o)
-      : camera(c), kind(k), options(o), orb(o.orb) {
+      : camera(c), kind(k), options(o), orb(o.orb), orb_initialisation(doubled(o.orb)) {
     const double baseline = kind == io::SequenceKind::kStereo ? camera.baseline_m : camera.virtual_baseline_m;
     bf = camera.fx * baseline;
     close_depth_m = options.close_depth_baselines * baseline;
@@ -662,7 +668,8 @@ struct VisualSlam::Impl {
     }
     const bool need_close = tracked_close < options.keyframe_close_tracked && untracked_close > options.keyframe_close_untracked;
     const bool c1 = static_cast<int>(f.index) - last_keyframe_frame >= options.keyframe_max_frames;
-    const bool c2 = (inliers < options.keyframe_tracked_ratio * reference_points || need_close) && inliers > options.lost_below_inliers;
+    const double ratio = kind == io::SequenceKind::kMonocular ? 0.9 : options.keyframe_tracked_ratio;  // ORB-SLAM2 thRefRatio
+    const bool c2 = (inliers < ratio * reference_points || need_close) && inliers > options.lost_below_inliers;
     return c2 || (c1 && inliers > options.lost_below_inliers);
   }
 
@@ -728,9 +735,9 @@ struct VisualSlam::Impl {
   // with the better stereo depth; kept when in front of both cameras, within the chi^2
   // thresholds in both, and at consistent scales (distance ratio within 1.5 x scale factor of
   // the octave ratio). Returns the points created.
-  int triangulate_new_points(int current) {
+  int triangulate_new_points(int current, int count) {
     std::vector<std::pair<int, int>> neighbours = covisible(current, 1);
-    if (neighbours.size() > static_cast<std::size_t>(options.triangulation_keyframes)) neighbours.resize(static_cast<std::size_t>(options.triangulation_keyframes));
+    if (neighbours.size() > static_cast<std::size_t>(count)) neighbours.resize(static_cast<std::size_t>(count));
     const double stereo_baseline = bf / camera.fx;
     const double ratio_factor = 1.5 * options.orb.scale_factor;
     const Eigen::Matrix3d K = (Eigen::Matrix3d() << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).finished();
@@ -741,8 +748,24 @@ struct VisualSlam::Impl {
       const FrameData& f1 = keyframes[static_cast<std::size_t>(current)].frame;
       const FrameData& f2 = k2.frame;
       const Eigen::Vector3d O1 = f1.T_world_camera.translation(), O2 = f2.T_world_camera.translation();
-      if ((O2 - O1).norm() < stereo_baseline) continue;  // ORB-SLAM2: no triangulation below the stereo baseline
       const core::SE3 T1_cw = f1.T_world_camera.inverse(), T2_cw = f2.T_world_camera.inverse();
+      if (kind == io::SequenceKind::kMonocular) {
+        // ORB-SLAM2: baseline / the neighbour's median scene depth at least 0.01.
+        std::vector<double> depths;
+        for (const int id : f2.map_point) {
+          if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) depths.push_back((T2_cw * points[static_cast<std::size_t>(id)].p_world).z());
+        }
+        if (depths.empty()) continue;
+        std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
+        if ((O2 - O1).norm() / depths[depths.size() / 2] < 0.01) continue;
+      } else if ((O2 - O1).norm() < stereo_baseline) {
+        continue;  // ORB-SLAM2: no triangulation below the stereo baseline
+      }
+      // The epipole of camera 1 in image 2 (monocular matches next to it are ill-conditioned).
+      const Eigen::Vector3d c1_in_2 = T2_cw * O1;
+      const bool epipole_valid = c1_in_2.z() > 1e-9;
+      const double ex = epipole_valid ? camera.fx * c1_in_2.x() / c1_in_2.z() + camera.cx : 0.0;
+      const double ey = epipole_valid ? camera.fy * c1_in_2.y() / c1_in_2.z() + camera.cy : 0.0;
       // Fundamental matrix of x1^T F12 x2 = 0: F12 = K^-T [t12]x R12 K^-1, T12 = T1_cw T2_wc.
       const core::SE3 T12 = T1_cw * f2.T_world_camera;
       const Eigen::Vector3d t = T12.translation();
@@ -762,6 +785,10 @@ struct VisualSlam::Impl {
           if (f2.map_point[i2] >= 0) continue;
           const int level2 = f2.keypoints[i2].octave;
           if (std::abs(level2 - f1.keypoints[i1].octave) > 1) continue;
+          if (epipole_valid && f1.depth[i1] <= 0 && f2.depth[i2] <= 0) {
+            const double dx = ex - f2.undistorted[i2].x(), dy = ey - f2.undistorted[i2].y();
+            if (dx * dx + dy * dy < 100.0 * scales[static_cast<std::size_t>(level2)]) continue;
+          }
           const double d = line.x() * f2.undistorted[i2].x() + line.y() * f2.undistorted[i2].y() + line.z();
           if (d * d / line_norm2 >= 3.84 * scales[static_cast<std::size_t>(level2)] * scales[static_cast<std::size_t>(level2)]) continue;
           const int dist = vision::descriptor_distance(f1.descriptors.ptr(static_cast<int>(i1)), f2.descriptors.ptr(static_cast<int>(i2)));
@@ -848,7 +875,7 @@ struct VisualSlam::Impl {
       if (mp.bad) continue;
       if (static_cast<double>(mp.found) / mp.visible < 0.25) {
         set_bad(id);
-      } else if (current - mp.first_keyframe >= 2 && observation_weight(mp) <= 3) {
+      } else if (current - mp.first_keyframe >= 2 && observation_weight(mp) <= (kind == io::SequenceKind::kMonocular ? 2 : 3)) {
         set_bad(id);
       } else if (current - mp.first_keyframe < 3) {
         keep.push_back(id);
@@ -975,8 +1002,8 @@ struct VisualSlam::Impl {
         point_var[id] = second.add_variable(point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
       }
       build(second, is_outlier, false);
-      lso.max_iterations = second_iterations;
-      backend::solve(second, lso);
+      lso.max_iterations = std::max(1, second_iterations);
+      if (second_iterations > 0) backend::solve(second, lso);
     }
     classify();
     for (std::size_t e = 0; e < edges.size(); ++e) {
@@ -1146,6 +1173,14 @@ struct VisualSlam::Impl {
   // loop_consistency - 1 keyframes; then verified, best score first.
   void detect_and_close_loop(FrameResult& result) {
     if (!options.vocabulary) return;
+    if (kind == io::SequenceKind::kMonocular) {
+      // Monocular loops need Sim(3) (scale drifts); not implemented: keyframes only go into the
+      // database, for relocalisation.
+      KeyFrame& kf = keyframes.back();
+      kf.bow = options.vocabulary->transform(kf.frame.descriptors);
+      database.add(static_cast<std::uint32_t>(kf.id), kf.bow);
+      return;
+    }
     const auto start = Clock::now();
     const int current = static_cast<int>(keyframes.size()) - 1;
     KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
@@ -1225,6 +1260,274 @@ struct VisualSlam::Impl {
     summary->loop_s += seconds_since(start);
   }
 
+  // --- Monocular initialisation (ORB-SLAM2 Initializer, Mur-Artal et al. T-RO 2015 Sec. IV) ----
+
+  FrameData init_reference;
+  bool have_init_reference = false;
+
+  // Level-0 keypoints of the reference matched to the frame within 100 px (ORB-SLAM2
+  // SearchForInitialization: TH_LOW, ratio 0.9, one-to-one).
+  std::vector<std::pair<int, int>> match_for_initialisation(const FrameData& a, const FrameData& b) const {
+    std::vector<int> owner(b.size(), -1), owner_distance(b.size(), 256);
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      if (a.keypoints[i].octave > 0) continue;
+      int best = 256, second = 256, best_j = -1;
+      for (const int j : features_in_area(b, a.undistorted[i].x(), a.undistorted[i].y(), 100.0, 0, 0)) {
+        const int d = vision::descriptor_distance(a.descriptors.ptr(static_cast<int>(i)), b.descriptors.ptr(j));
+        if (d < best) {
+          second = best;
+          best = d;
+          best_j = j;
+        } else if (d < second) {
+          second = d;
+        }
+      }
+      if (best_j < 0 || best > options.max_descriptor_distance / 2 || best >= 0.9 * second) continue;
+      if (best >= owner_distance[static_cast<std::size_t>(best_j)]) continue;
+      owner[static_cast<std::size_t>(best_j)] = static_cast<int>(i);
+      owner_distance[static_cast<std::size_t>(best_j)] = best;
+    }
+    std::vector<std::pair<int, int>> out;
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      if (owner[j] >= 0) out.emplace_back(owner[j], static_cast<int>(j));
+    }
+    return out;
+  }
+
+  // Two-view reconstruction: the homography and the essential matrix (RANSAC, OpenCV), scored
+  // as ORB-SLAM2 scores them (sum of chi^2 margins below 5.991 of the symmetric transfer errors
+  // for H, of the distances to the epipolar lines below 3.841 for F); H when
+  // S_H / (S_H + S_F) > 0.40, else E; the pose from cv::recoverPose / the homography's
+  // decompositions (the one with most points in front); points triangulated, kept in front of
+  // both cameras within 2 px; success with >= 50 points seen at >= 1 degree of parallax.
+  // `note` says which model and why it failed.
+  bool reconstruct_two_views(const FrameData& a, const FrameData& b, const std::vector<std::pair<int, int>>& matches, core::SE3& T_b_a,
+                             std::vector<std::pair<int, Eigen::Vector3d>>& points_a, std::string& note) const {
+    std::vector<cv::Point2d> pa, pb;
+    for (const auto& [i, j] : matches) {
+      pa.emplace_back(a.undistorted[static_cast<std::size_t>(i)].x(), a.undistorted[static_cast<std::size_t>(i)].y());
+      pb.emplace_back(b.undistorted[static_cast<std::size_t>(j)].x(), b.undistorted[static_cast<std::size_t>(j)].y());
+    }
+    const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    cv::Mat H, E, mask_h, mask_e;
+    try {
+      H = cv::findHomography(pa, pb, cv::RANSAC, 2.0, mask_h, 200, 0.99);
+      E = cv::findEssentialMat(pa, pb, K, cv::RANSAC, 0.999, 1.0, mask_e);
+    } catch (const cv::Exception& e) {
+      note = std::string("two-view models failed: ") + e.what();
+      return false;
+    }
+    if (H.empty() || E.empty() || E.rows != 3) {
+      note = "no homography or essential matrix";
+      return false;
+    }
+    const Eigen::Matrix3d K_e = (Eigen::Matrix3d() << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).finished();
+    Eigen::Matrix3d He, Ee;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        He(r, c) = H.at<double>(r, c);
+        Ee(r, c) = E.at<double>(r, c);
+      }
+    }
+    const Eigen::Matrix3d H_inv = He.inverse();
+    const Eigen::Matrix3d F = K_e.inverse().transpose() * Ee * K_e.inverse();
+    double score_h = 0.0, score_f = 0.0;
+    for (std::size_t k = 0; k < pa.size(); ++k) {
+      const Eigen::Vector3d x1(pa[k].x, pa[k].y, 1.0), x2(pb[k].x, pb[k].y, 1.0);
+      const Eigen::Vector3d h21 = He * x1, h12 = H_inv * x2;
+      const double e2 = (h21.head<2>() / h21.z() - x2.head<2>()).squaredNorm(), e1 = (h12.head<2>() / h12.z() - x1.head<2>()).squaredNorm();
+      if (e2 < 5.991) score_h += 5.991 - e2;
+      if (e1 < 5.991) score_h += 5.991 - e1;
+      const Eigen::Vector3d l2 = F * x1, l1 = F.transpose() * x2;
+      const double d2 = std::pow(l2.dot(x2), 2) / (l2.x() * l2.x() + l2.y() * l2.y());
+      const double d1 = std::pow(l1.dot(x1), 2) / (l1.x() * l1.x() + l1.y() * l1.y());
+      if (d2 < 3.841) score_f += 5.991 - d2;
+      if (d1 < 3.841) score_f += 5.991 - d1;
+    }
+    const bool use_h = score_h / (score_h + score_f) > 0.40;
+    std::vector<std::pair<cv::Matx33d, cv::Vec3d>> poses;
+    if (use_h) {
+      std::vector<cv::Mat> Rs, ts, normals;
+      cv::decomposeHomographyMat(H, K, Rs, ts, normals);
+      for (std::size_t k = 0; k < Rs.size(); ++k) poses.emplace_back(cv::Matx33d(Rs[k]), cv::Vec3d(ts[k]));
+    } else {
+      cv::Mat R, t;
+      cv::recoverPose(E, pa, pb, K, R, t, mask_e);
+      poses.emplace_back(cv::Matx33d(R), cv::Vec3d(t));
+    }
+    // Triangulate with every pose; keep the one with most good points.
+    std::size_t best_good = 0, second_good = 0;
+    std::vector<std::pair<int, Eigen::Vector3d>> best_points;
+    Eigen::Matrix3d best_R = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d best_t = Eigen::Vector3d::Zero();
+    double best_parallax_deg = 0.0;
+    for (const auto& [Rc, tc] : poses) {
+      Eigen::Matrix3d R;
+      Eigen::Vector3d t(tc[0], tc[1], tc[2]);
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) R(r, c) = Rc(r, c);
+      }
+      if (t.norm() < 1e-12) continue;
+      t.normalize();
+      const Eigen::Vector3d O2 = -R.transpose() * t;
+      std::vector<std::pair<int, Eigen::Vector3d>> good;
+      std::vector<double> parallax;
+      for (std::size_t k = 0; k < pa.size(); ++k) {
+        const Eigen::Vector3d xn1 = K_e.inverse() * Eigen::Vector3d(pa[k].x, pa[k].y, 1.0);
+        const Eigen::Vector3d xn2 = K_e.inverse() * Eigen::Vector3d(pb[k].x, pb[k].y, 1.0);
+        Eigen::Matrix4d A;
+        Eigen::Matrix<double, 3, 4> P2;
+        P2 << R, t;
+        A.row(0) << -1.0, 0.0, xn1.x(), 0.0;
+        A.row(1) << 0.0, -1.0, xn1.y(), 0.0;
+        A.row(2) = xn2.x() * P2.row(2) - P2.row(0);
+        A.row(3) = xn2.y() * P2.row(2) - P2.row(1);
+        const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(A, Eigen::ComputeFullV).matrixV().col(3);
+        if (std::abs(h(3)) < 1e-12) continue;
+        const Eigen::Vector3d X = h.head<3>() / h(3);
+        const Eigen::Vector3d X2 = R * X + t;
+        if (!(X.z() > 0.0) || !(X2.z() > 0.0) || !X.allFinite()) continue;
+        const Eigen::Vector2d u1(camera.fx * X.x() / X.z() + camera.cx, camera.fy * X.y() / X.z() + camera.cy);
+        const Eigen::Vector2d u2(camera.fx * X2.x() / X2.z() + camera.cx, camera.fy * X2.y() / X2.z() + camera.cy);
+        if ((u1 - Eigen::Vector2d(pa[k].x, pa[k].y)).squaredNorm() > 4.0 || (u2 - Eigen::Vector2d(pb[k].x, pb[k].y)).squaredNorm() > 4.0) continue;
+        const double cos_parallax = X.normalized().dot((X - O2).normalized());
+        parallax.push_back(std::acos(std::clamp(cos_parallax, -1.0, 1.0)) * 180.0 / 3.14159265358979323846);
+        good.emplace_back(matches[k].first, X);
+      }
+      if (good.size() > best_good) {
+        second_good = best_good;
+        best_good = good.size();
+        best_points = good;
+        best_R = R;
+        best_t = t;
+        std::sort(parallax.begin(), parallax.end(), std::greater<>());
+        // ORB-SLAM2 (Initializer::CheckRT): the parallax of the 50th largest-parallax point.
+        best_parallax_deg = parallax.empty() ? 0.0 : parallax[std::min<std::size_t>(50, parallax.size() - 1)];
+      } else if (good.size() > second_good) {
+        second_good = good.size();
+      }
+    }
+    const std::string model = use_h ? "homography" : "essential matrix";
+    if (best_good < 50) {
+      note = model + ": " + std::to_string(best_good) + " points triangulated (< 50)";
+      return false;
+    }
+    if (use_h && static_cast<double>(second_good) > 0.75 * static_cast<double>(best_good)) {
+      note = model + ": two decompositions explain the matches alike (" + std::to_string(best_good) + " vs " + std::to_string(second_good) + ")";
+      return false;
+    }
+    if (best_parallax_deg < 1.0) {
+      note = model + ": parallax " + std::to_string(best_parallax_deg) + " deg (< 1)";
+      return false;
+    }
+    T_b_a = core::SE3(core::SO3::from_matrix(best_R), best_t);
+    points_a = std::move(best_points);
+    note = model + " (S_H / (S_H + S_F) = " + std::to_string(score_h / (score_h + score_f)) + "), " + std::to_string(best_good) +
+           " points, parallax " + std::to_string(best_parallax_deg) + " deg";
+    return true;
+  }
+
+  FrameResult initialise_monocular(FrameData f, FrameResult result, FrameTimes times, Clock::time_point start, Clock::time_point tracking_start) {
+    result.health = TrackingHealth::kLost;
+    result.tracked = false;
+    auto finish = [&]() {
+      relative.emplace_back(-1, core::SE3());
+      times.tracking_s = seconds_since(tracking_start);
+      result.times = times;
+      result.times.total_s = seconds_since(start);
+      ++frames;
+      return result;
+    };
+    if (!have_init_reference) {
+      if (f.size() > 100) {
+        init_reference = std::move(f);
+        have_init_reference = true;
+        result.note = "monocular initialisation: reference frame";
+      } else {
+        result.note = "monocular initialisation: too few features (" + std::to_string(f.size()) + ")";
+      }
+      return finish();
+    }
+    const std::vector<std::pair<int, int>> matches = match_for_initialisation(init_reference, f);
+    if (matches.size() < 100) {
+      result.note = "monocular initialisation: " + std::to_string(matches.size()) + " matches to the reference (< 100): this frame is the new reference";
+      if (f.size() > 100) init_reference = std::move(f);
+      return finish();
+    }
+    core::SE3 T_f_ref;
+    std::vector<std::pair<int, Eigen::Vector3d>> reconstructed;
+    std::string note;
+    if (!reconstruct_two_views(init_reference, f, matches, T_f_ref, reconstructed, note)) {
+      result.note = "monocular initialisation: " + note;
+      return finish();
+    }
+    // Scale: the median depth of the points in the reference is 1 (ORB-SLAM2; the scale is not
+    // observable with one camera).
+    std::vector<double> depths;
+    for (const auto& [i, X] : reconstructed) depths.push_back(X.z());
+    std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
+    const double scale = 1.0 / depths[depths.size() / 2];
+    init_reference.T_world_camera = core::SE3();
+    f.T_world_camera = core::SE3(T_f_ref.so3(), T_f_ref.translation() * scale).inverse();
+    std::fill(init_reference.map_point.begin(), init_reference.map_point.end(), -1);
+    std::fill(f.map_point.begin(), f.map_point.end(), -1);
+    std::unordered_map<int, int> match_of;
+    for (const auto& [i, j] : matches) match_of[i] = j;
+    FrameData reference = init_reference;
+    insert_keyframe(reference, true);
+    insert_keyframe(f);
+    KeyFrame& k0 = keyframes[keyframes.size() - 2];
+    KeyFrame& k1 = keyframes.back();
+    for (const auto& [i, X] : reconstructed) {
+      const int j = match_of[i];
+      MapPoint mp;
+      mp.p_world = X * scale;
+      mp.descriptor = k0.frame.descriptors.row(i).clone();
+      mp.first_keyframe = mp.reference_keyframe = k0.id;
+      mp.observations[k0.id] = i;
+      mp.observations[k1.id] = j;
+      points.push_back(std::move(mp));
+      const int id = static_cast<int>(points.size()) - 1;
+      k0.frame.map_point[static_cast<std::size_t>(i)] = id;
+      k1.frame.map_point[static_cast<std::size_t>(j)] = id;
+      f.map_point[static_cast<std::size_t>(j)] = id;
+      update_normal_and_depth(points.back());
+      update_descriptor(points.back());
+      ++summary->map_points;
+    }
+    if (options.vocabulary) {
+      for (KeyFrame* kf : {&k0, &k1}) {
+        kf->bow = options.vocabulary->transform(kf->frame.descriptors);
+        database.add(static_cast<std::uint32_t>(kf->id), kf->bow);
+      }
+    }
+    const auto mapping_start = Clock::now();
+    bundle_adjustment({k0.id, k1.id}, 20, 0);  // ORB-SLAM2: a global BA of the two keyframes
+    times.mapping_s = seconds_since(mapping_start);
+    f.T_world_camera = keyframes.back().frame.T_world_camera;
+    for (std::size_t i = 0; i < f.size(); ++i) f.map_point[i] = keyframes.back().frame.map_point[i];
+    // The reference frame's trajectory entry becomes keyframe 0's.
+    relative[init_reference.index] = {k0.id, core::SE3()};
+    result.tracked = true;
+    result.health = TrackingHealth::kOk;
+    result.keyframe = true;
+    result.inliers = static_cast<int>(reconstructed.size());
+    result.inlier_ratio = static_cast<double>(reconstructed.size()) / static_cast<double>(matches.size());
+    result.note = "monocular initialisation with frame " + std::to_string(init_reference.index) + ": " + note + "; scale unobservable (median depth set to 1)";
+    reference_keyframe = k1.id;
+    last = std::move(f);
+    have_last = true;
+    have_velocity = false;
+    relative.emplace_back(reference_keyframe, core::SE3());
+    result.T_world_camera = last.T_world_camera;
+    result.segment = segment;
+    times.tracking_s = seconds_since(tracking_start) - times.mapping_s;
+    result.times = times;
+    result.times.total_s = seconds_since(start);
+    ++frames;
+    return result;
+  }
+
   // --- One frame ------------------------------------------------------------------------------
 
   FrameResult track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, FrameTimes times,
@@ -1237,6 +1540,7 @@ struct VisualSlam::Impl {
     const auto tracking_start = Clock::now();
     FrameData f = make_frame(time, left, stereo);
     bool mapped = false;
+    if (keyframes.empty() && kind == io::SequenceKind::kMonocular) return initialise_monocular(std::move(f), result, times, start, tracking_start);
     if (keyframes.empty()) {
       if (result.stereo_points < options.min_new_points) {
         result.note = "too few stereo/depth points to start a map (" + std::to_string(result.stereo_points) + ")";
@@ -1270,7 +1574,9 @@ struct VisualSlam::Impl {
       const bool was_lost = lost;
       if (have_last && have_velocity && !lost) {
         // ORB-SLAM2 TrackWithMotionModel: th 7 for stereo, 15 for RGB-D.
-        const double radius = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px : options.motion_search_radius_rgbd_px;
+        const double radius = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px
+                              : kind == io::SequenceKind::kRgbd ? options.motion_search_radius_rgbd_px
+                                                                : options.motion_search_radius_mono_px;
         matches = search_from_last(f, last, radius);
         if (matches < options.min_motion_matches) {
           std::fill(f.map_point.begin(), f.map_point.end(), -1);
@@ -1354,7 +1660,7 @@ struct VisualSlam::Impl {
         f.T_world_camera = have_velocity ? last.T_world_camera * velocity : last.T_world_camera;
         lost = true;
         ++lost_frames;
-        if (options.new_map_after_lost_frames > 0 && lost_frames >= options.new_map_after_lost_frames &&
+        if (options.new_map_after_lost_frames > 0 && kind != io::SequenceKind::kMonocular && lost_frames >= options.new_map_after_lost_frames &&
             result.stereo_points >= options.min_new_points) {
           // The Atlas: a new map segment from this frame, where the motion model put it.
           segment = static_cast<int>(segment_parent.size());
@@ -1393,7 +1699,11 @@ struct VisualSlam::Impl {
           const auto mapping_start = Clock::now();
           insert_keyframe(f);
           cull_points();
-          if (options.triangulation_keyframes > 0) triangulate_new_points(static_cast<int>(keyframes.size()) - 1);
+          if (kind == io::SequenceKind::kMonocular) {
+            triangulate_new_points(static_cast<int>(keyframes.size()) - 1, 20);  // the only source of points (ORB-SLAM2: 20)
+          } else if (options.triangulation_keyframes > 0) {
+            triangulate_new_points(static_cast<int>(keyframes.size()) - 1, options.triangulation_keyframes);
+          }
           if (options.local_ba) local_bundle_adjustment();
           detect_and_close_loop(result);
           times.mapping_s = seconds_since(mapping_start);
@@ -1475,7 +1785,6 @@ VisualSlam::VisualSlam(const io::CameraCalibration& camera, io::SequenceKind kin
     : options_(options) {
   if (const std::string p = options.problems(); !p.empty()) throw std::invalid_argument("visual SLAM options: " + p);
   if (const std::string p = camera.problems(); !p.empty()) throw std::invalid_argument("camera calibration: " + p);
-  if (kind == io::SequenceKind::kMonocular) throw std::invalid_argument("monocular visual SLAM is not implemented yet (stereo and RGB-D are)");
   if (kind == io::SequenceKind::kStereo && !(camera.baseline_m > 0.0)) throw std::invalid_argument("stereo needs a positive baseline");
   if (kind == io::SequenceKind::kRgbd && (!(camera.depth_units_per_m > 0.0) || !(camera.virtual_baseline_m > 0.0))) {
     throw std::invalid_argument("RGB-D needs depth_units_per_m and virtual_baseline_m > 0");
@@ -1533,6 +1842,23 @@ FrameResult VisualSlam::add_rgbd(core::Timestamp time, const cv::Mat& gray, cons
   const vision::StereoMatches stereo = vision::depth_from_rgbd(f.keypoints, undistorted, depth, impl_->camera);
   times.stereo_s = seconds_since(stereo_start);
   FrameResult r = impl_->track(time, f, stereo, times, start);
+  count(summary_, r);
+  return r;
+}
+
+FrameResult VisualSlam::add_monocular(core::Timestamp time, const cv::Mat& gray) {
+  if (impl_->kind != io::SequenceKind::kMonocular) throw std::logic_error("add_monocular on a stereo or RGB-D VisualSlam");
+  check_gray(gray, "the image");
+  impl_->set_image_size(gray.cols, gray.rows);
+  if (gray.cols != impl_->width || gray.rows != impl_->height) throw std::invalid_argument("the image size changed within the sequence");
+  const auto start = Clock::now();
+  FrameTimes times;
+  vision::Features f = (impl_->keyframes.empty() ? impl_->orb_initialisation : impl_->orb).extract(gray);
+  times.features_s = seconds_since(start);
+  vision::StereoMatches none;
+  none.u_right.assign(f.keypoints.size(), -1.0);
+  none.depth_m.assign(f.keypoints.size(), -1.0);
+  FrameResult r = impl_->track(time, f, none, times, start);
   count(summary_, r);
   return r;
 }

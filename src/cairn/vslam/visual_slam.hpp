@@ -50,6 +50,7 @@ struct VisualSlamOptions {
   /// (2026-11-25, docs/vslam.md): the wider radius let in wrong matches that held the keyframe
   /// rule back until the map no longer covered the view.
   double motion_search_radius_rgbd_px = 7.0;
+  double motion_search_radius_mono_px = 15.0;  ///< ORB-SLAM2's th for monocular
   double local_search_radius_px = 1.0;   ///< SearchLocalPoints' th (x 2.5 or 4 by viewing angle, x level scale)
   int max_descriptor_distance = 100;     ///< ORB-SLAM's TH_HIGH
   double local_match_ratio = 0.8;        ///< best / second best at the same level
@@ -170,6 +171,11 @@ class VisualSlam {
   FrameResult add_stereo(core::Timestamp time, const cv::Mat& left, const cv::Mat& right);
   /// A grey image and its registered 16-bit depth image.
   FrameResult add_rgbd(core::Timestamp time, const cv::Mat& gray, const cv::Mat& depth);
+  /// One grey image (monocular): the first frames initialise the map from two views (ORB-SLAM2's
+  /// homography / essential-matrix selection); the scale is not observable and is set so that
+  /// the initial scene's median depth is 1. No loop closure (needs Sim(3)) and no new map
+  /// segments (need a new initialisation) in this version.
+  FrameResult add_monocular(core::Timestamp time, const cv::Mat& gray);
 
   /// Every frame's pose, through its reference keyframe at the keyframe's current (bundle-
   /// adjusted) pose, as ORB-SLAM2 writes its trajectory.
