@@ -1,0 +1,271 @@
+// Monocular two-view initialisation after ORB-SLAM2 (Initializer.cc; Mur-Artal et al., T-RO 2015, Sec. IV).
+// The state and the declarations: slam_state.hpp.
+
+#include "cairn/vslam/slam_state.hpp"
+
+namespace cairn::vslam {
+
+// Level-0 keypoints of the reference matched to the frame within 100 px (ORB-SLAM2
+// SearchForInitialization: TH_LOW, ratio 0.9, one-to-one).
+std::vector<std::pair<int, int>> VisualSlam::Impl::match_for_initialisation(const FrameData& a, const FrameData& b) const {
+  std::vector<int> owner(b.size(), -1), owner_distance(b.size(), 256);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a.keypoints[i].octave > 0) continue;
+    int best = 256, second = 256, best_j = -1;
+    for (const int j : features_in_area(b, a.undistorted[i].x(), a.undistorted[i].y(), 100.0, 0, 0)) {
+      const int d = vision::descriptor_distance(a.descriptors.ptr(static_cast<int>(i)), b.descriptors.ptr(j));
+      if (d < best) {
+        second = best;
+        best = d;
+        best_j = j;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_j < 0 || best > options.max_descriptor_distance / 2 || best >= 0.9 * second) continue;
+    if (best >= owner_distance[static_cast<std::size_t>(best_j)]) continue;
+    owner[static_cast<std::size_t>(best_j)] = static_cast<int>(i);
+    owner_distance[static_cast<std::size_t>(best_j)] = best;
+  }
+  std::vector<std::pair<int, int>> out;
+  for (std::size_t j = 0; j < b.size(); ++j) {
+    if (owner[j] >= 0) out.emplace_back(owner[j], static_cast<int>(j));
+  }
+  return out;
+}
+
+// Two-view reconstruction: the homography and the essential matrix (RANSAC, OpenCV), scored
+// as ORB-SLAM2 scores them (sum of chi^2 margins below 5.991 of the symmetric transfer errors
+// for H, of the distances to the epipolar lines below 3.841 for F); H when
+// S_H / (S_H + S_F) > 0.40, else E; the pose from cv::recoverPose / the homography's
+// decompositions (the one with most points in front); points triangulated, kept in front of
+// both cameras within 2 px; success with >= 50 points seen at >= 1 degree of parallax.
+// `note` says which model and why it failed.
+bool VisualSlam::Impl::reconstruct_two_views(const FrameData& a, const FrameData& b, const std::vector<std::pair<int, int>>& matches, core::SE3& T_b_a,
+                           std::vector<std::pair<int, Eigen::Vector3d>>& points_a, std::string& note) const {
+  std::vector<cv::Point2d> pa, pb;
+  for (const auto& [i, j] : matches) {
+    pa.emplace_back(a.undistorted[static_cast<std::size_t>(i)].x(), a.undistorted[static_cast<std::size_t>(i)].y());
+    pb.emplace_back(b.undistorted[static_cast<std::size_t>(j)].x(), b.undistorted[static_cast<std::size_t>(j)].y());
+  }
+  const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  cv::Mat H, E, mask_h, mask_e;
+  try {
+    H = cv::findHomography(pa, pb, cv::RANSAC, 2.0, mask_h, 200, 0.99);
+    E = cv::findEssentialMat(pa, pb, K, cv::RANSAC, 0.999, 1.0, mask_e);
+  } catch (const cv::Exception& e) {
+    note = std::string("two-view models failed: ") + e.what();
+    return false;
+  }
+  if (H.empty() || E.empty() || E.rows != 3) {
+    note = "no homography or essential matrix";
+    return false;
+  }
+  const Eigen::Matrix3d K_e = (Eigen::Matrix3d() << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).finished();
+  Eigen::Matrix3d He, Ee;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      He(r, c) = H.at<double>(r, c);
+      Ee(r, c) = E.at<double>(r, c);
+    }
+  }
+  const Eigen::Matrix3d H_inv = He.inverse();
+  const Eigen::Matrix3d F = K_e.inverse().transpose() * Ee * K_e.inverse();
+  double score_h = 0.0, score_f = 0.0;
+  for (std::size_t k = 0; k < pa.size(); ++k) {
+    const Eigen::Vector3d x1(pa[k].x, pa[k].y, 1.0), x2(pb[k].x, pb[k].y, 1.0);
+    const Eigen::Vector3d h21 = He * x1, h12 = H_inv * x2;
+    const double e2 = (h21.head<2>() / h21.z() - x2.head<2>()).squaredNorm(), e1 = (h12.head<2>() / h12.z() - x1.head<2>()).squaredNorm();
+    if (e2 < 5.991) score_h += 5.991 - e2;
+    if (e1 < 5.991) score_h += 5.991 - e1;
+    const Eigen::Vector3d l2 = F * x1, l1 = F.transpose() * x2;
+    const double d2 = std::pow(l2.dot(x2), 2) / (l2.x() * l2.x() + l2.y() * l2.y());
+    const double d1 = std::pow(l1.dot(x1), 2) / (l1.x() * l1.x() + l1.y() * l1.y());
+    if (d2 < 3.841) score_f += 5.991 - d2;
+    if (d1 < 3.841) score_f += 5.991 - d1;
+  }
+  const bool use_h = score_h / (score_h + score_f) > 0.40;
+  std::vector<std::pair<cv::Matx33d, cv::Vec3d>> poses;
+  if (use_h) {
+    std::vector<cv::Mat> Rs, ts, normals;
+    cv::decomposeHomographyMat(H, K, Rs, ts, normals);
+    for (std::size_t k = 0; k < Rs.size(); ++k) poses.emplace_back(cv::Matx33d(Rs[k]), cv::Vec3d(ts[k]));
+  } else {
+    cv::Mat R, t;
+    cv::recoverPose(E, pa, pb, K, R, t, mask_e);
+    poses.emplace_back(cv::Matx33d(R), cv::Vec3d(t));
+  }
+  // Triangulate with every pose; keep the one with most good points.
+  std::size_t best_good = 0, second_good = 0;
+  std::vector<std::pair<int, Eigen::Vector3d>> best_points;
+  Eigen::Matrix3d best_R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d best_t = Eigen::Vector3d::Zero();
+  double best_parallax_deg = 0.0;
+  for (const auto& [Rc, tc] : poses) {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t(tc[0], tc[1], tc[2]);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) R(r, c) = Rc(r, c);
+    }
+    if (t.norm() < 1e-12) continue;
+    t.normalize();
+    const Eigen::Vector3d O2 = -R.transpose() * t;
+    std::vector<std::pair<int, Eigen::Vector3d>> good;
+    std::vector<double> parallax;
+    for (std::size_t k = 0; k < pa.size(); ++k) {
+      const Eigen::Vector3d xn1 = K_e.inverse() * Eigen::Vector3d(pa[k].x, pa[k].y, 1.0);
+      const Eigen::Vector3d xn2 = K_e.inverse() * Eigen::Vector3d(pb[k].x, pb[k].y, 1.0);
+      Eigen::Matrix4d A;
+      Eigen::Matrix<double, 3, 4> P2;
+      P2 << R, t;
+      A.row(0) << -1.0, 0.0, xn1.x(), 0.0;
+      A.row(1) << 0.0, -1.0, xn1.y(), 0.0;
+      A.row(2) = xn2.x() * P2.row(2) - P2.row(0);
+      A.row(3) = xn2.y() * P2.row(2) - P2.row(1);
+      const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(A, Eigen::ComputeFullV).matrixV().col(3);
+      if (std::abs(h(3)) < 1e-12) continue;
+      const Eigen::Vector3d X = h.head<3>() / h(3);
+      const Eigen::Vector3d X2 = R * X + t;
+      if (!(X.z() > 0.0) || !(X2.z() > 0.0) || !X.allFinite()) continue;
+      const Eigen::Vector2d u1(camera.fx * X.x() / X.z() + camera.cx, camera.fy * X.y() / X.z() + camera.cy);
+      const Eigen::Vector2d u2(camera.fx * X2.x() / X2.z() + camera.cx, camera.fy * X2.y() / X2.z() + camera.cy);
+      if ((u1 - Eigen::Vector2d(pa[k].x, pa[k].y)).squaredNorm() > 4.0 || (u2 - Eigen::Vector2d(pb[k].x, pb[k].y)).squaredNorm() > 4.0) continue;
+      const double cos_parallax = X.normalized().dot((X - O2).normalized());
+      parallax.push_back(std::acos(std::clamp(cos_parallax, -1.0, 1.0)) * 180.0 / 3.14159265358979323846);
+      good.emplace_back(matches[k].first, X);
+    }
+    if (good.size() > best_good) {
+      second_good = best_good;
+      best_good = good.size();
+      best_points = good;
+      best_R = R;
+      best_t = t;
+      std::sort(parallax.begin(), parallax.end(), std::greater<>());
+      // ORB-SLAM2 (Initializer::CheckRT): the parallax of the 50th largest-parallax point.
+      best_parallax_deg = parallax.empty() ? 0.0 : parallax[std::min<std::size_t>(50, parallax.size() - 1)];
+    } else if (good.size() > second_good) {
+      second_good = good.size();
+    }
+  }
+  const std::string model = use_h ? "homography" : "essential matrix";
+  if (best_good < 50) {
+    note = model + ": " + std::to_string(best_good) + " points triangulated (< 50)";
+    return false;
+  }
+  if (use_h && static_cast<double>(second_good) > 0.75 * static_cast<double>(best_good)) {
+    note = model + ": two decompositions explain the matches alike (" + std::to_string(best_good) + " vs " + std::to_string(second_good) + ")";
+    return false;
+  }
+  if (best_parallax_deg < 1.0) {
+    note = model + ": parallax " + std::to_string(best_parallax_deg) + " deg (< 1)";
+    return false;
+  }
+  T_b_a = core::SE3(core::SO3::from_matrix(best_R), best_t);
+  points_a = std::move(best_points);
+  note = model + " (S_H / (S_H + S_F) = " + std::to_string(score_h / (score_h + score_f)) + "), " + std::to_string(best_good) +
+         " points, parallax " + std::to_string(best_parallax_deg) + " deg";
+  return true;
+}
+
+FrameResult VisualSlam::Impl::initialise_monocular(FrameData f, FrameResult result, FrameTimes times, Clock::time_point start, Clock::time_point tracking_start) {
+  result.health = TrackingHealth::kLost;
+  result.tracked = false;
+  auto finish = [&]() {
+    relative.emplace_back(-1, core::SE3());
+    times.tracking_s = seconds_since(tracking_start);
+    result.times = times;
+    result.times.total_s = seconds_since(start);
+    ++frames;
+    return result;
+  };
+  if (!have_init_reference) {
+    if (f.size() > 100) {
+      init_reference = std::move(f);
+      have_init_reference = true;
+      result.note = "monocular initialisation: reference frame";
+    } else {
+      result.note = "monocular initialisation: too few features (" + std::to_string(f.size()) + ")";
+    }
+    return finish();
+  }
+  const std::vector<std::pair<int, int>> matches = match_for_initialisation(init_reference, f);
+  if (matches.size() < 100) {
+    result.note = "monocular initialisation: " + std::to_string(matches.size()) + " matches to the reference (< 100): this frame is the new reference";
+    if (f.size() > 100) init_reference = std::move(f);
+    return finish();
+  }
+  core::SE3 T_f_ref;
+  std::vector<std::pair<int, Eigen::Vector3d>> reconstructed;
+  std::string note;
+  if (!reconstruct_two_views(init_reference, f, matches, T_f_ref, reconstructed, note)) {
+    result.note = "monocular initialisation: " + note;
+    return finish();
+  }
+  // Scale: the median depth of the points in the reference is 1 (ORB-SLAM2; the scale is not
+  // observable with one camera).
+  std::vector<double> depths;
+  for (const auto& [i, X] : reconstructed) depths.push_back(X.z());
+  std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
+  const double scale = 1.0 / depths[depths.size() / 2];
+  init_reference.T_world_camera = core::SE3();
+  f.T_world_camera = core::SE3(T_f_ref.so3(), T_f_ref.translation() * scale).inverse();
+  std::fill(init_reference.map_point.begin(), init_reference.map_point.end(), -1);
+  std::fill(f.map_point.begin(), f.map_point.end(), -1);
+  std::unordered_map<int, int> match_of;
+  for (const auto& [i, j] : matches) match_of[i] = j;
+  FrameData reference = init_reference;
+  insert_keyframe(reference, true);
+  insert_keyframe(f);
+  KeyFrame& k0 = keyframes[keyframes.size() - 2];
+  KeyFrame& k1 = keyframes.back();
+  for (const auto& [i, X] : reconstructed) {
+    const int j = match_of[i];
+    MapPoint mp;
+    mp.p_world = X * scale;
+    mp.descriptor = k0.frame.descriptors.row(i).clone();
+    mp.first_keyframe = mp.reference_keyframe = k0.id;
+    mp.observations[k0.id] = i;
+    mp.observations[k1.id] = j;
+    points.push_back(std::move(mp));
+    const int id = static_cast<int>(points.size()) - 1;
+    k0.frame.map_point[static_cast<std::size_t>(i)] = id;
+    k1.frame.map_point[static_cast<std::size_t>(j)] = id;
+    f.map_point[static_cast<std::size_t>(j)] = id;
+    update_normal_and_depth(points.back());
+    update_descriptor(points.back());
+    ++summary->map_points;
+  }
+  if (options.vocabulary) {
+    for (KeyFrame* kf : {&k0, &k1}) {
+      kf->bow = options.vocabulary->transform(kf->frame.descriptors);
+      database.add(static_cast<std::uint32_t>(kf->id), kf->bow);
+    }
+  }
+  const auto mapping_start = Clock::now();
+  bundle_adjustment({k0.id, k1.id}, 20, 0);  // ORB-SLAM2: a global BA of the two keyframes
+  times.mapping_s = seconds_since(mapping_start);
+  f.T_world_camera = keyframes.back().frame.T_world_camera;
+  for (std::size_t i = 0; i < f.size(); ++i) f.map_point[i] = keyframes.back().frame.map_point[i];
+  // The reference frame's trajectory entry becomes keyframe 0's.
+  relative[init_reference.index] = {k0.id, core::SE3()};
+  result.tracked = true;
+  result.health = TrackingHealth::kOk;
+  result.keyframe = true;
+  result.inliers = static_cast<int>(reconstructed.size());
+  result.inlier_ratio = static_cast<double>(reconstructed.size()) / static_cast<double>(matches.size());
+  result.note = "monocular initialisation with frame " + std::to_string(init_reference.index) + ": " + note + "; scale unobservable (median depth set to 1)";
+  reference_keyframe = k1.id;
+  last = std::move(f);
+  have_last = true;
+  have_velocity = false;
+  relative.emplace_back(reference_keyframe, core::SE3());
+  result.T_world_camera = last.T_world_camera;
+  result.segment = segment;
+  times.tracking_s = seconds_since(tracking_start) - times.mapping_s;
+  result.times = times;
+  result.times.total_s = seconds_since(start);
+  ++frames;
+  return result;
+}
+
+}  // namespace cairn::vslam

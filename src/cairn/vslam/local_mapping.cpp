@@ -1,0 +1,378 @@
+// Local mapping after ORB-SLAM2 (LocalMapping.cc, Optimizer::LocalBundleAdjustment): keyframe decision and insertion, triangulation between keyframes, point culling, covisibility, local and global bundle adjustment on the least-squares engine.
+// The state and the declarations: slam_state.hpp.
+
+#include "cairn/vslam/slam_state.hpp"
+
+namespace cairn::vslam {
+
+bool VisualSlam::Impl::need_keyframe(const FrameData& f, int inliers) const {
+  if (reference_keyframe < 0) return true;
+  const KeyFrame& ref = keyframes[static_cast<std::size_t>(reference_keyframe)];
+  // The reference keyframe's points seen by enough keyframes (a stereo observation counts 2).
+  const int min_obs = keyframes.size() <= 2 ? 2 : 3;
+  int reference_points = 0;
+  for (const int id : ref.frame.map_point) {
+    if (id >= 0 && !points[static_cast<std::size_t>(id)].bad && observation_weight(points[static_cast<std::size_t>(id)]) >= min_obs) ++reference_points;
+  }
+  int tracked_close = 0, untracked_close = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (f.depth[i] > 0 && f.depth[i] < close_depth_m) {
+      if (f.map_point[i] >= 0) ++tracked_close;
+      else ++untracked_close;
+    }
+  }
+  const bool need_close = tracked_close < options.keyframe_close_tracked && untracked_close > options.keyframe_close_untracked;
+  const bool c1 = static_cast<int>(f.index) - last_keyframe_frame >= options.keyframe_max_frames;
+  const double ratio = kind == io::SequenceKind::kMonocular ? 0.9 : options.keyframe_tracked_ratio;  // ORB-SLAM2 thRefRatio
+  const bool c2 = (inliers < ratio * reference_points || need_close) && inliers > options.lost_below_inliers;
+  return c2 || (c1 && inliers > options.lost_below_inliers);
+}
+
+void VisualSlam::Impl::insert_keyframe(FrameData& f, bool starts_segment) {
+  KeyFrame kf;
+  kf.id = static_cast<int>(keyframes.size());
+  kf.frame = f;
+  kf.segment = segment;
+  kf.starts_segment = starts_segment || kf.id == 0;
+  // New points from stereo/depth, nearest first: every close one, at least min_new_points.
+  std::vector<std::pair<double, std::size_t>> by_depth;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (f.depth[i] > 0) by_depth.emplace_back(f.depth[i], i);
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  keyframes.push_back(std::move(kf));
+  KeyFrame& k = keyframes.back();
+  int created_or_seen = 0;
+  for (const auto& [z, i] : by_depth) {
+    if (k.frame.map_point[i] < 0) {
+      MapPoint mp;
+      mp.p_world = unproject(k.frame, i);
+      mp.descriptor = k.frame.descriptors.row(static_cast<int>(i)).clone();
+      mp.first_keyframe = mp.reference_keyframe = k.id;
+      mp.observations[k.id] = static_cast<int>(i);
+      points.push_back(std::move(mp));
+      const int id = static_cast<int>(points.size()) - 1;
+      k.frame.map_point[i] = id;
+      f.map_point[i] = id;
+      update_normal_and_depth(points.back());
+      recent_points.push_back(id);
+      ++summary->map_points;
+    }
+    ++created_or_seen;
+    // The first keyframe of a map takes every stereo point (ORB-SLAM2 StereoInitialization).
+    if (!k.starts_segment && z > close_depth_m && created_or_seen > options.min_new_points) break;
+  }
+  // Observations of the points the frame tracked.
+  for (std::size_t i = 0; i < k.frame.size(); ++i) {
+    const int id = k.frame.map_point[i];
+    if (id < 0) continue;
+    MapPoint& mp = points[static_cast<std::size_t>(id)];
+    if (mp.bad) {
+      k.frame.map_point[i] = -1;
+      continue;
+    }
+    if (!mp.observations.count(k.id)) {
+      mp.observations[k.id] = static_cast<int>(i);
+      update_normal_and_depth(mp);
+      update_descriptor(mp);
+    }
+  }
+  reference_keyframe = k.id;
+  last_keyframe_frame = static_cast<int>(f.index);
+  ++summary->keyframes;
+}
+
+// ORB-SLAM2 LocalMapping::CreateNewMapPoints: the newest keyframe's unmatched keypoints are
+// matched to those of its 10 most covisible keyframes (descriptor within TH_LOW, the best one
+// within 3.84 sigma^2 of the epipolar line; ORB-SLAM2 restricts the search to bag-of-words
+// nodes, here every unmatched keypoint is compared) and triangulated (linear, Hartley &
+// Zisserman 12.2) when the rays' parallax beats the stereo parallax, else taken from the view
+// with the better stereo depth; kept when in front of both cameras, within the chi^2
+// thresholds in both, and at consistent scales (distance ratio within 1.5 x scale factor of
+// the octave ratio). Returns the points created.
+int VisualSlam::Impl::triangulate_new_points(int current, int count) {
+  std::vector<std::pair<int, int>> neighbours = covisible(current, 1);
+  if (neighbours.size() > static_cast<std::size_t>(count)) neighbours.resize(static_cast<std::size_t>(count));
+  const double stereo_baseline = bf / camera.fx;
+  const double ratio_factor = 1.5 * options.orb.scale_factor;
+  const Eigen::Matrix3d K = (Eigen::Matrix3d() << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).finished();
+  const Eigen::Matrix3d K_inv = K.inverse();
+  int created = 0;
+  for (const auto& [shared, k2_id] : neighbours) {
+    const KeyFrame& k2 = keyframes[static_cast<std::size_t>(k2_id)];
+    const FrameData& f1 = keyframes[static_cast<std::size_t>(current)].frame;
+    const FrameData& f2 = k2.frame;
+    const Eigen::Vector3d O1 = f1.T_world_camera.translation(), O2 = f2.T_world_camera.translation();
+    const core::SE3 T1_cw = f1.T_world_camera.inverse(), T2_cw = f2.T_world_camera.inverse();
+    if (kind == io::SequenceKind::kMonocular) {
+      // ORB-SLAM2: baseline / the neighbour's median scene depth at least 0.01.
+      std::vector<double> depths;
+      for (const int id : f2.map_point) {
+        if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) depths.push_back((T2_cw * points[static_cast<std::size_t>(id)].p_world).z());
+      }
+      if (depths.empty()) continue;
+      std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
+      if ((O2 - O1).norm() / depths[depths.size() / 2] < 0.01) continue;
+    } else if ((O2 - O1).norm() < stereo_baseline) {
+      continue;  // ORB-SLAM2: no triangulation below the stereo baseline
+    }
+    // The epipole of camera 1 in image 2 (monocular matches next to it are ill-conditioned).
+    const Eigen::Vector3d c1_in_2 = T2_cw * O1;
+    const bool epipole_valid = c1_in_2.z() > 1e-9;
+    const double ex = epipole_valid ? camera.fx * c1_in_2.x() / c1_in_2.z() + camera.cx : 0.0;
+    const double ey = epipole_valid ? camera.fy * c1_in_2.y() / c1_in_2.z() + camera.cy : 0.0;
+    // Fundamental matrix of x1^T F12 x2 = 0: F12 = K^-T [t12]x R12 K^-1, T12 = T1_cw T2_wc.
+    const core::SE3 T12 = T1_cw * f2.T_world_camera;
+    const Eigen::Vector3d t = T12.translation();
+    Eigen::Matrix3d tx;
+    tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+    const Eigen::Matrix3d F12 = K_inv.transpose() * tx * T12.rotation_matrix() * K_inv;
+    std::vector<int> taken_by(f2.size(), -1);
+    std::vector<int> taken_distance(f2.size(), 256);
+    for (std::size_t i1 = 0; i1 < f1.size(); ++i1) {
+      if (f1.map_point[i1] >= 0) continue;
+      const Eigen::Vector3d x1(f1.undistorted[i1].x(), f1.undistorted[i1].y(), 1.0);
+      const Eigen::Vector3d line = F12.transpose() * x1;  // epipolar line in image 2: x2^T (F12^T x1) = 0
+      const double line_norm2 = line.x() * line.x() + line.y() * line.y();
+      if (!(line_norm2 > 0.0)) continue;
+      int best = 256, second = 256, best_i2 = -1;
+      for (std::size_t i2 = 0; i2 < f2.size(); ++i2) {
+        if (f2.map_point[i2] >= 0) continue;
+        const int level2 = f2.keypoints[i2].octave;
+        if (std::abs(level2 - f1.keypoints[i1].octave) > 1) continue;
+        if (epipole_valid && f1.depth[i1] <= 0 && f2.depth[i2] <= 0) {
+          const double dx = ex - f2.undistorted[i2].x(), dy = ey - f2.undistorted[i2].y();
+          if (dx * dx + dy * dy < 100.0 * scales[static_cast<std::size_t>(level2)]) continue;
+        }
+        const double d = line.x() * f2.undistorted[i2].x() + line.y() * f2.undistorted[i2].y() + line.z();
+        if (d * d / line_norm2 >= 3.84 * scales[static_cast<std::size_t>(level2)] * scales[static_cast<std::size_t>(level2)]) continue;
+        const int dist = vision::descriptor_distance(f1.descriptors.ptr(static_cast<int>(i1)), f2.descriptors.ptr(static_cast<int>(i2)));
+        if (dist < best) {
+          second = best;
+          best = dist;
+          best_i2 = static_cast<int>(i2);
+        } else if (dist < second) {
+          second = dist;
+        }
+      }
+      // TH_LOW, and a ratio test along the epipolar band: without ORB-SLAM2's bag-of-words
+      // nodes the band holds many look-alikes (repeated texture, forward motion).
+      if (best_i2 < 0 || best > options.max_descriptor_distance / 2 || best > options.triangulation_match_ratio * second) continue;
+      if (best >= taken_distance[static_cast<std::size_t>(best_i2)]) continue;
+      taken_by[static_cast<std::size_t>(best_i2)] = static_cast<int>(i1);
+      taken_distance[static_cast<std::size_t>(best_i2)] = best;
+    }
+    for (std::size_t i2 = 0; i2 < f2.size(); ++i2) {
+      const int signed_i1 = taken_by[i2];
+      if (signed_i1 < 0) continue;
+      const auto i1 = static_cast<std::size_t>(signed_i1);
+      const Eigen::Vector3d xn1 = K_inv * Eigen::Vector3d(f1.undistorted[i1].x(), f1.undistorted[i1].y(), 1.0);
+      const Eigen::Vector3d xn2 = K_inv * Eigen::Vector3d(f2.undistorted[i2].x(), f2.undistorted[i2].y(), 1.0);
+      const Eigen::Vector3d ray1 = f1.T_world_camera.rotation_matrix() * xn1, ray2 = f2.T_world_camera.rotation_matrix() * xn2;
+      const double cos_rays = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
+      const bool stereo1 = f1.depth[i1] > 0, stereo2 = f2.depth[i2] > 0;
+      const double cos_stereo1 = stereo1 ? std::cos(2.0 * std::atan2(stereo_baseline / 2.0, f1.depth[i1])) : 2.0;
+      const double cos_stereo2 = stereo2 ? std::cos(2.0 * std::atan2(stereo_baseline / 2.0, f2.depth[i2])) : 2.0;
+      const double cos_stereo = std::min(cos_stereo1, cos_stereo2);
+      Eigen::Vector3d X;
+      if (cos_rays < cos_stereo && cos_rays > 0.0 && (stereo1 || stereo2 || cos_rays < 0.9998)) {
+        // Linear triangulation: A X = 0 from x cross (P X) = 0 in both views.
+        const Eigen::Matrix<double, 3, 4> P1 = T1_cw.matrix3x4(), P2 = T2_cw.matrix3x4();
+        Eigen::Matrix4d A;
+        A.row(0) = xn1.x() * P1.row(2) - P1.row(0);
+        A.row(1) = xn1.y() * P1.row(2) - P1.row(1);
+        A.row(2) = xn2.x() * P2.row(2) - P2.row(0);
+        A.row(3) = xn2.y() * P2.row(2) - P2.row(1);
+        const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(A, Eigen::ComputeFullV).matrixV().col(3);
+        if (std::abs(h(3)) < 1e-12) continue;
+        X = h.head<3>() / h(3);
+      } else if (stereo1 && cos_stereo1 < cos_stereo2) {
+        X = unproject(f1, i1);
+      } else if (stereo2 && cos_stereo2 < cos_stereo1) {
+        X = unproject(f2, i2);
+      } else {
+        continue;  // too little parallax either way
+      }
+      if (!((T1_cw * X).z() > 0.0) || !((T2_cw * X).z() > 0.0)) continue;
+      if (chi2(f1, i1, T1_cw, X) > (stereo1 ? options.chi2_stereo : options.chi2_mono)) continue;
+      if (chi2(f2, i2, T2_cw, X) > (stereo2 ? options.chi2_stereo : options.chi2_mono)) continue;
+      const double dist1 = (X - O1).norm(), dist2 = (X - O2).norm();
+      if (dist1 <= 0.0 || dist2 <= 0.0) continue;
+      const double ratio_dist = dist2 / dist1;
+      const double ratio_octave = scales[static_cast<std::size_t>(f1.keypoints[i1].octave)] / scales[static_cast<std::size_t>(f2.keypoints[i2].octave)];
+      if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor) continue;
+      MapPoint mp;
+      mp.p_world = X;
+      mp.descriptor = f1.descriptors.row(static_cast<int>(i1)).clone();
+      mp.first_keyframe = mp.reference_keyframe = current;
+      mp.observations[current] = static_cast<int>(i1);
+      mp.observations[k2_id] = static_cast<int>(i2);
+      points.push_back(std::move(mp));
+      const int id = static_cast<int>(points.size()) - 1;
+      keyframes[static_cast<std::size_t>(current)].frame.map_point[i1] = id;
+      keyframes[static_cast<std::size_t>(k2_id)].frame.map_point[i2] = id;
+      update_normal_and_depth(points.back());
+      update_descriptor(points.back());
+      recent_points.push_back(id);
+      ++summary->map_points;
+      ++created;
+    }
+  }
+  return created;
+}
+
+// ORB-SLAM2 LocalMapping::MapPointCulling (stereo: 3 observations, a stereo one counting 2).
+void VisualSlam::Impl::cull_points() {
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  std::vector<int> keep;
+  for (const int id : recent_points) {
+    MapPoint& mp = points[static_cast<std::size_t>(id)];
+    if (mp.bad) continue;
+    if (static_cast<double>(mp.found) / mp.visible < 0.25) {
+      set_bad(id);
+    } else if (current - mp.first_keyframe >= 2 && observation_weight(mp) <= (kind == io::SequenceKind::kMonocular ? 2 : 3)) {
+      set_bad(id);
+    } else if (current - mp.first_keyframe < 3) {
+      keep.push_back(id);
+    }
+  }
+  recent_points = std::move(keep);
+}
+
+// Keyframes sharing at least `min_shared` good points with keyframe `kf`, most first.
+std::vector<std::pair<int, int>> VisualSlam::Impl::covisible(int kf, int min_shared) const {
+  std::unordered_map<int, int> shared;
+  for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
+    if (id < 0 || points[static_cast<std::size_t>(id)].bad) continue;
+    for (const auto& [other, idx] : points[static_cast<std::size_t>(id)].observations) {
+      if (other != kf) ++shared[other];
+    }
+  }
+  std::vector<std::pair<int, int>> ranked;
+  for (const auto& [other, n] : shared) {
+    if (n >= min_shared) ranked.emplace_back(n, other);
+  }
+  std::sort(ranked.begin(), ranked.end(), std::greater<>());
+  return ranked;
+}
+
+// ORB-SLAM2 Optimizer::LocalBundleAdjustment: the newest keyframe and its covisible ones.
+void VisualSlam::Impl::local_bundle_adjustment() {
+  const auto start = Clock::now();
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  std::vector<std::pair<int, int>> ranked = covisible(current, options.min_covisible_points);
+  if (ranked.size() > static_cast<std::size_t>(options.max_local_ba_keyframes)) ranked.resize(static_cast<std::size_t>(options.max_local_ba_keyframes));
+  std::set<int> local{current};
+  for (const auto& [n, kf] : ranked) local.insert(kf);
+  bundle_adjustment(local, 5, 10);
+  ++summary->local_bas;
+  summary->local_ba_s += seconds_since(start);
+}
+
+// Bundle adjustment on the engine of the keyframes `local` (free, but keyframe 0) and every
+// point they see, the other keyframes that see those points fixed; `first` LM iterations with
+// Huber, chi^2 outliers removed, `second` more without the kernel, outlier observations erased.
+void VisualSlam::Impl::bundle_adjustment(const std::set<int>& local, int first, int second_iterations) {
+  std::set<int> local_points;
+  for (const int kf : local) {
+    for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
+      if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) local_points.insert(id);
+    }
+  }
+  std::set<int> fixed;
+  for (const int id : local_points) {
+    for (const auto& [kf, idx] : points[static_cast<std::size_t>(id)].observations) {
+      if (!local.count(kf)) fixed.insert(kf);
+    }
+  }
+  if (local.size() < 2 && fixed.empty()) return;
+  std::map<int, std::array<double, 7>> pose_values;
+  std::map<int, int> pose_var;
+  backend::LeastSquaresProblem problem;
+  auto add_pose = [&](int kf, bool constant) {
+    auto& v = pose_values[kf];
+    backend::se3_to_values(keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera, v.data());
+    pose_var[kf] = problem.add_variable(v.data(), backend::se3_manifold());
+    if (constant || kf == 0) problem.set_constant(pose_var[kf]);
+  };
+  for (const int kf : local) add_pose(kf, false);
+  for (const int kf : fixed) add_pose(kf, true);
+  std::unordered_map<int, Eigen::Vector3d> point_values;
+  point_values.reserve(local_points.size());
+  struct Edge {
+    int point, kf, idx;
+  };
+  std::vector<Edge> edges;
+  std::unordered_map<int, int> point_var;
+  for (const int id : local_points) {
+    point_values[id] = points[static_cast<std::size_t>(id)].p_world;
+  }
+  for (const int id : local_points) {
+    point_var[id] = problem.add_variable(point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
+    for (const auto& [kf, idx] : points[static_cast<std::size_t>(id)].observations) edges.push_back({id, kf, idx});
+  }
+  auto build = [&](backend::LeastSquaresProblem& p, const std::vector<char>& is_outlier, bool robust) {
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      if (is_outlier[e]) continue;
+      const Edge& edge = edges[e];
+      const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
+      const auto i = static_cast<std::size_t>(edge.idx);
+      const bool stereo = f.u_right[i] >= 0;
+      backend::FactorLoss loss;
+      if (robust) loss = {backend::RobustKernel::kHuber, std::sqrt(stereo ? options.chi2_stereo : options.chi2_mono)};
+      p.add_factor(std::make_unique<ScaledFactor>(observation_factor(f, i), 1.0 / scales[static_cast<std::size_t>(f.keypoints[i].octave)]),
+                   {pose_var[edge.kf], point_var[edge.point]}, loss);
+    }
+  };
+  std::vector<char> is_outlier(edges.size(), 0);
+  build(problem, is_outlier, true);
+  backend::LeastSquaresOptions lso;
+  lso.linear_solver = backend::LinearSolverType::kSparseSchur;
+  lso.max_iterations = first;
+  lso.threads = 1;
+  backend::solve(problem, lso);
+  auto edge_chi2 = [&](const Edge& edge, const core::SE3& T_wc, const Eigen::Vector3d& p_world) {
+    return chi2(keyframes[static_cast<std::size_t>(edge.kf)].frame, static_cast<std::size_t>(edge.idx), T_wc.inverse(), p_world);
+  };
+  auto classify = [&]() {
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      const Edge& edge = edges[e];
+      const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
+      const double threshold = f.u_right[static_cast<std::size_t>(edge.idx)] >= 0 ? options.chi2_stereo : options.chi2_mono;
+      is_outlier[e] = edge_chi2(edge, backend::se3_from_values(pose_values[edge.kf].data()), point_values[edge.point]) > threshold ? 1 : 0;
+    }
+  };
+  classify();
+  {
+    // The second pass without the outliers and without the robust kernel, from where the first
+    // ended (ORB-SLAM2 sets the outliers' level to 1 and removes the kernels).
+    backend::LeastSquaresProblem second;
+    std::map<int, int> second_pose;
+    for (auto& [kf, v] : pose_values) {
+      second_pose[kf] = second.add_variable(v.data(), backend::se3_manifold());
+      if (fixed.count(kf) || kf == 0) second.set_constant(second_pose[kf]);
+    }
+    std::swap(pose_var, second_pose);
+    for (const int id : local_points) {
+      point_var[id] = second.add_variable(point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
+    }
+    build(second, is_outlier, false);
+    lso.max_iterations = std::max(1, second_iterations);
+    if (second_iterations > 0) backend::solve(second, lso);
+  }
+  classify();
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    if (is_outlier[e]) erase_observation(edges[e].point, edges[e].kf);
+  }
+  for (const int kf : local) {
+    if (kf != 0) keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera = backend::se3_from_values(pose_values[kf].data());
+  }
+  for (const int id : local_points) {
+    MapPoint& mp = points[static_cast<std::size_t>(id)];
+    if (mp.bad) continue;
+    mp.p_world = point_values[id];
+    update_normal_and_depth(mp);
+  }
+}
+
+}  // namespace cairn::vslam

@@ -1,0 +1,246 @@
+// Loop closing after ORB-SLAM2 (LoopClosing.cc) and the merging of map segments after ORB-SLAM3 (Campos et al. 2021): bag-of-words candidates with consistency, SE(3) verification, essential-graph correction, point fusion.
+// The state and the declarations: slam_state.hpp.
+
+#include "cairn/vslam/slam_state.hpp"
+
+namespace cairn::vslam {
+
+// Replaces point `old_id` by `new_id` everywhere (ORB-SLAM2 MapPoint::Replace): its
+// observations move to the new point where the keyframe does not see that one already.
+void VisualSlam::Impl::replace_point(int old_id, int new_id) {
+  if (old_id == new_id) return;
+  MapPoint& old_point = points[static_cast<std::size_t>(old_id)];
+  MapPoint& new_point = points[static_cast<std::size_t>(new_id)];
+  for (const auto& [kf, idx] : old_point.observations) {
+    FrameData& f = keyframes[static_cast<std::size_t>(kf)].frame;
+    if (!new_point.observations.count(kf)) {
+      new_point.observations[kf] = idx;
+      f.map_point[static_cast<std::size_t>(idx)] = new_id;
+    } else {
+      f.map_point[static_cast<std::size_t>(idx)] = -1;
+    }
+  }
+  new_point.visible += old_point.visible;
+  new_point.found += old_point.found;
+  old_point.observations.clear();
+  old_point.bad = true;
+  for (int& id : last.map_point) {
+    if (id == old_id) id = new_id;
+  }
+  ++summary->map_points_fused;
+}
+
+// Geometric verification of a loop candidate (stereo / RGB-D: SE(3), ORB-SLAM2 ComputeSim3
+// with the scale fixed): the keyframe's keypoints matched to the candidate's points, a PnP
+// RANSAC pose, the motion-only BA, then the points of the candidate and its covisible
+// keyframes projected at that pose and the BA again. `probe` gets the keyframe at the pose
+// the candidate's part of the map gives it, with its matches to that part.
+bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe) {
+  probe = keyframes[static_cast<std::size_t>(current)].frame;
+  std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
+  std::fill(probe.outlier.begin(), probe.outlier.end(), 0);
+  const int matches = match_brute_force(probe, keyframes[static_cast<std::size_t>(candidate)].frame.map_point);
+  if (matches < options.loop_min_pnp_inliers) {
+    record.reason = std::to_string(matches) + " descriptor matches to the candidate's points (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
+    return false;
+  }
+  record.pnp_inliers = pnp_ransac(probe);
+  if (record.pnp_inliers < options.loop_min_pnp_inliers) {
+    record.reason = "PnP RANSAC: " + std::to_string(record.pnp_inliers) + " inliers of " + std::to_string(matches) + " (< " +
+                    std::to_string(options.loop_min_pnp_inliers) + ")";
+    return false;
+  }
+  optimize_pose(probe);
+  drop_outliers(probe);
+  std::vector<int> ids;
+  std::vector<std::pair<int, int>> group = covisible(candidate, options.min_covisible_points);
+  if (group.size() > 10) group.resize(10);
+  group.emplace_back(0, candidate);
+  for (const auto& [n, kf] : group) {
+    for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
+      if (id >= 0) ids.push_back(id);
+    }
+  }
+  search_by_projection(probe, ids, 3.0, false);
+  record.matches = optimize_pose(probe);
+  drop_outliers(probe);
+  if (record.matches < options.loop_min_matches) {
+    record.reason = "after projecting the candidate's neighbourhood: " + std::to_string(record.matches) +
+                    " inlier matches (< " + std::to_string(options.loop_min_matches) + ")";
+    return false;
+  }
+  return true;
+}
+
+// Loop correction (ORB-SLAM2 CorrectLoop, stereo: SE(3)): the pose graph of every keyframe
+// (consecutive keyframes, covisibility edges of >= 100 shared points, the loop edge; unit
+// information as ORB-SLAM2's essential graph; keyframe 0 fixed) optimised on the back end;
+// points follow their reference keyframe; the keyframe's loop matches fuse its points into the
+// old ones; then a global bundle adjustment.
+void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData& probe, LoopRecord& record) {
+  const std::size_t n = keyframes.size();
+  std::vector<core::SE3> old_poses(n);
+  for (std::size_t k = 0; k < n; ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
+  const core::SE3 T_loop = probe.T_world_camera;
+  const core::SE3 change = old_poses[static_cast<std::size_t>(current)].inverse() * T_loop;
+  record.correction_m = change.translation().norm();
+  record.correction_deg = Eigen::AngleAxisd(change.rotation_matrix()).angle() * 180.0 / 3.14159265358979323846;
+  io::PoseGraph3D graph;
+  for (std::size_t k = 0; k < n; ++k) graph.vertices.push_back({static_cast<std::int64_t>(k), old_poses[k]});
+  auto add_edge = [&](int a, int b, const core::SE3& T_a_b, double weight = 1.0) {
+    io::GraphEdge<core::SE3> e;
+    e.from = a;
+    e.to = b;
+    e.T_from_to = T_a_b;
+    e.information *= weight;
+    graph.edges.push_back(e);
+  };
+  // Consecutive keyframes; into the first keyframe of a segment the link is only the motion
+  // model's guess across the lost stretch: a weight of 1e-6 keeps the graph connected without
+  // holding the segments where the guess put them.
+  for (std::size_t k = 1; k < n; ++k) {
+    add_edge(static_cast<int>(k) - 1, static_cast<int>(k), old_poses[k - 1].inverse() * old_poses[k], keyframes[k].starts_segment ? 1e-6 : 1.0);
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    for (const auto& [shared, other] : covisible(static_cast<int>(k), 100)) {
+      if (other < static_cast<int>(k) - 1) add_edge(other, static_cast<int>(k), old_poses[static_cast<std::size_t>(other)].inverse() * old_poses[k]);
+    }
+  }
+  add_edge(candidate, current, old_poses[static_cast<std::size_t>(candidate)].inverse() * T_loop);
+  graph.fixed.push_back(0);
+  backend::Problem3D problem = backend::make_problem(graph, "vslam essential graph");
+  backend::OptimizerOptions solver;
+  solver.max_iterations = 20;
+  solver.function_tolerance = 1e-9;
+  solver.threads = 1;
+  backend::optimize(problem, solver);
+  for (std::size_t k = 0; k < n; ++k) keyframes[k].frame.T_world_camera = problem.T_world_pose[k];
+  for (MapPoint& mp : points) {
+    if (mp.bad) continue;
+    const auto r = static_cast<std::size_t>(mp.reference_keyframe);
+    mp.p_world = keyframes[r].frame.T_world_camera * (old_poses[r].inverse() * mp.p_world);
+  }
+  if (reference_keyframe >= 0) {
+    const auto r = static_cast<std::size_t>(reference_keyframe);
+    last.T_world_camera = keyframes[r].frame.T_world_camera * (old_poses[r].inverse() * last.T_world_camera);
+  }
+  // Fuse: the keyframe's keypoints matched to the old part of the map take its points.
+  KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
+  for (std::size_t i = 0; i < probe.size(); ++i) {
+    const int loop_id = probe.map_point[i];
+    if (loop_id < 0 || points[static_cast<std::size_t>(loop_id)].bad) continue;
+    const int own = kf.frame.map_point[i];
+    if (own == loop_id) continue;
+    if (own >= 0 && !points[static_cast<std::size_t>(own)].bad) {
+      replace_point(own, loop_id);
+    } else if (!points[static_cast<std::size_t>(loop_id)].observations.count(current)) {
+      points[static_cast<std::size_t>(loop_id)].observations[current] = static_cast<int>(i);
+      kf.frame.map_point[i] = loop_id;
+    }
+    update_descriptor(points[static_cast<std::size_t>(loop_id)]);
+    update_normal_and_depth(points[static_cast<std::size_t>(loop_id)]);
+  }
+  if (options.global_ba_after_loop) {
+    const auto start = Clock::now();
+    std::set<int> all;
+    for (std::size_t k = 0; k < n; ++k) all.insert(static_cast<int>(k));
+    bundle_adjustment(all, 10, 10);
+    ++summary->global_bas;
+    summary->global_ba_s += seconds_since(start);
+  }
+}
+
+// ORB-SLAM2 LoopClosing::DetectLoop: candidates from the database scoring at least as well as
+// the keyframe's worst covisible neighbour and sharing at least 80 % of the best candidate's
+// words, kept only when their covisibility group was also a candidate group for the previous
+// loop_consistency - 1 keyframes; then verified, best score first.
+void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
+  if (!options.vocabulary) return;
+  if (kind == io::SequenceKind::kMonocular) {
+    // Monocular loops need Sim(3) (scale drifts); not implemented: keyframes only go into the
+    // database, for relocalisation.
+    KeyFrame& kf = keyframes.back();
+    kf.bow = options.vocabulary->transform(kf.frame.descriptors);
+    database.add(static_cast<std::uint32_t>(kf.id), kf.bow);
+    return;
+  }
+  const auto start = Clock::now();
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
+  kf.bow = options.vocabulary->transform(kf.frame.descriptors);
+  // Loops within a segment wait for enough keyframes since the start and the last loop; a
+  // merge with another segment may come at any keyframe.
+  const bool too_early = current < 2 * options.loop_min_keyframes_apart || current < last_loop_keyframe + options.loop_min_keyframes_apart;
+  bool other_segments = false;
+  for (const KeyFrame& other : keyframes) other_segments = other_segments || segment_of(other.id) != segment_of(current);
+  if (!options.loop_closure || (too_early && !other_segments)) {
+    database.add(static_cast<std::uint32_t>(current), kf.bow);
+    summary->loop_s += seconds_since(start);
+    return;
+  }
+  ++summary->loop_queries;
+  const std::vector<std::pair<int, int>> neighbours = covisible(current, options.min_covisible_points);
+  double min_score = 1.0;
+  std::vector<std::uint32_t> exclude{static_cast<std::uint32_t>(current)};
+  for (const auto& [shared, k] : neighbours) {
+    min_score = std::min(min_score, vision::Vocabulary::score(kf.bow, keyframes[static_cast<std::size_t>(k)].bow));
+    exclude.push_back(static_cast<std::uint32_t>(k));
+  }
+  for (int k = std::max(0, current - options.loop_min_keyframes_apart); k < current; ++k) exclude.push_back(static_cast<std::uint32_t>(k));
+  const std::vector<vision::BowDatabase::Result> results = database.query(kf.bow, 20, exclude);
+  database.add(static_cast<std::uint32_t>(current), kf.bow);
+  int max_common = 0;
+  for (const auto& r : results) max_common = std::max(max_common, r.common_words);
+  std::vector<std::pair<std::set<int>, int>> groups;
+  std::vector<std::tuple<double, int, int>> consistent;  // score, candidate, consistency
+  for (const auto& r : results) {
+    if (r.score < min_score || r.common_words < 0.8 * max_common) continue;
+    const int candidate = static_cast<int>(r.id);
+    if (too_early && segment_of(candidate) == segment_of(current)) continue;
+    std::set<int> group{candidate};
+    for (const auto& [shared, k] : covisible(candidate, options.min_covisible_points)) group.insert(k);
+    int consistency = 0;
+    for (const auto& [previous, count] : consistent_groups) {
+      const bool shares = std::any_of(group.begin(), group.end(), [&](int k) { return previous.count(k) > 0; });
+      if (shares) consistency = std::max(consistency, count + 1);
+    }
+    groups.emplace_back(group, consistency);
+    if (consistency + 1 >= options.loop_consistency) consistent.emplace_back(r.score, candidate, consistency + 1);
+  }
+  consistent_groups = std::move(groups);
+  std::sort(consistent.begin(), consistent.end(), std::greater<>());
+  for (const auto& [score, candidate, consistency] : consistent) {
+    LoopRecord record;
+    record.keyframe = static_cast<std::size_t>(current);
+    record.candidate = static_cast<std::size_t>(candidate);
+    record.frame = kf.frame.index;
+    record.candidate_frame = keyframes[static_cast<std::size_t>(candidate)].frame.index;
+    record.score = score;
+    record.min_covisible_score = min_score;
+    record.consistency = consistency;
+    record.merge = segment_of(candidate) != segment_of(current);
+    FrameData probe;
+    if (verify_loop(current, candidate, record, probe)) {
+      record.decision = "accepted";
+      record.reason = std::to_string(record.matches) + " inlier matches to the candidate's neighbourhood";
+      correct_loop(current, candidate, probe, record);
+      if (record.merge) {
+        // The segment being tracked joins the candidate's (the older one keeps its id).
+        const int a = segment_of(current), b = segment_of(candidate);
+        segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+        ++summary->maps_merged;
+      }
+      summary->loops.push_back(record);
+      ++summary->loops_accepted;
+      result.loop_closed = true;
+      last_loop_keyframe = current;
+      consistent_groups.clear();
+      break;
+    }
+    record.decision = "rejected";
+    summary->loops.push_back(record);
+  }
+  summary->loop_s += seconds_since(start);
+}
+
+}  // namespace cairn::vslam

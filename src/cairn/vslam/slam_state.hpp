@@ -1,0 +1,317 @@
+#pragma once
+/// \file
+/// Internal to cairn::vslam: the state of VisualSlam (frames, map points, keyframes, the Atlas's
+/// segments, the place-recognition database) and the declaration of VisualSlam::Impl, whose
+/// methods live in tracking.cpp (frames, matching, motion-only BA, local-map tracking, one frame),
+/// local_mapping.cpp (keyframes, triangulation, culling, local and global BA), loop_closing.cpp
+/// (loop detection, verification, correction, merges) and initialisation.cpp (monocular
+/// two-view initialisation). Not installed; include only from those files.
+
+#include <tbb/parallel_invoke.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/features2d.hpp>
+#include <set>
+#include <unordered_map>
+#include "cairn/backend/least_squares.hpp"
+#include "cairn/backend/optimizer.hpp"
+#include "cairn/backend/problem.hpp"
+#include "cairn/io/pose_graph.hpp"
+#include "cairn/backend/reprojection_factors.hpp"
+#include "cairn/vslam/visual_slam.hpp"
+
+namespace cairn::vslam {
+namespace internal {
+
+
+using Clock = std::chrono::steady_clock;
+inline double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// A factor whose residual and Jacobians are scaled by sqrt(information) = 1 / sigma of the
+// keypoint's level (ORB-SLAM2's invLevelSigma2 information), optionally with the point held
+// fixed inside it (motion-only BA: the factor then has the pose as its only variable).
+class ScaledFactor final : public backend::Factor {
+ public:
+  ScaledFactor(std::unique_ptr<backend::Factor> inner, double sqrt_information, const Eigen::Vector3d* fixed_point = nullptr)
+      : inner_(std::move(inner)), weight_(sqrt_information), fixed_(fixed_point != nullptr) {
+    if (fixed_point) point_ = *fixed_point;
+  }
+  int residual_size() const override { return inner_->residual_size(); }
+  bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
+    const int m = inner_->residual_size();
+    bool ok;
+    if (fixed_) {
+      const double* v[2] = {values[0], point_.data()};
+      double* j[2] = {jacobians ? jacobians[0] : nullptr, nullptr};
+      ok = inner_->evaluate(v, residual, jacobians ? j : nullptr);
+    } else {
+      ok = inner_->evaluate(values, residual, jacobians);
+    }
+    if (!ok) return false;
+    for (int i = 0; i < m; ++i) residual[i] *= weight_;
+    if (jacobians) {
+      const int blocks = fixed_ ? 1 : 2;
+      const int sizes[2] = {6, 3};
+      for (int b = 0; b < blocks; ++b) {
+        if (!jacobians[b]) continue;
+        for (int i = 0; i < m * sizes[b]; ++i) jacobians[b][i] *= weight_;
+      }
+    }
+    return true;
+  }
+
+ private:
+  std::unique_ptr<backend::Factor> inner_;
+  double weight_;
+  bool fixed_;
+  Eigen::Vector3d point_ = Eigen::Vector3d::Zero();
+};
+
+constexpr int kGridCols = 64;
+constexpr int kGridRows = 48;
+
+struct FrameData {
+  std::size_t index = 0;
+  core::Timestamp time;
+  std::vector<cv::KeyPoint> keypoints;
+  std::vector<Eigen::Vector2d> undistorted;
+  std::vector<double> u_right, depth;
+  cv::Mat descriptors;
+  std::vector<int> map_point;  // id or -1
+  std::vector<char> outlier;
+  std::vector<std::vector<int>> grid;
+  core::SE3 T_world_camera;
+  std::size_t size() const { return keypoints.size(); }
+};
+
+struct MapPoint {
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
+  cv::Mat descriptor;  // 1 x 32
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double min_distance = 0.0, max_distance = 0.0;
+  std::map<int, int> observations;  // keyframe id -> keypoint index
+  int first_keyframe = 0;
+  int reference_keyframe = 0;
+  int visible = 1, found = 1;
+  bool bad = false;
+  std::uint64_t last_search = 0;  // search_by_projection's stamp: considered already
+};
+
+struct KeyFrame {
+  int id = 0;
+  FrameData frame;
+  bool bad = false;
+  int segment = 0;              // the map segment it was created in
+  bool starts_segment = false;  // the first keyframe of a segment: no odometry link to the one before
+  vision::BowVector bow;  // empty without a vocabulary
+};
+
+
+inline vision::OrbOptions doubled(vision::OrbOptions o) {
+  o.features *= 2;
+  return o;
+}
+
+}  // namespace internal
+
+using internal::Clock;
+using internal::doubled;
+using internal::FrameData;
+using internal::KeyFrame;
+using internal::kGridCols;
+using internal::kGridRows;
+using internal::MapPoint;
+using internal::ScaledFactor;
+using internal::seconds_since;
+
+struct VisualSlam::Impl {
+  io::CameraCalibration camera;
+  io::SequenceKind kind;
+  VisualSlamOptions options;
+  VisualSlamSummary* summary = nullptr;
+  vision::OrbExtractor orb;
+  vision::OrbExtractor orb_initialisation;  // monocular, until initialised: twice the features (ORB-SLAM2 mpIniORBextractor)
+  double bf = 0.0;            // fx * baseline (virtual for RGB-D)
+  double close_depth_m = 0.0; // ThDepth in metres
+  double min_x = 0, max_x = 0, min_y = 0, max_y = 0;
+  double cell_w_inv = 0, cell_h_inv = 0;
+  int width = 0, height = 0;
+  std::vector<double> scales, inv_sigma2;
+
+  std::vector<MapPoint> points;
+  std::vector<KeyFrame> keyframes;
+  std::vector<int> recent_points;
+  FrameData last;
+  bool have_last = false;
+  bool have_velocity = false;
+  core::SE3 velocity;  // T_last_current of the last step: T_current = T_last * velocity
+  int reference_keyframe = -1;
+  int last_keyframe_frame = 0;
+  std::size_t frames = 0;
+  bool lost = false;
+  std::uint64_t search_stamp = 0;
+  // Place recognition.
+  vision::BowDatabase database;
+  int last_loop_keyframe = 0;
+  std::vector<std::pair<std::set<int>, int>> consistent_groups;  // ORB-SLAM2 mvConsistentGroups
+  // The Atlas: map segments, merged by union-find.
+  int segment = 0;
+  std::vector<int> segment_parent{0};
+  int lost_frames = 0;
+  int find(int s) const {
+    while (segment_parent[static_cast<std::size_t>(s)] != s) s = segment_parent[static_cast<std::size_t>(s)];
+    return s;
+  }
+  int segment_of(int kf) const { return find(keyframes[static_cast<std::size_t>(kf)].segment); }
+  // Per frame: reference keyframe and the pose relative to it, for the final trajectory.
+  std::vector<std::pair<int, core::SE3>> relative;
+
+  Impl(const io::CameraCalibration& c, io::SequenceKind k, const VisualSlamOptions& o)
+      : camera(c), kind(k), options(o), orb(o.orb), orb_initialisation(doubled(o.orb)) {
+    const double baseline = kind == io::SequenceKind::kStereo ? camera.baseline_m : camera.virtual_baseline_m;
+    bf = camera.fx * baseline;
+    close_depth_m = options.close_depth_baselines * baseline;
+    double s = 1.0;
+    for (int l = 0; l < options.orb.levels; ++l) {
+      scales.push_back(s);
+      inv_sigma2.push_back(1.0 / (s * s));
+      s *= options.orb.scale_factor;
+    }
+  }
+
+  bool cell_of(double x, double y, int& cx, int& cy) const {
+    cx = static_cast<int>(std::floor((x - min_x) * cell_w_inv));
+    cy = static_cast<int>(std::floor((y - min_y) * cell_h_inv));
+    return cx >= 0 && cx < kGridCols && cy >= 0 && cy < kGridRows;
+  }
+
+  // Monocular, until initialised: the reference frame of the two-view initialisation.
+  FrameData init_reference;
+  bool have_init_reference = false;
+
+  // --- Camera geometry and the keypoint grid (tracking.cpp) ---
+  void set_image_size(int w, int h);
+  void build_grid(FrameData& f) const;
+  std::vector<int> features_in_area(const FrameData& f, double x, double y, double r, int min_level, int max_level) const;
+  bool project(const core::SE3& T_camera_world, const Eigen::Vector3d& p_world, double& u, double& v, double& ur, double& z) const;
+  int predict_level(const MapPoint& mp, double distance) const;
+  Eigen::Vector3d unproject(const FrameData& f, std::size_t i) const;
+
+  // --- Frames (tracking.cpp) ---
+  FrameData make_frame(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo) const;
+
+  // --- Map points (tracking.cpp) ---
+  void update_normal_and_depth(MapPoint& mp);
+  // The observation's descriptor with the least median distance to the others (ORB-SLAM2
+  // MapPoint::ComputeDistinctiveDescriptors).
+  void update_descriptor(MapPoint& mp);
+  int observation_weight(const MapPoint& mp) const;
+  void erase_observation(int point, int kf);
+  void set_bad(int point);
+
+  // --- Matching (tracking.cpp) ---
+  // ORB-SLAM2 ORBmatcher::SearchByProjection(CurrentFrame, LastFrame, th, bMono) without the
+  // rotation-histogram check (stereo and RGB-D do not use it).
+  int search_from_last(FrameData& current, const FrameData& previous, double radius_px);
+  // Brute-force descriptor matching of the frame's keypoints against the points `ids` with a
+  // ratio test and TH_LOW (50): the matcher of the reference fallback, relocalisation and loop
+  // verification (ORB-SLAM2 restricts these to keypoints in the same bag-of-words node instead).
+  int match_brute_force(FrameData& current, const std::vector<int>& point_ids);
+  int search_reference(FrameData& current, const KeyFrame& kf) { return match_brute_force(current, kf.frame.map_point); }
+  // PnP with RANSAC (OpenCV's solvePnPRansac, EPnP minimal sets; Lepetit et al. 2009) on the
+  // frame's map-point matches: the starting pose when there is no prediction. Matches that are
+  // not RANSAC inliers are dropped. Returns the inliers (0 when it fails).
+  int pnp_ransac(FrameData& f) const;
+
+  // --- Motion-only bundle adjustment (ORB-SLAM2 Optimizer::PoseOptimization) (tracking.cpp) ---
+  // chi^2 of keypoint i of f observing p_world from T_camera_world: the squared reprojection
+  // error (u, v and, with stereo/depth, u_right) times the level's information (ORB-SLAM2's
+  // chi2() of its edges); infinite behind the camera.
+  double chi2(const FrameData& f, std::size_t i, const core::SE3& T_cw, const Eigen::Vector3d& p_world) const;
+  double chi2_of(const FrameData& f, std::size_t i, const core::SE3& T_cw) const;
+  std::unique_ptr<backend::Factor> observation_factor(const FrameData& f, std::size_t i) const;
+  // Returns the inliers; marks outliers in f.outlier; sets f.T_world_camera.
+  int optimize_pose(FrameData& f, double* sigma_position_m = nullptr);
+  void drop_outliers(FrameData& f);
+
+  // --- Local map (ORB-SLAM2 Tracking::TrackLocalMap) (tracking.cpp) ---
+  // Projects the points `ids` (repeats allowed) at f's pose and matches each to the best
+  // unmatched keypoint near its projection (ORB-SLAM2 ORBmatcher::SearchByProjection(Frame,
+  // vector<MapPoint*>, th) after Frame::isInFrustum): in front, inside the image, within the
+  // point's scale-invariance distances, viewed within 60 degrees of its mean viewing direction;
+  // radius th x (2.5 or 4 by viewing angle) x the predicted level's scale; the best descriptor
+  // within TH_HIGH and, when the second best is on the same level, better than ratio x it.
+  // Points the frame already holds are skipped. Returns the new matches.
+  int search_by_projection(FrameData& f, const std::vector<int>& ids, double th, bool count_visible);
+  int track_local_map(FrameData& f, double* sigma_position_m, int* given);
+
+  // --- Keyframes and local mapping (local_mapping.cpp) ---
+  bool need_keyframe(const FrameData& f, int inliers) const;
+  void insert_keyframe(FrameData& f, bool starts_segment = false);
+  // ORB-SLAM2 LocalMapping::CreateNewMapPoints: the newest keyframe's unmatched keypoints are
+  // matched to those of its 10 most covisible keyframes (descriptor within TH_LOW, the best one
+  // within 3.84 sigma^2 of the epipolar line; ORB-SLAM2 restricts the search to bag-of-words
+  // nodes, here every unmatched keypoint is compared) and triangulated (linear, Hartley &
+  // Zisserman 12.2) when the rays' parallax beats the stereo parallax, else taken from the view
+  // with the better stereo depth; kept when in front of both cameras, within the chi^2
+  // thresholds in both, and at consistent scales (distance ratio within 1.5 x scale factor of
+  // the octave ratio). Returns the points created.
+  int triangulate_new_points(int current, int count);
+  // ORB-SLAM2 LocalMapping::MapPointCulling (stereo: 3 observations, a stereo one counting 2).
+  void cull_points();
+  // Keyframes sharing at least `min_shared` good points with keyframe `kf`, most first.
+  std::vector<std::pair<int, int>> covisible(int kf, int min_shared) const;
+  // ORB-SLAM2 Optimizer::LocalBundleAdjustment: the newest keyframe and its covisible ones.
+  void local_bundle_adjustment();
+  // Bundle adjustment on the engine of the keyframes `local` (free, but keyframe 0) and every
+  // point they see, the other keyframes that see those points fixed; `first` LM iterations with
+  // Huber, chi^2 outliers removed, `second` more without the kernel, outlier observations erased.
+  void bundle_adjustment(const std::set<int>& local, int first, int second_iterations);
+
+  // --- Place recognition: loop closure (ORB-SLAM2 LoopClosing) (loop_closing.cpp) ---
+  // Replaces point `old_id` by `new_id` everywhere (ORB-SLAM2 MapPoint::Replace): its
+  // observations move to the new point where the keyframe does not see that one already.
+  void replace_point(int old_id, int new_id);
+  // Geometric verification of a loop candidate (stereo / RGB-D: SE(3), ORB-SLAM2 ComputeSim3
+  // with the scale fixed): the keyframe's keypoints matched to the candidate's points, a PnP
+  // RANSAC pose, the motion-only BA, then the points of the candidate and its covisible
+  // keyframes projected at that pose and the BA again. `probe` gets the keyframe at the pose
+  // the candidate's part of the map gives it, with its matches to that part.
+  bool verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe);
+  // Loop correction (ORB-SLAM2 CorrectLoop, stereo: SE(3)): the pose graph of every keyframe
+  // (consecutive keyframes, covisibility edges of >= 100 shared points, the loop edge; unit
+  // information as ORB-SLAM2's essential graph; keyframe 0 fixed) optimised on the back end;
+  // points follow their reference keyframe; the keyframe's loop matches fuse its points into the
+  // old ones; then a global bundle adjustment.
+  void correct_loop(int current, int candidate, const FrameData& probe, LoopRecord& record);
+  // ORB-SLAM2 LoopClosing::DetectLoop: candidates from the database scoring at least as well as
+  // the keyframe's worst covisible neighbour and sharing at least 80 % of the best candidate's
+  // words, kept only when their covisibility group was also a candidate group for the previous
+  // loop_consistency - 1 keyframes; then verified, best score first.
+  void detect_and_close_loop(FrameResult& result);
+
+  // --- Monocular initialisation (ORB-SLAM2 Initializer, Mur-Artal et al. T-RO 2015 Sec. IV) (initialisation.cpp) ---
+  // Level-0 keypoints of the reference matched to the frame within 100 px (ORB-SLAM2
+  // SearchForInitialization: TH_LOW, ratio 0.9, one-to-one).
+  std::vector<std::pair<int, int>> match_for_initialisation(const FrameData& a, const FrameData& b) const;
+  // Two-view reconstruction: the homography and the essential matrix (RANSAC, OpenCV), scored
+  // as ORB-SLAM2 scores them (sum of chi^2 margins below 5.991 of the symmetric transfer errors
+  // for H, of the distances to the epipolar lines below 3.841 for F); H when
+  // S_H / (S_H + S_F) > 0.40, else E; the pose from cv::recoverPose / the homography's
+  // decompositions (the one with most points in front); points triangulated, kept in front of
+  // both cameras within 2 px; success with >= 50 points seen at >= 1 degree of parallax.
+  // `note` says which model and why it failed.
+  bool reconstruct_two_views(const FrameData& a, const FrameData& b, const std::vector<std::pair<int, int>>& matches, core::SE3& T_b_a,
+                             std::vector<std::pair<int, Eigen::Vector3d>>& points_a, std::string& note) const;
+  FrameResult initialise_monocular(FrameData f, FrameResult result, FrameTimes times, Clock::time_point start, Clock::time_point tracking_start);
+
+  // --- One frame (tracking.cpp) ---
+  FrameResult track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, FrameTimes times,
+                    Clock::time_point start);
+};
+
+}  // namespace cairn::vslam

@@ -1,0 +1,689 @@
+// Tracking after ORB-SLAM2 (Tracking.cc, Optimizer::PoseOptimization, ORBmatcher): frames, the keypoint grid, map-point upkeep, matching by projection and by descriptor, PnP RANSAC, motion-only BA, local-map tracking and one whole frame.
+// The state and the declarations: slam_state.hpp.
+
+#include "cairn/vslam/slam_state.hpp"
+
+namespace cairn::vslam {
+
+void VisualSlam::Impl::set_image_size(int w, int h) {
+  if (width != 0) return;
+  width = w;
+  height = h;
+  std::vector<cv::KeyPoint> corners{cv::KeyPoint(0.f, 0.f, 1.f), cv::KeyPoint(static_cast<float>(w), 0.f, 1.f),
+                                    cv::KeyPoint(0.f, static_cast<float>(h), 1.f),
+                                    cv::KeyPoint(static_cast<float>(w), static_cast<float>(h), 1.f)};
+  const auto u = vision::undistort_keypoints(corners, camera);
+  min_x = std::min(u[0].x(), u[2].x());
+  max_x = std::max(u[1].x(), u[3].x());
+  min_y = std::min(u[0].y(), u[1].y());
+  max_y = std::max(u[2].y(), u[3].y());
+  cell_w_inv = kGridCols / (max_x - min_x);
+  cell_h_inv = kGridRows / (max_y - min_y);
+}
+
+void VisualSlam::Impl::build_grid(FrameData& f) const {
+  f.grid.assign(kGridCols * kGridRows, {});
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    int cx, cy;
+    if (cell_of(f.undistorted[i].x(), f.undistorted[i].y(), cx, cy)) f.grid[static_cast<std::size_t>(cy * kGridCols + cx)].push_back(static_cast<int>(i));
+  }
+}
+
+std::vector<int> VisualSlam::Impl::features_in_area(const FrameData& f, double x, double y, double r, int min_level, int max_level) const {
+  std::vector<int> out;
+  const int x0 = std::max(0, static_cast<int>(std::floor((x - r - min_x) * cell_w_inv)));
+  const int x1 = std::min(kGridCols - 1, static_cast<int>(std::ceil((x + r - min_x) * cell_w_inv)));
+  const int y0 = std::max(0, static_cast<int>(std::floor((y - r - min_y) * cell_h_inv)));
+  const int y1 = std::min(kGridRows - 1, static_cast<int>(std::ceil((y + r - min_y) * cell_h_inv)));
+  if (x0 > x1 || y0 > y1) return out;
+  for (int cy = y0; cy <= y1; ++cy) {
+    for (int cx = x0; cx <= x1; ++cx) {
+      for (const int i : f.grid[static_cast<std::size_t>(cy * kGridCols + cx)]) {
+        const cv::KeyPoint& kp = f.keypoints[static_cast<std::size_t>(i)];
+        if (kp.octave < min_level || kp.octave > max_level) continue;
+        const Eigen::Vector2d& u = f.undistorted[static_cast<std::size_t>(i)];
+        if (std::abs(u.x() - x) < r && std::abs(u.y() - y) < r) out.push_back(i);
+      }
+    }
+  }
+  return out;
+}
+
+bool VisualSlam::Impl::project(const core::SE3& T_camera_world, const Eigen::Vector3d& p_world, double& u, double& v, double& ur, double& z) const {
+  const Eigen::Vector3d p = T_camera_world * p_world;
+  z = p.z();
+  if (!(z > 1e-6)) return false;
+  u = camera.fx * p.x() / z + camera.cx;
+  v = camera.fy * p.y() / z + camera.cy;
+  ur = u - bf / z;
+  return u >= min_x && u < max_x && v >= min_y && v < max_y;
+}
+
+int VisualSlam::Impl::predict_level(const MapPoint& mp, double distance) const {
+  const double ratio = mp.max_distance / distance;
+  int level = static_cast<int>(std::ceil(std::log(ratio) / std::log(options.orb.scale_factor)));
+  return std::clamp(level, 0, options.orb.levels - 1);
+}
+
+Eigen::Vector3d VisualSlam::Impl::unproject(const FrameData& f, std::size_t i) const {
+  const double z = f.depth[i];
+  const Eigen::Vector3d p_camera((f.undistorted[i].x() - camera.cx) * z / camera.fx, (f.undistorted[i].y() - camera.cy) * z / camera.fy, z);
+  return f.T_world_camera * p_camera;
+}
+
+FrameData VisualSlam::Impl::make_frame(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo) const {
+  FrameData f;
+  f.index = frames;
+  f.time = time;
+  f.keypoints = std::move(left.keypoints);
+  f.descriptors = left.descriptors;
+  f.undistorted = vision::undistort_keypoints(f.keypoints, camera);
+  f.u_right = stereo.u_right;
+  f.depth = stereo.depth_m;
+  f.map_point.assign(f.size(), -1);
+  f.outlier.assign(f.size(), 0);
+  build_grid(f);
+  return f;
+}
+
+void VisualSlam::Impl::update_normal_and_depth(MapPoint& mp) {
+  if (mp.observations.empty()) return;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  for (const auto& [kf, idx] : mp.observations) {
+    const Eigen::Vector3d d = mp.p_world - keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera.translation();
+    normal += d.normalized();
+  }
+  mp.normal = normal.normalized();
+  const KeyFrame& ref = keyframes[static_cast<std::size_t>(mp.reference_keyframe)];
+  auto it = mp.observations.find(mp.reference_keyframe);
+  if (it == mp.observations.end()) it = mp.observations.begin();
+  const KeyFrame& r = it->first == mp.reference_keyframe ? ref : keyframes[static_cast<std::size_t>(it->first)];
+  const double distance = (mp.p_world - r.frame.T_world_camera.translation()).norm();
+  const int level = r.frame.keypoints[static_cast<std::size_t>(it->second)].octave;
+  mp.max_distance = distance * scales[static_cast<std::size_t>(level)];
+  mp.min_distance = mp.max_distance / scales.back();
+}
+
+// The observation's descriptor with the least median distance to the others (ORB-SLAM2
+// MapPoint::ComputeDistinctiveDescriptors).
+void VisualSlam::Impl::update_descriptor(MapPoint& mp) {
+  std::vector<const unsigned char*> d;
+  for (const auto& [kf, idx] : mp.observations) d.push_back(keyframes[static_cast<std::size_t>(kf)].frame.descriptors.ptr(idx));
+  if (d.empty()) return;
+  if (d.size() <= 2) {
+    mp.descriptor = cv::Mat(1, 32, CV_8U, const_cast<unsigned char*>(d.front())).clone();
+    return;
+  }
+  std::size_t best = 0;
+  int best_median = 1 << 30;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    std::vector<int> dist;
+    for (std::size_t j = 0; j < d.size(); ++j) dist.push_back(vision::descriptor_distance(d[i], d[j]));
+    std::nth_element(dist.begin(), dist.begin() + static_cast<std::ptrdiff_t>((dist.size() - 1) / 2), dist.end());
+    const int median = dist[(dist.size() - 1) / 2];
+    if (median < best_median) {
+      best_median = median;
+      best = i;
+    }
+  }
+  mp.descriptor = cv::Mat(1, 32, CV_8U, const_cast<unsigned char*>(d[best])).clone();
+}
+
+int VisualSlam::Impl::observation_weight(const MapPoint& mp) const {
+  int n = 0;
+  for (const auto& [kf, idx] : mp.observations) n += keyframes[static_cast<std::size_t>(kf)].frame.u_right[static_cast<std::size_t>(idx)] >= 0 ? 2 : 1;
+  return n;
+}
+
+void VisualSlam::Impl::erase_observation(int point, int kf) {
+  MapPoint& mp = points[static_cast<std::size_t>(point)];
+  auto it = mp.observations.find(kf);
+  if (it == mp.observations.end()) return;
+  FrameData& f = keyframes[static_cast<std::size_t>(kf)].frame;
+  if (f.map_point[static_cast<std::size_t>(it->second)] == point) f.map_point[static_cast<std::size_t>(it->second)] = -1;
+  mp.observations.erase(it);
+  if (mp.observations.empty() || observation_weight(mp) <= 1) {
+    set_bad(point);
+  } else if (mp.reference_keyframe == kf) {
+    mp.reference_keyframe = mp.observations.begin()->first;
+  }
+}
+
+void VisualSlam::Impl::set_bad(int point) {
+  MapPoint& mp = points[static_cast<std::size_t>(point)];
+  if (mp.bad) return;
+  mp.bad = true;
+  for (const auto& [kf, idx] : mp.observations) {
+    FrameData& f = keyframes[static_cast<std::size_t>(kf)].frame;
+    if (f.map_point[static_cast<std::size_t>(idx)] == point) f.map_point[static_cast<std::size_t>(idx)] = -1;
+  }
+  mp.observations.clear();
+  ++summary->map_points_culled;
+}
+
+// ORB-SLAM2 ORBmatcher::SearchByProjection(CurrentFrame, LastFrame, th, bMono) without the
+// rotation-histogram check (stereo and RGB-D do not use it).
+int VisualSlam::Impl::search_from_last(FrameData& current, const FrameData& previous, double radius_px) {
+  const core::SE3 T_cw = current.T_world_camera.inverse();
+  int matches = 0;
+  for (std::size_t i = 0; i < previous.size(); ++i) {
+    const int id = previous.map_point[i];
+    if (id < 0 || previous.outlier[i]) continue;
+    const MapPoint& mp = points[static_cast<std::size_t>(id)];
+    if (mp.bad) continue;
+    double u, v, ur, z;
+    if (!project(T_cw, mp.p_world, u, v, ur, z)) continue;
+    const int level = previous.keypoints[i].octave;
+    const double r = radius_px * scales[static_cast<std::size_t>(level)];
+    const std::vector<int> candidates = features_in_area(current, u, v, r, std::max(0, level - 1), level + 1);
+    int best = 256, best_j = -1;
+    for (const int j : candidates) {
+      const auto sj = static_cast<std::size_t>(j);
+      if (current.map_point[sj] >= 0) continue;
+      if (current.u_right[sj] >= 0 && std::abs(ur - current.u_right[sj]) > r) continue;
+      const int d = vision::descriptor_distance(mp.descriptor.ptr(), current.descriptors.ptr(j));
+      if (d < best) {
+        best = d;
+        best_j = j;
+      }
+    }
+    if (best_j >= 0 && best <= options.max_descriptor_distance) {
+      current.map_point[static_cast<std::size_t>(best_j)] = id;
+      ++matches;
+    }
+  }
+  return matches;
+}
+
+// Brute-force descriptor matching of the frame's keypoints against the points `ids` with a
+// ratio test and TH_LOW (50): the matcher of the reference fallback, relocalisation and loop
+// verification (ORB-SLAM2 restricts these to keypoints in the same bag-of-words node instead).
+int VisualSlam::Impl::match_brute_force(FrameData& current, const std::vector<int>& point_ids) {
+  std::vector<int> ids;
+  cv::Mat descriptors;
+  for (const int id : point_ids) {
+    if (id < 0 || points[static_cast<std::size_t>(id)].bad) continue;
+    ids.push_back(id);
+    descriptors.push_back(points[static_cast<std::size_t>(id)].descriptor);
+  }
+  if (ids.empty() || current.descriptors.rows == 0) return 0;
+  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher.knnMatch(current.descriptors, descriptors, knn, 2);
+  std::vector<int> taken(ids.size(), -1);
+  std::vector<float> taken_distance(ids.size(), 1e9f);
+  for (const auto& m : knn) {
+    if (m.empty() || static_cast<double>(m[0].distance) > options.max_descriptor_distance / 2.0) continue;
+    if (m.size() > 1 && static_cast<double>(m[0].distance) > options.reference_match_ratio * static_cast<double>(m[1].distance)) continue;
+    if (current.map_point[static_cast<std::size_t>(m[0].queryIdx)] >= 0) continue;
+    const auto t = static_cast<std::size_t>(m[0].trainIdx);
+    if (m[0].distance < taken_distance[t]) {
+      taken[t] = m[0].queryIdx;
+      taken_distance[t] = m[0].distance;
+    }
+  }
+  int matches = 0;
+  for (std::size_t t = 0; t < ids.size(); ++t) {
+    if (taken[t] < 0) continue;
+    current.map_point[static_cast<std::size_t>(taken[t])] = ids[t];
+    ++matches;
+  }
+  return matches;
+}
+
+// PnP with RANSAC (OpenCV's solvePnPRansac, EPnP minimal sets; Lepetit et al. 2009) on the
+// frame's map-point matches: the starting pose when there is no prediction. Matches that are
+// not RANSAC inliers are dropped. Returns the inliers (0 when it fails).
+int VisualSlam::Impl::pnp_ransac(FrameData& f) const {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  std::vector<std::size_t> index;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (f.map_point[i] < 0) continue;
+    const Eigen::Vector3d& p = points[static_cast<std::size_t>(f.map_point[i])].p_world;
+    object.emplace_back(p.x(), p.y(), p.z());
+    image.emplace_back(f.undistorted[i].x(), f.undistorted[i].y());
+    index.push_back(i);
+  }
+  if (object.size() < 6) return 0;
+  const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  bool ok = false;
+  try {
+    ok = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 200, 3.0f, 0.99, inliers, cv::SOLVEPNP_EPNP);
+  } catch (const cv::Exception&) {
+    ok = false;
+  }
+  if (!ok || inliers.size() < 6) {
+    std::fill(f.map_point.begin(), f.map_point.end(), -1);
+    return 0;
+  }
+  cv::Matx33d R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix4d T_camera_world = Eigen::Matrix4d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) T_camera_world(r, c) = R(r, c);
+    T_camera_world(r, 3) = tvec.at<double>(r);
+  }
+  f.T_world_camera = core::SE3::from_matrix(T_camera_world).inverse();
+  std::vector<char> keep(index.size(), 0);
+  for (const int k : inliers) keep[static_cast<std::size_t>(k)] = 1;
+  for (std::size_t k = 0; k < index.size(); ++k) {
+    if (!keep[k]) f.map_point[index[k]] = -1;
+  }
+  return static_cast<int>(inliers.size());
+}
+
+// chi^2 of keypoint i of f observing p_world from T_camera_world: the squared reprojection
+// error (u, v and, with stereo/depth, u_right) times the level's information (ORB-SLAM2's
+// chi2() of its edges); infinite behind the camera.
+double VisualSlam::Impl::chi2(const FrameData& f, std::size_t i, const core::SE3& T_cw, const Eigen::Vector3d& p_world) const {
+  const Eigen::Vector3d p = T_cw * p_world;
+  if (!(p.z() > 1e-6)) return std::numeric_limits<double>::infinity();
+  const double u = camera.fx * p.x() / p.z() + camera.cx, v = camera.fy * p.y() / p.z() + camera.cy;
+  double e2 = (u - f.undistorted[i].x()) * (u - f.undistorted[i].x()) + (v - f.undistorted[i].y()) * (v - f.undistorted[i].y());
+  if (f.u_right[i] >= 0) {
+    const double ur = u - bf / p.z();
+    e2 += (ur - f.u_right[i]) * (ur - f.u_right[i]);
+  }
+  return e2 * inv_sigma2[static_cast<std::size_t>(f.keypoints[i].octave)];
+}
+
+double VisualSlam::Impl::chi2_of(const FrameData& f, std::size_t i, const core::SE3& T_cw) const {
+  return chi2(f, i, T_cw, points[static_cast<std::size_t>(f.map_point[i])].p_world);
+}
+
+std::unique_ptr<backend::Factor> VisualSlam::Impl::observation_factor(const FrameData& f, std::size_t i) const {
+  const backend::PinholeIntrinsics K{camera.fx, camera.fy, camera.cx, camera.cy};
+  const double baseline = bf / camera.fx;
+  if (f.u_right[i] >= 0) {
+    return std::make_unique<backend::StereoReprojectionFactor>(K, baseline, f.undistorted[i].x(), f.undistorted[i].y(), f.u_right[i]);
+  }
+  return std::make_unique<backend::PinholeReprojectionFactor>(K, f.undistorted[i].x(), f.undistorted[i].y());
+}
+
+// Returns the inliers; marks outliers in f.outlier; sets f.T_world_camera.
+int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m) {
+  std::vector<std::size_t> matched;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    f.outlier[i] = 0;
+    if (f.map_point[i] >= 0) matched.push_back(i);
+  }
+  if (matched.size() < 3) return 0;
+  const core::SE3 initial = f.T_world_camera;
+  core::SE3 T = initial;
+  backend::LeastSquaresOptions lso;
+  lso.linear_solver = backend::LinearSolverType::kSparseNormalCholesky;
+  lso.max_iterations = 10;
+  lso.threads = 1;
+  int inliers = 0;
+  for (int round = 0; round < 4; ++round) {
+    backend::LeastSquaresProblem problem;
+    double pose[7];
+    backend::se3_to_values(initial, pose);  // every round starts from the prediction, as ORB-SLAM2
+    const int var = problem.add_variable(pose, backend::se3_manifold());
+    for (const std::size_t i : matched) {
+      if (f.outlier[i]) continue;
+      const bool stereo = f.u_right[i] >= 0;
+      const double sqrt_info = 1.0 / scales[static_cast<std::size_t>(f.keypoints[i].octave)];
+      backend::FactorLoss loss;
+      if (round < 2) loss = {backend::RobustKernel::kHuber, std::sqrt(stereo ? options.chi2_stereo : options.chi2_mono)};
+      problem.add_factor(std::make_unique<ScaledFactor>(observation_factor(f, i), sqrt_info,
+                                                        &points[static_cast<std::size_t>(f.map_point[i])].p_world),
+                         {var}, loss);
+    }
+    if (problem.num_factors() < 3) break;
+    const backend::LeastSquaresSummary s = backend::solve(problem, lso);
+    if (s.is_solution_usable()) T = backend::se3_from_values(pose);
+    const core::SE3 T_cw = T.inverse();
+    inliers = 0;
+    for (const std::size_t i : matched) {
+      const double chi2 = chi2_of(f, i, T_cw);
+      const double threshold = f.u_right[i] >= 0 ? options.chi2_stereo : options.chi2_mono;
+      f.outlier[i] = chi2 > threshold ? 1 : 0;
+      if (!f.outlier[i]) ++inliers;
+    }
+    if (round == 3 && sigma_position_m && inliers >= 3) {
+      // Covariance of the pose at the solution, from the inliers only.
+      backend::LeastSquaresProblem cp;
+      double cpose[7];
+      backend::se3_to_values(T, cpose);
+      const int cv = cp.add_variable(cpose, backend::se3_manifold());
+      for (const std::size_t i : matched) {
+        if (f.outlier[i]) continue;
+        cp.add_factor(std::make_unique<ScaledFactor>(observation_factor(f, i), 1.0 / scales[static_cast<std::size_t>(f.keypoints[i].octave)],
+                                                     &points[static_cast<std::size_t>(f.map_point[i])].p_world),
+                      {cv});
+      }
+      const backend::MarginalCovariances c = backend::marginal_covariances(cp, {cv}, 1);
+      if (c.ok) {
+        // Tangent (rho, phi) on the right: the position block in the camera frame; its
+        // largest eigenvalue is frame-independent. Pixel noise of 1 px at level 0 assumed.
+        const Eigen::Matrix3d P = c.blocks[0].topLeftCorner<3, 3>();
+        *sigma_position_m = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P).eigenvalues().maxCoeff()));
+      }
+    }
+  }
+  f.T_world_camera = T;
+  return inliers;
+}
+
+void VisualSlam::Impl::drop_outliers(FrameData& f) {
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (f.map_point[i] >= 0 && f.outlier[i]) {
+      f.map_point[i] = -1;
+      f.outlier[i] = 0;
+    }
+  }
+}
+
+// Projects the points `ids` (repeats allowed) at f's pose and matches each to the best
+// unmatched keypoint near its projection (ORB-SLAM2 ORBmatcher::SearchByProjection(Frame,
+// vector<MapPoint*>, th) after Frame::isInFrustum): in front, inside the image, within the
+// point's scale-invariance distances, viewed within 60 degrees of its mean viewing direction;
+// radius th x (2.5 or 4 by viewing angle) x the predicted level's scale; the best descriptor
+// within TH_HIGH and, when the second best is on the same level, better than ratio x it.
+// Points the frame already holds are skipped. Returns the new matches.
+int VisualSlam::Impl::search_by_projection(FrameData& f, const std::vector<int>& ids, double th, bool count_visible) {
+  ++search_stamp;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (f.map_point[i] >= 0) points[static_cast<std::size_t>(f.map_point[i])].last_search = search_stamp;
+  }
+  const core::SE3 T_cw = f.T_world_camera.inverse();
+  const Eigen::Vector3d center = f.T_world_camera.translation();
+  int matches = 0;
+  for (const int id : ids) {
+    MapPoint& mp = points[static_cast<std::size_t>(id)];
+    if (mp.bad || mp.last_search == search_stamp) continue;
+    mp.last_search = search_stamp;
+    double u, v, ur, z;
+    if (!project(T_cw, mp.p_world, u, v, ur, z)) continue;
+    const Eigen::Vector3d po = mp.p_world - center;
+    const double distance = po.norm();
+    if (distance < 0.8 * mp.min_distance || distance > 1.2 * mp.max_distance) continue;
+    const double view_cos = po.dot(mp.normal) / distance;
+    if (view_cos < 0.5) continue;
+    if (count_visible) ++mp.visible;
+    const int level = predict_level(mp, distance);
+    const double r = (view_cos > 0.998 ? 2.5 : 4.0) * th * scales[static_cast<std::size_t>(level)];
+    const std::vector<int> candidates = features_in_area(f, u, v, r, level - 1, level);
+    int best = 256, second = 256, best_level = -1, second_level = -1, best_j = -1;
+    for (const int j : candidates) {
+      const auto sj = static_cast<std::size_t>(j);
+      if (f.map_point[sj] >= 0) continue;
+      if (f.u_right[sj] >= 0 && std::abs(ur - f.u_right[sj]) > r) continue;
+      const int d = vision::descriptor_distance(mp.descriptor.ptr(), f.descriptors.ptr(j));
+      if (d < best) {
+        second = best;
+        second_level = best_level;
+        best = d;
+        best_level = f.keypoints[sj].octave;
+        best_j = j;
+      } else if (d < second) {
+        second = d;
+        second_level = f.keypoints[sj].octave;
+      }
+    }
+    if (best_j < 0 || best > options.max_descriptor_distance) continue;
+    if (best_level == second_level && best > options.local_match_ratio * second) continue;
+    f.map_point[static_cast<std::size_t>(best_j)] = id;
+    ++matches;
+  }
+  return matches;
+}
+
+int VisualSlam::Impl::track_local_map(FrameData& f, double* sigma_position_m, int* given) {
+  // Keyframes sharing points with the frame, most shared first.
+  std::unordered_map<int, int> shared;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const int id = f.map_point[i];
+    if (id < 0) continue;
+    MapPoint& mp = points[static_cast<std::size_t>(id)];
+    if (mp.bad) {
+      f.map_point[i] = -1;
+      continue;
+    }
+    for (const auto& [kf, idx] : mp.observations) ++shared[kf];
+  }
+  std::vector<std::pair<int, int>> ranked;
+  for (const auto& [kf, n] : shared) ranked.emplace_back(n, kf);
+  std::sort(ranked.begin(), ranked.end(), std::greater<>());
+  if (!ranked.empty()) reference_keyframe = ranked.front().second;
+  if (ranked.size() > static_cast<std::size_t>(options.local_map_keyframes)) ranked.resize(static_cast<std::size_t>(options.local_map_keyframes));
+  // Project the local map's points that the frame has not matched yet.
+  std::vector<int> ids;
+  for (const auto& [n, kf] : ranked) {
+    for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
+      if (id >= 0) ids.push_back(id);
+    }
+  }
+  const double th = kind == io::SequenceKind::kRgbd ? 3.0 * options.local_search_radius_px : options.local_search_radius_px;
+  search_by_projection(f, ids, th, true);
+  int matched = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) matched += f.map_point[i] >= 0 ? 1 : 0;
+  *given = matched;
+  const int inliers = optimize_pose(f, sigma_position_m);
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (f.map_point[i] >= 0 && !f.outlier[i]) ++points[static_cast<std::size_t>(f.map_point[i])].found;
+  }
+  drop_outliers(f);
+  return inliers;
+}
+
+FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, FrameTimes times,
+                  Clock::time_point start) {
+  FrameResult result;
+  result.frame = frames;
+  result.time = time;
+  result.features = static_cast<int>(left.keypoints.size());
+  result.stereo_points = static_cast<int>(stereo.matched);
+  const auto tracking_start = Clock::now();
+  FrameData f = make_frame(time, left, stereo);
+  bool mapped = false;
+  if (keyframes.empty() && kind == io::SequenceKind::kMonocular) return initialise_monocular(std::move(f), result, times, start, tracking_start);
+  if (keyframes.empty()) {
+    if (result.stereo_points < options.min_new_points) {
+      result.note = "too few stereo/depth points to start a map (" + std::to_string(result.stereo_points) + ")";
+      result.health = TrackingHealth::kLost;
+      times.tracking_s = seconds_since(tracking_start);
+    } else {
+      f.T_world_camera = core::SE3();
+      times.tracking_s = seconds_since(tracking_start);
+      const auto mapping_start = Clock::now();
+      insert_keyframe(f);
+      detect_and_close_loop(result);
+      times.mapping_s = seconds_since(mapping_start);
+      result.tracked = true;
+      result.health = TrackingHealth::kOk;
+      result.keyframe = true;
+      result.inliers = static_cast<int>(std::count_if(f.map_point.begin(), f.map_point.end(), [](int id) { return id >= 0; }));
+      result.inlier_ratio = 1.0;
+      mapped = true;
+    }
+    if (!mapped) {
+      relative.emplace_back(-1, core::SE3());
+      result.times = times;
+      result.times.total_s = seconds_since(start);
+      ++frames;
+      return result;
+    }
+  } else {
+    // Stage 1: the previous frame's points at the constant-velocity prediction.
+    f.T_world_camera = have_velocity && !lost ? last.T_world_camera * velocity : last.T_world_camera;
+    int matches = 0;
+    const bool was_lost = lost;
+    if (have_last && have_velocity && !lost) {
+      // ORB-SLAM2 TrackWithMotionModel: th 7 for stereo, 15 for RGB-D.
+      const double radius = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px
+                            : kind == io::SequenceKind::kRgbd ? options.motion_search_radius_rgbd_px
+                                                              : options.motion_search_radius_mono_px;
+      matches = search_from_last(f, last, radius);
+      if (matches < options.min_motion_matches) {
+        std::fill(f.map_point.begin(), f.map_point.end(), -1);
+        matches = search_from_last(f, last, 2.0 * radius);
+      }
+    }
+    int inliers = 0;
+    if (matches >= options.min_motion_matches) {
+      inliers = optimize_pose(f);
+      drop_outliers(f);
+    }
+    if (inliers < std::max(30, matches / 2)) {
+      // The prediction explains too little (fast motion, or no prediction): the reference
+      // keyframe's points by descriptor, a PnP RANSAC pose, then the same optimisation; the
+      // better of the two is kept.
+      // When lost, the most recent keyframes are tried too (a bounded stand-in for ORB-SLAM2's
+      // bag-of-words relocalisation over the whole map).
+      std::vector<int> candidates{reference_keyframe >= 0 ? reference_keyframe : static_cast<int>(keyframes.size()) - 1};
+      if (lost && options.vocabulary && database.size() > 0) {
+        // Relocalisation (ORB-SLAM2 Tracking::Relocalization): the keyframes the database
+        // ranks best for this frame's words.
+        for (const auto& r : database.query(options.vocabulary->transform(f.descriptors), 8)) {
+          if (static_cast<int>(r.id) != candidates.front()) candidates.push_back(static_cast<int>(r.id));
+        }
+      } else if (lost) {
+        for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && candidates.size() < 9; --kf) {
+          if (kf != candidates.front()) candidates.push_back(kf);
+        }
+      }
+      for (const int kf : candidates) {
+        FrameData alternative = f;
+        std::fill(alternative.map_point.begin(), alternative.map_point.end(), -1);
+        alternative.T_world_camera = keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera;
+        int alternative_matches = search_reference(alternative, keyframes[static_cast<std::size_t>(kf)]);
+        ++summary->reference_fallbacks;
+        int alternative_inliers = 0;
+        if (alternative_matches >= 15) alternative_matches = pnp_ransac(alternative);
+        if (alternative_matches >= 15) {
+          alternative_inliers = optimize_pose(alternative);
+          drop_outliers(alternative);
+        }
+        if (alternative_inliers > inliers) {
+          f = std::move(alternative);
+          inliers = alternative_inliers;
+          matches = alternative_matches;
+          result.used_reference = true;
+        }
+        if (inliers >= 30) break;
+      }
+    }
+    result.motion_matches = matches;
+    int given = 0;
+    if (inliers >= 10) {
+      // The local map must not make the frame worse than the first stage left it (wrong
+      // matches from a poorly predicted projection): then the first stage's result stands.
+      FrameData first_stage = f;
+      const int first_inliers = inliers;
+      inliers = track_local_map(f, &result.sigma_position_m, &given);
+      if (inliers < first_inliers / 2) {
+        f = std::move(first_stage);
+        inliers = first_inliers;
+        given = first_inliers;
+        result.note = "local-map matches contradicted the first stage; its pose kept";
+      }
+    }
+    result.inliers = inliers;
+    result.inlier_ratio = given > 0 ? static_cast<double>(inliers) / given : 0.0;
+    times.tracking_s = seconds_since(tracking_start);
+    if (was_lost && inliers >= options.lost_below_inliers && inliers < options.relocalisation_min_inliers) {
+      result.note = "relocalisation candidate with " + std::to_string(inliers) + " inliers (< " +
+                    std::to_string(options.relocalisation_min_inliers) + " needed after being lost): still lost";
+      inliers = 0;
+    }
+    if (inliers < options.lost_below_inliers) {
+      result.health = TrackingHealth::kLost;
+      result.tracked = false;
+      if (result.note.empty()) {
+        result.note = "only " + std::to_string(inliers) + " inlier map-point matches (lost below " +
+                      std::to_string(options.lost_below_inliers) + "): pose from the motion model";
+      }
+      f.T_world_camera = have_velocity ? last.T_world_camera * velocity : last.T_world_camera;
+      lost = true;
+      ++lost_frames;
+      if (options.new_map_after_lost_frames > 0 && kind != io::SequenceKind::kMonocular && lost_frames >= options.new_map_after_lost_frames &&
+          result.stereo_points >= options.min_new_points) {
+        // The Atlas: a new map segment from this frame, where the motion model put it.
+        segment = static_cast<int>(segment_parent.size());
+        segment_parent.push_back(segment);
+        const auto mapping_start = Clock::now();
+        std::fill(f.map_point.begin(), f.map_point.end(), -1);
+        insert_keyframe(f, true);
+        detect_and_close_loop(result);
+        times.mapping_s = seconds_since(mapping_start);
+        ++summary->maps_started;
+        result.new_map = true;
+        result.keyframe = true;
+        result.tracked = true;
+        result.health = TrackingHealth::kDegraded;
+        result.note = "lost for " + std::to_string(lost_frames) + " frames: new map segment " + std::to_string(segment) + " started";
+        result.inliers = 0;
+        lost = false;
+        lost_frames = 0;
+        have_velocity = false;
+      }
+    } else {
+      lost_frames = 0;
+      result.tracked = true;
+      if (was_lost) {
+        result.relocalised = true;
+        ++summary->relocalisations;
+      }
+      lost = false;
+      if (inliers < options.degraded_below_inliers) {
+        result.health = TrackingHealth::kDegraded;
+        result.note = std::to_string(inliers) + " inlier matches (degraded below " + std::to_string(options.degraded_below_inliers) + ")";
+      } else {
+        result.health = TrackingHealth::kOk;
+      }
+      if (need_keyframe(f, inliers)) {
+        const auto mapping_start = Clock::now();
+        insert_keyframe(f);
+        cull_points();
+        if (kind == io::SequenceKind::kMonocular) {
+          triangulate_new_points(static_cast<int>(keyframes.size()) - 1, 20);  // the only source of points (ORB-SLAM2: 20)
+        } else if (options.triangulation_keyframes > 0) {
+          triangulate_new_points(static_cast<int>(keyframes.size()) - 1, options.triangulation_keyframes);
+        }
+        if (options.local_ba) local_bundle_adjustment();
+        detect_and_close_loop(result);
+        times.mapping_s = seconds_since(mapping_start);
+        result.keyframe = true;
+      }
+    }
+  }
+  result.keypoints = f.keypoints;
+  result.keypoint_states.resize(f.size());
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    result.keypoint_states[i] = static_cast<signed char>(f.map_point[i] >= 0 ? 2 : (f.depth[i] > 0 ? 1 : 0));
+  }
+  if (result.tracked) {
+    if (have_last && !result.new_map) {
+      velocity = last.T_world_camera.inverse() * f.T_world_camera;
+      have_velocity = true;
+    }
+    // Tracking may have relocalised into another segment, or a merge may have renamed it.
+    segment = segment_of(reference_keyframe);
+    last = std::move(f);
+    have_last = true;
+    const KeyFrame& ref = keyframes[static_cast<std::size_t>(reference_keyframe)];
+    relative.emplace_back(reference_keyframe, ref.frame.T_world_camera.inverse() * last.T_world_camera);
+    result.T_world_camera = last.T_world_camera;
+  } else {
+    // Keep the last tracked frame and its points for the next attempt; report the guess.
+    const KeyFrame& ref = keyframes[static_cast<std::size_t>(std::max(reference_keyframe, 0))];
+    relative.emplace_back(ref.id, ref.frame.T_world_camera.inverse() * f.T_world_camera);
+    result.T_world_camera = f.T_world_camera;
+    if (have_last) {
+      last.T_world_camera = f.T_world_camera;
+      have_velocity = false;
+    }
+  }
+  result.segment = segment;
+  result.times = times;
+  result.times.total_s = seconds_since(start);
+  ++frames;
+  return result;
+}
+
+}  // namespace cairn::vslam
