@@ -1,3 +1,4 @@
+#include "cairn/viz/cairo_image.hpp"
 #include "cairn/landmarks/outputs.hpp"
 
 #include <algorithm>
@@ -22,18 +23,6 @@ namespace {
 
 nlohmann::json number_or_null(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
 
-struct SurfaceDeleter {
-  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
-};
-struct ContextDeleter {
-  void operator()(cairo_t* c) const { cairo_destroy(c); }
-};
-
-cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
-  auto* out = static_cast<std::ostream*>(closure);
-  out->write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(length));
-  return *out ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
-}
 
 }  // namespace
 
@@ -167,8 +156,8 @@ void write_landmarks_png(const std::string& path, const LandmarkRun& run, const 
   const double legend = 60.0;
   const int width = static_cast<int>(std::ceil(size.x() * scale + 2 * margin));
   const int height = static_cast<int>(std::ceil(size.y() * scale + 2 * margin + legend));
-  std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height));
-  std::unique_ptr<cairo_t, ContextDeleter> context(cairo_create(surface.get()));
+  viz::CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height));
+  viz::CairoContext context(cairo_create(surface.get()));
   cairo_t* cr = context.get();
   cairo_set_source_rgb(cr, 1, 1, 1);
   cairo_paint(cr);
@@ -244,12 +233,8 @@ void write_landmarks_png(const std::string& path, const LandmarkRun& run, const 
   cairo_move_to(cr, margin, y0 + 30);
   cairo_line_to(cr, margin + scale, y0 + 30);
   cairo_stroke(cr);
-  cairo_surface_flush(surface.get());
-  io::write_output(path, [&](std::ostream& out) {
-    if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS) {
-      out.setstate(std::ios::badbit);
-    }
-  });
+  const std::string png = viz::encode_png(surface.get());
+  io::write_output(path, [&](std::ostream& out) { out << png; });
 }
 
 }  // namespace cairn::landmarks

@@ -1,3 +1,4 @@
+#include "cairn/viz/cairo_image.hpp"
 #include "cairn/lidar3d/outputs.hpp"
 
 #include <cairo.h>
@@ -21,18 +22,6 @@ eval::MatrixTrajectory relative_to_first(const std::vector<core::SE3>& poses) {
   const core::SE3 T_first_world = poses.front().inverse();
   for (const core::SE3& T : poses) out.poses.push_back((T_first_world * T).matrix());
   return out;
-}
-
-struct SurfaceDeleter {
-  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
-};
-struct ContextDeleter {
-  void operator()(cairo_t* c) const { cairo_destroy(c); }
-};
-cairo_status_t append_bytes(void* closure, const unsigned char* data, unsigned int length) {
-  auto* out = static_cast<std::vector<unsigned char>*>(closure);
-  out->insert(out->end(), data, data + length);
-  return CAIRO_STATUS_SUCCESS;
 }
 
 }  // namespace
@@ -117,10 +106,10 @@ std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& m
     return Eigen::Vector2d((p.x() - lo.x()) / resolution, static_cast<double>(height) - (p.y() - lo.y()) / resolution);
   };
 
-  std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(
+  viz::CairoSurface surface(
       cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
   if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) throw std::runtime_error("cannot create a picture");
-  std::unique_ptr<cairo_t, ContextDeleter> context(cairo_create(surface.get()));
+  viz::CairoContext context(cairo_create(surface.get()));
   cairo_t* cr = context.get();
   cairo_set_source_rgb(cr, 1, 1, 1);
   cairo_paint(cr);
@@ -223,13 +212,8 @@ std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& m
   cairo_fill(cr);
   cairo_move_to(cr, x + bar_m / resolution + 6.0, y - 3.0);
   cairo_show_text(cr, (std::to_string(static_cast<int>(bar_m)) + " m").c_str());
-  cairo_surface_flush(surface.get());
-
-  std::vector<unsigned char> png;
-  if (cairo_surface_write_to_png_stream(surface.get(), append_bytes, &png) != CAIRO_STATUS_SUCCESS) {
-    throw std::runtime_error("cannot encode the picture as PNG");
-  }
-  return png;
+  const std::string png = viz::encode_png(surface.get());
+  return std::vector<unsigned char>(png.begin(), png.end());
 }
 
 }  // namespace cairn::lidar3d

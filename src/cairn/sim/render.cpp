@@ -1,3 +1,4 @@
+#include "cairn/viz/cairo_image.hpp"
 #include "cairn/sim/render.hpp"
 
 #include <cairo.h>
@@ -17,18 +18,6 @@ namespace {
 /// Largest image side, pixels: a wildly drifting dead reckoning shrinks the scale instead.
 constexpr double kMaxSidePx = 4000.0;
 
-struct SurfaceDeleter {
-  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
-};
-struct ContextDeleter {
-  void operator()(cairo_t* c) const { cairo_destroy(c); }
-};
-
-cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
-  auto* out = static_cast<std::ostream*>(closure);
-  out->write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(length));
-  return *out ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
-}
 
 }  // namespace
 
@@ -49,8 +38,8 @@ void render_png(const std::string& path, const World& world, const std::vector<V
   const int width = static_cast<int>(std::ceil(size.x() * scale + 2 * margin));
   const int height = static_cast<int>(std::ceil(size.y() * scale + 2 * margin + legend_height));
 
-  std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height));
-  std::unique_ptr<cairo_t, ContextDeleter> context(cairo_create(surface.get()));
+  viz::CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height));
+  viz::CairoContext context(cairo_create(surface.get()));
   cairo_t* cr = context.get();
   cairo_set_source_rgb(cr, 1, 1, 1);
   cairo_paint(cr);
@@ -160,12 +149,8 @@ void render_png(const std::string& path, const World& world, const std::vector<V
   cairo_move_to(cr, bar_x + bar + 8, y0 + 37);
   cairo_show_text(cr, "5 m");
 
-  cairo_surface_flush(surface.get());
-  io::write_output(path, [&](std::ostream& out) {
-    if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS) {
-      throw io::ParseError(path, 0, "cannot write: cairo failed to encode the PNG");
-    }
-  });
+  const std::string png = viz::encode_png(surface.get());
+  io::write_output(path, [&](std::ostream& out) { out << png; });
 }
 
 }  // namespace cairn::sim

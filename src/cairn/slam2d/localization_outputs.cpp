@@ -1,3 +1,4 @@
+#include "cairn/viz/cairo_image.hpp"
 #include "cairn/slam2d/localization_outputs.hpp"
 
 #include <cairo.h>
@@ -15,18 +16,6 @@
 
 namespace cairn::slam2d {
 namespace {
-
-struct SurfaceDeleter {
-  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
-};
-struct ContextDeleter {
-  void operator()(cairo_t* c) const { cairo_destroy(c); }
-};
-cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
-  auto* out = static_cast<std::ostream*>(closure);
-  out->write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(length));
-  return *out ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
-}
 
 }  // namespace
 
@@ -110,7 +99,7 @@ void write_localization_png(const ProbabilityGrid& grid, const std::vector<Local
   const int map_width = i1 - i0 + 1;
   const int width = std::max(480, map_width), height = j1 - j0 + 1;
   const int legend = 28;
-  std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
+  viz::CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
   if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) throw io::ParseError(path, 0, "the map is too large for a PNG");
   unsigned char* data = cairo_image_surface_get_data(surface.get());
   const int stride = cairo_image_surface_get_stride(surface.get());
@@ -126,7 +115,7 @@ void write_localization_png(const ProbabilityGrid& grid, const std::vector<Local
     }
   }
   cairo_surface_mark_dirty(surface.get());
-  std::unique_ptr<cairo_t, ContextDeleter> context(cairo_create(surface.get()));
+  viz::CairoContext context(cairo_create(surface.get()));
   cairo_t* cr = context.get();
   const double r = grid.resolution();
   const Eigen::Vector2d origin = grid.origin() + Eigen::Vector2d(i0, j0) * r;
@@ -211,11 +200,8 @@ void write_localization_png(const ProbabilityGrid& grid, const std::vector<Local
   cairo_fill(cr);
   cairo_move_to(cr, x + bar_m / r + 6.0, y - 3.0);
   cairo_show_text(cr, (std::to_string(static_cast<int>(bar_m)) + " m").c_str());
-  cairo_surface_flush(surface.get());
-  io::write_output(path, [&](std::ostream& out) {
-    if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS)
-      throw io::ParseError(path, 0, "cairo could not encode the PNG");
-  });
+  const std::string png = viz::encode_png(surface.get());
+  io::write_output(path, [&](std::ostream& out) { out << png; });
 }
 
 void write_localization_csv(const std::vector<LocalizationResult>& results, const std::string& path) {

@@ -1,3 +1,4 @@
+#include "cairn/viz/cairo_image.hpp"
 #include "cairn/slam2d/outputs.hpp"
 
 #include <cairo.h>
@@ -24,18 +25,6 @@ namespace fs = std::filesystem;
 
 core::SE3 to_se3(const core::SE2& T) {
   return core::SE3(core::SO3::from_rpy(0.0, 0.0, T.angle()), Eigen::Vector3d(T.x(), T.y(), 0.0));
-}
-
-struct SurfaceDeleter {
-  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
-};
-struct ContextDeleter {
-  void operator()(cairo_t* c) const { cairo_destroy(c); }
-};
-cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
-  auto* out = static_cast<std::ostream*>(closure);
-  out->write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(length));
-  return *out ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
 }
 
 // Occupancy class of a cell for the map files: 0 free, 1 occupied, 2 unknown.
@@ -150,7 +139,7 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
   const Crop crop = known_crop(grid, 10);
   const int width = std::max(480, crop.width), height = crop.height;
   const int legend = 28;
-  std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
+  viz::CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
   unsigned char* data = cairo_image_surface_get_data(surface.get());
   const int stride = cairo_image_surface_get_stride(surface.get());
   cairo_surface_flush(surface.get());
@@ -169,7 +158,7 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
     std::fill(pixels, pixels + width, 0xffffffu);
   }
   cairo_surface_mark_dirty(surface.get());
-  std::unique_ptr<cairo_t, ContextDeleter> context(cairo_create(surface.get()));
+  viz::CairoContext context(cairo_create(surface.get()));
   cairo_t* cr = context.get();
   const double r = grid.resolution();
   const Eigen::Vector2d origin = grid.origin() + Eigen::Vector2d(crop.i0, crop.j0) * r;
@@ -255,11 +244,8 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
   cairo_fill(cr);
   cairo_move_to(cr, x + bar_m / r + 6.0, y - 3.0);
   cairo_show_text(cr, (std::to_string(static_cast<int>(bar_m)) + " m").c_str());
-  cairo_surface_flush(surface.get());
-  io::write_output(path, [&](std::ostream& out) {
-    if (cairo_surface_write_to_png_stream(surface.get(), write_to_stream, &out) != CAIRO_STATUS_SUCCESS)
-      throw io::ParseError(path, 0, "cairo could not encode the PNG");
-  });
+  const std::string png = viz::encode_png(surface.get());
+  io::write_output(path, [&](std::ostream& out) { out << png; });
 }
 
 OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::size_t scans_used,

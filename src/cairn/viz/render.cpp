@@ -1,5 +1,7 @@
 #include "cairn/viz/render.hpp"
 
+#include "cairn/viz/cairo_image.hpp"
+
 #include <cairo-svg.h>
 #include <cairo.h>
 
@@ -18,14 +20,8 @@
 namespace cairn::viz {
 namespace {
 
-struct SurfaceDeleter {
-  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
-};
-struct ContextDeleter {
-  void operator()(cairo_t* c) const { cairo_destroy(c); }
-};
-using Surface = std::unique_ptr<cairo_surface_t, SurfaceDeleter>;
-using Context = std::unique_ptr<cairo_t, ContextDeleter>;
+using Surface = CairoSurface;
+using Context = CairoContext;
 
 cairo_status_t append_to_string(void* closure, const unsigned char* data, unsigned int length) {
   static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
@@ -555,10 +551,10 @@ RenderResult render(const Figure& figure, ImageFormat format) {
     }
   }
   if (format == ImageFormat::kPng) {
-    cairo_surface_flush(surface.get());
-    const cairo_status_t status = cairo_surface_write_to_png_stream(surface.get(), append_to_string, &result.bytes);
-    if (status != CAIRO_STATUS_SUCCESS) {
-      result.message = std::string("cairo: ") + cairo_status_to_string(status);
+    try {
+      result.bytes = encode_png(surface.get());
+    } catch (const std::runtime_error& e) {
+      result.message = e.what();
       return result;
     }
   } else {
