@@ -30,10 +30,10 @@ double unit(std::uint64_t h, int shift) { return static_cast<double>((h >> shift
 class TextureCell {
  public:
   double value(std::uint64_t seed, double u, double v) {
-    const double cu = std::floor(u / kCell), cv = std::floor(v / kCell);
-    const auto i = static_cast<std::int64_t>(cu), j = static_cast<std::int64_t>(cv);
+    const double su = u / kCell, sv = v / kCell;
+    const std::int64_t i = floor_to_int(su), j = floor_to_int(sv);
     if (!valid_ || seed != seed_ || i != i_ || j != j_) build(seed, i, j);
-    const double x = u / kCell - cu, y = v / kCell - cv;
+    const double x = su - static_cast<double>(i), y = sv - static_cast<double>(j);
     double value = background_;
     for (const Shape& s : shapes_) {
       const double dx = x - s.centre_x, dy = y - s.centre_y;
@@ -44,6 +44,12 @@ class TextureCell {
 
  private:
   static constexpr double kCell = 0.2;
+  // floor() for the texture's range (|x| < 2^62); std::floor is a call or a slow bit trick
+  // without SSE4.1, and this is the renderer's innermost loop.
+  static std::int64_t floor_to_int(double x) {
+    const auto i = static_cast<std::int64_t>(x);
+    return x < static_cast<double>(i) ? i - 1 : i;
+  }
   struct Shape {
     double centre_x, centre_y, half_x, half_y, grey;
     bool rectangle;

@@ -1,8 +1,9 @@
 // Visual SLAM on rendered stereo pairs with exact ground truth (synthetic_world.hpp): tracking
 // accuracy in a textured corridor, and its failure modes: aliasing (two rooms with identical
-// textures), a texture-less wall filling the view, and a kidnap into the look-alike room.
-// Thresholds were measured on this code (numbers beside them) and given a margin; the SLAM's
-// options are its defaults throughout.
+// textures), a texture-less wall filling the view, fast motion, and a kidnap into the look-alike
+// room. Thresholds were measured on this code (numbers beside them) and given a margin. The
+// SLAM's options are its defaults throughout, plus a vocabulary for place recognition where the
+// test is about it, trained on another world's images (other seeds), never on a test's.
 
 #include <gtest/gtest.h>
 
@@ -129,6 +130,18 @@ core::SE3 truth_in_first_camera(const SlamRun& run, std::size_t k) { return run.
 
 double position_error(const SlamRun& run, std::size_t k, const core::SE3& estimate) {
   return (truth_in_first_camera(run, k).translation() - estimate.translation()).norm();
+}
+
+// The position error of frame k within its map segment (as reported with the frame): a segment
+// started after tracking loss is placed where the motion model guessed, so only the motion since
+// the segment's first frame can be compared with the truth. For the first segment that is the
+// absolute error.
+double segment_error(const SlamRun& run, std::size_t k) {
+  std::size_t first = 0;
+  while (first < k && run.results[first].segment != run.results[k].segment) ++first;
+  const core::SE3 truth = run.truth[first].inverse() * run.truth[k];
+  const core::SE3 estimate = run.results[first].T_world_camera.inverse() * run.results[k].T_world_camera;
+  return (truth.translation() - estimate.translation()).norm();
 }
 
 const char* health_name(TrackingHealth h) { return h == TrackingHealth::kOk ? "ok" : h == TrackingHealth::kDegraded ? "degraded" : "lost"; }
@@ -270,7 +283,7 @@ TEST(VisualSlamSynthetic, NoLoopClosureBetweenIdenticalRooms) {
   test::append(truth, test::walk(Eigen::Vector3d(0.0, 0.0, 1.0), Eigen::Vector3d(0.0, 0.0, 11.0), 0.2, 0.0, 10.0 * kDeg, 0.0, 5.0));
   const std::size_t entering_b = truth.size() - 1;
   test::append(truth, look_around(11.0));
-  test::append(truth, test::walk(Eigen::Vector3d(0.0, 0.0, 11.0), Eigen::Vector3d(0.0, 0.0, 13.5), 0.2, 0.0, 10.0 * kDeg, 0.0, 5.0));
+  test::append(truth, test::walk(Eigen::Vector3d(0.0, 0.0, 11.0), Eigen::Vector3d(0.0, 0.0, 12.6), 0.2, 0.0, 10.0 * kDeg, 0.0, 5.0));
   const SlamRun run = run_stereo(world, truth, options);
   print_summary("aliasing, A -> B", run);
   std::size_t keyframes_before_b = 0, tracked = 0;
@@ -281,7 +294,12 @@ TEST(VisualSlamSynthetic, NoLoopClosureBetweenIdenticalRooms) {
   std::printf("vocabulary: %s; %zu keyframes before room B (frame %zu); %zu / %zu frames tracked\n", options.vocabulary->description().c_str(),
               keyframes_before_b, entering_b, tracked, truth.size());
   const int false_loops = print_loops_and_count_false(run);
-  std::printf("aliasing, A -> B: %d accepted loops between places more than 1 m apart\n", false_loops);
+  const std::vector<core::SE3> estimate = run.slam->trajectory();
+  double max_error = 0.0;
+  for (std::size_t k = 0; k < truth.size(); ++k) max_error = std::max(max_error, position_error(run, k, estimate[k]));
+  std::printf("aliasing, A -> B: %d accepted loops between places more than 1 m apart; max position error of the final "
+              "trajectory %.3f m\n",
+              false_loops, max_error);
   // Not vacuous: place recognition was asked in room B.
   EXPECT_GT(run.slam->summary().loop_queries, 0u);
   // The requirement. On 2026-11-25 this FAILS: frame 102 (corridor 1, 1.2 m before room
@@ -346,8 +364,9 @@ TEST(VisualSlamSynthetic, ReportsWhetherARealRevisitClosesALoop) {
   EXPECT_EQ(false_loops, 0);
   // The revisit is found (in every run so far, 2026-11-25: frame 105 or 106 -> 16 or 18, true
   // distance 0.15-0.55 m) and removes the drift of the two turns: measured 0.43 m before the loop,
-  // at most 0.011 m after it. (The final trajectory() keeps 0.43 m at the loop frame itself and 0.1 m at
-  // some keyframes: their entries are not corrected with the rest; printed above.)
+  // at most 0.011 m after it. The final trajectory() follows the corrected keyframes (a keyframe
+  // frame takes its keyframe's final pose since 2026-11-25; before, the loop frame kept 0.43 m);
+  // what remains, up to 0.23 m before the loop, is the drift the pose graph spreads.
   EXPECT_GE(true_loops, 1);
   EXPECT_LT(loop_frame + 1, truth.size());
   EXPECT_LT(max_error_after_loop, 0.05);
@@ -406,6 +425,59 @@ TEST(VisualSlamSynthetic, FailsLoudlyFacingABlankWall) {
   EXPECT_LE(recovered_at - last_blank, 5u);
   EXPECT_EQ(tracked_after, truth.size() - recovered_at);
   EXPECT_LT(max_error_after, 0.1);
+}
+
+// --- Fast motion ------------------------------------------------------------------------------
+
+TEST(VisualSlamSynthetic, FastMotionIsTrackedOrDeclaredLostNeverWrong) {
+  const SyntheticWorld world = corridor_world(301);
+  // 3 m at 0.15 m per frame, then 9 m at 0.9 m per frame with the yaw swinging +-20 deg over
+  // 3.6 m (up to ~30 deg between frames), then 0.15 m per frame again.
+  std::vector<core::SE3> truth = test::walk(Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(0.0, 0.0, 3.0), 0.15);
+  const std::size_t fast_from = truth.size();
+  test::append(truth, test::walk(Eigen::Vector3d(0.0, 0.0, 3.0), Eigen::Vector3d(0.0, 0.0, 12.0), 0.9, 0.0, 20.0 * kDeg, 0.0, 3.6));
+  const std::size_t fast_to = truth.size();
+  test::append(truth, test::walk(Eigen::Vector3d(0.0, 0.0, 12.0), Eigen::Vector3d(0.0, 0.0, 15.0), 0.15));
+  const SlamRun run = run_stereo(world, truth, VisualSlamOptions{});
+  print_summary("fast motion", run);
+  std::size_t ok_wrong = 0, tracked_wrong = 0, lost = 0, tracked_right = 0;
+  double max_tracked_error = 0.0;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    const FrameResult& r = run.results[k];
+    const double absolute = position_error(run, k, r.T_world_camera);
+    const double e = segment_error(run, k);
+    if (k + 1 >= fast_from) {
+      std::printf("  frame %3zu%s: %-8s tracked %d reloc %d new map %d segment %d ref %d inliers %4d, error %.3f m in its "
+                  "segment, %.3f m absolute %s\n",
+                  k, k >= fast_from && k < fast_to ? " (fast)" : "       ", health_name(r.health), r.tracked ? 1 : 0, r.relocalised ? 1 : 0,
+                  r.new_map ? 1 : 0, r.segment, r.used_reference ? 1 : 0, r.inliers, e, absolute, r.note.c_str());
+    }
+    if (!r.tracked) {
+      ++lost;
+      continue;
+    }
+    max_tracked_error = std::max(max_tracked_error, e);
+    if (e > 0.5) {
+      ++tracked_wrong;
+      ok_wrong += r.health == TrackingHealth::kOk ? 1 : 0;
+    } else {
+      ++tracked_right;
+    }
+  }
+  std::size_t tracked_at_the_end = 0;
+  for (std::size_t k = truth.size() - 15; k < truth.size(); ++k) tracked_at_the_end += run.results[k].tracked ? 1 : 0;
+  std::printf("fast motion: %zu frames (%zu fast): %zu tracked within 0.5 m (in their map segment), %zu lost, %zu tracked more "
+              "than 0.5 m off (%zu of them ok); max error of a tracked frame %.3f m; %zu new map segments; %zu of the last 15 frames "
+              "tracked, the last %.3f m from the truth in absolute terms\n",
+              truth.size(), fast_to - fast_from, tracked_right, lost, tracked_wrong, ok_wrong, max_tracked_error,
+              run.slam->summary().maps_started, tracked_at_the_end, position_error(run, truth.size() - 1, run.results.back().T_world_camera));
+  // Measured (2026-11-25): of the 10 fast frames 6 are lost, 3 start new map segments (reported
+  // degraded) and the rest are tracked within 0.015 m of the truth in their segment; back at
+  // 0.15 m per frame every frame is tracked (in segment 3, whose placement is the motion model's
+  // guess: 7-11 m off in absolute terms, since without a vocabulary segments are never merged).
+  EXPECT_EQ(ok_wrong, 0u) << "frames reported ok more than 0.5 m from the truth (in their map segment)";
+  EXPECT_LT(max_tracked_error, 0.1);
+  EXPECT_EQ(tracked_at_the_end, 15u);
 }
 
 // --- d. Kidnapped into the look-alike room -----------------------------------------------------

@@ -417,6 +417,7 @@ int vslam_command(const VslamFlags& flags) {
                                  {"map_points_fused", s.map_points_fused},
                                  {"maps_started", s.maps_started},
                                  {"maps_merged", s.maps_merged},
+                                 {"merge_attempts_with_recent_keyframes", s.merge_attempts},
                                  {"global_bundle_adjustments", s.global_bas},
                                  {"loop_s", s.loop_s},
                                  {"global_ba_s", s.global_ba_s},

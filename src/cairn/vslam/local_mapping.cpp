@@ -228,6 +228,9 @@ void VisualSlam::Impl::cull_points() {
   for (const int id : recent_points) {
     MapPoint& mp = points[static_cast<std::size_t>(id)];
     if (mp.bad) continue;
+    // A point of another map segment (tracking was lost, or relocalised elsewhere) is judged by
+    // nothing this segment sees: it stays, as it was when its segment stopped.
+    if (segment_of(mp.first_keyframe) != segment_of(current)) continue;
     if (static_cast<double>(mp.found) / mp.visible < 0.25) {
       set_bad(id);
     } else if (current - mp.first_keyframe >= 2 && observation_weight(mp) <= (kind == io::SequenceKind::kMonocular ? 2 : 3)) {

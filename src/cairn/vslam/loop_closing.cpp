@@ -3,6 +3,8 @@
 
 #include "cairn/vslam/slam_state.hpp"
 
+#include <optional>
+
 namespace cairn::vslam {
 
 // Replaces point `old_id` by `new_id` everywhere (ORB-SLAM2 MapPoint::Replace): its
@@ -69,6 +71,28 @@ bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& recor
                     " inlier matches (< " + std::to_string(options.loop_min_matches) + ")";
     return false;
   }
+  // The correction the loop asks for, against the drift the keyframes between the two could
+  // have gathered (cairn's guard against look-alike places, as slam2d's loop windows: a true
+  // loop moves the keyframe by what odometry drifted, an aliased one by the distance between
+  // the look-alikes). Within one segment only: a merge has no such bound.
+  const core::SE3 change = keyframes[static_cast<std::size_t>(current)].frame.T_world_camera.inverse() * probe.T_world_camera;
+  record.correction_m = change.translation().norm();
+  record.correction_deg = Eigen::AngleAxisd(change.rotation_matrix()).angle() * 180.0 / 3.14159265358979323846;
+  if (segment_of(candidate) == segment_of(current)) {
+    double travelled = 0.0;
+    for (int k = std::min(candidate, current); k < std::max(candidate, current); ++k) {
+      travelled += (keyframes[static_cast<std::size_t>(k) + 1].frame.T_world_camera.translation() -
+                    keyframes[static_cast<std::size_t>(k)].frame.T_world_camera.translation()).norm();
+    }
+    const double allowed_m = options.loop_drift_floor_m + options.loop_drift_fraction * travelled;
+    const double allowed_deg = options.loop_drift_floor_deg + options.loop_drift_deg_per_m * travelled;
+    if (record.correction_m > allowed_m || record.correction_deg > allowed_deg) {
+      record.reason = "correction " + std::to_string(record.correction_m) + " m / " + std::to_string(record.correction_deg) +
+                      " deg exceeds the drift possible over the " + std::to_string(travelled) + " m travelled since the candidate (" +
+                      std::to_string(allowed_m) + " m / " + std::to_string(allowed_deg) + " deg): a look-alike place";
+      return false;
+    }
+  }
   return true;
 }
 
@@ -77,14 +101,11 @@ bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& recor
 // information as ORB-SLAM2's essential graph; keyframe 0 fixed) optimised on the back end;
 // points follow their reference keyframe; the keyframe's loop matches fuse its points into the
 // old ones; then a global bundle adjustment.
-void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData& probe, LoopRecord& record) {
+void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData& probe) {
   const std::size_t n = keyframes.size();
   std::vector<core::SE3> old_poses(n);
   for (std::size_t k = 0; k < n; ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
   const core::SE3 T_loop = probe.T_world_camera;
-  const core::SE3 change = old_poses[static_cast<std::size_t>(current)].inverse() * T_loop;
-  record.correction_m = change.translation().norm();
-  record.correction_deg = Eigen::AngleAxisd(change.rotation_matrix()).angle() * 180.0 / 3.14159265358979323846;
   io::PoseGraph3D graph;
   for (std::size_t k = 0; k < n; ++k) graph.vertices.push_back({static_cast<std::int64_t>(k), old_poses[k]});
   auto add_edge = [&](int a, int b, const core::SE3& T_a_b, double weight = 1.0) {
@@ -223,7 +244,7 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
     if (verify_loop(current, candidate, record, probe)) {
       record.decision = "accepted";
       record.reason = std::to_string(record.matches) + " inlier matches to the candidate's neighbourhood";
-      correct_loop(current, candidate, probe, record);
+      correct_loop(current, candidate, probe);
       if (record.merge) {
         // The segment being tracked joins the candidate's (the older one keeps its id).
         const int a = segment_of(current), b = segment_of(candidate);
@@ -240,6 +261,56 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
     record.decision = "rejected";
     summary->loops.push_back(record);
   }
+  summary->loop_s += seconds_since(start);
+}
+
+// A young map segment (its first `merge_recent_keyframes_of_new_map` keyframes) tries to merge
+// with the keyframes tracked last before it started, the place where tracking was lost (cairn's,
+// as slam2d merges segments near the estimate; ORB-SLAM3 relies on place recognition alone):
+// the newest keyframe verified against each of the 8 most recent keyframes of the other
+// segments, as a loop is verified. Needs no vocabulary. The candidates are near in time, so a
+// look-alike elsewhere is not among them.
+void VisualSlam::Impl::merge_with_recent(FrameResult& result) {
+  if (options.merge_recent_keyframes_of_new_map <= 0 || kind == io::SequenceKind::kMonocular) return;
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  const int own = segment_of(current);
+  int age = 0;
+  for (const KeyFrame& k : keyframes) age += segment_of(k.id) == own ? 1 : 0;
+  if (age > options.merge_recent_keyframes_of_new_map) return;
+  std::vector<int> candidates;
+  for (int k = current - 1; k >= 0 && candidates.size() < 8; --k) {
+    if (segment_of(k) != own) candidates.push_back(k);
+  }
+  if (candidates.empty()) return;
+  const auto start = Clock::now();
+  std::optional<LoopRecord> best_rejected;
+  for (const int candidate : candidates) {
+    LoopRecord record;
+    record.keyframe = static_cast<std::size_t>(current);
+    record.candidate = static_cast<std::size_t>(candidate);
+    record.frame = keyframes[static_cast<std::size_t>(current)].frame.index;
+    record.candidate_frame = keyframes[static_cast<std::size_t>(candidate)].frame.index;
+    record.score = -1.0;  // proposed by recency, not by the bag of words
+    record.merge = true;
+    FrameData probe;
+    ++summary->merge_attempts;
+    if (verify_loop(current, candidate, record, probe)) {
+      record.decision = "accepted";
+      record.reason = std::to_string(record.matches) + " inlier matches to the keyframes tracked last before this segment";
+      correct_loop(current, candidate, probe);
+      const int a = segment_of(current), b = segment_of(candidate);
+      segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+      ++summary->maps_merged;
+      ++summary->loops_accepted;
+      summary->loops.push_back(record);
+      result.loop_closed = true;
+      summary->loop_s += seconds_since(start);
+      return;
+    }
+    record.decision = "rejected";
+    if (!best_rejected || record.matches + record.pnp_inliers > best_rejected->matches + best_rejected->pnp_inliers) best_rejected = record;
+  }
+  if (best_rejected) summary->loops.push_back(*best_rejected);  // the closest attempt of this keyframe
   summary->loop_s += seconds_since(start);
 }
 

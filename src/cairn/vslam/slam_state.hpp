@@ -287,12 +287,13 @@ struct VisualSlam::Impl {
   // information as ORB-SLAM2's essential graph; keyframe 0 fixed) optimised on the back end;
   // points follow their reference keyframe; the keyframe's loop matches fuse its points into the
   // old ones; then a global bundle adjustment.
-  void correct_loop(int current, int candidate, const FrameData& probe, LoopRecord& record);
+  void correct_loop(int current, int candidate, const FrameData& probe);
   // ORB-SLAM2 LoopClosing::DetectLoop: candidates from the database scoring at least as well as
   // the keyframe's worst covisible neighbour and sharing at least 80 % of the best candidate's
   // words, kept only when their covisibility group was also a candidate group for the previous
   // loop_consistency - 1 keyframes; then verified, best score first.
   void detect_and_close_loop(FrameResult& result);
+  void merge_with_recent(FrameResult& result);
 
   // --- Monocular initialisation (ORB-SLAM2 Initializer, Mur-Artal et al. T-RO 2015 Sec. IV) (initialisation.cpp) ---
   // Level-0 keypoints of the reference matched to the frame within 100 px (ORB-SLAM2

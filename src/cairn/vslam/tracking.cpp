@@ -610,6 +610,8 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
         std::fill(f.map_point.begin(), f.map_point.end(), -1);
         insert_keyframe(f, true);
         detect_and_close_loop(result);
+        if (!result.loop_closed) merge_with_recent(result);
+        f.T_world_camera = keyframes.back().frame.T_world_camera;
         times.mapping_s = seconds_since(mapping_start);
         ++summary->maps_started;
         result.new_map = true;
@@ -647,6 +649,10 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
         }
         if (options.local_ba) local_bundle_adjustment();
         detect_and_close_loop(result);
+        if (!result.loop_closed) merge_with_recent(result);
+        // The frame is the keyframe: it takes the pose the bundle adjustment and any loop
+        // correction gave the keyframe (its trajectory entry is relative to it).
+        f.T_world_camera = keyframes.back().frame.T_world_camera;
         times.mapping_s = seconds_since(mapping_start);
         result.keyframe = true;
       }

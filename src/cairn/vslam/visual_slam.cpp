@@ -27,8 +27,11 @@ std::string VisualSlamOptions::problems() const {
   if (loop_min_keyframes_apart < 1 || loop_consistency < 1) add("loop_min_keyframes_apart and loop_consistency must be >= 1");
   if (loop_min_pnp_inliers < 6 || loop_min_matches < loop_min_pnp_inliers) add("need 6 <= loop_min_pnp_inliers <= loop_min_matches");
   if (relocalisation_min_inliers < lost_below_inliers) add("relocalisation_min_inliers must be >= lost_below_inliers");
-  if (new_map_after_lost_frames < 0) add("new_map_after_lost_frames must be >= 0");
+  if (new_map_after_lost_frames < 0 || merge_recent_keyframes_of_new_map < 0) add("new_map_after_lost_frames and merge_recent_keyframes_of_new_map must be >= 0");
   if (triangulation_keyframes < 0) add("triangulation_keyframes must be >= 0");
+  if (!(loop_drift_floor_m >= 0.0) || !(loop_drift_fraction >= 0.0) || !(loop_drift_floor_deg >= 0.0) || !(loop_drift_deg_per_m >= 0.0)) {
+    add("the loop drift bounds must be >= 0");
+  }
   if (!(triangulation_match_ratio > 0.0 && triangulation_match_ratio <= 1.0)) add("triangulation_match_ratio must be in (0, 1]");
   return out;
 }

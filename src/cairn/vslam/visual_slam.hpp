@@ -86,12 +86,24 @@ struct VisualSlamOptions {
   int loop_min_pnp_inliers = 20;       ///< descriptor matches to, and PnP RANSAC inliers of, the candidate's points (ORB-SLAM2 ComputeSim3: 20 and 20)
   int loop_min_matches = 40;           ///< map-point matches after projecting the candidate's neighbourhood (ORB-SLAM2: 40)
   int relocalisation_min_inliers = 50; ///< ORB-SLAM2 Relocalization: 50
+  /// A loop within a map segment is refused when it would move the keyframe further than the
+  /// drift the keyframes since the candidate could have gathered: floor + fraction x distance
+  /// travelled, floor + deg_per_m x distance for the rotation (stereo visual odometry drifts
+  /// 1-2 %; an identical room 10 m away asks for a 10 m correction). Not ORB-SLAM2's; cairn's
+  /// guard against aliasing, measured in tests/vslam/test_vslam_synthetic.cpp.
+  double loop_drift_floor_m = 0.5;
+  double loop_drift_fraction = 0.05;
+  double loop_drift_floor_deg = 5.0;
+  double loop_drift_deg_per_m = 0.5;
   bool global_ba_after_loop = true;    ///< a full bundle adjustment after each loop correction
   /// The Atlas (ORB-SLAM3, Campos et al. 2021, Sec. IV): after this many lost frames in a row, a
   /// frame with enough stereo/depth points starts a new map segment (its own keyframes and
   /// points, placed where the motion model guessed, with no constraint to the old ones); a
   /// verified loop between segments merges them (the same verification as a loop). 0 = never.
   int new_map_after_lost_frames = 3;
+  /// A new segment's first this-many keyframes each try to merge with the 8 keyframes tracked
+  /// last before it (verified as a loop; no vocabulary needed). 0 = only place recognition merges.
+  int merge_recent_keyframes_of_new_map = 10;
   /// Empty when usable, else every problem.
   std::string problems() const;
 };
@@ -138,7 +150,7 @@ struct LoopRecord {
   std::size_t keyframe = 0;   ///< the querying keyframe (index)
   std::size_t candidate = 0;  ///< the candidate keyframe
   std::size_t frame = 0, candidate_frame = 0;
-  double score = 0.0;         ///< BoW L1 score
+  double score = 0.0;         ///< BoW L1 score; -1 for a merge attempt proposed by recency
   double min_covisible_score = 0.0;  ///< the query's lowest score with its covisible keyframes
   int consistency = 0;        ///< consecutive keyframes with agreeing candidates
   int pnp_inliers = 0, matches = 0;
@@ -156,6 +168,7 @@ struct VisualSlamSummary {
   std::size_t loop_queries = 0, loops_accepted = 0, relocalisations = 0, global_bas = 0;
   std::size_t map_points_fused = 0;
   std::size_t maps_started = 0, maps_merged = 0;  ///< segments beyond the first; merges of two
+  std::size_t merge_attempts = 0;  ///< verifications of a new segment against the keyframes tracked last before it
   double loop_s = 0.0, global_ba_s = 0.0;
   std::vector<LoopRecord> loops;  ///< every candidate that reached verification, and why
 };
