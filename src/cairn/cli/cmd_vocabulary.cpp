@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/io/image_sequence.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/vision/features.hpp"
 #include "cairn/vision/vocabulary.hpp"
@@ -30,25 +31,13 @@ struct VocabularyFlags {
   bool quiet = false;
 };
 
-bool is_image(const fs::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".ppm" || ext == ".bmp";
-}
-
 // Folders give their images (sorted, not recursive); files are taken as they are.
 std::vector<std::string> list_images(const std::vector<std::string>& inputs) {
   std::vector<std::string> out;
   for (const std::string& input : inputs) {
     std::error_code ec;
     if (fs::is_directory(input, ec)) {
-      std::vector<std::string> here;
-      for (const auto& e : fs::directory_iterator(input, ec)) {
-        if (e.is_regular_file(ec) && is_image(e.path())) here.push_back(e.path().string());
-      }
-      if (ec) throw io::ParseError(input, 0, "cannot list the folder: " + ec.message());
-      if (here.empty()) throw io::ParseError(input, 0, "no images (.png, .jpg, .pgm, ...) in the folder");
-      std::sort(here.begin(), here.end());
+      const std::vector<std::string> here = io::image_files_in(input);
       out.insert(out.end(), here.begin(), here.end());
     } else {
       out.push_back(input);

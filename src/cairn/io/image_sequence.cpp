@@ -13,25 +13,26 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool is_image_name(const fs::path& p) {
-  std::string ext = p.extension().string();
+}  // namespace
+
+bool is_image_file_name(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".ppm" || ext == ".bmp" ||
          ext == ".tif" || ext == ".tiff";
 }
 
-std::vector<std::string> images_in(const fs::path& dir) {
+std::vector<std::string> image_files_in(const std::string& folder) {
   std::vector<std::string> names;
   std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    if (entry.is_regular_file(ec) && is_image_name(entry.path())) names.push_back(entry.path().filename().string());
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    if (entry.is_regular_file(ec) && is_image_file_name(entry.path().string())) names.push_back(entry.path().string());
   }
-  if (ec) throw ParseError(dir.string(), 0, "cannot list the folder: " + ec.message());
+  if (ec) throw ParseError(folder, 0, "cannot list the folder: " + ec.message());
+  if (names.empty()) throw ParseError(folder, 0, "no images (.png, .jpg, .pgm, ...) in the folder");
   std::sort(names.begin(), names.end());
   return names;
 }
-
-}  // namespace
 
 std::string CameraCalibration::problems() const {
   std::string out;
@@ -134,9 +135,9 @@ ImageSequence read_kitti_stereo(const std::string& folder) {
   }
   seq.calibration = read_kitti_calibration((dir / "calib.txt").string());
   seq.calibration_from_dataset = true;
-  const std::vector<std::string> names = images_in(left);
-  if (names.empty()) throw ParseError(left.string(), 0, "no images (.png, .jpg, .pgm, ...) in the folder");
-  const std::vector<std::string> right_names = images_in(right);
+  std::vector<std::string> names, right_names;
+  for (const std::string& p : image_files_in(left.string())) names.push_back(fs::path(p).filename().string());
+  for (const std::string& p : image_files_in(right.string())) right_names.push_back(fs::path(p).filename().string());
   const std::set<std::string> right_set(right_names.begin(), right_names.end());
   for (const std::string& name : names) {
     if (!right_set.count(name)) {

@@ -85,6 +85,13 @@ CameraCalibration read_kitti_calibration(const std::string& path);
 /// most once, |dt| < max_difference_s). The calibration is not in the folder (left zero).
 ImageSequence read_tum_rgbd(const std::string& folder, double max_difference_s = 0.02);
 
+/// True for the image file extensions cairn reads (.png, .jpg, .jpeg, .pgm, .ppm, .bmp, .tif,
+/// .tiff; any case).
+bool is_image_file_name(const std::string& path);
+/// The image files directly in `folder`, sorted by name; ParseError when it cannot be listed or
+/// holds none.
+std::vector<std::string> image_files_in(const std::string& folder);
+
 /// Reads a TUM "timestamp filename" list (rgb.txt, depth.txt). Comments (#) are skipped.
 std::vector<std::pair<core::Timestamp, std::string>> read_tum_image_list(const std::string& path);
 
