@@ -1,4 +1,4 @@
-#include "cairn/viz/cairo_image.hpp"
+#include "cairn/slam2d/map_picture.hpp"
 #include "cairn/slam2d/localization_outputs.hpp"
 
 #include <cairo.h>
@@ -89,39 +89,9 @@ ProbabilityGrid render_saved_map(const SavedMap2D& map, double resolution_m) {
 
 void write_localization_png(const ProbabilityGrid& grid, const std::vector<LocalizationResult>& results,
                             const std::string& path) {
-  int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
-  if (!grid.known_bounds(i0, j0, i1, j1)) i0 = j0 = i1 = j1 = 0;
-  const int margin = 10;
-  i0 = std::max(0, i0 - margin);
-  j0 = std::max(0, j0 - margin);
-  i1 = std::min(std::max(grid.width() - 1, 0), i1 + margin);
-  j1 = std::min(std::max(grid.height() - 1, 0), j1 + margin);
-  const int map_width = i1 - i0 + 1;
-  const int width = std::max(480, map_width), height = j1 - j0 + 1;
-  const int legend = 28;
-  viz::CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
-  if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) throw io::ParseError(path, 0, "the map is too large for a PNG");
-  unsigned char* data = cairo_image_surface_get_data(surface.get());
-  const int stride = cairo_image_surface_get_stride(surface.get());
-  cairo_surface_flush(surface.get());
-  for (int row = 0; row < height + legend; ++row) {
-    auto* pixels = reinterpret_cast<std::uint32_t*>(data + static_cast<std::ptrdiff_t>(row) * stride);
-    for (int i = 0; i < width; ++i) {
-      std::uint32_t grey = row < height ? 0xcdu : 0xffu;
-      const int gi = i + i0, gj = height - 1 - row + j0;
-      if (row < height && grid.cell_known(gi, gj))
-        grey = static_cast<std::uint32_t>(std::lround(255.0 * (1.0 - grid.cell_probability(gi, gj))));
-      pixels[i] = (grey << 16) | (grey << 8) | grey;
-    }
-  }
-  cairo_surface_mark_dirty(surface.get());
-  viz::CairoContext context(cairo_create(surface.get()));
-  cairo_t* cr = context.get();
-  const double r = grid.resolution();
-  const Eigen::Vector2d origin = grid.origin() + Eigen::Vector2d(i0, j0) * r;
-  auto to_image = [&](const Eigen::Vector2d& p) {
-    return Eigen::Vector2d((p.x() - origin.x()) / r, height - (p.y() - origin.y()) / r);
-  };
+  MapPicture picture(grid, path);
+  cairo_t* cr = picture.cr();
+  auto to_image = [&](const Eigen::Vector2d& p) { return picture.to_image(p); };
   auto colour = [&](Health h) {
     if (h == Health::kOk) cairo_set_source_rgb(cr, 0.12, 0.35, 0.85);
     else cairo_set_source_rgb(cr, 0.95, 0.55, 0.05);
@@ -157,51 +127,25 @@ void write_localization_png(const ProbabilityGrid& grid, const std::vector<Local
     }
   }
   // Legend and scale bar.
-  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-  cairo_set_font_size(cr, 12.0);
-  double x = 8.0;
-  const double y = height + 18.0;
-  auto label = [&](const char* text) {
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_move_to(cr, x + 22.0, y - 3.0);
-    cairo_show_text(cr, text);
-    cairo_text_extents_t extents;
-    cairo_text_extents(cr, text, &extents);
-    x += 22.0 + extents.x_advance + 14.0;
-  };
-  for (const Health h : {Health::kOk, Health::kDegraded}) {
-    colour(h);
-    cairo_rectangle(cr, x, y - 9.0, 18.0, 4.0);
-    cairo_fill(cr);
-    label(h == Health::kOk ? "ok" : "degraded");
-  }
+  picture.legend_swatch(0.12, 0.35, 0.85, "ok");
+  picture.legend_swatch(0.95, 0.55, 0.05, "degraded");
+  const double x = picture.legend_x(), y = picture.legend_y();
   cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
   cairo_set_line_width(cr, 2.0);
   cairo_new_sub_path(cr);
   cairo_arc(cr, x + 9.0, y - 7.0, 5.0, 0.0, 2.0 * std::numbers::pi);
   cairo_stroke(cr);
-  label("(re)localised");
+  picture.legend_text("(re)localised");
+  const double x2 = picture.legend_x();
   cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
-  cairo_move_to(cr, x + 4.0, y - 12.0);
-  cairo_line_to(cr, x + 14.0, y - 2.0);
-  cairo_move_to(cr, x + 4.0, y - 2.0);
-  cairo_line_to(cr, x + 14.0, y - 12.0);
+  cairo_move_to(cr, x2 + 4.0, y - 12.0);
+  cairo_line_to(cr, x2 + 14.0, y - 2.0);
+  cairo_move_to(cr, x2 + 4.0, y - 2.0);
+  cairo_line_to(cr, x2 + 14.0, y - 12.0);
   cairo_stroke(cr);
-  label("lost");
-  double bar_m = 1.0;
-  for (const double length : {10.0, 5.0, 2.0}) {
-    if (x + length / r + 50.0 <= width) {
-      bar_m = length;
-      break;
-    }
-  }
-  cairo_set_source_rgb(cr, 0, 0, 0);
-  cairo_rectangle(cr, x, y - 9.0, bar_m / r, 4.0);
-  cairo_fill(cr);
-  cairo_move_to(cr, x + bar_m / r + 6.0, y - 3.0);
-  cairo_show_text(cr, (std::to_string(static_cast<int>(bar_m)) + " m").c_str());
-  const std::string png = viz::encode_png(surface.get());
-  io::write_output(path, [&](std::ostream& out) { out << png; });
+  picture.legend_text("lost");
+  picture.scale_bar();
+  picture.write(path);
 }
 
 void write_localization_csv(const std::vector<LocalizationResult>& results, const std::string& path) {

@@ -1,4 +1,4 @@
-#include "cairn/viz/cairo_image.hpp"
+#include "cairn/slam2d/map_picture.hpp"
 #include "cairn/slam2d/outputs.hpp"
 
 #include <cairo.h>
@@ -44,29 +44,6 @@ void append_float(std::string& out, float value) {
 
 // The observed part of the grid plus a margin of `margin` cells (the grid itself grows by
 // doubling and is mostly unknown).
-struct Crop {
-  int i0 = 0, j0 = 0, width = 1, height = 1;
-};
-Crop known_crop(const ProbabilityGrid& grid, int margin) {
-  int i0 = grid.width(), j0 = grid.height(), i1 = -1, j1 = -1;
-  for (int j = 0; j < grid.height(); ++j) {
-    for (int i = 0; i < grid.width(); ++i) {
-      if (!grid.cell_known(i, j)) continue;
-      i0 = std::min(i0, i);
-      i1 = std::max(i1, i);
-      j0 = std::min(j0, j);
-      j1 = std::max(j1, j);
-    }
-  }
-  if (i1 < 0) return {};
-  Crop c;
-  c.i0 = std::max(0, i0 - margin);
-  c.j0 = std::max(0, j0 - margin);
-  c.width = std::min(grid.width(), i1 + margin + 1) - c.i0;
-  c.height = std::min(grid.height(), j1 + margin + 1) - c.j0;
-  return c;
-}
-
 }  // namespace
 
 io::Trajectory to_trajectory(const Slam2d& slam) {
@@ -84,7 +61,7 @@ io::Trajectory to_trajectory(const Slam2d& slam) {
 eval::MatrixTrajectory to_matrix_trajectory(const Slam2d& slam) { return eval::MatrixTrajectory(to_trajectory(slam)); }
 
 void write_map_pgm(const ProbabilityGrid& grid, const std::string& pgm_path, const std::string& yaml_path) {
-  const Crop crop = known_crop(grid, 10);
+  const GridCrop crop = known_crop(grid, 10);
   const int width = crop.width, height = crop.height;
   io::write_output(pgm_path, [&](std::ostream& out) {
     out << "P5\n# cairn slam2d occupancy grid, resolution " << grid.resolution() << " m\n"
@@ -136,35 +113,9 @@ SegmentMarks segment_marks(const Slam2d& slam, const std::vector<ScanResult>& tr
 void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& trajectory,
                    const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& loops, const std::string& path,
                    const SegmentMarks& segments) {
-  const Crop crop = known_crop(grid, 10);
-  const int width = std::max(480, crop.width), height = crop.height;
-  const int legend = 28;
-  viz::CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
-  unsigned char* data = cairo_image_surface_get_data(surface.get());
-  const int stride = cairo_image_surface_get_stride(surface.get());
-  cairo_surface_flush(surface.get());
-  for (int row = 0; row < height; ++row) {
-    const int j = height - 1 - row;
-    auto* pixels = reinterpret_cast<std::uint32_t*>(data + static_cast<std::ptrdiff_t>(row) * stride);
-    for (int i = 0; i < width; ++i) {
-      std::uint32_t grey = 0xcd;
-      const int gi = i + crop.i0, gj = j + crop.j0;
-      if (grid.cell_known(gi, gj)) grey = static_cast<std::uint32_t>(std::lround(255.0 * (1.0 - grid.cell_probability(gi, gj))));
-      pixels[i] = (grey << 16) | (grey << 8) | grey;
-    }
-  }
-  for (int row = height; row < height + legend; ++row) {
-    auto* pixels = reinterpret_cast<std::uint32_t*>(data + static_cast<std::ptrdiff_t>(row) * stride);
-    std::fill(pixels, pixels + width, 0xffffffu);
-  }
-  cairo_surface_mark_dirty(surface.get());
-  viz::CairoContext context(cairo_create(surface.get()));
-  cairo_t* cr = context.get();
-  const double r = grid.resolution();
-  const Eigen::Vector2d origin = grid.origin() + Eigen::Vector2d(crop.i0, crop.j0) * r;
-  auto to_image = [&](const Eigen::Vector2d& p) {
-    return Eigen::Vector2d((p.x() - origin.x()) / r, height - (p.y() - origin.y()) / r);
-  };
+  MapPicture picture(grid, path);
+  cairo_t* cr = picture.cr();
+  auto to_image = [&](const Eigen::Vector2d& p) { return picture.to_image(p); };
   // Loop closures: thin green lines between the two poses.
   // Many loop closures would hide the map: the more there are, the fainter each line.
   cairo_set_line_width(cr, 1.0);
@@ -211,41 +162,13 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
     cairo_show_text(cr, start.label.c_str());
   }
   // Legend and scale bar.
-  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-  cairo_set_font_size(cr, 12.0);
-  double x = 8.0;
-  const double y = height + 18.0;
-  auto swatch = [&](double red, double green, double blue, const char* text) {
-    cairo_set_source_rgb(cr, red, green, blue);
-    cairo_rectangle(cr, x, y - 9.0, 18.0, 4.0);
-    cairo_fill(cr);
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_move_to(cr, x + 22.0, y - 3.0);
-    cairo_show_text(cr, text);
-    cairo_text_extents_t extents;
-    cairo_text_extents(cr, text, &extents);
-    x += 22.0 + extents.x_advance + 14.0;
-  };
-  swatch(0.12, 0.35, 0.85, "ok");
-  swatch(0.95, 0.55, 0.05, "degraded");
-  swatch(0.9, 0.1, 0.1, "lost");
-  swatch(0.1, 0.7, 0.2, "loop closure");
-  if (!segments.starts.empty()) swatch(0.55, 0.1, 0.75, "segment start / merge");
-  // The longest round scale bar that fits beside the legend.
-  double bar_m = 1.0;
-  for (const double length : {10.0, 5.0, 2.0}) {
-    if (x + length / r + 50.0 <= width) {
-      bar_m = length;
-      break;
-    }
-  }
-  cairo_set_source_rgb(cr, 0, 0, 0);
-  cairo_rectangle(cr, x, y - 9.0, bar_m / r, 4.0);
-  cairo_fill(cr);
-  cairo_move_to(cr, x + bar_m / r + 6.0, y - 3.0);
-  cairo_show_text(cr, (std::to_string(static_cast<int>(bar_m)) + " m").c_str());
-  const std::string png = viz::encode_png(surface.get());
-  io::write_output(path, [&](std::ostream& out) { out << png; });
+  picture.legend_swatch(0.12, 0.35, 0.85, "ok");
+  picture.legend_swatch(0.95, 0.55, 0.05, "degraded");
+  picture.legend_swatch(0.9, 0.1, 0.1, "lost");
+  picture.legend_swatch(0.1, 0.7, 0.2, "loop closure");
+  if (!segments.starts.empty()) picture.legend_swatch(0.55, 0.1, 0.75, "segment start / merge");
+  picture.scale_bar();
+  picture.write(path);
 }
 
 OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::size_t scans_used,
