@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
@@ -111,7 +112,23 @@ nlohmann::json stats_json(const eval::Statistics& s) {
 int vslam_command(const VslamFlags& flags) {
   if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
   const std::string layout = io::detect_image_layout(flags.folder);
-  io::ImageSequence seq = layout == "kitti" ? io::read_kitti_stereo(flags.folder) : io::read_tum_rgbd(flags.folder);
+  io::ImageSequence seq = layout == "kitti"   ? io::read_kitti_stereo(flags.folder)
+                          : layout == "euroc" ? io::read_euroc_stereo(flags.folder)
+                                              : io::read_tum_rgbd(flags.folder);
+  // EuRoC's cameras are not rectified: rectify every pair (Bouguet) and track the rectified
+  // left camera; its ground truth is the body's moved to that camera.
+  std::optional<vision::StereoRectifier> rectifier;
+  if (seq.rig) {
+    if (!flags.calib.empty() || !flags.camera.empty()) throw std::invalid_argument("an EuRoC folder brings its own calibration: no --camera or --calib");
+    int w = seq.rig->left.width, h = seq.rig->left.height;
+    if (w <= 0 || h <= 0) {
+      const cv::Mat first = vision::read_gray_image(seq.frames.front().image);
+      w = first.cols;
+      h = first.rows;
+    }
+    rectifier.emplace(*seq.rig, w, h);
+    seq.calibration = rectifier->rectified();
+  }
   if (!flags.calib.empty() && !flags.camera.empty()) throw std::invalid_argument("give --camera or --calib, not both");
   if (!flags.calib.empty()) {
     io::CameraCalibration c = read_calibration_yaml(flags.calib);
@@ -133,6 +150,10 @@ int vslam_command(const VslamFlags& flags) {
   } else if (seq.ground_truth) {
     ground_truth = *seq.ground_truth;
     ground_truth_path = seq.ground_truth_path;
+    if (rectifier) {
+      const core::SE3 T_body_camera = seq.rig->T_body_left * rectifier->T_left_rectified();
+      for (core::SE3& T : ground_truth.poses) T = T * T_body_camera;
+    }
   }
 
   vslam::VisualSlamOptions options;
@@ -173,15 +194,26 @@ int vslam_command(const VslamFlags& flags) {
   for (std::size_t k = 0; k < n && !interrupted(); ++k) {
     const io::ImageFrame& frame = seq.frames[k];
     const auto read_start = std::chrono::steady_clock::now();
-    const cv::Mat image = vision::read_gray_image(frame.image, width, height);
+    cv::Mat image = vision::read_gray_image(frame.image, width, height);
     width = image.cols;
     height = image.rows;
     vslam::FrameResult r;
     if (kind == io::SequenceKind::kMonocular) {
+      if (rectifier) {
+        cv::Mat unused, rectified;
+        rectifier->rectify(image, image, rectified, unused);
+        image = rectified;
+      }
       read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
       r = slam.add_monocular(frame.time, image);
     } else if (seq.kind == io::SequenceKind::kStereo) {
-      const cv::Mat right = vision::read_gray_image(frame.right_image, width, height);
+      cv::Mat right = vision::read_gray_image(frame.right_image, width, height);
+      if (rectifier) {
+        cv::Mat left_rectified, right_rectified;
+        rectifier->rectify(image, right, left_rectified, right_rectified);
+        image = left_rectified;
+        right = right_rectified;
+      }
       read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
       r = slam.add_stereo(frame.time, image, right);
     } else {
@@ -471,7 +503,7 @@ int vslam_command(const VslamFlags& flags) {
 Runner register_vslam(CLI::App& app) {
   auto flags = std::make_shared<VslamFlags>();
   CLI::App* cmd = &app;
-  cmd->add_option("folder", flags->folder, "KITTI odometry folder (calib.txt, image_0/1 or image_l/r) or TUM RGB-D folder")->required();
+  cmd->add_option("folder", flags->folder, "KITTI odometry folder (calib.txt, image_0/1 or image_l/r), EuRoC MAV folder (mav0/cam0, cam1) or TUM RGB-D folder")->required();
   cmd->add_option("--out", flags->out, "Output directory (trajectory.tum/.kitti, keyframes.tum, map_points.ply, frames.csv, report.json, trajectory.png, features.png)");
   cmd->add_option("--camera", flags->camera, "Calibration preset for TUM RGB-D: tum-fr1, tum-fr2, tum-fr3");
   cmd->add_option("--calib", flags->calib, "Calibration YAML (fx, fy, cx, cy, k1..k3, p1, p2, baseline_m, depth_units_per_m, virtual_baseline_m)");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <set>
 
@@ -69,9 +70,10 @@ std::string detect_image_layout(const std::string& folder) {
     return "kitti";
   }
   if (fs::exists(dir / "rgb.txt", ec) || fs::exists(dir / "associations.txt", ec)) return "tum";
+  if (fs::is_directory(dir / "mav0" / "cam0", ec) || fs::is_directory(dir / "cam0", ec)) return "euroc";
   throw ParseError(folder, 0,
                    "not a known image sequence: expected calib.txt with image_0/ and image_1/ (or image_l/ and image_r/) "
-                   "(KITTI odometry stereo), or rgb.txt / associations.txt (TUM RGB-D)");
+                   "(KITTI odometry stereo), rgb.txt / associations.txt (TUM RGB-D), or mav0/cam0 (EuRoC)");
 }
 
 CameraCalibration read_kitti_calibration(const std::string& path) {
@@ -269,6 +271,170 @@ ImageSequence read_tum_rgbd(const std::string& folder, double max_difference_s) 
   const fs::path gt = dir / "groundtruth.txt";
   if (fs::exists(gt, ec)) {
     seq.ground_truth = read_tum(gt.string());
+    seq.ground_truth_path = gt.string();
+  }
+  return seq;
+}
+
+namespace {
+
+// The numbers of `key: [a, b, ...]` (the list may span lines) or, for T_BS, of its `data:` list.
+// Returns the line of the key (0 when absent).
+std::size_t yaml_list(const std::vector<std::string>& lines, const std::string& key, std::vector<double>& out, const std::string& path) {
+  out.clear();
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const std::string line = lines[i].substr(0, lines[i].find('#'));
+    const std::size_t k = line.find(key + ":");
+    if (k == std::string::npos || line.find_first_not_of(" \t") != k) continue;
+    std::string text = line.substr(k + key.size() + 1);
+    std::size_t j = i;
+    if (key == "T_BS") {
+      // cols / rows / data lines follow; take the data list.
+      for (j = i + 1; j < lines.size(); ++j) {
+        const std::string l = lines[j].substr(0, lines[j].find('#'));
+        const std::size_t d = l.find("data:");
+        if (d != std::string::npos) {
+          text = l.substr(d + 5);
+          break;
+        }
+      }
+      if (j == lines.size()) throw ParseError(path, i + 1, "T_BS has no data: list");
+    }
+    while (text.find(']') == std::string::npos) {
+      if (++j >= lines.size()) throw ParseError(path, i + 1, "the list of " + key + " is not closed by ']'");
+      text += " " + lines[j].substr(0, lines[j].find('#'));
+    }
+    const std::size_t open = text.find('['), close = text.find(']');
+    if (open == std::string::npos || close < open) throw ParseError(path, i + 1, "expected " + key + ": [numbers, ...]");
+    std::string body = text.substr(open + 1, close - open - 1);
+    std::replace(body.begin(), body.end(), ',', ' ');
+    for (const std::string_view token : split_whitespace(body)) {
+      char* end = nullptr;
+      const std::string t(token);
+      const double value = std::strtod(t.c_str(), &end);
+      if (end != t.c_str() + t.size() || !std::isfinite(value)) throw ParseError(path, i + 1, key + ": expected a finite number, found " + quote_token(token));
+      out.push_back(value);
+    }
+    return i + 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+CameraCalibration read_euroc_camera(const std::string& path, core::SE3* T_body_camera) {
+  std::vector<std::string> lines;
+  {
+    TextReader reader(path);
+    while (reader.next_line()) lines.emplace_back(reader.line());
+  }
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const std::string l = lines[i].substr(0, lines[i].find('#'));
+    if (l.find("camera_model:") != std::string::npos && l.find("pinhole") == std::string::npos) {
+      throw ParseError(path, i + 1, "only camera_model: pinhole is supported");
+    }
+    if (l.find("distortion_model:") != std::string::npos && l.find("radial-tangential") == std::string::npos &&
+        l.find("radtan") == std::string::npos) {
+      throw ParseError(path, i + 1, "only distortion_model: radial-tangential is supported");
+    }
+  }
+  std::vector<double> v;
+  CameraCalibration c;
+  std::size_t line = yaml_list(lines, "intrinsics", v, path);
+  if (line == 0) throw ParseError(path, 0, "missing intrinsics: [fu, fv, cu, cv]");
+  if (v.size() != 4) throw ParseError(path, line, "intrinsics: expected 4 numbers [fu, fv, cu, cv], found " + std::to_string(v.size()));
+  c.fx = v[0];
+  c.fy = v[1];
+  c.cx = v[2];
+  c.cy = v[3];
+  line = yaml_list(lines, "distortion_coefficients", v, path);
+  if (line > 0) {
+    if (v.size() != 4 && v.size() != 5) throw ParseError(path, line, "distortion_coefficients: expected [k1, k2, p1, p2] (or 5 with k3)");
+    c.k1 = v[0];
+    c.k2 = v[1];
+    c.p1 = v[2];
+    c.p2 = v[3];
+    if (v.size() == 5) c.k3 = v[4];
+  }
+  line = yaml_list(lines, "resolution", v, path);
+  if (line > 0) {
+    if (v.size() != 2 || !(v[0] >= 1.0) || !(v[1] >= 1.0)) throw ParseError(path, line, "resolution: expected [width, height]");
+    c.width = static_cast<int>(v[0]);
+    c.height = static_cast<int>(v[1]);
+  }
+  line = yaml_list(lines, "T_BS", v, path);
+  if (line == 0) throw ParseError(path, 0, "missing T_BS (the camera's pose in the body frame)");
+  if (v.size() != 16) throw ParseError(path, line, "T_BS data: expected 16 numbers (4 x 4, row-major), found " + std::to_string(v.size()));
+  Eigen::Matrix4d T;
+  for (int r = 0; r < 4; ++r) {
+    for (int k = 0; k < 4; ++k) T(r, k) = v[static_cast<std::size_t>(4 * r + k)];
+  }
+  if (const Eigen::Matrix3d R = T.topLeftCorner<3, 3>(); (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-3) {
+    throw ParseError(path, line, "T_BS: the rotation block is not a rotation");
+  }
+  if (T_body_camera) *T_body_camera = core::SE3::from_matrix(T);
+  if (const std::string p = c.problems(); !p.empty()) throw ParseError(path, 0, p);
+  return c;
+}
+
+ImageSequence read_euroc_stereo(const std::string& folder) {
+  fs::path dir(folder);
+  std::error_code ec;
+  if (fs::is_directory(dir / "mav0", ec)) dir /= "mav0";
+  ImageSequence seq;
+  seq.kind = SequenceKind::kStereo;
+  seq.layout = "euroc";
+  seq.folder = folder;
+  seq.times_from_file = true;
+  StereoRig rig;
+  rig.left = read_euroc_camera((dir / "cam0" / "sensor.yaml").string(), &rig.T_body_left);
+  rig.right = read_euroc_camera((dir / "cam1" / "sensor.yaml").string(), &rig.T_body_right);
+  auto read_list = [&](const fs::path& csv) {
+    std::vector<std::pair<core::Timestamp, std::string>> out;
+    TextReader reader(csv.string());
+    while (reader.next_line()) {
+      if (is_blank_or_comment(reader.line())) continue;
+      const std::vector<std::string_view> f = split_fields(reader.line(), ',');
+      if (f.size() != 2) reader.fail("expected \"timestamp [ns],filename\", found " + std::to_string(f.size()) + " fields");
+      const auto t = core::Timestamp::parse_nanoseconds(f[0]);
+      if (!t) reader.fail("expected a timestamp in integer nanoseconds, found " + quote_token(f[0]));
+      if (!out.empty() && !(out.back().first < *t)) reader.fail("timestamps must increase strictly");
+      std::string name(f[1]);
+      while (!name.empty() && (name.back() == ' ' || name.back() == '\r')) name.pop_back();
+      while (!name.empty() && name.front() == ' ') name.erase(name.begin());
+      out.emplace_back(*t, (csv.parent_path() / "data" / name).string());
+    }
+    if (out.empty()) throw ParseError(csv.string(), 0, "no images listed");
+    return out;
+  };
+  const auto left = read_list(dir / "cam0" / "data.csv");
+  const auto right = read_list(dir / "cam1" / "data.csv");
+  std::size_t j = 0, unpaired = 0;
+  for (const auto& [t, path] : left) {
+    while (j < right.size() && right[j].first < t) {
+      ++j;
+      ++unpaired;
+    }
+    if (j < right.size() && right[j].first == t) {
+      ImageFrame frame;
+      frame.time = t;
+      frame.image = path;
+      frame.right_image = right[j].second;
+      seq.frames.push_back(std::move(frame));
+      ++j;
+    } else {
+      ++unpaired;
+    }
+  }
+  unpaired += right.size() - j;
+  if (seq.frames.empty()) throw ParseError((dir / "cam1" / "data.csv").string(), 0, "no cam1 stamp equals a cam0 stamp: the pair cannot be formed");
+  if (unpaired > 0) seq.notes.push_back(std::to_string(unpaired) + " images have no partner with the same stamp and are skipped");
+  seq.calibration = rig.left;
+  seq.calibration_from_dataset = true;
+  seq.rig = rig;
+  const fs::path gt = dir / "state_groundtruth_estimate0" / "data.csv";
+  if (fs::exists(gt, ec)) {
+    seq.ground_truth = read_euroc(gt.string());
     seq.ground_truth_path = gt.string();
   }
   return seq;

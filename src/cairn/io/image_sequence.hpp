@@ -8,6 +8,7 @@
 /// | layout | folder holds | calibration | times | ground truth |
 /// |---|---|---|---|---|
 /// | KITTI odometry stereo | `image_0/` + `image_1/` (or `image_l/` + `image_r/`), `calib.txt` | `P0:`/`P1:` lines or two unlabelled 12-number lines | `times.txt` if present, else 0.1 s apart (said in `notes`) | `poses.txt` if present (camera 0 in the first camera-0 frame) |
+/// | EuRoC MAV (stereo) | `mav0/cam0/`, `mav0/cam1/` (`data.csv`, `data/`, `sensor.yaml`) | each camera's `sensor.yaml` (pinhole, radial-tangential, `T_BS`); the pair is not rectified: `rig` holds both cameras and the images must be rectified (vision::StereoRectifier) | from `data.csv` (ns) | `mav0/state_groundtruth_estimate0/data.csv` (the body, i.e. the IMU; `rig->T_body_cam0` turns it into the left camera's) |
 /// | TUM RGB-D | `rgb.txt` + `depth.txt` (or `associations.txt`), `rgb/`, `depth/` | not in the dataset: give it (cairn vslam --camera tum-fr1 / --calib) | from the lists | `groundtruth.txt` if present (T_world_rgb-camera) |
 
 #include <optional>
@@ -45,6 +46,13 @@ struct CameraCalibration {
 enum class SequenceKind { kStereo, kRgbd, kMonocular };
 std::string_view to_string(SequenceKind kind);
 
+/// Two cameras that are not rectified (EuRoC): each with its own calibration and its pose in the
+/// body frame (EuRoC's T_BS).
+struct StereoRig {
+  CameraCalibration left, right;
+  core::SE3 T_body_left, T_body_right;
+};
+
 struct ImageFrame {
   core::Timestamp time;
   std::string image;        ///< left (stereo), colour (RGB-D) or the only image
@@ -56,7 +64,8 @@ struct ImageSequence {
   SequenceKind kind = SequenceKind::kStereo;
   std::string layout;  ///< "kitti", "tum"
   std::string folder;
-  CameraCalibration calibration;  ///< from the dataset where it ships one (KITTI)
+  CameraCalibration calibration;  ///< from the dataset where it ships one (KITTI; EuRoC: the left camera's, unrectified)
+  std::optional<StereoRig> rig;   ///< EuRoC: the unrectified pair
   bool calibration_from_dataset = false;
   std::vector<ImageFrame> frames;
   bool times_from_file = false;
@@ -75,6 +84,16 @@ std::string detect_image_layout(const std::string& folder);
 /// Reads a KITTI odometry stereo folder (layout above). Every image listed in image_0 must have
 /// its partner in image_1; times.txt and poses.txt, when present, must have one line per frame.
 ImageSequence read_kitti_stereo(const std::string& folder);
+
+/// Reads an EuRoC MAV folder (the one holding `mav0/`, or `mav0/` itself). cam0 and cam1 frames
+/// are paired by their identical stamps (a stamp in one list only is skipped and counted in
+/// `notes`). The ground truth, when present, is the body's (EuRoC's IMU frame).
+ImageSequence read_euroc_stereo(const std::string& folder);
+
+/// Reads one EuRoC camera `sensor.yaml`: `intrinsics` [fu, fv, cu, cv], `distortion_model`
+/// radial-tangential with `distortion_coefficients` [k1, k2, p1, p2], `resolution` [w, h] and
+/// `T_BS` (data: 16 numbers, row-major). Throws ParseError with the line.
+CameraCalibration read_euroc_camera(const std::string& path, core::SE3* T_body_camera);
 
 /// Reads `calib.txt` of KITTI odometry: P0 and P1 (labelled or the first two lines), fx, fy,
 /// cx, cy from P0 and the baseline from P1's fourth column. Throws ParseError.

@@ -355,6 +355,47 @@ StereoMatches depth_from_rgbd(const std::vector<cv::KeyPoint>& keypoints, const 
   return out;
 }
 
+StereoRectifier::StereoRectifier(const io::StereoRig& rig, int width, int height) : width_(width), height_(height) {
+  auto K = [](const io::CameraCalibration& c) { return cv::Matx33d(c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1); };
+  auto D = [](const io::CameraCalibration& c) { return std::vector<double>{c.k1, c.k2, c.p1, c.p2, c.k3}; };
+  // x_right = R x_left + T.
+  const core::SE3 T_right_left = rig.T_body_right.inverse() * rig.T_body_left;
+  cv::Matx33d R;
+  const Eigen::Matrix3d Re = T_right_left.rotation_matrix();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R(r, c) = Re(r, c);
+  }
+  const cv::Vec3d T(T_right_left.translation().x(), T_right_left.translation().y(), T_right_left.translation().z());
+  cv::Mat R1, R2, P1, P2, Q;
+  const cv::Size size(width, height);
+  cv::stereoRectify(K(rig.left), D(rig.left), K(rig.right), D(rig.right), size, R, T, R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY, 0.0, size);
+  cv::initUndistortRectifyMap(K(rig.left), D(rig.left), R1, P1, size, CV_32FC1, map_left_x_, map_left_y_);
+  cv::initUndistortRectifyMap(K(rig.right), D(rig.right), R2, P2, size, CV_32FC1, map_right_x_, map_right_y_);
+  rectified_.fx = P1.at<double>(0, 0);
+  rectified_.fy = P1.at<double>(1, 1);
+  rectified_.cx = P1.at<double>(0, 2);
+  rectified_.cy = P1.at<double>(1, 2);
+  rectified_.width = width;
+  rectified_.height = height;
+  rectified_.baseline_m = -P2.at<double>(0, 3) / P2.at<double>(0, 0);
+  if (!(rectified_.baseline_m > 0.0)) throw std::invalid_argument("stereo rectification: the right camera is not to the right of the left one");
+  Eigen::Matrix3d R1e;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R1e(r, c) = R1.at<double>(r, c);
+  }
+  // x_rectified = R1 x_left: the rectified frame's axes in the left frame are R1^T.
+  T_left_rectified_ = core::SE3(core::SO3::from_matrix(R1e.transpose()), Eigen::Vector3d::Zero());
+}
+
+void StereoRectifier::rectify(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out, cv::Mat& right_out) const {
+  if (left.cols != width_ || left.rows != height_ || right.cols != width_ || right.rows != height_) {
+    throw std::invalid_argument("stereo rectification: images of " + std::to_string(left.cols) + " x " + std::to_string(left.rows) +
+                                " pixels, the calibration is for " + std::to_string(width_) + " x " + std::to_string(height_));
+  }
+  cv::remap(left, left_out, map_left_x_, map_left_y_, cv::INTER_LINEAR);
+  cv::remap(right, right_out, map_right_x_, map_right_y_, cv::INTER_LINEAR);
+}
+
 std::string draw_features_png(const cv::Mat& gray, const std::vector<cv::KeyPoint>& keypoints,
                               const std::vector<signed char>& states, const std::string& caption) {
   cv::Mat color;

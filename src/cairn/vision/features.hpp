@@ -97,6 +97,26 @@ StereoMatches match_stereo(const Features& left, const Features& right, const io
 StereoMatches depth_from_rgbd(const std::vector<cv::KeyPoint>& keypoints, const std::vector<Eigen::Vector2d>& undistorted,
                               const cv::Mat& depth, const io::CameraCalibration& camera);
 
+/// Rectification of a stereo pair that is not rectified (EuRoC): Bouguet's method
+/// (cv::stereoRectify, alpha 0: only valid pixels) and the maps of cv::initUndistortRectifyMap.
+/// The rectified pair is a pinhole camera without distortion: fx, fy, cx, cy of the new left
+/// projection matrix and the baseline -P_right[0,3] / fx.
+class StereoRectifier {
+ public:
+  StereoRectifier(const io::StereoRig& rig, int width, int height);
+  const io::CameraCalibration& rectified() const { return rectified_; }
+  /// The rectified left camera in the original left camera's frame (a pure rotation).
+  const core::SE3& T_left_rectified() const { return T_left_rectified_; }
+  /// Throws std::invalid_argument when the images are not the size given at construction.
+  void rectify(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out, cv::Mat& right_out) const;
+
+ private:
+  io::CameraCalibration rectified_;
+  core::SE3 T_left_rectified_;
+  cv::Mat map_left_x_, map_left_y_, map_right_x_, map_right_y_;
+  int width_ = 0, height_ = 0;
+};
+
 /// A PNG of the image with its keypoints: green = states[i] 2 (matched to the map), blue = 1
 /// (stereo or depth only), red = 0 (unmatched); the caption at the top left.
 std::string draw_features_png(const cv::Mat& gray, const std::vector<cv::KeyPoint>& keypoints,
