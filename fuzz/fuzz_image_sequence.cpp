@@ -1,6 +1,6 @@
 // libFuzzer entry point for the image-sequence readers (io/image_sequence.hpp) and the image
 // decoders behind cairn vslam (vision/features.hpp). Any input must give a result or a
-// cairn::io::ParseError: as a KITTI calib.txt, as a TUM image list, as a TUM associations file
+// cairn::io::ParseError: as a KITTI calib.txt, as an EuRoC sensor.yaml, as a TUM image list, as a TUM associations file
 // in a scratch folder, and as an image file (grey and 16-bit depth). Another exception, a crash,
 // a hang or a sanitizer report is a bug. Run with `make fuzz` (clang); the corpus in
 // fuzz/corpus/image_sequence runs in `make test`.
@@ -70,6 +70,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   expect_result_or_parse_error([&] {
     const cairn::io::CameraCalibration c = cairn::io::read_kitti_calibration(calib.string());
     check(c.fx > 0.0 && c.fy > 0.0 && c.baseline_m > 0.0 && std::isfinite(c.baseline_m), "an accepted calibration is usable");
+  });
+  expect_result_or_parse_error([&] {
+    cairn::core::SE3 T_body_camera;
+    const cairn::io::CameraCalibration c = cairn::io::read_euroc_camera(calib.string(), &T_body_camera);
+    check(c.fx > 0.0 && c.fy > 0.0 && T_body_camera.translation().allFinite(), "an accepted EuRoC camera is usable");
   });
   expect_result_or_parse_error([&] {
     const auto list = cairn::io::read_tum_image_list(calib.string());
