@@ -52,6 +52,23 @@ echo "3D LiDAR SLAM on a simulated street driven twice, the second lap reversed 
 rm -rf "$OUT/slam3d/street-sim/scans"  # 92 MB of simulated scans; the run's outputs stay
 echo "  map: $OUT/slam3d/street/map.png (report.json lists every loop candidate and its decision)"
 
+kitti_visual="$DATA/visual/kitti_extract_seq2"
+tum_visual="$DATA/visual/tum_fr1_desk_every4th"
+if [[ -d "$kitti_visual/image_l" ]]; then
+  echo
+  echo "Stereo visual SLAM on 51 real KITTI frames (ORB-SLAM2-style; docs/vslam.md on the extract's 3.6 % scale):"
+  "$CAIRN" vslam "$kitti_visual" --out "$OUT/vslam/kitti" 2> >(grep -v '^\[frame\|^cairn vslam: no' >&2) | sed 's/^/  /'
+  echo "  pictures: $OUT/vslam/kitti/trajectory.png, features.png"
+  if [[ -d "$tum_visual/rgb" ]]; then
+    echo
+    echo "RGB-D visual SLAM on TUM fr1/desk (every 4th frame), place recognition with a vocabulary trained on the KITTI images:"
+    "$CAIRN" vocabulary train "$kitti_visual/image_l" -L 4 --out "$OUT/vslam/kitti.voc" -q
+    "$CAIRN" vslam "$tum_visual" --camera tum-fr1 --vocabulary "$OUT/vslam/kitti.voc" --out "$OUT/vslam/tum" \
+      2> >(grep -v '^\[frame\|^cairn vslam:' >&2) | sed 's/^/  /'
+    echo "  report: $OUT/vslam/tum/report.json (maps, loop candidates and why each was accepted or rejected)"
+  fi
+fi
+
 graphs=()
 if [[ -d "$DATA/posegraph" ]]; then
   while IFS= read -r f; do graphs+=("$f"); done < <(find "$DATA/posegraph" -type f ! -name SOURCE.txt | sort)

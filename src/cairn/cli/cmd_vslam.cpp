@@ -482,13 +482,16 @@ int vslam_command(const VslamFlags& flags) {
                 s.keyframes, map_points.size(), spread(total).median * 1e3,
                 spread(tracking).median * 1e3, spread(features_s).median * 1e3, spread(mapping).median * 1e3);
     if (!evaluation.is_null() && evaluation.contains("ate_sim3_aligned_m")) {
-      std::printf("against %s: ATE (Sim(3)-aligned, scale %.4f: monocular scale is not observable) RMSE %.4f m\n", ground_truth_path.c_str(),
+      std::printf("against %s, the %zu tracked frames of %zu: ATE (Sim(3)-aligned, scale %.4f: monocular scale is not observable) "
+                  "RMSE %.4f m\n",
+                  ground_truth_path.c_str(), evaluation["frames_compared"].get<std::size_t>(), results.size(),
                   evaluation["sim3_scale"].get<double>(), evaluation["ate_sim3_aligned_m"]["rmse"].get<double>());
     }
     if (!evaluation.is_null() && evaluation.contains("ate_se3_aligned_m")) {
-      std::printf("against %s: ATE (SE(3)-aligned) RMSE %.4f m; end-point drift %.3f m over %.1f m; RPE (1 frame) RMSE %.4f m, "
-                  "%.4f deg\n",
-                  ground_truth_path.c_str(), evaluation["ate_se3_aligned_m"]["rmse"].get<double>(),
+      std::printf("against %s, the main map's %zu tracked frames of %zu: ATE (SE(3)-aligned) RMSE %.4f m; end-point drift %.3f m "
+                  "over %.1f m; RPE (1 frame) RMSE %.4f m, %.4f deg\n",
+                  ground_truth_path.c_str(), evaluation["frames_compared"].get<std::size_t>(), results.size(),
+                  evaluation["ate_se3_aligned_m"]["rmse"].get<double>(),
                   evaluation["end_point_drift_m"].get<double>(), evaluation["path_length_m"].get<double>(),
                   evaluation.value("rpe_1_frame_translation_m", nlohmann::json{{"rmse", NAN}})["rmse"].get<double>(),
                   evaluation.value("rpe_1_frame_rotation_deg", nlohmann::json{{"rmse", NAN}})["rmse"].get<double>());
