@@ -153,7 +153,7 @@ core::SE3 nearest(const io::Trajectory& truth, core::Timestamp t) {
 // on TUM's): place recognition may close the desk loop and relocalise after fast turns, but every
 // accepted loop must join keyframes whose true poses see the same place, and every
 // relocalisation must land where the ground truth is (after aligning the tracked trajectory).
-TEST(VisualSlamTum, PlaceRecognitionNeverJoinsDifferentPlaces) {
+void run_tum_place_recognition(bool bow_restricted) {
   CAIRN_REQUIRE_DATA("visual/tum_fr1_desk_every4th/associations.txt");
   CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/image_l");
   std::vector<cv::Mat> training;
@@ -176,6 +176,7 @@ TEST(VisualSlamTum, PlaceRecognitionNeverJoinsDifferentPlaces) {
   options.orb.features = 1000;
   options.close_depth_baselines = 40.0;
   options.vocabulary = vocabulary;
+  options.bow_restricted_matching = bow_restricted;
   VisualSlam slam(camera, io::SequenceKind::kRgbd, options);
   std::vector<FrameResult> results;
   for (const io::ImageFrame& frame : seq.frames) {
@@ -183,9 +184,9 @@ TEST(VisualSlamTum, PlaceRecognitionNeverJoinsDifferentPlaces) {
     results.back().keypoints.clear();
   }
   const VisualSlamSummary& s = slam.summary();
-  std::printf("TUM fr1/desk, %zu frames: %zu ok, %zu degraded, %zu lost; %zu relocalisations; %zu loop queries, %zu candidates "
+  std::printf("TUM fr1/desk (%s matching), %zu frames: %zu ok, %zu degraded, %zu lost; %zu relocalisations; %zu loop queries, %zu candidates "
               "verified, %zu loops accepted; vocabulary %s\n",
-              s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loop_queries, s.loops.size(),
+              bow_restricted ? "bag-of-words-node" : "brute-force", s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loop_queries, s.loops.size(),
               s.loops_accepted, vocabulary->description().c_str());
   const io::Trajectory& truth = *seq.ground_truth;
   for (const LoopRecord& loop : s.loops) {
@@ -233,6 +234,10 @@ TEST(VisualSlamTum, PlaceRecognitionNeverJoinsDifferentPlaces) {
   EXPECT_GT(tracked.size(), seq.frames.size() / 3);
   EXPECT_LT(ape.statistics.max, 0.5) << "a tracked or relocalised pose far from the truth";
 }
+
+TEST(VisualSlamTum, PlaceRecognitionNeverJoinsDifferentPlaces) { run_tum_place_recognition(false); }
+
+TEST(VisualSlamTum, PlaceRecognitionWithBowRestrictedMatchingNeverJoinsDifferentPlaces) { run_tum_place_recognition(true); }
 
 }  // namespace
 }  // namespace cairn::vslam

@@ -237,7 +237,7 @@ FrameResult VisualSlam::Impl::initialise_monocular(FrameData f, FrameResult resu
   }
   if (options.vocabulary) {
     for (KeyFrame* kf : {&k0, &k1}) {
-      kf->bow = options.vocabulary->transform(kf->frame.descriptors);
+      kf->bow = options.vocabulary->transform(kf->frame.descriptors, nullptr, &kf->nodes, bow_levels_up());
       database.add(static_cast<std::uint32_t>(kf->id), kf->bow);
     }
   }

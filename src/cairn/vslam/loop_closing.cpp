@@ -41,7 +41,8 @@ bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& recor
   probe = keyframes[static_cast<std::size_t>(current)].frame;
   std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
   std::fill(probe.outlier.begin(), probe.outlier.end(), 0);
-  const int matches = match_brute_force(probe, keyframes[static_cast<std::size_t>(candidate)].frame.map_point);
+  const KeyFrame& query = keyframes[static_cast<std::size_t>(current)];
+  const int matches = match_to_keyframe(probe, query.nodes.size() == probe.size() ? &query.nodes : nullptr, keyframes[static_cast<std::size_t>(candidate)]);
   if (matches < options.loop_min_pnp_inliers) {
     record.reason = std::to_string(matches) + " descriptor matches to the candidate's points (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
     return false;
@@ -181,14 +182,14 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
     // Monocular loops need Sim(3) (scale drifts); not implemented: keyframes only go into the
     // database, for relocalisation.
     KeyFrame& kf = keyframes.back();
-    kf.bow = options.vocabulary->transform(kf.frame.descriptors);
+    kf.bow = options.vocabulary->transform(kf.frame.descriptors, nullptr, &kf.nodes, bow_levels_up());
     database.add(static_cast<std::uint32_t>(kf.id), kf.bow);
     return;
   }
   const auto start = Clock::now();
   const int current = static_cast<int>(keyframes.size()) - 1;
   KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
-  kf.bow = options.vocabulary->transform(kf.frame.descriptors);
+  kf.bow = options.vocabulary->transform(kf.frame.descriptors, nullptr, &kf.nodes, bow_levels_up());
   // Loops within a segment wait for enough keyframes since the start and the last loop; a
   // merge with another segment may come at any keyframe.
   const bool too_early = current < 2 * options.loop_min_keyframes_apart || current < last_loop_keyframe + options.loop_min_keyframes_apart;

@@ -107,7 +107,8 @@ struct KeyFrame {
   bool bad = false;
   int segment = 0;              // the map segment it was created in
   bool starts_segment = false;  // the first keyframe of a segment: no odometry link to the one before
-  vision::BowVector bow;  // empty without a vocabulary
+  vision::BowVector bow;              // empty without a vocabulary
+  std::vector<std::uint32_t> nodes;   // per keypoint, its vocabulary node two levels below the root
 };
 
 
@@ -222,6 +223,12 @@ struct VisualSlam::Impl {
   // verification (ORB-SLAM2 restricts these to keypoints in the same bag-of-words node instead).
   int match_brute_force(FrameData& current, const std::vector<int>& point_ids);
   int search_reference(FrameData& current, const KeyFrame& kf) { return match_brute_force(current, kf.frame.map_point); }
+  // ORB-SLAM2 ORBmatcher::SearchByBoW when VisualSlamOptions::bow_restricted_matching: the
+  // frame's keypoints matched to the keyframe's points only within the same vocabulary node
+  // (`frame_nodes`, KeyFrame::nodes), TH_LOW and a 0.75 ratio; else (and without a vocabulary)
+  // brute force (match_brute_force).
+  int match_to_keyframe(FrameData& current, const std::vector<std::uint32_t>* frame_nodes, const KeyFrame& kf);
+  int bow_levels_up() const { return options.vocabulary ? std::max(1, options.vocabulary->depth() - 2) : 1; }
   // PnP with RANSAC (OpenCV's solvePnPRansac, EPnP minimal sets; Lepetit et al. 2009) on the
   // frame's map-point matches: the starting pose when there is no prediction. Matches that are
   // not RANSAC inliers are dropped. Returns the inliers (0 when it fails).

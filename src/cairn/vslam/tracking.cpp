@@ -198,6 +198,46 @@ int VisualSlam::Impl::search_from_last(FrameData& current, const FrameData& prev
 // Brute-force descriptor matching of the frame's keypoints against the points `ids` with a
 // ratio test and TH_LOW (50): the matcher of the reference fallback, relocalisation and loop
 // verification (ORB-SLAM2 restricts these to keypoints in the same bag-of-words node instead).
+int VisualSlam::Impl::match_to_keyframe(FrameData& current, const std::vector<std::uint32_t>* frame_nodes, const KeyFrame& kf) {
+  if (!options.bow_restricted_matching || frame_nodes == nullptr || kf.nodes.size() != kf.frame.size() || frame_nodes->size() != current.size()) {
+    return match_brute_force(current, kf.frame.map_point);
+  }
+  std::unordered_map<std::uint32_t, std::vector<int>> by_node;
+  for (std::size_t j = 0; j < kf.frame.size(); ++j) {
+    const int id = kf.frame.map_point[j];
+    if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) by_node[kf.nodes[j]].push_back(static_cast<int>(j));
+  }
+  std::vector<int> owner(kf.frame.size(), -1), owner_distance(kf.frame.size(), 256);
+  for (std::size_t i = 0; i < current.size(); ++i) {
+    if (current.map_point[i] >= 0) continue;
+    const auto it = by_node.find((*frame_nodes)[i]);
+    if (it == by_node.end()) continue;
+    int best = 256, second = 256, best_j = -1;
+    for (const int j : it->second) {
+      const int d = vision::descriptor_distance(current.descriptors.ptr(static_cast<int>(i)),
+                                                points[static_cast<std::size_t>(kf.frame.map_point[static_cast<std::size_t>(j)])].descriptor.ptr());
+      if (d < best) {
+        second = best;
+        best = d;
+        best_j = j;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_j < 0 || best > options.max_descriptor_distance / 2 || best >= 0.75 * second) continue;
+    if (best >= owner_distance[static_cast<std::size_t>(best_j)]) continue;
+    owner[static_cast<std::size_t>(best_j)] = static_cast<int>(i);
+    owner_distance[static_cast<std::size_t>(best_j)] = best;
+  }
+  int matches = 0;
+  for (std::size_t j = 0; j < kf.frame.size(); ++j) {
+    if (owner[j] < 0) continue;
+    current.map_point[static_cast<std::size_t>(owner[j])] = kf.frame.map_point[j];
+    ++matches;
+  }
+  return matches;
+}
+
 int VisualSlam::Impl::match_brute_force(FrameData& current, const std::vector<int>& point_ids) {
   std::vector<int> ids;
   cv::Mat descriptors;
@@ -536,10 +576,13 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
       // When lost, the most recent keyframes are tried too (a bounded stand-in for ORB-SLAM2's
       // bag-of-words relocalisation over the whole map).
       std::vector<int> candidates{reference_keyframe >= 0 ? reference_keyframe : static_cast<int>(keyframes.size()) - 1};
+      std::vector<std::uint32_t> frame_nodes;
+      vision::BowVector frame_bow;
+      if (options.vocabulary) frame_bow = options.vocabulary->transform(f.descriptors, nullptr, &frame_nodes, bow_levels_up());
       if (lost && options.vocabulary && database.size() > 0) {
         // Relocalisation (ORB-SLAM2 Tracking::Relocalization): the keyframes the database
         // ranks best for this frame's words.
-        for (const auto& r : database.query(options.vocabulary->transform(f.descriptors), 8)) {
+        for (const auto& r : database.query(frame_bow, 8)) {
           if (static_cast<int>(r.id) != candidates.front()) candidates.push_back(static_cast<int>(r.id));
         }
       } else if (lost) {
@@ -551,7 +594,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
         FrameData alternative = f;
         std::fill(alternative.map_point.begin(), alternative.map_point.end(), -1);
         alternative.T_world_camera = keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera;
-        int alternative_matches = search_reference(alternative, keyframes[static_cast<std::size_t>(kf)]);
+        int alternative_matches = match_to_keyframe(alternative, options.vocabulary ? &frame_nodes : nullptr, keyframes[static_cast<std::size_t>(kf)]);
         ++summary->reference_fallbacks;
         int alternative_inliers = 0;
         if (alternative_matches >= 15) alternative_matches = pnp_ransac(alternative);
@@ -627,6 +670,9 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
     } else {
       lost_frames = 0;
       result.tracked = true;
+      // Tracking may have relocalised into another segment: a keyframe made now belongs to the
+      // segment whose points it tracked, not to the one it was lost from.
+      segment = segment_of(reference_keyframe);
       if (was_lost) {
         result.relocalised = true;
         ++summary->relocalisations;

@@ -81,6 +81,12 @@ struct VisualSlamOptions {
   /// been trained on the images it is used on.
   std::shared_ptr<const vision::Vocabulary> vocabulary;
   bool loop_closure = true;
+  /// Match relocalisation, fallback and loop candidates only within vocabulary nodes (ORB-SLAM2's
+  /// SearchByBoW, ratio 0.75) instead of by brute force (ratio 0.7). Off by default, measured on
+  /// TUM fr1/desk every 4th frame (2026-11-25, docs/vslam.md): on, 82 frames in the main map at
+  /// 0.0197 m but the desk revisit no longer verified (15 PnP inliers < 20); off, 60 frames at
+  /// 0.0140 m with the revisit verified and merged.
+  bool bow_restricted_matching = false;
   int loop_min_keyframes_apart = 10;   ///< no loop with the last 10 keyframes, none within 10 of the last loop (ORB-SLAM2)
   int loop_consistency = 3;            ///< consecutive keyframes whose candidates agree (ORB-SLAM2 mnCovisibilityConsistencyTh)
   int loop_min_pnp_inliers = 20;       ///< descriptor matches to, and PnP RANSAC inliers of, the candidate's points (ORB-SLAM2 ComputeSim3: 20 and 20)
