@@ -58,7 +58,7 @@ TEST(VisualSlamKitti, TracksEveryFrameAndKeepsTheShapeOfTheGroundTruth) {
 }
 
 // Triangulation between keyframes (off by default): more points, and the per-frame rotation
-// error it lowers (measured 0.107 -> 0.045 degrees; docs/vslam.md says what it costs).
+// error it lowers (measured 0.096 -> 0.045 degrees; docs/vslam.md says what it costs).
 TEST(VisualSlamKitti, TriangulationBetweenKeyframesAddsPointsAndSteadiesRotation) {
   CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/calib.txt");
   const io::ImageSequence seq = io::read_kitti_stereo(test::data_path("visual/kitti_extract_seq2").string());

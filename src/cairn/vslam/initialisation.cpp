@@ -11,21 +11,14 @@ std::vector<std::pair<int, int>> VisualSlam::Impl::match_for_initialisation(cons
   std::vector<int> owner(b.size(), -1), owner_distance(b.size(), 256);
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (a.keypoints[i].octave > 0) continue;
-    int best = 256, second = 256, best_j = -1;
+    BestTwo m;
     for (const int j : features_in_area(b, a.undistorted[i].x(), a.undistorted[i].y(), 100.0, 0, 0)) {
-      const int d = vision::descriptor_distance(a.descriptors.ptr(static_cast<int>(i)), b.descriptors.ptr(j));
-      if (d < best) {
-        second = best;
-        best = d;
-        best_j = j;
-      } else if (d < second) {
-        second = d;
-      }
+      m.offer(vision::descriptor_distance(a.descriptors.ptr(static_cast<int>(i)), b.descriptors.ptr(j)), j);
     }
-    if (best_j < 0 || best > options.max_descriptor_distance / 2 || best >= 0.9 * second) continue;
-    if (best >= owner_distance[static_cast<std::size_t>(best_j)]) continue;
-    owner[static_cast<std::size_t>(best_j)] = static_cast<int>(i);
-    owner_distance[static_cast<std::size_t>(best_j)] = best;
+    if (!m.passes(options.max_descriptor_distance / 2, 0.9)) continue;
+    if (m.best >= owner_distance[static_cast<std::size_t>(m.index)]) continue;
+    owner[static_cast<std::size_t>(m.index)] = static_cast<int>(i);
+    owner_distance[static_cast<std::size_t>(m.index)] = m.best;
   }
   std::vector<std::pair<int, int>> out;
   for (std::size_t j = 0; j < b.size(); ++j) {

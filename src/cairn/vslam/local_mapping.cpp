@@ -135,7 +135,7 @@ int VisualSlam::Impl::triangulate_new_points(int current, int count) {
       const Eigen::Vector3d line = F12.transpose() * x1;  // epipolar line in image 2: x2^T (F12^T x1) = 0
       const double line_norm2 = line.x() * line.x() + line.y() * line.y();
       if (!(line_norm2 > 0.0)) continue;
-      int best = 256, second = 256, best_i2 = -1;
+      BestTwo m;
       for (std::size_t i2 = 0; i2 < f2.size(); ++i2) {
         if (f2.map_point[i2] >= 0) continue;
         const int level2 = f2.keypoints[i2].octave;
@@ -146,18 +146,13 @@ int VisualSlam::Impl::triangulate_new_points(int current, int count) {
         }
         const double d = line.x() * f2.undistorted[i2].x() + line.y() * f2.undistorted[i2].y() + line.z();
         if (d * d / line_norm2 >= 3.84 * scales[static_cast<std::size_t>(level2)] * scales[static_cast<std::size_t>(level2)]) continue;
-        const int dist = vision::descriptor_distance(f1.descriptors.ptr(static_cast<int>(i1)), f2.descriptors.ptr(static_cast<int>(i2)));
-        if (dist < best) {
-          second = best;
-          best = dist;
-          best_i2 = static_cast<int>(i2);
-        } else if (dist < second) {
-          second = dist;
-        }
+        m.offer(vision::descriptor_distance(f1.descriptors.ptr(static_cast<int>(i1)), f2.descriptors.ptr(static_cast<int>(i2))),
+                static_cast<int>(i2));
       }
       // TH_LOW, and a ratio test along the epipolar band: without ORB-SLAM2's bag-of-words
       // nodes the band holds many look-alikes (repeated texture, forward motion).
-      if (best_i2 < 0 || best > options.max_descriptor_distance / 2 || best > options.triangulation_match_ratio * second) continue;
+      if (m.index < 0 || m.best > options.max_descriptor_distance / 2 || m.best > options.triangulation_match_ratio * m.second) continue;
+      const int best = m.best, best_i2 = m.index;
       if (best >= taken_distance[static_cast<std::size_t>(best_i2)]) continue;
       taken_by[static_cast<std::size_t>(best_i2)] = static_cast<int>(i1);
       taken_distance[static_cast<std::size_t>(best_i2)] = best;

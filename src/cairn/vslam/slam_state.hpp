@@ -71,6 +71,23 @@ class ScaledFactor final : public backend::Factor {
   Eigen::Vector3d point_ = Eigen::Vector3d::Zero();
 };
 
+// The best and second-best descriptor distance of a search and the best candidate: the ratio
+// tests of every ORB-SLAM2 matcher.
+struct BestTwo {
+  int best = 256, second = 256, index = -1;
+  void offer(int distance, int candidate) {
+    if (distance < best) {
+      second = best;
+      best = distance;
+      index = candidate;
+    } else if (distance < second) {
+      second = distance;
+    }
+  }
+  /// A candidate within `max_distance` and better than `ratio` x the second best.
+  bool passes(int max_distance, double ratio) const { return index >= 0 && best <= max_distance && best < ratio * second; }
+};
+
 constexpr int kGridCols = 64;
 constexpr int kGridRows = 48;
 
@@ -119,6 +136,7 @@ inline vision::OrbOptions doubled(vision::OrbOptions o) {
 
 }  // namespace internal
 
+using internal::BestTwo;
 using internal::Clock;
 using internal::doubled;
 using internal::FrameData;

@@ -212,22 +212,16 @@ int VisualSlam::Impl::match_to_keyframe(FrameData& current, const std::vector<st
     if (current.map_point[i] >= 0) continue;
     const auto it = by_node.find((*frame_nodes)[i]);
     if (it == by_node.end()) continue;
-    int best = 256, second = 256, best_j = -1;
+    BestTwo m;
     for (const int j : it->second) {
-      const int d = vision::descriptor_distance(current.descriptors.ptr(static_cast<int>(i)),
-                                                points[static_cast<std::size_t>(kf.frame.map_point[static_cast<std::size_t>(j)])].descriptor.ptr());
-      if (d < best) {
-        second = best;
-        best = d;
-        best_j = j;
-      } else if (d < second) {
-        second = d;
-      }
+      m.offer(vision::descriptor_distance(current.descriptors.ptr(static_cast<int>(i)),
+                                          points[static_cast<std::size_t>(kf.frame.map_point[static_cast<std::size_t>(j)])].descriptor.ptr()),
+              j);
     }
-    if (best_j < 0 || best > options.max_descriptor_distance / 2 || best >= 0.75 * second) continue;
-    if (best >= owner_distance[static_cast<std::size_t>(best_j)]) continue;
-    owner[static_cast<std::size_t>(best_j)] = static_cast<int>(i);
-    owner_distance[static_cast<std::size_t>(best_j)] = best;
+    if (!m.passes(options.max_descriptor_distance / 2, 0.75)) continue;
+    if (m.best >= owner_distance[static_cast<std::size_t>(m.index)]) continue;
+    owner[static_cast<std::size_t>(m.index)] = static_cast<int>(i);
+    owner_distance[static_cast<std::size_t>(m.index)] = m.best;
   }
   int matches = 0;
   for (std::size_t j = 0; j < kf.frame.size(); ++j) {
