@@ -411,8 +411,12 @@ std::string draw_features_png(const cv::Mat& gray, const std::vector<cv::KeyPoin
   }
   const std::string text = caption + ": " + std::to_string(counts[2]) + " matched to the map (green), " + std::to_string(counts[1]) +
                            " stereo/depth only (blue), " + std::to_string(counts[0]) + " unmatched (red)";
-  cv::putText(color, text, cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
-  cv::putText(color, text, cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  // The caption shrinks to fit narrow images (TUM's 640 px).
+  double font = 0.5;
+  int baseline = 0;
+  while (font > 0.25 && cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline).width > color.cols - 16) font -= 0.05;
+  cv::putText(color, text, cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
+  cv::putText(color, text, cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   std::vector<uchar> bytes;
   if (!cv::imencode(".png", color, bytes)) throw std::runtime_error("cannot encode the features picture as PNG");
   return std::string(bytes.begin(), bytes.end());
