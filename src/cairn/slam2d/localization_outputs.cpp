@@ -1,5 +1,6 @@
 #include "cairn/slam2d/map_picture.hpp"
 #include "cairn/slam2d/localization_outputs.hpp"
+#include "cairn/slam2d/outputs.hpp"
 
 #include <cairo.h>
 
@@ -280,15 +281,7 @@ nlohmann::json localization_report_json(const Localizer2d& localizer, const Loca
                                {"evidence", evidence}});
   }
   report["relocalisations"] = relocalisations;
-  nlohmann::json events = nlohmann::json::array();
-  for (const HealthEvent& e : s.health_events) {
-    events.push_back({{"time", e.time.to_seconds_string()},
-                      {"scan", e.scan},
-                      {"from", std::string(to_string(e.from))},
-                      {"to", std::string(to_string(e.to))},
-                      {"reason", e.reason}});
-  }
-  report["health_events"] = events;
+  report["health_events"] = health_events_json(s.health_events);
   return report;
 }
 

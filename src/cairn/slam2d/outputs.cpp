@@ -171,6 +171,18 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
   picture.write(path);
 }
 
+nlohmann::json health_events_json(const std::vector<HealthEvent>& events) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const HealthEvent& e : events) {
+    out.push_back({{"time", e.time.to_seconds_string()},
+                   {"scan", e.scan},
+                   {"from", std::string(to_string(e.from))},
+                   {"to", std::string(to_string(e.to))},
+                   {"reason", e.reason}});
+  }
+  return out;
+}
+
 OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::size_t scans_used,
                           const std::string& directory, const Slam2dOptions& options) {
   OutputFiles files;
@@ -295,15 +307,7 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                           {"reason", c.rejected_by_gnc ? std::string("rejected by GNC in the back end") : c.reason}});
   }
   report["loop_candidates"] = candidates;
-  nlohmann::json events = nlohmann::json::array();
-  for (const HealthEvent& e : s.health_events) {
-    events.push_back({{"time", e.time.to_seconds_string()},
-                      {"scan", e.scan},
-                      {"from", std::string(to_string(e.from))},
-                      {"to", std::string(to_string(e.to))},
-                      {"reason", e.reason}});
-  }
-  report["health_events"] = events;
+  report["health_events"] = health_events_json(s.health_events);
   nlohmann::json segments = nlohmann::json::array();
   for (const SegmentInfo& g : s.segments) {
     segments.push_back({{"id", g.id},

@@ -62,4 +62,8 @@ void write_map_png(const ProbabilityGrid& grid, const std::vector<ScanResult>& t
 /// The run's report (summary, options in effect, loop candidates, health events).
 nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options);
 
+/// The health events as report.json lists them (time, scan, from, to, reason): slam2d's and
+/// localize2d's reports.
+nlohmann::json health_events_json(const std::vector<HealthEvent>& events);
+
 }  // namespace cairn::slam2d

@@ -121,7 +121,6 @@ struct MapPoint {
 struct KeyFrame {
   int id = 0;
   FrameData frame;
-  bool bad = false;
   int segment = 0;              // the map segment it was created in
   bool starts_segment = false;  // the first keyframe of a segment: no odometry link to the one before
   vision::BowVector bow;              // empty without a vocabulary
@@ -240,7 +239,6 @@ struct VisualSlam::Impl {
   // ratio test and TH_LOW (50): the matcher of the reference fallback, relocalisation and loop
   // verification (ORB-SLAM2 restricts these to keypoints in the same bag-of-words node instead).
   int match_brute_force(FrameData& current, const std::vector<int>& point_ids);
-  int search_reference(FrameData& current, const KeyFrame& kf) { return match_brute_force(current, kf.frame.map_point); }
   // ORB-SLAM2 ORBmatcher::SearchByBoW when VisualSlamOptions::bow_restricted_matching: the
   // frame's keypoints matched to the keyframe's points only within the same vocabulary node
   // (`frame_nodes`, KeyFrame::nodes), TH_LOW and a 0.75 ratio; else (and without a vocabulary)

@@ -570,9 +570,13 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
       // When lost, the most recent keyframes are tried too (a bounded stand-in for ORB-SLAM2's
       // bag-of-words relocalisation over the whole map).
       std::vector<int> candidates{reference_keyframe >= 0 ? reference_keyframe : static_cast<int>(keyframes.size()) - 1};
+      // The frame's words: for the database query when lost, and for node-restricted matching.
       std::vector<std::uint32_t> frame_nodes;
       vision::BowVector frame_bow;
-      if (options.vocabulary) frame_bow = options.vocabulary->transform(f.descriptors, nullptr, &frame_nodes, bow_levels_up());
+      const bool use_nodes = options.vocabulary && options.bow_restricted_matching;
+      if (options.vocabulary && (lost || use_nodes)) {
+        frame_bow = options.vocabulary->transform(f.descriptors, nullptr, use_nodes ? &frame_nodes : nullptr, bow_levels_up());
+      }
       if (lost && options.vocabulary && database.size() > 0) {
         // Relocalisation (ORB-SLAM2 Tracking::Relocalization): the keyframes the database
         // ranks best for this frame's words.
@@ -588,7 +592,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
         FrameData alternative = f;
         std::fill(alternative.map_point.begin(), alternative.map_point.end(), -1);
         alternative.T_world_camera = keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera;
-        int alternative_matches = match_to_keyframe(alternative, options.vocabulary ? &frame_nodes : nullptr, keyframes[static_cast<std::size_t>(kf)]);
+        int alternative_matches = match_to_keyframe(alternative, use_nodes ? &frame_nodes : nullptr, keyframes[static_cast<std::size_t>(kf)]);
         ++summary->reference_fallbacks;
         int alternative_inliers = 0;
         if (alternative_matches >= 15) alternative_matches = pnp_ransac(alternative);
