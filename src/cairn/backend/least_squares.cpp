@@ -103,16 +103,6 @@ std::string_view to_string(LinearSolverType type) {
   return "?";
 }
 
-std::string_view to_string(LeastSquaresTermination termination) {
-  switch (termination) {
-    case LeastSquaresTermination::kConvergence: return "convergence";
-    case LeastSquaresTermination::kNoConvergence: return "no_convergence";
-    case LeastSquaresTermination::kFailure: return "failure";
-    case LeastSquaresTermination::kInterrupted: return "interrupted";
-  }
-  return "?";
-}
-
 bool LeastSquaresOptions::is_valid(std::string* error) const {
   std::ostringstream problems;
   if (max_iterations < 1) problems << "max_iterations must be >= 1; ";
@@ -139,7 +129,8 @@ bool LeastSquaresOptions::is_valid(std::string* error) const {
 
 std::string LeastSquaresSummary::brief_report() const {
   char buffer[256];
-  std::snprintf(buffer, sizeof(buffer), "LM (%s): cost %.6e -> %.6e in %d iterations (%.3f s): %s",
+  std::snprintf(buffer, sizeof(buffer), "%s (%s): cost %.6e -> %.6e in %d iterations (%.3f s): %s",
+                algorithm == Algorithm::kLevenbergMarquardt ? "LM" : (algorithm == Algorithm::kGaussNewton ? "GN" : "dog-leg"),
                 std::string(to_string(linear_solver)).c_str(), initial_cost, final_cost, iterations, total_s,
                 message.c_str());
   return buffer;
@@ -315,7 +306,7 @@ class ReducedMatrix {
 // ---------------------------------------------------------------------------------------------
 // The solver state of one solve().
 
-class Engine {
+class Engine final : public TrustRegionModel {
  public:
   Engine(LeastSquaresProblem& problem, const LeastSquaresOptions& options)
       : problem_(problem.impl()),
@@ -336,14 +327,35 @@ class Engine {
   bool evaluate(bool jacobians, double& cost, std::vector<double>& residual_buffer, std::vector<double>& jacobian_buffer);
   // Gradient g = J^T r over the free variables (reduced part, eliminated part).
   void compute_gradient();
-  // Builds and solves the damped system for the step; false on a numerical failure.
-  bool compute_step(double radius, int& cg_iterations);
-  double model_cost_change() const;
+  // Builds and solves the system damped by D * mu_inverse (0: undamped) for the step into
+  // step_reduced_ / step_eliminated_; false on a numerical failure. *inexact: the step came
+  // from PCG on an earlier factorisation.
+  bool solve_system(double mu_inverse, int& cg_iterations, bool* inexact);
+  // r^T J dx and ||J dx||^2 over all factors, dx split as the steps are.
+  void jacobian_products(const double* dx_reduced, const double* dx_eliminated, double* r_dot, double* squared) const;
   void save_values();
   void restore_values();
   void apply_step();
-  double values_norm() const;
-  double gradient_max_norm();
+  // Ceres' gradient norm at the current point (computed after compute_gradient()).
+  double compute_gradient_max_norm();
+  // The step in TrustRegionModel's layout: [reduced; eliminated], both ways.
+  void join_step(Eigen::VectorXd& step) const;
+  void split_step(const Eigen::VectorXd& step);
+
+ public:
+  // TrustRegionModel (trust_region.hpp).
+  bool start(double* cost, std::string* error) override;
+  double gradient_max_norm() override { return gradient_max_norm_; }
+  double values_norm() override;
+  StepQuality compute_step(double lambda, Eigen::VectorXd& step, double* predicted, TrustRegionIteration& it) override;
+  const Eigen::VectorXd& gradient() override;
+  double curvature(const Eigen::VectorXd& v) override;
+  double model_decrease(const Eigen::VectorXd& step) override;
+  bool evaluate_trial(const Eigen::VectorXd& step, double* cost, TrustRegionIteration& it) override;
+  void accept_trial(double old_cost, double new_cost, bool final, TrustRegionIteration& it) override;
+  void reject_trial(StepQuality quality) override;
+
+ private:
 
   template <int R, int E, int F>
   void eliminate(int e, double mu_inverse, double* matrix_values, double* rhs, double* diagonal, bool diagonal_only);
@@ -417,6 +429,13 @@ class Engine {
   // Iterative Schur: the block-diagonal preconditioner's inverse blocks.
   std::vector<Eigen::MatrixXd> preconditioner_;
   LeastSquaresSummary* summary_ = nullptr;
+  // Trust-region state: the current point's gradient (max-norm, and joined for dog-leg), a
+  // rejected PCG step forces the next factorisation, an accepted point whose Jacobians could not
+  // be evaluated (jacobians_with_trial_cost off) fails the next step.
+  double gradient_max_norm_ = 0.0;
+  Eigen::VectorXd gradient_joined_;
+  bool force_factorization_ = false;
+  bool linearization_failed_ = false;
 };
 
 bool Engine::build_layout(std::string* error) {
@@ -938,7 +957,7 @@ bool Engine::solve_iterative(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, int
 // a small fraction of the factorisation it tried to save. False: factorise.
 bool Engine::solve_with_previous_factor(const UpperCsc& S, const Eigen::VectorXd& rhs, int& cg_iterations) {
   constexpr double kReuseMinFlopRatio = 50.0;
-  if (!options_.reuse_factorization || !cholesky_.has_factor()) return false;
+  if (!options_.reuse_factorization || !cholesky_.has_factor() || force_factorization_) return false;
   const double pcg_flops = 4.0 * static_cast<double>(cholesky_.factor_nonzeros()) + 4.0 * static_cast<double>(S.value.size());
   if (cholesky_.factor_flops() < kReuseMinFlopRatio * pcg_flops) return false;
   const int n = S.size;
@@ -970,8 +989,8 @@ bool Engine::solve_with_previous_factor(const UpperCsc& S, const Eigen::VectorXd
   return false;
 }
 
-bool Engine::compute_step(double radius, int& cg_iterations) {
-  const double mu_inverse = 1.0 / radius;
+bool Engine::solve_system(double mu_inverse, int& cg_iterations, bool* inexact) {
+  *inexact = false;
   const bool iterative = options_.linear_solver == LinearSolverType::kIterativeSchur;
   UpperCsc& S = reduced_->matrix();
   const int n = layout_.reduced_dim;
@@ -1062,7 +1081,10 @@ bool Engine::compute_step(double radius, int& cg_iterations) {
         summary_->factor_nonzeros = cholesky_.factor_nonzeros();
         analyzed_ = true;
       }
-      if (!solve_with_previous_factor(S, minus_rhs, cg_iterations)) {
+      if (solve_with_previous_factor(S, minus_rhs, cg_iterations)) {
+        *inexact = true;
+      } else {
+        force_factorization_ = false;
         if (cholesky_.factorize(S) != FactorizationStatus::kSuccess) return false;
         ++summary_->factorizations;
         step_reduced_ = cholesky_.solve(minus_rhs);
@@ -1085,16 +1107,19 @@ bool Engine::compute_step(double radius, int& cg_iterations) {
   return step_eliminated_.allFinite();
 }
 
+// r^T J dx and ||J dx||^2, factor by factor: the model cost change of a step is
 // 1/2 ||r||^2 - 1/2 ||r + J dx||^2 = -(r . J dx) - 1/2 ||J dx||^2 (Ceres' model cost change).
-double Engine::model_cost_change() const {
+void Engine::jacobian_products(const double* dx_reduced, const double* dx_eliminated, double* r_dot,
+                               double* squared) const {
   const int factors = static_cast<int>(problem_.factors.size());
-  double change = 0.0;
+  double dot = 0.0;
+  double norm = 0.0;
+  std::vector<double> large;
   for (int f = 0; f < factors; ++f) {
     const FactorEntry& factor = problem_.factors[f];
     const int m = factor.residual_size;
     const double* r = residuals_.data() + layout_.residual_offset[f];
     double J_dx[16];
-    std::vector<double> large;
     double* product = J_dx;
     if (m > 16) {
       large.assign(m, 0.0);
@@ -1108,17 +1133,32 @@ double Engine::model_cost_change() const {
       const int v = factor.variables[k];
       const int n = problem_.variables[v].manifold->tangent_size();
       const int block = layout_.block_of[v];
-      const double* dx = layout_.eliminated[v] ? step_eliminated_.data() + layout_.eliminated_offset[block]
-                                               : step_reduced_.data() + layout_.reduced_offset[block];
+      const double* dx = layout_.eliminated[v] ? dx_eliminated + layout_.eliminated_offset[block]
+                                               : dx_reduced + layout_.reduced_offset[block];
       for (int i = 0; i < m; ++i) {
         double sum = 0.0;
         for (int j = 0; j < n; ++j) sum += J[i * n + j] * dx[j];
         product[i] += sum;
       }
     }
-    for (int i = 0; i < m; ++i) change -= r[i] * product[i] + 0.5 * product[i] * product[i];
+    for (int i = 0; i < m; ++i) {
+      dot += r[i] * product[i];
+      norm += product[i] * product[i];
+    }
   }
-  return change;
+  *r_dot = dot;
+  *squared = norm;
+}
+
+void Engine::join_step(Eigen::VectorXd& step) const {
+  step.resize(step_reduced_.size() + step_eliminated_.size());
+  step.head(step_reduced_.size()) = step_reduced_;
+  step.tail(step_eliminated_.size()) = step_eliminated_;
+}
+
+void Engine::split_step(const Eigen::VectorXd& step) {
+  step_reduced_ = step.head(layout_.reduced_dim);
+  step_eliminated_ = step.tail(layout_.eliminated_dim);
 }
 
 void Engine::save_values() {
@@ -1158,7 +1198,7 @@ void Engine::apply_step() {
   });
 }
 
-double Engine::values_norm() const {
+double Engine::values_norm() {
   double squared = 0.0;
   for (const auto& list : {&layout_.reduced_variable, &layout_.eliminated_variable}) {
     for (const int v : *list) {
@@ -1170,7 +1210,7 @@ double Engine::values_norm() const {
 }
 
 // Ceres' gradient norm: max_i |x_i - (x [+] -g)_i| (for R^n: max |g_i|).
-double Engine::gradient_max_norm() {
+double Engine::compute_gradient_max_norm() {
   double norm = 0.0;
   std::vector<double> minus_g, moved;
   const auto visit = [&](int v, const double* g) {
@@ -1278,6 +1318,7 @@ LeastSquaresSummary Engine::run() {
   LeastSquaresSummary summary;
   summary_ = &summary;
   summary.linear_solver = options_.linear_solver;
+  summary.algorithm = options_.algorithm;
   summary.threads = options_.threads > 0 ? options_.threads : arena_.max_concurrency();
   // CHOLMOD's BLAS gets the solve's threads, not one per core spinning beside TBB's workers;
   // the caller's setting is restored when the solve ends.
@@ -1307,142 +1348,114 @@ LeastSquaresSummary Engine::run() {
 
   prepare();
 
-  // Iteration 0: the starting point.
-  auto phase = Clock::now();
-  double cost = 0.0;
-  if (!evaluate(true, cost)) {
-    summary.jacobian_s += seconds_since(phase);
-    return finish(LeastSquaresTermination::kFailure, "a factor could not be evaluated at the initial values (NaN or infinite residual or Jacobian)");
+  TrustRegionOptions minimizer;
+  minimizer.algorithm = options_.algorithm;
+  minimizer.max_iterations = options_.max_iterations;
+  minimizer.function_tolerance = options_.function_tolerance;
+  minimizer.gradient_tolerance = options_.gradient_tolerance;
+  minimizer.parameter_tolerance = options_.parameter_tolerance;
+  minimizer.initial_trust_region_radius = options_.initial_trust_region_radius;
+  minimizer.max_trust_region_radius = options_.max_trust_region_radius;
+  minimizer.progress = options_.progress;
+  minimizer.should_stop = options_.should_stop;
+  TrustRegionResult result = minimize(*this, minimizer);
+  summary.initial_cost = result.initial_cost;
+  summary.final_cost = result.final_cost;
+  summary.iterations = result.iterations;
+  summary.successful_iterations = result.successful_iterations;
+  summary.iteration_log = std::move(result.iteration_log);
+  return finish(result.termination, std::move(result.message));
+}
+
+bool Engine::start(double* cost, std::string* error) {
+  const auto phase = Clock::now();
+  if (!evaluate(true, *cost)) {
+    summary_->jacobian_s += seconds_since(phase);
+    *error = "a factor could not be evaluated at the initial values (NaN or infinite residual or Jacobian)";
+    return false;
   }
   compute_gradient();
-  summary.jacobian_s += seconds_since(phase);
-  summary.initial_cost = cost;
-  summary.final_cost = cost;
-  double gradient_norm = gradient_max_norm();
-  if (gradient_norm <= options_.gradient_tolerance) {
-    return finish(LeastSquaresTermination::kConvergence, "gradient tolerance reached at the initial values");
-  }
+  gradient_max_norm_ = compute_gradient_max_norm();
+  summary_->jacobian_s += seconds_since(phase);
+  return true;
+}
 
-  double radius = options_.initial_trust_region_radius;
-  double decrease_factor = 2.0;
-  int consecutive_invalid_steps = 0;
-  constexpr int kMaxConsecutiveInvalidSteps = 5;  // Ceres' max_num_consecutive_invalid_steps
-  constexpr double kMinRelativeDecrease = 1e-3;  // Ceres' min_relative_decrease
-  constexpr double kMinTrustRegionRadius = 1e-32;
-  while (true) {
-    if (options_.should_stop && options_.should_stop()) {
-      return finish(LeastSquaresTermination::kInterrupted, "interrupted; values of the last accepted step");
-    }
-    if (summary.iterations >= options_.max_iterations) {
-      return finish(LeastSquaresTermination::kNoConvergence, "maximum number of iterations reached");
-    }
-    if (radius < kMinTrustRegionRadius) {
-      return finish(LeastSquaresTermination::kConvergence, "trust region radius below 1e-32");
-    }
-    const auto iteration_start = Clock::now();
-    LeastSquaresIteration iteration;
-    iteration.iteration = ++summary.iterations;
-    iteration.trust_region_radius = radius;
-    iteration.gradient_max_norm = gradient_norm;
-    int cg_iterations = 0;
-    const bool step_valid = compute_step(radius, cg_iterations);
-    iteration.cg_iterations = cg_iterations;
-    summary.cg_iterations += cg_iterations;
-    consecutive_invalid_steps = step_valid ? 0 : consecutive_invalid_steps + 1;
-    if (consecutive_invalid_steps >= kMaxConsecutiveInvalidSteps) {
-      return finish(LeastSquaresTermination::kFailure,
-                    "the linear solver failed " + std::to_string(kMaxConsecutiveInvalidSteps) +
-                        " times in a row (the damped system is not positive definite or its solution not finite)");
-    }
-    double new_cost = std::numeric_limits<double>::infinity();
-    double model_change = 0.0;
-    double step_norm = 0.0;
-    if (step_valid) {
-      model_change = model_cost_change();
-      step_norm = std::sqrt(step_reduced_.squaredNorm() + step_eliminated_.squaredNorm());
-      iteration.step_norm = step_norm;
-      const double x_norm = values_norm();
-      save_values();
-      apply_step();
-      phase = Clock::now();
-      double trial = 0.0;
-      // The trial point's residuals go to their own buffer: a rejected step must leave the
-      // current point's residuals (the next step's right-hand side) untouched.
-      const bool with_jacobians = options_.jacobians_with_trial_cost;
-      if (trial_residuals_.size() != residuals_.size()) trial_residuals_.assign(residuals_.size(), 0.0);
-      if (with_jacobians && trial_jacobians_.size() != jacobians_.size()) trial_jacobians_.assign(jacobians_.size(), 0.0);
-      const bool trial_ok = evaluate(with_jacobians, trial, trial_residuals_, with_jacobians ? trial_jacobians_ : jacobians_);
-      summary.residual_s += seconds_since(phase);
-      if (trial_ok) new_cost = trial;
-      // Ceres checks the step size and the cost change before deciding on the step.
-      const double step_tolerance = options_.parameter_tolerance * (x_norm + options_.parameter_tolerance);
-      if (step_norm <= step_tolerance) {
-        restore_values();
-        iteration.cost = cost;
-        iteration.iteration_s = seconds_since(iteration_start);
-        summary.iteration_log.push_back(iteration);
-        if (options_.progress) options_.progress(iteration);
-        return finish(LeastSquaresTermination::kConvergence, "parameter tolerance reached");
-      }
-      const double cost_change = cost - new_cost;
-      iteration.cost_change = cost_change;
-      if (std::isfinite(new_cost) && std::abs(cost_change) <= options_.function_tolerance * cost) {
-        // Converged; keep the trial point when it is no worse (Ceres keeps the old one).
-        if (cost_change >= 0.0) {
-          cost = new_cost;
-          iteration.step_accepted = true;
-          ++summary.successful_iterations;
-        } else {
-          restore_values();
-        }
-        summary.final_cost = cost;
-        iteration.cost = cost;
-        iteration.iteration_s = seconds_since(iteration_start);
-        summary.iteration_log.push_back(iteration);
-        if (options_.progress) options_.progress(iteration);
-        char message[160];
-        std::snprintf(message, sizeof(message), "function tolerance reached: |cost change| / cost = %.3e <= %.1e",
-                      std::abs(cost_change) / std::max(cost, 1e-300), options_.function_tolerance);
-        return finish(LeastSquaresTermination::kConvergence, message);
-      }
-    }
-    const double relative_decrease = (step_valid && model_change > 0.0) ? (cost - new_cost) / model_change : -1.0;
-    iteration.relative_decrease = relative_decrease;
-    if (step_valid && std::isfinite(new_cost) && relative_decrease > kMinRelativeDecrease) {
-      cost = new_cost;
-      iteration.step_accepted = true;
-      ++summary.successful_iterations;
-      // LevenbergMarquardtStrategy::StepAccepted (Nielsen 1999).
-      radius = std::min(options_.max_trust_region_radius,
-                        radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * relative_decrease - 1.0, 3)));
-      decrease_factor = 2.0;
-      phase = Clock::now();
-      if (options_.jacobians_with_trial_cost) {
-        std::swap(residuals_, trial_residuals_);
-        std::swap(jacobians_, trial_jacobians_);
-      } else {
-        double relinearized = 0.0;
-        if (!evaluate(true, relinearized)) {
-          return finish(LeastSquaresTermination::kFailure, "a factor could not be evaluated at an accepted point");
-        }
-      }
-      compute_gradient();
-      summary.jacobian_s += seconds_since(phase);
-      gradient_norm = gradient_max_norm();
-    } else {
-      if (step_valid) restore_values();
-      radius /= decrease_factor;
-      decrease_factor *= 2.0;
-    }
-    summary.final_cost = cost;
-    iteration.cost = cost;
-    iteration.iteration_s = seconds_since(iteration_start);
-    summary.iteration_log.push_back(iteration);
-    if (options_.progress) options_.progress(iteration);
-    if (iteration.step_accepted && gradient_norm <= options_.gradient_tolerance) {
-      return finish(LeastSquaresTermination::kConvergence, "gradient tolerance reached");
-    }
+StepQuality Engine::compute_step(double lambda, Eigen::VectorXd& step, double* predicted, TrustRegionIteration& it) {
+  if (linearization_failed_) return StepQuality::kFailed;
+  int cg_iterations = 0;
+  bool inexact = false;
+  const bool ok = solve_system(lambda, cg_iterations, &inexact);
+  it.cg_iterations = cg_iterations;
+  it.reused_factorization = inexact;
+  summary_->cg_iterations += cg_iterations;
+  if (!ok) return StepQuality::kFailed;
+  double r_dot = 0.0;
+  double squared = 0.0;
+  jacobian_products(step_reduced_.data(), step_eliminated_.data(), &r_dot, &squared);
+  *predicted = -r_dot - 0.5 * squared;
+  join_step(step);
+  return inexact ? StepQuality::kInexact : StepQuality::kExact;
+}
+
+const Eigen::VectorXd& Engine::gradient() {
+  gradient_joined_.resize(gradient_reduced_.size() + gradient_eliminated_.size());
+  gradient_joined_.head(gradient_reduced_.size()) = gradient_reduced_;
+  gradient_joined_.tail(gradient_eliminated_.size()) = gradient_eliminated_;
+  return gradient_joined_;
+}
+
+double Engine::curvature(const Eigen::VectorXd& v) {
+  double r_dot = 0.0;
+  double squared = 0.0;
+  jacobian_products(v.data(), v.data() + layout_.reduced_dim, &r_dot, &squared);
+  return squared;
+}
+
+double Engine::model_decrease(const Eigen::VectorXd& step) {
+  double r_dot = 0.0;
+  double squared = 0.0;
+  jacobian_products(step.data(), step.data() + layout_.reduced_dim, &r_dot, &squared);
+  return -r_dot - 0.5 * squared;
+}
+
+bool Engine::evaluate_trial(const Eigen::VectorXd& step, double* cost, TrustRegionIteration& it) {
+  split_step(step);
+  save_values();
+  apply_step();
+  const auto phase = Clock::now();
+  // The trial point's residuals go to their own buffer: a rejected step must leave the current
+  // point's residuals (the next step's right-hand side) untouched.
+  const bool with_jacobians = options_.jacobians_with_trial_cost;
+  if (trial_residuals_.size() != residuals_.size()) trial_residuals_.assign(residuals_.size(), 0.0);
+  if (with_jacobians && trial_jacobians_.size() != jacobians_.size()) trial_jacobians_.assign(jacobians_.size(), 0.0);
+  const bool ok = evaluate(with_jacobians, *cost, trial_residuals_, with_jacobians ? trial_jacobians_ : jacobians_);
+  const double seconds = seconds_since(phase);
+  summary_->residual_s += seconds;
+  it.linearize_s += seconds;
+  return ok;
+}
+
+void Engine::accept_trial(double /*old_cost*/, double /*new_cost*/, bool final, TrustRegionIteration& it) {
+  if (final) return;  // the values are in place; nothing is solved from here
+  const auto phase = Clock::now();
+  if (options_.jacobians_with_trial_cost) {
+    std::swap(residuals_, trial_residuals_);
+    std::swap(jacobians_, trial_jacobians_);
+  } else {
+    double relinearized = 0.0;
+    linearization_failed_ = !evaluate(true, relinearized);
   }
+  compute_gradient();
+  gradient_max_norm_ = compute_gradient_max_norm();
+  const double seconds = seconds_since(phase);
+  summary_->jacobian_s += seconds;
+  it.linearize_s += seconds;
+}
+
+void Engine::reject_trial(StepQuality quality) {
+  restore_values();
+  // A rejected PCG step: the next one comes from a fresh factorisation (the minimiser keeps lambda).
+  if (quality == StepQuality::kInexact) force_factorization_ = true;
 }
 
 MarginalCovariances Engine::covariances(const std::vector<int>& variables) {
@@ -1470,7 +1483,8 @@ MarginalCovariances Engine::covariances(const std::vector<int>& variables) {
   compute_gradient();
   // The undamped normal equations J^T J (radius infinite: no LM damping), factorised.
   int cg_iterations = 0;
-  if (!compute_step(std::numeric_limits<double>::infinity(), cg_iterations) || !cholesky_.has_factor()) {
+  bool inexact = false;
+  if (!solve_system(0.0, cg_iterations, &inexact) || !cholesky_.has_factor()) {
     result.message = "J^T J is singular at the current values (is the gauge fixed by a constant variable?)";
     return result;
   }

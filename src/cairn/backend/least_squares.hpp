@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "cairn/backend/robust_kernel.hpp"
+#include "cairn/backend/trust_region.hpp"
 #include "cairn/core/se2.hpp"
 #include "cairn/core/se3.hpp"
 
@@ -135,6 +136,9 @@ enum class LinearSolverType { kSparseNormalCholesky, kSparseSchur, kIterativeSch
 std::string_view to_string(LinearSolverType type);
 
 struct LeastSquaresOptions {
+  /// Levenberg-Marquardt (default), Gauss-Newton or Powell's dog-leg: the iterations of cairn's
+  /// one trust-region minimiser (trust_region.hpp).
+  Algorithm algorithm = Algorithm::kLevenbergMarquardt;
   LinearSolverType linear_solver = LinearSolverType::kSparseSchur;
   /// Iterations, accepted or not (Ceres' max_num_iterations). >= 1.
   int max_iterations = 50;
@@ -181,32 +185,21 @@ struct LeastSquaresOptions {
   /// (restored afterwards, set_blas_threads); 0 = all cores.
   int threads = 0;
   /// Called after every iteration; may be empty.
-  std::function<void(const struct LeastSquaresIteration&)> progress;
+  std::function<void(const TrustRegionIteration&)> progress;
   /// Polled before every iteration; true stops with kInterrupted at the last accepted point.
   std::function<bool()> should_stop;
 
   bool is_valid(std::string* error) const;
 };
 
-struct LeastSquaresIteration {
-  int iteration = 0;
-  double cost = 0.0;
-  double cost_change = 0.0;
-  double gradient_max_norm = 0.0;
-  double step_norm = 0.0;
-  double relative_decrease = 0.0;
-  double trust_region_radius = 0.0;
-  int cg_iterations = 0;
-  bool step_accepted = false;
-  double iteration_s = 0.0;
-};
-
-enum class LeastSquaresTermination { kConvergence, kNoConvergence, kFailure, kInterrupted };
-std::string_view to_string(LeastSquaresTermination termination);
+/// One iteration (the shared minimiser's record, trust_region.hpp).
+using LeastSquaresIteration = TrustRegionIteration;
+using LeastSquaresTermination = TerminationType;
 
 struct LeastSquaresSummary {
   LeastSquaresTermination termination = LeastSquaresTermination::kFailure;
   std::string message;
+  Algorithm algorithm = Algorithm::kLevenbergMarquardt;
   LinearSolverType linear_solver = LinearSolverType::kSparseSchur;
   double initial_cost = 0.0;
   double final_cost = 0.0;

@@ -11,6 +11,7 @@
 #include <type_traits>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 #include "cairn/backend/factors.hpp"
@@ -19,27 +20,8 @@
 
 namespace cairn::backend {
 
-std::string_view to_string(Algorithm algorithm) {
-  switch (algorithm) {
-    case Algorithm::kLevenbergMarquardt: return "lm";
-    case Algorithm::kGaussNewton: return "gn";
-    case Algorithm::kDogleg: return "dogleg";
-  }
-  return "?";
-}
-
 std::string_view to_string(Objective objective) {
   return objective == Objective::kGeodesic ? "geodesic" : "chordal";
-}
-
-std::string_view to_string(TerminationType termination) {
-  switch (termination) {
-    case TerminationType::kConvergence: return "convergence";
-    case TerminationType::kNoConvergence: return "no_convergence";
-    case TerminationType::kFailure: return "failure";
-    case TerminationType::kInterrupted: return "interrupted";
-  }
-  return "?";
 }
 
 bool OptimizerOptions::is_valid(std::string* error) const {
@@ -76,7 +58,7 @@ using Clock = std::chrono::steady_clock;
 
 // LM damping after a rejected step is at least Ceres' initial damping (1 / radius 1e4), so an
 // undamped (Gauss-Newton) start that overshoots is damped at once instead of after a dozen
-// doublings from 1e-16.
+// doublings from 1e-16 (TrustRegionOptions::min_damping_after_rejection).
 constexpr double kRejectionDampingFloor = 1e-4;
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -88,7 +70,7 @@ double edge_weight(const OptimizerOptions& options, std::size_t e) {
 }
 
 template <class Group, class Factor>
-class Engine {
+class PoseGraphSystem {
   // Edges per task of the parallel evaluation.
   static constexpr std::size_t kGrain = 128;
 
@@ -96,7 +78,7 @@ class Engine {
   static constexpr int D = Group::kDoF;
   using BlockVector = Eigen::Matrix<double, D, 1>;
 
-  Engine(PoseGraphProblem<Group>& problem, const OptimizerOptions& options, const std::vector<int>& variable,
+  PoseGraphSystem(PoseGraphProblem<Group>& problem, const OptimizerOptions& options, const std::vector<int>& variable,
          const std::vector<char>& in_pattern, BlockPattern& pattern)
       : problem_(problem),
         options_(options),
@@ -408,6 +390,165 @@ bool prepare_pattern(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
   return true;
 }
 
+// The pose graph as the trust-region minimiser sees it (trust_region.hpp): the current poses
+// with their assembled J^T J and J^T r, the trial poses, and the linear algebra of a step:
+// CHOLMOD on the damped J^T J, or PCG preconditioned with an earlier factorisation
+// (OptimizerOptions::reuse_factorization).
+template <class Group, class Factor>
+class PoseGraphModel final : public TrustRegionModel {
+ public:
+  PoseGraphModel(PoseGraphProblem<Group>& problem, const OptimizerOptions& options, PoseGraphSystem<Group, Factor>& system,
+                 SparseCholesky& cholesky, OptimizerSummary& summary)
+      : problem_(problem), options_(options), system_(system), cholesky_(cholesky), summary_(summary) {
+    reuse_ = options.algorithm == Algorithm::kLevenbergMarquardt && options.reuse_factorization;
+    // PCG budget before refactorising (OptimizerOptions::reuse_max_cg_iterations); 0: a quarter
+    // of a factorisation's flops spent in iterations of two triangular solves (4 flops per
+    // factor non-zero) and one product with H (4 per stored entry).
+    cg_budget_ = options.reuse_max_cg_iterations;
+    if (cg_budget_ == 0) {
+      const double per_iteration = 4.0 * static_cast<double>(cholesky.factor_nonzeros()) +
+                                   4.0 * static_cast<double>(system.pattern().matrix().value.size());
+      cg_budget_ = static_cast<int>(std::clamp(0.25 * cholesky.factor_flops() / per_iteration, 8.0, 30.0));
+    }
+  }
+
+  bool start(double* cost, std::string* /*error*/) override {
+    const auto t0 = Clock::now();
+    *cost = system_.evaluate(problem_.T_world_pose);
+    linearize();
+    summary_.linearize_s += seconds_since(t0);
+    previous_gradient_max_norm_ = gradient_max_norm_;
+    return true;
+  }
+
+  double gradient_max_norm() override { return gradient_max_norm_; }
+  double values_norm() override { return system_.translation_norm(); }
+  const Eigen::VectorXd& gradient() override { return system_.gradient(); }
+
+  double curvature(const Eigen::VectorXd& v) override { return v.dot(symmetric_multiply(system_.pattern().matrix(), v)); }
+
+  // Cost ||r||^2 (no 1/2): ||r||^2 - ||r + J s||^2 = -2 g^T s - s^T H s.
+  double model_decrease(const Eigen::VectorXd& step) override { return -2.0 * gradient().dot(step) - curvature(step); }
+
+  StepQuality compute_step(double lambda, Eigen::VectorXd& step, double* predicted, TrustRegionIteration& it) override {
+    const Eigen::VectorXd& g = system_.gradient();
+    auto& A = system_.pattern().matrix();
+    // LM's damping lambda D, D = diag(J^T J) clamped as Ceres does; used by PCG and added to
+    // the diagonal before a factorisation. Empty for Gauss-Newton (lambda = 0).
+    damping_.resize(lambda > 0.0 ? A.size : 0);
+    for (Eigen::Index k = 0; k < damping_.size(); ++k) {
+      damping_[k] = lambda * std::clamp(diagonal_[static_cast<std::size_t>(k)], 1e-6, 1e32);
+    }
+    if (reuse_ && lambda > 0.0 && cholesky_.has_factor() && !force_factorization_ &&
+        last_step_ <= options_.reuse_step_fraction * largest_step_) {
+      // Inexact LM step: PCG on the current damped system, the last factorisation as
+      // preconditioner. Forcing term (Eisenstat & Walker 1996, choice 1 in spirit): the
+      // gradient's reduction over the last iteration, at most reuse_cg_tolerance, at least 1e-8.
+      // Loose while the gradient falls slowly, tight when it falls fast, so the superlinear
+      // convergence of the exact steps is kept near the minimum.
+      const auto t0 = Clock::now();
+      const double forcing =
+          std::clamp(gradient_max_norm_ / previous_gradient_max_norm_, 1e-8, options_.reuse_cg_tolerance);
+      PcgResult pcg = preconditioned_cg(A, damping_, -g, cholesky_, cg_budget_, forcing);
+      it.solve_s += seconds_since(t0);
+      it.cg_iterations = pcg.iterations;
+      if (pcg.converged && pcg.x.allFinite()) {
+        step = std::move(pcg.x);
+        it.reused_factorization = true;
+        // With PCG's residual rho = -g - (H + lambda D) step: step^T H step = -g^T step -
+        // step^T rho - lambda step^T D step, so the decrease of ||r + J step||^2 is
+        // -g^T step + step^T rho + lambda step^T D step (no product with H).
+        *predicted = -g.dot(step) + step.dot(pcg.residual) + step.dot(damping_.cwiseProduct(step));
+        return StepQuality::kInexact;
+      }
+    }
+    for (Eigen::Index k = 0; k < damping_.size(); ++k) {
+      A.value[static_cast<std::size_t>(system_.pattern().diagonal_index(static_cast<int>(k)))] += damping_[k];
+    }
+    force_factorization_ = false;
+    const auto t1 = Clock::now();
+    const FactorizationStatus status = cholesky_.factorize(A);
+    ++summary_.factorizations;
+    it.factorize_s += seconds_since(t1);
+    for (Eigen::Index k = 0; k < damping_.size(); ++k) {  // back to the undamped J^T J
+      const int index = system_.pattern().diagonal_index(static_cast<int>(k));
+      A.value[static_cast<std::size_t>(index)] = diagonal_[static_cast<std::size_t>(k)];
+    }
+    if (status != FactorizationStatus::kSuccess) return StepQuality::kFailed;
+    const auto t2 = Clock::now();
+    step = cholesky_.solve(Eigen::VectorXd(-g));
+    it.solve_s += seconds_since(t2);
+    if (!step.allFinite()) return StepQuality::kFailed;
+    // (H + lambda D) step = -g  =>  step^T H step = -g^T step - lambda step^T D step, so the
+    // decrease of ||r + J step||^2 is -g^T step + lambda step^T D step.
+    *predicted = -g.dot(step) + (damping_.size() > 0 ? step.dot(damping_.cwiseProduct(step)) : 0.0);
+    return StepQuality::kExact;
+  }
+
+  bool evaluate_trial(const Eigen::VectorXd& step, double* cost, TrustRegionIteration& it) override {
+    candidate_ = system_.apply(step);
+    const auto t0 = Clock::now();
+    *cost = system_.evaluate(candidate_);
+    candidate_evaluate_s_ = seconds_since(t0);
+    it.linearize_s += candidate_evaluate_s_;
+    return std::isfinite(*cost);
+  }
+
+  void accept_trial(double old_cost, double new_cost, bool final, TrustRegionIteration& it) override {
+    problem_.T_world_pose = std::move(candidate_);
+    previous_gradient_max_norm_ = gradient_max_norm_;
+    last_step_ = it.step_norm;
+    largest_step_ = std::max(largest_step_, it.step_norm);
+    if (final) return;
+    const auto t0 = Clock::now();
+    // Chordal objective, LM only (Gauss-Newton and dog-leg need a positive semidefinite model):
+    // the exact Hessian once Gauss-Newton's steps make little progress (kSecondOrderSwitch).
+    if (options_.algorithm == Algorithm::kLevenbergMarquardt && options_.exact_chordal_hessian &&
+        options_.objective == Objective::kChordal && !system_.second_order() &&
+        old_cost - new_cost < kSecondOrderSwitch * old_cost) {
+      system_.set_second_order(true);
+      system_.evaluate(problem_.T_world_pose);  // the blocks again, now with the second-order term
+    }
+    linearize();
+    it.linearize_s += seconds_since(t0);
+  }
+
+  void reject_trial(StepQuality quality) override {
+    // A rejected PCG step is retried from a fresh factorisation with the same damping.
+    if (quality == StepQuality::kInexact) force_factorization_ = true;
+    candidate_.clear();
+  }
+
+ private:
+  // J^T J and J^T r from the blocks of the last evaluate() at the current poses.
+  void linearize() {
+    system_.assemble();
+    const auto& A = system_.pattern().matrix();
+    diagonal_.resize(static_cast<std::size_t>(A.size));
+    for (int k = 0; k < A.size; ++k) {
+      diagonal_[static_cast<std::size_t>(k)] = A.value[static_cast<std::size_t>(system_.pattern().diagonal_index(k))];
+    }
+    gradient_max_norm_ = system_.gradient().size() > 0 ? system_.gradient().cwiseAbs().maxCoeff() : 0.0;
+  }
+
+  PoseGraphProblem<Group>& problem_;
+  const OptimizerOptions& options_;
+  PoseGraphSystem<Group, Factor>& system_;
+  SparseCholesky& cholesky_;
+  OptimizerSummary& summary_;
+  bool reuse_ = false;
+  int cg_budget_ = 0;
+  bool force_factorization_ = false;         // after a rejected inexact step
+  double last_step_ = 0.0;                   // norm of the last accepted step
+  double largest_step_ = 0.0;                // largest accepted step norm so far
+  double gradient_max_norm_ = 0.0;           // at the current poses
+  double previous_gradient_max_norm_ = 1.0;  // at the accepted point before the current one
+  std::vector<double> diagonal_;             // undamped diag(J^T J)
+  Eigen::VectorXd damping_;
+  std::vector<Group> candidate_;
+  double candidate_evaluate_s_ = 0.0;
+};
+
 template <class Group, class Factor>
 OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& options, OptimizerWorkspace* workspace) {
   const auto start = Clock::now();
@@ -430,286 +571,42 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
     if (workspace != nullptr) ++workspace->analyses;
   }
   SparseCholesky& cholesky = *state->cholesky;
-  Engine<Group, Factor> engine(problem, options, state->variable, state->in_pattern, *state->pattern);
-  summary.free_poses = engine.free_poses();
+  PoseGraphSystem<Group, Factor> system(problem, options, state->variable, state->in_pattern, *state->pattern);
+  summary.free_poses = system.free_poses();
   summary.edges = static_cast<int>(problem.edges.size());
-  const auto evaluate_start = Clock::now();
-  double cost = engine.evaluate(problem.T_world_pose);
-  double evaluate_s = seconds_since(evaluate_start);  // of the point to linearise next
-  summary.initial_cost = cost;
-  summary.final_cost = cost;
-  if (engine.free_poses() == 0) {
+  if (system.free_poses() == 0) {
+    summary.initial_cost = summary.final_cost = system.evaluate(problem.T_world_pose);
     summary.termination = TerminationType::kConvergence;
     summary.message = "no free poses";
     summary.total_s = seconds_since(start);
     return summary;
   }
 
-  const bool lm = options.algorithm == Algorithm::kLevenbergMarquardt;
-  const bool dogleg = options.algorithm == Algorithm::kDogleg;
-  const bool reuse = lm && options.reuse_factorization;
-  // PCG budget before refactorising (OptimizerOptions::reuse_max_cg_iterations); 0: a quarter of
-  // a factorisation's flops spent in iterations of two triangular solves (4 flops per factor
-  // non-zero) and one product with H (4 per stored entry).
-  int cg_budget = options.reuse_max_cg_iterations;
-  if (cg_budget == 0) {
-    const double per_iteration = 4.0 * static_cast<double>(cholesky.factor_nonzeros()) +
-                                 4.0 * static_cast<double>(engine.pattern().matrix().value.size());
-    cg_budget = static_cast<int>(std::clamp(0.25 * cholesky.factor_flops() / per_iteration, 8.0, 30.0));
-  }
-  bool force_factorization = false;  // after a rejected inexact step
-  double last_step = 0.0;            // norm of the last accepted step
-  double largest_step = 0.0;         // largest accepted step norm so far
-  double previous_gradient_max_norm = 1.0;  // at the last accepted point before this one
-  double lambda = 1.0 / options.initial_trust_region_radius;
-  double nu = 2.0;
-  double radius = options.initial_trust_region_radius;
-  bool need_linearization = true;
-  std::vector<double> diagonal;  // undamped diag(J^T J)
-  Eigen::VectorXd gn_step;       // dog-leg: cached Gauss-Newton step at the current poses
-  bool gn_step_valid = false;
-  summary.termination = TerminationType::kNoConvergence;
-  summary.message = "maximum number of iterations reached";
+  PoseGraphModel<Group, Factor> model(problem, options, system, cholesky, summary);
+  TrustRegionOptions minimizer;
+  minimizer.algorithm = options.algorithm;
+  minimizer.max_iterations = options.max_iterations;
+  minimizer.function_tolerance = options.function_tolerance;
+  minimizer.gradient_tolerance = options.gradient_tolerance;
+  minimizer.parameter_tolerance = options.parameter_tolerance;
+  minimizer.initial_trust_region_radius = options.initial_trust_region_radius;
+  // The undamped start may let lambda fall below 1e-16 (no floor), as before the minimiser was
+  // shared; every failed factorisation raises lambda and the solve goes on (no invalid-step cap).
+  minimizer.max_trust_region_radius = std::numeric_limits<double>::infinity();
+  minimizer.min_damping_after_rejection = kRejectionDampingFloor;
+  minimizer.max_consecutive_invalid_steps = std::numeric_limits<int>::max();
+  minimizer.progress = options.progress;
+  minimizer.should_stop = options.should_stop;
+  TrustRegionResult result = minimize(model, minimizer);
 
-  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
-    if (options.should_stop && options.should_stop()) {
-      summary.termination = TerminationType::kInterrupted;
-      summary.message = "interrupted before iteration " + std::to_string(iteration);
-      break;
-    }
-    const auto iteration_start = Clock::now();
-    IterationSummary it;
-    it.iteration = iteration;
-    // Logs the iteration (time, progress callback, count).
-    auto record = [&](IterationSummary& logged) {
-      logged.iteration_s = seconds_since(iteration_start);
-      summary.iteration_log.push_back(logged);
-      if (options.progress) options.progress(logged);
-      summary.iterations = iteration;
-    };
-    if (need_linearization) {
-      const auto t0 = Clock::now();
-      engine.assemble();
-      it.linearize_s = evaluate_s + seconds_since(t0);
-      const auto& A = engine.pattern().matrix();
-      diagonal.resize(static_cast<std::size_t>(A.size));
-      for (int k = 0; k < A.size; ++k) diagonal[static_cast<std::size_t>(k)] = A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))];
-      need_linearization = false;
-      gn_step_valid = false;
-    }
-    const Eigen::VectorXd& g = engine.gradient();
-    it.gradient_max_norm = g.cwiseAbs().maxCoeff();
-    if (iteration == 1) previous_gradient_max_norm = it.gradient_max_norm;
-    if (it.gradient_max_norm < options.gradient_tolerance) {
-      summary.termination = TerminationType::kConvergence;
-      summary.message = "gradient tolerance reached (max |J^T r| = " + std::to_string(it.gradient_max_norm) + ")";
-      break;
-    }
-
-    // Solve for the step.
-    Eigen::VectorXd step;
-    Eigen::VectorXd pcg_residual;  // of a PCG step
-    auto& A = engine.pattern().matrix();
-    bool solved = false;
-    // LM's damping lambda D, D = diag(J^T J) clamped as Ceres does; used by PCG and added to the
-    // diagonal before a factorisation.
-    Eigen::VectorXd damping;
-    if (lm) {
-      damping.resize(A.size);
-      for (int k = 0; k < A.size; ++k) damping[k] = lambda * std::clamp(diagonal[static_cast<std::size_t>(k)], 1e-6, 1e32);
-    }
-    if (reuse && cholesky.has_factor() && !force_factorization && last_step <= options.reuse_step_fraction * largest_step) {
-      // Inexact LM step: PCG on the current damped system, the last factorisation as preconditioner.
-      const auto t2 = Clock::now();
-      // Forcing term (Eisenstat & Walker 1996, choice 1 in spirit): the gradient's reduction
-      // over the last iteration, at most reuse_cg_tolerance, at least 1e-8. Loose while the
-      // gradient falls slowly, tight when it falls fast, so the superlinear convergence of the
-      // exact steps is kept near the minimum.
-      const double forcing = std::clamp(it.gradient_max_norm / previous_gradient_max_norm, 1e-8, options.reuse_cg_tolerance);
-      PcgResult pcg = preconditioned_cg(A, damping, -g, cholesky, cg_budget, forcing);
-      it.solve_s = seconds_since(t2);
-      it.cg_iterations = pcg.iterations;
-      if (pcg.converged && pcg.x.allFinite()) {
-        step = std::move(pcg.x);
-        pcg_residual = std::move(pcg.residual);
-        solved = true;
-        it.reused_factorization = true;
-      }
-    }
-    if (!solved && (!dogleg || !gn_step_valid)) {
-      if (lm) {
-        for (int k = 0; k < A.size; ++k) A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] += damping[k];
-      }
-      force_factorization = false;
-      const auto t1 = Clock::now();
-      const FactorizationStatus status = cholesky.factorize(A);
-      ++summary.factorizations;
-      it.factorize_s = seconds_since(t1);
-      if (lm) {  // back to the undamped J^T J
-        for (int k = 0; k < A.size; ++k) A.value[static_cast<std::size_t>(engine.pattern().diagonal_index(k))] = diagonal[static_cast<std::size_t>(k)];
-      }
-      if (status == FactorizationStatus::kSuccess) {
-        const auto t2 = Clock::now();
-        step = cholesky.solve(Eigen::VectorXd(-g));
-        it.solve_s += seconds_since(t2);
-        solved = step.allFinite();
-      }
-      if (dogleg && solved) {
-        gn_step = step;
-        gn_step_valid = true;
-      }
-    } else if (dogleg) {
-      solved = true;  // the cached Gauss-Newton step
-    }
-    if (!solved) {
-      if (lm) {
-        lambda = std::max(lambda * nu, kRejectionDampingFloor);
-        nu *= 2.0;
-        it.lambda = lambda;
-        it.cost = cost;
-        record(it);
-        continue;
-      }
-      summary.termination = TerminationType::kFailure;
-      summary.message = "the normal equations are not positive definite (is every pose constrained?)";
-      summary.iterations = iteration;
-      break;
-    }
-    double predicted = 0.0;
-    if (dogleg) {
-      // Powell's dog-leg (Nocedal & Wright, Numerical Optimization, 2nd ed., sec. 4.1).
-      const Eigen::VectorXd Hg = symmetric_multiply(A, g);
-      const double alpha = g.squaredNorm() / g.dot(Hg);
-      const Eigen::VectorXd cauchy = -alpha * g;
-      if (gn_step.norm() <= radius) {
-        step = gn_step;
-      } else if (cauchy.norm() >= radius) {
-        step = -(radius / g.norm()) * g;
-      } else {
-        const Eigen::VectorXd d = gn_step - cauchy;
-        const double a = d.squaredNorm();
-        const double b = 2.0 * cauchy.dot(d);
-        const double c = cauchy.squaredNorm() - radius * radius;
-        const double beta = (-b + std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a);
-        step = cauchy + beta * d;
-      }
-      const Eigen::VectorXd Hs = symmetric_multiply(A, step);
-      predicted = -2.0 * g.dot(step) - step.dot(Hs);
-      it.lambda = radius;
-    } else if (it.reused_factorization) {
-      // An inexact step, with PCG's residual rho = -g - (H + lambda D) step: step^T H step =
-      // -g^T step - step^T rho - lambda step^T D step, so the decrease of ||r + J step||^2 is
-      // -g^T step + step^T rho + lambda step^T D step (no product with H).
-      predicted = -g.dot(step) + step.dot(pcg_residual) + step.dot(damping.cwiseProduct(step));
-      it.lambda = lambda;
-    } else {
-      // (H + lambda D) step = -g  =>  step^T H step = -g^T step - lambda step^T D step, so the
-      // decrease of ||r + J step||^2 is -g^T step + lambda step^T D step (D = 0 for GN).
-      // `damping` already holds lambda D.
-      const double step_damping = lm ? step.dot(damping.cwiseProduct(step)) : 0.0;
-      predicted = -g.dot(step) + step_damping;
-      it.lambda = lm ? lambda : 0.0;
-    }
-    it.step_norm = step.norm();
-    if (it.step_norm < options.parameter_tolerance * (engine.translation_norm() + options.parameter_tolerance)) {
-      summary.termination = TerminationType::kConvergence;
-      summary.message = "parameter tolerance reached (step norm " + std::to_string(it.step_norm) + ")";
-      it.cost = cost;
-      summary.iteration_log.push_back(it);
-      summary.iterations = iteration;
-      break;
-    }
-    std::vector<Group> candidate = engine.apply(step);
-    const auto candidate_start = Clock::now();
-    const double new_cost = engine.evaluate(candidate);
-    const double candidate_evaluate_s = seconds_since(candidate_start);
-    it.cost_change = cost - new_cost;
-    it.relative_decrease = predicted > 0.0 ? it.cost_change / predicted : -1.0;
-    const bool accept = std::isfinite(new_cost) && (options.algorithm == Algorithm::kGaussNewton
-                                                        ? new_cost <= cost
-                                                        : it.relative_decrease > 1e-3);
-    if (!accept && std::isfinite(new_cost) && std::abs(it.cost_change) <= options.function_tolerance * cost) {
-      // Ceres' rule (trust_region_minimizer.cc, FunctionToleranceReached): the candidate's cost
-      // change is tested whether or not the step is taken, so steps at the floating-point floor
-      // of the cost end the solve instead of raising the damping again and again.
-      it.cost = cost;
-      record(it);
-      summary.termination = TerminationType::kConvergence;
-      summary.message = "function tolerance reached (the last step, not taken, changed the cost by a negligible amount)";
-      break;
-    }
-    if (accept) {
-      const double old_cost = cost;
-      problem.T_world_pose = std::move(candidate);
-      cost = new_cost;
-      need_linearization = true;
-      evaluate_s = candidate_evaluate_s;
-      previous_gradient_max_norm = it.gradient_max_norm;
-      last_step = it.step_norm;
-      largest_step = std::max(largest_step, it.step_norm);
-      ++summary.successful_iterations;
-      it.step_accepted = true;
-      // Levenberg-Marquardt only: Gauss-Newton and dog-leg need a positive semidefinite model.
-      if (lm && options.exact_chordal_hessian && options.objective == Objective::kChordal && !engine.second_order() &&
-          it.cost_change < kSecondOrderSwitch * old_cost) {
-        engine.set_second_order(true);
-        const auto relinearize_start = Clock::now();
-        engine.evaluate(problem.T_world_pose);  // the blocks again, now with the second-order term
-        evaluate_s += seconds_since(relinearize_start);
-      }
-      if (lm) {
-        // Nielsen's update (Madsen, Nielsen & Tingleff 2004, eq. 3.16), as Ceres' LM strategy.
-        const double t = 2.0 * it.relative_decrease - 1.0;
-        lambda *= std::max(1.0 / 3.0, 1.0 - t * t * t);
-        nu = 2.0;
-      } else if (dogleg) {
-        if (it.relative_decrease > 0.75) radius = std::max(radius, 3.0 * it.step_norm);
-        if (it.relative_decrease < 0.25) radius = 0.25 * std::min(radius, it.step_norm);
-      }
-      it.cost = cost;
-      record(it);
-      if (std::abs(old_cost - new_cost) <= options.function_tolerance * old_cost) {
-        summary.termination = TerminationType::kConvergence;
-        summary.message = "function tolerance reached";
-        break;
-      }
-    } else if (it.reused_factorization) {
-      // An inexact step failed: the fault may be PCG's, not the model's. Keep lambda and take
-      // the next step from a fresh factorisation.
-      force_factorization = true;
-      it.cost = cost;
-      record(it);
-    } else {
-      if (options.algorithm == Algorithm::kGaussNewton) {
-        summary.termination = TerminationType::kConvergence;
-        summary.message = "Gauss-Newton step did not decrease the cost";
-        it.cost = cost;
-        summary.iteration_log.push_back(it);
-        summary.iterations = iteration;
-        break;
-      }
-      if (lm) {
-        lambda = std::max(lambda * nu, kRejectionDampingFloor);
-        nu *= 2.0;
-      } else {
-        radius = 0.25 * std::min(radius, it.step_norm);
-      }
-      it.cost = cost;
-      record(it);
-      if (lm && lambda > 1e32) {
-        summary.termination = TerminationType::kConvergence;
-        summary.message = "no further decrease possible (damping reached 1e32)";
-        break;
-      }
-      if (dogleg && radius < 1e-32) {
-        summary.termination = TerminationType::kConvergence;
-        summary.message = "no further decrease possible (trust region collapsed)";
-        break;
-      }
-    }
-  }
-  summary.final_cost = cost;
-  summary.final_lambda = dogleg ? 1.0 / radius : lambda;
+  summary.termination = result.termination;
+  summary.message = std::move(result.message);
+  summary.initial_cost = result.initial_cost;
+  summary.final_cost = result.final_cost;
+  summary.iterations = result.iterations;
+  summary.successful_iterations = result.successful_iterations;
+  summary.final_lambda = result.final_lambda;
+  summary.iteration_log = std::move(result.iteration_log);
   summary.factor_nonzeros = cholesky.factor_nonzeros();
   for (const auto& it : summary.iteration_log) {
     summary.linearize_s += it.linearize_s;

@@ -1,8 +1,9 @@
 #pragma once
 /// \file
 /// Sparse nonlinear least squares over a pose graph: Levenberg-Marquardt (default), Gauss-Newton
-/// or Powell's dog-leg, on the normal equations assembled block by block (in parallel) and
-/// solved by CHOLMOD (symbolic analysis once, numeric factorisation per iteration).
+/// or Powell's dog-leg -- the iterations of cairn's one trust-region minimiser (trust_region.hpp)
+/// -- on the normal equations assembled block by block (in parallel) and solved by CHOLMOD
+/// (symbolic analysis once, numeric factorisation per iteration, or PCG on an earlier one).
 /// Cost = sum over edges of rho(||r||^2), with r the whitened residual of the chosen objective
 /// (no factor 1/2: with the geodesic objective this is g2o's chi2, with the chordal one
 /// SE-Sync's f). Termination follows Ceres' Solver::Options (solver.h): function, gradient and
@@ -16,31 +17,14 @@
 #include "cairn/backend/factors.hpp"
 #include "cairn/backend/problem.hpp"
 #include "cairn/backend/robust_kernel.hpp"
+#include "cairn/backend/trust_region.hpp"
 
 namespace cairn::backend {
 
-enum class Algorithm { kLevenbergMarquardt, kGaussNewton, kDogleg };
-std::string_view to_string(Algorithm algorithm);
 std::string_view to_string(Objective objective);
 
-struct IterationSummary {
-  int iteration = 0;
-  double cost = 0.0;               ///< after the step if accepted, else unchanged
-  double cost_change = 0.0;        ///< old cost - new cost (the actual decrease tried)
-  double gradient_max_norm = 0.0;  ///< max |J^T r| at the start of the iteration
-  double step_norm = 0.0;
-  double relative_decrease = 0.0;  ///< actual / predicted decrease (rho)
-  double lambda = 0.0;             ///< LM damping (1/trust radius) or dog-leg radius
-  bool step_accepted = false;
-  bool reused_factorization = false;  ///< the step came from PCG on an earlier factorisation
-  int cg_iterations = 0;              ///< PCG iterations of this step (0 = direct solve)
-  /// Residuals and Jacobians at this iteration's point (computed with its cost, when it was
-  /// the last iteration's trial point) and their assembly into J^T J and J^T r.
-  double linearize_s = 0.0;
-  double factorize_s = 0.0;
-  double solve_s = 0.0;
-  double iteration_s = 0.0;
-};
+/// One iteration of the optimiser (the shared minimiser's record, trust_region.hpp).
+using IterationSummary = TrustRegionIteration;
 
 struct OptimizerOptions {
   Algorithm algorithm = Algorithm::kLevenbergMarquardt;
@@ -136,14 +120,6 @@ struct OptimizerOptions {
   /// False with every problem described in `error`, like Ceres' Solver::Options::IsValid.
   bool is_valid(std::string* error) const;
 };
-
-enum class TerminationType {
-  kConvergence,    ///< a tolerance was met
-  kNoConvergence,  ///< max_iterations reached; the result is usable but may not be optimal
-  kFailure,        ///< numerical failure (e.g. Gauss-Newton on an indefinite system)
-  kInterrupted,    ///< OptimizerOptions::should_stop said stop; usable, at the last accepted point
-};
-std::string_view to_string(TerminationType termination);
 
 struct OptimizerSummary {
   TerminationType termination = TerminationType::kFailure;

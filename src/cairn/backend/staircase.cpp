@@ -4,10 +4,12 @@
 #include <Eigen/SparseCore>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "cairn/backend/chordal_relaxation.hpp"
 #include "cairn/backend/sparse_cholesky.hpp"
+#include "cairn/backend/trust_region.hpp"
 
 namespace cairn::backend {
 namespace {
@@ -20,69 +22,91 @@ Eigen::MatrixXd polar(const Eigen::MatrixXd& A) {
   return svd.matrixU() * svd.matrixV().transpose();
 }
 
-/// Levenberg-Marquardt on St(d, r)^n x R^(r n) (see staircase.hpp). Y is r x n(d+1).
-class RankSolver {
+/// The rank-r problem on St(d, r)^n x R^(r n) (see staircase.hpp) as a trust-region model
+/// (trust_region.hpp): f(Y) with its Riemannian gradient and exact Riemannian Hessian in
+/// orthonormal bases of the tangent spaces, LM damping lambda I (the Hessian may be indefinite
+/// away from a minimum; the damping makes the system positive definite). Y is r x n(d+1).
+class RankSolver final : public TrustRegionModel {
  public:
-  RankSolver(const ChordalRelaxation& relaxation, int r)
-      : x_(relaxation), n_(relaxation.n), d_(relaxation.d), r_(r), q_(r + d_ * (d_ - 1) / 2 + (r - d_) * d_) {}
-
-  /// Minimises f from Y; returns the iterations taken.
-  int solve(Eigen::MatrixXd& Y, const StaircaseOptions& options) {
-    double f = x_.f(Y);
-    double lambda = -1.0;
-    int iterations = 0;
-    SparseCholesky cholesky;
-    cholesky.require_ll();
-    bool analyzed = false;
-    for (; iterations < options.max_iterations; ++iterations) {
-      if (options.polish.should_stop && options.polish.should_stop()) break;
-      build_bases(Y);
-      const Eigen::MatrixXd G = 2.0 * (x_.M * Y.transpose()).transpose();  // Euclidean gradient, r x N
-      const Eigen::VectorXd g = gradient(G);
-      if (g.size() == 0 || g.cwiseAbs().maxCoeff() <= options.gradient_tolerance * std::max(1.0, f)) break;
-      const Eigen::SparseMatrix<double> H = hessian(Y, G);
-      if (lambda < 0.0) lambda = 1e-6 * H.diagonal().cwiseAbs().maxCoeff();
-      bool accepted = false;
-      for (int attempt = 0; attempt < 60 && !accepted; ++attempt) {
-        Eigen::SparseMatrix<double> A = H;
-        for (int k = 0; k < A.rows(); ++k) A.coeffRef(k, k) += lambda;
-        const Eigen::SparseMatrix<double> U = A.triangularView<Eigen::Upper>();
-        UpperCsc csc;
-        csc.size = static_cast<int>(U.rows());
-        csc.column_start.assign(U.outerIndexPtr(), U.outerIndexPtr() + U.cols() + 1);
-        csc.row.assign(U.innerIndexPtr(), U.innerIndexPtr() + U.nonZeros());
-        csc.value.assign(U.valuePtr(), U.valuePtr() + U.nonZeros());
-        if (!analyzed) {
-          cholesky.analyze(csc);
-          analyzed = true;
-        }
-        if (cholesky.factorize(csc) != FactorizationStatus::kSuccess) {
-          lambda *= 10.0;  // the Hessian is indefinite here: more damping
-          continue;
-        }
-        const Eigen::VectorXd step = cholesky.solve(Eigen::VectorXd(-g));
-        const double predicted = -(g.dot(step) + 0.5 * step.dot(H * step));
-        const Eigen::MatrixXd trial = retract(Y, step);
-        const double f_trial = x_.f(trial);
-        const double ratio = predicted > 0.0 ? (f - f_trial) / predicted : -1.0;
-        if (ratio > 1e-3) {
-          const bool negligible = f - f_trial <= 1e-15 * std::max(1.0, f);
-          Y = trial;
-          f = f_trial;
-          lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));  // Nielsen (1999)
-          accepted = true;
-          if (negligible) return iterations + 1;
-        } else {
-          lambda *= 4.0;
-        }
-      }
-      if (!accepted) break;
-    }
-    return iterations;
+  RankSolver(const ChordalRelaxation& relaxation, int r, Eigen::MatrixXd& Y)
+      : x_(relaxation), n_(relaxation.n), d_(relaxation.d), r_(r), q_(r + d_ * (d_ - 1) / 2 + (r - d_) * d_), Y_(Y) {
+    cholesky_.require_ll();
+    f_ = x_.f(Y_);
+    linearize();
   }
+
+  /// Minimises f from Y (LM of the shared minimiser); returns the iterations taken.
+  int solve(const StaircaseOptions& options) {
+    TrustRegionOptions minimizer;
+    minimizer.max_iterations = options.max_iterations;
+    minimizer.gradient_tolerance = options.gradient_tolerance;  // relative: gradient_max_norm()
+    minimizer.function_tolerance = 1e-15;
+    minimizer.parameter_tolerance = 0.0;
+    // Damping starts at 1e-6 of the Hessian's largest diagonal entry and has no floor.
+    const double scale = H_.size() > 0 ? H_.diagonal().cwiseAbs().maxCoeff() : 0.0;
+    minimizer.initial_trust_region_radius = scale > 0.0 ? 1.0 / (1e-6 * scale) : 1e16;
+    minimizer.max_trust_region_radius = std::numeric_limits<double>::infinity();
+    minimizer.max_consecutive_invalid_steps = 60;
+    minimizer.should_stop = options.polish.should_stop;
+    return minimize(*this, minimizer).iterations;
+  }
+
+  bool start(double* cost, std::string* /*error*/) override {
+    *cost = f_;
+    return true;
+  }
+  /// max |grad| / max(1, f): the staircase's relative gradient tolerance.
+  double gradient_max_norm() override { return g_.size() == 0 ? 0.0 : g_.cwiseAbs().maxCoeff() / std::max(1.0, f_); }
+  double values_norm() override { return Y_.norm(); }
+  const Eigen::VectorXd& gradient() override { return g_; }
+  double curvature(const Eigen::VectorXd& v) override { return v.dot(H_ * v); }
+  double model_decrease(const Eigen::VectorXd& step) override { return -(g_.dot(step) + 0.5 * curvature(step)); }
+
+  StepQuality compute_step(double lambda, Eigen::VectorXd& step, double* predicted, TrustRegionIteration& /*it*/) override {
+    Eigen::SparseMatrix<double> A = H_;
+    for (int k = 0; k < A.rows(); ++k) A.coeffRef(k, k) += lambda;
+    const Eigen::SparseMatrix<double> U = A.triangularView<Eigen::Upper>();
+    UpperCsc csc;
+    csc.size = static_cast<int>(U.rows());
+    csc.column_start.assign(U.outerIndexPtr(), U.outerIndexPtr() + U.cols() + 1);
+    csc.row.assign(U.innerIndexPtr(), U.innerIndexPtr() + U.nonZeros());
+    csc.value.assign(U.valuePtr(), U.valuePtr() + U.nonZeros());
+    if (!analyzed_) {
+      cholesky_.analyze(csc);
+      analyzed_ = true;
+    }
+    // Not positive definite: the Hessian is indefinite here and needs more damping.
+    if (cholesky_.factorize(csc) != FactorizationStatus::kSuccess) return StepQuality::kFailed;
+    step = cholesky_.solve(Eigen::VectorXd(-g_));
+    if (!step.allFinite()) return StepQuality::kFailed;
+    *predicted = model_decrease(step);
+    return StepQuality::kExact;
+  }
+
+  bool evaluate_trial(const Eigen::VectorXd& step, double* cost, TrustRegionIteration& /*it*/) override {
+    trial_ = retract(Y_, step);
+    *cost = x_.f(trial_);
+    return std::isfinite(*cost);
+  }
+
+  void accept_trial(double /*old_cost*/, double new_cost, bool final, TrustRegionIteration& /*it*/) override {
+    Y_ = std::move(trial_);
+    f_ = new_cost;
+    if (!final) linearize();
+  }
+
+  void reject_trial(StepQuality /*quality*/) override {}
 
  private:
   int variable(int p) const { return p < x_.anchor ? p : p - 1; }
+
+  /// Bases, Euclidean gradient, Riemannian gradient and Hessian at Y.
+  void linearize() {
+    build_bases(Y_);
+    const Eigen::MatrixXd G = 2.0 * (x_.M * Y_.transpose()).transpose();  // Euclidean gradient, r x N
+    g_ = riemannian_gradient(G);
+    H_ = hessian(Y_, G);
+  }
 
   /// Orthonormal bases of each pose's tangent space as (r (1 + d)) x q matrices acting on
   /// vec([t_p | Y_p]) (column-major).
@@ -126,7 +150,7 @@ class RankSolver {
     return {(column - n_) / d_, 1 + (column - n_) % d_};
   }
 
-  Eigen::VectorXd gradient(const Eigen::MatrixXd& G) const {
+  Eigen::VectorXd riemannian_gradient(const Eigen::MatrixXd& G) const {
     Eigen::VectorXd g = Eigen::VectorXd::Zero((n_ - 1) * q_);
     for (int p = 0; p < n_; ++p) {
       if (p == x_.anchor) continue;
@@ -199,6 +223,13 @@ class RankSolver {
 
   const ChordalRelaxation& x_;
   int n_, d_, r_, q_;
+  Eigen::MatrixXd& Y_;
+  double f_ = 0.0;
+  Eigen::VectorXd g_;
+  Eigen::SparseMatrix<double> H_;
+  Eigen::MatrixXd trial_;
+  SparseCholesky cholesky_;
+  bool analyzed_ = false;
   std::vector<Eigen::MatrixXd> bases_;
 };
 
@@ -277,8 +308,8 @@ StaircaseSummary riemannian_staircase(PoseGraphProblem<Group>& problem, const St
     if (!escape_saddle(x, escape, Y)) return finish("no descent along the direction of negative curvature at rank " + std::to_string(r - 1));
     StaircaseLevel level;
     level.rank = r;
-    RankSolver solver(x, r);
-    level.iterations = solver.solve(Y, options);
+    RankSolver solver(x, r, Y);
+    level.iterations = solver.solve(options);
     level.certificate = certify_relaxation(x, Y.rightCols(x.n * d), options.certificate, &escape);
     level.f = level.certificate.f;
     summary.levels.push_back(level);
