@@ -1,9 +1,11 @@
 // libFuzzer entry point for the image-sequence readers (io/image_sequence.hpp) and the image
-// decoders behind cairn vslam (vision/features.hpp). Any input must give a result or a
-// cairn::io::ParseError: as a KITTI calib.txt, as an EuRoC sensor.yaml, as a TUM image list, as a TUM associations file
-// in a scratch folder, and as an image file (grey and 16-bit depth). Another exception, a crash,
-// a hang or a sanitizer report is a bug. Run with `make fuzz` (clang); the corpus in
-// fuzz/corpus/image_sequence runs in `make test`.
+// decoders behind cairn vslam (libpng / libjpeg, vision/image_file.hpp, and vision/features.hpp).
+// Any input must give a result or a cairn::io::ParseError: as a KITTI calib.txt, as an EuRoC
+// sensor.yaml, as a TUM image list, as a TUM associations file in a scratch folder, and as an
+// image file (grey and 16-bit depth); decoded from memory, a result or a
+// cairn::vision::ImageFileError. Another exception, a crash, a hang or a sanitizer report is a
+// bug. Run with `make fuzz` (clang); the corpus in fuzz/corpus/image_sequence (PNGs of several
+// kinds, JPEGs, broken ones) runs in `make test`.
 
 #include <unistd.h>
 
@@ -20,6 +22,7 @@
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/vision/features.hpp"
+#include "cairn/vision/image_file.hpp"
 
 namespace {
 
@@ -87,6 +90,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const cairn::io::ImageSequence seq = cairn::io::read_tum_rgbd(tum.string());
     check(!seq.frames.empty(), "an accepted sequence has frames");
   });
+  for (const cairn::vision::ImageMode mode : {cairn::vision::ImageMode::kGray8, cairn::vision::ImageMode::kUnchanged}) {
+    try {
+      const cv::Mat decoded = cairn::vision::decode_image(data, size, mode, "fuzz input");
+      check(!decoded.empty() && decoded.total() <= cairn::vision::kMaxImagePixels, "a decoded image has pixels, within the limit");
+      check(mode == cairn::vision::ImageMode::kUnchanged || decoded.type() == CV_8UC1, "a grey decode is 8-bit, one channel");
+    } catch (const cairn::vision::ImageFileError&) {
+    }
+  }
   const fs::path image = scratch() / "image.png";
   write_bytes(image, bytes, size);
   expect_result_or_parse_error([&] { check(!cairn::vision::read_gray_image(image.string()).empty(), "a decoded image has pixels"); });

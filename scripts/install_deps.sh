@@ -29,7 +29,9 @@ PACKAGES=(
   zlib1g-dev           # reading .gz logs
   libbz2-dev           # reading .bz2 logs
   liblzma-dev          # reading .xz point clouds
-  libopencv-dev        # vision/vslam: image decoding, FAST, rotated BRIEF, PnP RANSAC, undistortion
+  libopencv-dev        # vision/vslam: FAST, rotated BRIEF, PnP RANSAC, undistortion (imgcodecs only in tests)
+  libpng-dev           # vision/image_file: reading the PNG images, writing features.png
+  libjpeg-dev          # vision/image_file: reading JPEG images (libjpeg62-turbo)
 )
 # `install_deps.sh --bench` adds the registration peers of bench/registration_vs_peers.cpp. They
 # pull in about 400 packages (Qt, Java, VTK), too many for every build, and only that benchmark

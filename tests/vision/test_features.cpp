@@ -7,11 +7,11 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/vision/features.hpp"
+#include "cairn/vision/image_file.hpp"
 #include "test_data.hpp"
 
 namespace cairn::vision {
@@ -126,13 +126,12 @@ TEST(Images, UnreadableImagesGiveClearErrors) {
   }
   // A real PNG cut in half, and one of the wrong size.
   const cv::Mat image(40, 60, CV_8UC1, cv::Scalar(100));
-  std::vector<uchar> png;
-  cv::imencode(".png", image, png);
+  const std::string png = encode_png(image);
   const fs::path cut = dir / "cut.png";
-  std::ofstream(cut, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size() / 2));
+  std::ofstream(cut, std::ios::binary) << png.substr(0, png.size() / 2);
   EXPECT_THROW(read_gray_image(cut.string()), io::ParseError);
   const fs::path whole = dir / "whole.png";
-  std::ofstream(whole, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  std::ofstream(whole, std::ios::binary) << png;
   EXPECT_EQ(read_gray_image(whole.string()).cols, 60);
   try {
     read_gray_image(whole.string(), 61, 40);

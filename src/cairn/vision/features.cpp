@@ -7,10 +7,10 @@
 #include <filesystem>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "cairn/io/parse_error.hpp"
+#include "cairn/vision/image_file.hpp"
 
 namespace cairn::vision {
 namespace {
@@ -18,16 +18,15 @@ namespace {
 constexpr int kEdgeThreshold = 19;   // ORB-SLAM's EDGE_THRESHOLD: no corner nearer the border
 constexpr int kHalfPatchSize = 15;   // the orientation disc (ORB-SLAM's HALF_PATCH_SIZE)
 
-cv::Mat read_image(const std::string& path, int flags, const char* what, int expected_width, int expected_height) {
+cv::Mat read_image(const std::string& path, ImageMode mode, const char* what, int expected_width, int expected_height) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw io::ParseError(path, 0, std::string("cannot open ") + what + ": no such file");
   cv::Mat image;
   try {
-    image = cv::imread(path, flags);
-  } catch (const cv::Exception& e) {
-    throw io::ParseError(path, 0, std::string("cannot decode ") + what + ": " + e.what());
+    image = read_image_file(path, mode);
+  } catch (const ImageFileError& e) {
+    throw io::ParseError(path, 0, std::string("cannot decode ") + what + ": " + e.detail());
   }
-  if (image.empty()) throw io::ParseError(path, 0, std::string("cannot decode ") + what + " (not an image, or truncated)");
   if (expected_width > 0 && (image.cols != expected_width || image.rows != expected_height)) {
     throw io::ParseError(path, 0, std::string(what) + " is " + std::to_string(image.cols) + " x " + std::to_string(image.rows) +
                                       " pixels, expected " + std::to_string(expected_width) + " x " + std::to_string(expected_height) +
@@ -58,11 +57,11 @@ float ic_angle(const cv::Mat& image, cv::Point2f pt, const std::vector<int>& uma
 }  // namespace
 
 cv::Mat read_gray_image(const std::string& path, int expected_width, int expected_height) {
-  return read_image(path, cv::IMREAD_GRAYSCALE, "image", expected_width, expected_height);
+  return read_image(path, ImageMode::kGray8, "image", expected_width, expected_height);
 }
 
 cv::Mat read_depth_image(const std::string& path, int expected_width, int expected_height) {
-  cv::Mat depth = read_image(path, cv::IMREAD_UNCHANGED, "depth image", expected_width, expected_height);
+  cv::Mat depth = read_image(path, ImageMode::kUnchanged, "depth image", expected_width, expected_height);
   if (depth.type() != CV_16UC1) {
     throw io::ParseError(path, 0, "expected a 16-bit single-channel depth image, found " + std::to_string(depth.channels()) +
                                       " channel(s) of " + std::to_string(8 * depth.elemSize1()) + "-bit values");
@@ -417,9 +416,7 @@ std::string draw_features_png(const cv::Mat& gray, const std::vector<cv::KeyPoin
   while (font > 0.25 && cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline).width > color.cols - 16) font -= 0.05;
   cv::putText(color, text, cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
   cv::putText(color, text, cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", color, bytes)) throw std::runtime_error("cannot encode the features picture as PNG");
-  return std::string(bytes.begin(), bytes.end());
+  return encode_png(color);
 }
 
 }  // namespace cairn::vision
