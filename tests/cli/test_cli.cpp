@@ -42,6 +42,43 @@ TEST(Cli, HelpEverywhere) {
   }
 }
 
+// `cairn` runs info, convert, corrupt, optimize and ba itself and hands the other commands to the
+// cairn-suite beside it (src/cairn/cli/main.cpp): every command is listed and helps, the front
+// loads neither cairo nor OpenCV, and a front without its suite says so.
+TEST(Cli, TheFrontHandsTheOtherCommandsToCairnSuite) {
+  const Result top = run("--help");
+  for (const char* command : {"info", "convert", "corrupt", "optimize", "ba", "slam2d", "localize2d", "slam3d", "vslam",
+                              "vocabulary", "eval", "landmarks", "simulate"}) {
+    EXPECT_NE(top.out.find(std::string("\n  ") + command + " "), std::string::npos) << command << top.out;
+  }
+  for (const char* command : {"slam2d", "vslam", "simulate"}) {
+    const Result help = run(std::string(command) + " --help");
+    EXPECT_EQ(help.status, 0) << command << help.err;
+    EXPECT_NE(help.out.find(std::string("Usage: cairn ") + command), std::string::npos) << command << help.out;
+    EXPECT_NE(help.out.find("--"), std::string::npos) << command << ": its own options" << help.out;
+  }
+  EXPECT_EQ(run("slam2d --no-such-flag x.clf").status, 2);  // the suite's usage error, passed on
+
+  // The libraries the dynamic loader maps for the front (what ldd prints, without ldd).
+  const Result libraries = cairn::test::run_command("LD_TRACE_LOADED_OBJECTS=1 " + std::string(CAIRN_BINARY), "",
+                                                    scratch() / "stderr.txt");
+  EXPECT_NE(libraries.out.find("libcholmod"), std::string::npos) << libraries.out;
+  EXPECT_EQ(libraries.out.find("libcairo"), std::string::npos) << libraries.out;
+  EXPECT_EQ(libraries.out.find("libopencv"), std::string::npos) << libraries.out;
+
+  // Alone in a folder, the front still runs its own commands and names what is missing.
+  const auto lone = scratch() / "lone";
+  std::filesystem::create_directories(lone);
+  std::filesystem::copy_file(CAIRN_BINARY, lone / "cairn", std::filesystem::copy_options::overwrite_existing);
+  const std::string graph = write_file("lone.g2o", "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\n"
+                                                   "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n");
+  const Result own = cairn::test::run_command((lone / "cairn").string(), "info " + graph, scratch() / "stderr.txt");
+  EXPECT_EQ(own.status, 0) << own.err;
+  const Result handed = cairn::test::run_command((lone / "cairn").string(), "slam2d x.clf", scratch() / "stderr.txt");
+  EXPECT_EQ(handed.status, 1);
+  EXPECT_NE(handed.err.find((lone / "cairn-suite").string() + ", which cannot be started"), std::string::npos) << handed.err;
+}
+
 TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(run("").status, 2);
   EXPECT_EQ(run("info").status, 2);

@@ -1,18 +1,56 @@
-// The `cairn` command: one binary, one subcommand per job. Library code never prints; this file
-// and the commands are where results and errors meet the terminal.
+// The `cairn` command: one subcommand per job. Library code never prints; this file and the
+// commands are where results and errors meet the terminal.
+//
+// Two binaries are built from this file. `cairn-suite` holds every command. `cairn` (compiled
+// with CAIRN_CLI_FRONT) holds the commands whose libraries load fast -- info, convert, corrupt,
+// optimize, ba: the back end, CHOLMOD, TBB -- and hands every other command to the cairn-suite
+// beside it by exec (the same process, its arguments unchanged), as git runs git-<command>.
+// Loading cairo (X11, fontconfig, freetype) and OpenCV costs every process 5-8 ms of dynamic
+// linking, more than a whole solve of a small pose graph (docs/benchmarks.md, "Certified global
+// optimality"); a command that does not draw or see should not pay it.
+
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/io/parse_error.hpp"
+
+namespace {
+
+#ifdef CAIRN_CLI_FRONT
+// The commands cairn-suite runs (their registrars are not linked into the front).
+#define CAIRN_SUITE(registrar) nullptr
+#else
+#define CAIRN_SUITE(registrar) registrar
+#endif
+
+// Replaces this process by cairn-suite, beside this binary, with the same arguments. Returns
+// only on failure, with the exit status.
+[[maybe_unused]] int run_in_suite(char** argv) {
+  std::error_code ec;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const std::filesystem::path suite = (ec ? std::filesystem::path(argv[0]) : self).parent_path() / "cairn-suite";
+  std::cout.flush();
+  std::fflush(stdout);
+  ::execv(suite.c_str(), argv);
+  const int error = errno;
+  std::cerr << "cairn: error: this command runs in " << suite.string() << ", which cannot be started: "
+            << std::strerror(error) << " (it is built and installed beside cairn)\n";
+  return 1;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -22,24 +60,35 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.fallthrough(false);
 
+  app.name("cairn");
   std::map<CLI::App*, cairn::cli::Runner> runners;
+  std::vector<CLI::App*> handed_over;  // the commands cairn-suite runs
   auto add = [&](cairn::cli::Runner (*registrar)(CLI::App&), const char* name, const char* help) {
     CLI::App* command = app.add_subcommand(name, help);
-    runners[command] = registrar(*command);
+    if (registrar != nullptr) {
+      runners[command] = registrar(*command);
+      return;
+    }
+    // Run by cairn-suite: every argument after the command name is passed on untouched, --help
+    // included.
+    command->set_help_flag();
+    command->prefix_command();
+    handed_over.push_back(command);
+    runners[command] = [argv] { return run_in_suite(argv); };
   };
   add(cairn::cli::register_info, "info", "Describe a pose graph or trajectory file");
   add(cairn::cli::register_convert, "convert", "Convert between graph formats or between trajectory formats");
   add(cairn::cli::register_corrupt, "corrupt", "Add random false loop closures to a pose graph (robustness experiments)");
   add(cairn::cli::register_optimize, "optimize", "Optimise a pose graph (LM / GN / dog-leg, chordal initialisation)");
-  add(cairn::cli::register_slam2d, "slam2d", "2D LiDAR SLAM on a CARMEN log: map, trajectory, pose graph, report");
-  add(cairn::cli::register_localize2d, "localize2d", "Localise a CARMEN log in a map saved by slam2d --save-map: pose, health and confidence per scan, relocalisation, report");
-  add(cairn::cli::register_slam3d, "slam3d", "3D LiDAR SLAM on a folder of scans (KISS-ICP-style odometry, Scan Context loops verified by ICP, GNC): trajectory, map, picture, report");
-  add(cairn::cli::register_vslam, "vslam", "Stereo (KITTI layout) or RGB-D (TUM layout) visual SLAM on an image folder: trajectory, keyframes, map points, pictures, report");
-  add(cairn::cli::register_vocabulary, "vocabulary", "Train (hierarchical k-means++ on ORB descriptors) or describe a bag-of-words vocabulary for cairn vslam's place recognition");
-  add(cairn::cli::register_eval, "eval", "Evaluate a trajectory: APE, RPE, KITTI t_err/r_err, relations metric; tables, JSON, plots");
-  add(cairn::cli::register_landmarks, "landmarks", "Landmark SLAM (EKF or graph; known, NN or JCBB association) on a simulated landmark run");
+  add(CAIRN_SUITE(cairn::cli::register_slam2d), "slam2d", "2D LiDAR SLAM on a CARMEN log: map, trajectory, pose graph, report");
+  add(CAIRN_SUITE(cairn::cli::register_localize2d), "localize2d", "Localise a CARMEN log in a map saved by slam2d --save-map: pose, health and confidence per scan, relocalisation, report");
+  add(CAIRN_SUITE(cairn::cli::register_slam3d), "slam3d", "3D LiDAR SLAM on a folder of scans (KISS-ICP-style odometry, Scan Context loops verified by ICP, GNC): trajectory, map, picture, report");
+  add(CAIRN_SUITE(cairn::cli::register_vslam), "vslam", "Stereo (KITTI layout) or RGB-D (TUM layout) visual SLAM on an image folder: trajectory, keyframes, map points, pictures, report");
+  add(CAIRN_SUITE(cairn::cli::register_vocabulary), "vocabulary", "Train (hierarchical k-means++ on ORB descriptors) or describe a bag-of-words vocabulary for cairn vslam's place recognition");
+  add(CAIRN_SUITE(cairn::cli::register_eval), "eval", "Evaluate a trajectory: APE, RPE, KITTI t_err/r_err, relations metric; tables, JSON, plots");
+  add(CAIRN_SUITE(cairn::cli::register_landmarks), "landmarks", "Landmark SLAM (EKF or graph; known, NN or JCBB association) on a simulated landmark run");
   add(cairn::cli::register_ba, "ba", "Bundle adjustment of a BAL problem (points eliminated by Schur complement)");
-  add(cairn::cli::register_simulate, "simulate", "Simulate a world, a trajectory and sensor logs (CARMEN, TUM, g2o, relations, PNG)");
+  add(CAIRN_SUITE(cairn::cli::register_simulate), "simulate", "Simulate a world, a trajectory and sensor logs (CARMEN, TUM, g2o, relations, PNG)");
 
   try {
     app.parse(argc, argv);
@@ -54,6 +103,10 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  // A command of cairn-suite: hand over before anything else happens in this process.
+  for (CLI::App* command : handed_over) {
+    if (command->parsed()) return runners[command]();
+  }
   // The commands with safe points stop at the first SIGINT/SIGTERM; the others end at once.
   for (const auto& [command, run] : runners) {
     const std::string name = command->get_name();
