@@ -104,15 +104,9 @@ std::string_view to_string(LinearSolverType type) {
 }
 
 bool LeastSquaresOptions::is_valid(std::string* error) const {
+  std::string shared;
   std::ostringstream problems;
-  if (max_iterations < 1) problems << "max_iterations must be >= 1; ";
-  if (!(function_tolerance >= 0.0)) problems << "function_tolerance must be >= 0; ";
-  if (!(gradient_tolerance >= 0.0)) problems << "gradient_tolerance must be >= 0; ";
-  if (!(parameter_tolerance >= 0.0)) problems << "parameter_tolerance must be >= 0; ";
-  if (!(initial_trust_region_radius > 0.0)) problems << "initial_trust_region_radius must be > 0; ";
-  if (!(max_trust_region_radius >= initial_trust_region_radius)) {
-    problems << "max_trust_region_radius must be >= initial_trust_region_radius; ";
-  }
+  if (!TrustRegionOptions::is_valid(&shared)) problems << shared << "; ";
   if (!(min_diagonal > 0.0 && max_diagonal >= min_diagonal)) problems << "need 0 < min_diagonal <= max_diagonal; ";
   if (!(cg_tolerance > 0.0 && cg_tolerance < 1.0)) problems << "cg_tolerance must be in (0, 1); ";
   if (max_cg_iterations < 1 || min_cg_iterations < 0 || min_cg_iterations > max_cg_iterations) {
@@ -1348,23 +1342,8 @@ LeastSquaresSummary Engine::run() {
 
   prepare();
 
-  TrustRegionOptions minimizer;
-  minimizer.algorithm = options_.algorithm;
-  minimizer.max_iterations = options_.max_iterations;
-  minimizer.function_tolerance = options_.function_tolerance;
-  minimizer.gradient_tolerance = options_.gradient_tolerance;
-  minimizer.parameter_tolerance = options_.parameter_tolerance;
-  minimizer.initial_trust_region_radius = options_.initial_trust_region_radius;
-  minimizer.max_trust_region_radius = options_.max_trust_region_radius;
-  minimizer.progress = options_.progress;
-  minimizer.should_stop = options_.should_stop;
-  TrustRegionResult result = minimize(*this, minimizer);
-  summary.initial_cost = result.initial_cost;
-  summary.final_cost = result.final_cost;
-  summary.iterations = result.iterations;
-  summary.successful_iterations = result.successful_iterations;
-  summary.iteration_log = std::move(result.iteration_log);
-  return finish(result.termination, std::move(result.message));
+  static_cast<TrustRegionResult&>(summary) = minimize(*this, options_);
+  return finish(summary.termination, summary.message);
 }
 
 bool Engine::start(double* cost, std::string* error) {

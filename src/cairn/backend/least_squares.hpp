@@ -135,26 +135,14 @@ class LeastSquaresProblem {
 enum class LinearSolverType { kSparseNormalCholesky, kSparseSchur, kIterativeSchur };
 std::string_view to_string(LinearSolverType type);
 
-struct LeastSquaresOptions {
-  /// Levenberg-Marquardt (default), Gauss-Newton or Powell's dog-leg: the iterations of cairn's
-  /// one trust-region minimiser (trust_region.hpp).
-  Algorithm algorithm = Algorithm::kLevenbergMarquardt;
+/// The minimiser's options (trust_region.hpp: algorithm, Ceres' tolerances and defaults --
+/// 50 iterations, function 1e-6, gradient 1e-10, parameter 1e-8, radius 1e4 up to 1e16 --,
+/// progress, should_stop) and the engine's. The gradient tolerance is Ceres' max_i
+/// |x_i - (x [+] -g)_i| (for the Euclidean variables of BA, max |g_i|; solver.h); LM solves
+/// (J^T J + D / mu) dx = -J^T r, mu the trust-region radius, D the diagonal of J^T J clamped to
+/// [min_diagonal, max_diagonal] (Ceres' LevenbergMarquardtStrategy).
+struct LeastSquaresOptions : TrustRegionOptions {
   LinearSolverType linear_solver = LinearSolverType::kSparseSchur;
-  /// Iterations, accepted or not (Ceres' max_num_iterations). >= 1.
-  int max_iterations = 50;
-  /// Stop when |old cost - new cost| / old cost < function_tolerance (Ceres' default). >= 0.
-  double function_tolerance = 1e-6;
-  /// Stop when max_i |x_i - (x [+] -g)_i| < gradient_tolerance; for the Euclidean variables of
-  /// BA this is max |g_i| (Ceres' definition, solver.h). >= 0.
-  double gradient_tolerance = 1e-10;
-  /// Stop when ||dx|| < parameter_tolerance * (||x|| + parameter_tolerance). >= 0.
-  double parameter_tolerance = 1e-8;
-  /// Initial trust-region radius mu; LM solves (J^T J + D / mu) dx = -J^T r with D the diagonal
-  /// of J^T J clamped to [min_diagonal, max_diagonal] (Ceres' LevenbergMarquardtStrategy:
-  /// initial radius 1e4, clamp [1e-6, 1e32]). > 0.
-  double initial_trust_region_radius = 1e4;
-  /// Largest radius the LM updates may reach (Ceres' default 1e16). >= initial radius.
-  double max_trust_region_radius = 1e16;
   /// The clamp of D above. 0 < min_diagonal <= max_diagonal.
   double min_diagonal = 1e-6;
   double max_diagonal = 1e32;
@@ -184,11 +172,6 @@ struct LeastSquaresOptions {
   /// Threads for evaluation and the Schur complement, and for CHOLMOD's BLAS during the solve
   /// (restored afterwards, set_blas_threads); 0 = all cores.
   int threads = 0;
-  /// Called after every iteration; may be empty.
-  std::function<void(const TrustRegionIteration&)> progress;
-  /// Polled before every iteration; true stops with kInterrupted at the last accepted point.
-  std::function<bool()> should_stop;
-
   bool is_valid(std::string* error) const;
 };
 
@@ -196,15 +179,11 @@ struct LeastSquaresOptions {
 using LeastSquaresIteration = TrustRegionIteration;
 using LeastSquaresTermination = TerminationType;
 
-struct LeastSquaresSummary {
-  LeastSquaresTermination termination = LeastSquaresTermination::kFailure;
-  std::string message;
+/// The minimiser's result (termination, message, costs, iterations, the log) and the engine's
+/// sizes, counts and per-phase times.
+struct LeastSquaresSummary : TrustRegionResult {
   Algorithm algorithm = Algorithm::kLevenbergMarquardt;
   LinearSolverType linear_solver = LinearSolverType::kSparseSchur;
-  double initial_cost = 0.0;
-  double final_cost = 0.0;
-  int iterations = 0;
-  int successful_iterations = 0;
   int cg_iterations = 0;  ///< total, kIterativeSchur and factorisation reuse
   int factorizations = 0;  ///< numeric factorisations (kSparseSchur, kSparseNormalCholesky)
   int reused_factorizations = 0;  ///< steps solved by PCG on an earlier factorisation
@@ -215,7 +194,6 @@ struct LeastSquaresSummary {
   int residuals = 0;
   int reduced_size = 0;  ///< scalar unknowns of the system CHOLMOD or CG solves
   std::size_t factor_nonzeros = 0;
-  std::vector<LeastSquaresIteration> iteration_log;
   /// Per phase, seconds (as Ceres' Summary): residual evaluation with Jacobians, trial-point
   /// costs, forming the (reduced) normal equations, factorisation / CG, back-substitution.
   double jacobian_s = 0.0;

@@ -24,16 +24,22 @@ std::string_view to_string(Objective objective) {
   return objective == Objective::kGeodesic ? "geodesic" : "chordal";
 }
 
+OptimizerOptions::OptimizerOptions() {
+  max_iterations = 100;
+  function_tolerance = 1e-12;
+  parameter_tolerance = 1e-10;
+  initial_trust_region_radius = 1e16;
+  max_trust_region_radius = std::numeric_limits<double>::infinity();
+  min_damping_after_rejection = 1e-4;
+  max_consecutive_invalid_steps = std::numeric_limits<int>::max();
+}
+
 bool OptimizerOptions::is_valid(std::string* error) const {
   std::string problems;
+  TrustRegionOptions::is_valid(&problems);
   auto check = [&](bool ok, const char* what) {
     if (!ok) problems += std::string(problems.empty() ? "" : "; ") + what;
   };
-  check(max_iterations >= 1, "max_iterations must be >= 1");
-  check(function_tolerance >= 0.0, "function_tolerance must be >= 0");
-  check(gradient_tolerance >= 0.0, "gradient_tolerance must be >= 0");
-  check(parameter_tolerance >= 0.0, "parameter_tolerance must be >= 0");
-  check(initial_trust_region_radius > 0.0, "initial_trust_region_radius must be > 0");
   check(kernel_scale > 0.0, "kernel_scale must be > 0");
   check(threads >= 0, "threads must be >= 0");
   check(reuse_cg_tolerance > 0.0 && reuse_cg_tolerance < 1.0, "reuse_cg_tolerance must be in (0, 1)");
@@ -56,10 +62,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// LM damping after a rejected step is at least Ceres' initial damping (1 / radius 1e4), so an
-// undamped (Gauss-Newton) start that overshoots is damped at once instead of after a dozen
-// doublings from 1e-16 (TrustRegionOptions::min_damping_after_rejection).
-constexpr double kRejectionDampingFloor = 1e-4;
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -583,30 +585,7 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
   }
 
   PoseGraphModel<Group, Factor> model(problem, options, system, cholesky, summary);
-  TrustRegionOptions minimizer;
-  minimizer.algorithm = options.algorithm;
-  minimizer.max_iterations = options.max_iterations;
-  minimizer.function_tolerance = options.function_tolerance;
-  minimizer.gradient_tolerance = options.gradient_tolerance;
-  minimizer.parameter_tolerance = options.parameter_tolerance;
-  minimizer.initial_trust_region_radius = options.initial_trust_region_radius;
-  // The undamped start may let lambda fall below 1e-16 (no floor), as before the minimiser was
-  // shared; every failed factorisation raises lambda and the solve goes on (no invalid-step cap).
-  minimizer.max_trust_region_radius = std::numeric_limits<double>::infinity();
-  minimizer.min_damping_after_rejection = kRejectionDampingFloor;
-  minimizer.max_consecutive_invalid_steps = std::numeric_limits<int>::max();
-  minimizer.progress = options.progress;
-  minimizer.should_stop = options.should_stop;
-  TrustRegionResult result = minimize(model, minimizer);
-
-  summary.termination = result.termination;
-  summary.message = std::move(result.message);
-  summary.initial_cost = result.initial_cost;
-  summary.final_cost = result.final_cost;
-  summary.iterations = result.iterations;
-  summary.successful_iterations = result.successful_iterations;
-  summary.final_lambda = result.final_lambda;
-  summary.iteration_log = std::move(result.iteration_log);
+  static_cast<TrustRegionResult&>(summary) = minimize(model, options);
   summary.factor_nonzeros = cholesky.factor_nonzeros();
   for (const auto& it : summary.iteration_log) {
     summary.linearize_s += it.linearize_s;

@@ -26,29 +26,29 @@ std::string_view to_string(Objective objective);
 /// One iteration of the optimiser (the shared minimiser's record, trust_region.hpp).
 using IterationSummary = TrustRegionIteration;
 
-struct OptimizerOptions {
-  Algorithm algorithm = Algorithm::kLevenbergMarquardt;
+/// The minimiser's options (trust_region.hpp: algorithm, tolerances, radius, progress,
+/// should_stop), with the pose graph's defaults and its own options. ||x|| of the parameter
+/// tolerance is the norm of all translations; the gradient norm is max_i |(J^T r)_i|.
+struct OptimizerOptions : TrustRegionOptions {
+  /// Defaults that differ from the minimiser's (Ceres'):
+  ///  * max_iterations 100, function_tolerance 1e-12, parameter_tolerance 1e-10: pose graphs are
+  ///    solved to the optimum, not to Ceres' 1e-6 (the SE-Sync optima, docs/backend.md);
+  ///  * initial_trust_region_radius 1e16: the first step is Gauss-Newton's (lambda = 1e-16), and
+  ///    damping appears only after a rejected step, which raises lambda to at least
+  ///    min_damping_after_rejection = 1e-4 (Ceres' initial damping, radius 1e4). Measured on the
+  ///    SE-Sync graphs from a chordal start (docs/benchmarks.md), Ceres' radius 1e4 needs 5-16
+  ///    iterations on 11 of 14 graphs where the undamped start needs 2-5: the damping holds back
+  ///    the steps along the graphs' flat directions iteration after iteration. Dog-leg: the
+  ///    initial radius;
+  ///  * max_trust_region_radius infinite (lambda may fall below 1e-16) and no cap on failed
+  ///    factorisations in a row (max_consecutive_invalid_steps): each raises lambda and the solve
+  ///    goes on, as before the minimiser was shared.
+  OptimizerOptions();
+
   Objective objective = Objective::kGeodesic;
   RobustKernel kernel = RobustKernel::kNone;
   /// Kernel scale c in whitened units (standard deviations); > 0.
   double kernel_scale = 1.0;
-  /// Iterations, accepted or not. >= 1.
-  int max_iterations = 100;
-  /// Stop when |old cost - new cost| / old cost < function_tolerance. >= 0.
-  double function_tolerance = 1e-12;
-  /// Stop when max_i |(J^T r)_i| < gradient_tolerance. >= 0.
-  double gradient_tolerance = 1e-10;
-  /// Stop when ||step|| < parameter_tolerance * (||x|| + parameter_tolerance), ||x|| the norm of
-  /// all translations. >= 0.
-  double parameter_tolerance = 1e-10;
-  /// LM: initial damping lambda = 1 / radius, on Marquardt's scaling diag(J^T J) clamped to
-  /// [1e-6, 1e32] (Ceres' clamp). Dog-leg: initial trust-region radius. > 0.
-  /// The default starts as Gauss-Newton (lambda = 1e-16): damping only after a rejected step,
-  /// which raises lambda to at least 1e-4 (Ceres' initial damping, radius 1e4). Measured on the
-  /// SE-Sync graphs from a chordal start (docs/benchmarks.md), Ceres' radius 1e4 needs 5-16
-  /// iterations on 11 of 14 graphs where the undamped start needs 2-5: the damping holds back
-  /// the steps along the graphs' flat directions iteration after iteration.
-  double initial_trust_region_radius = 1e16;
   /// LM only: once a factorisation exists, solve the next damped systems (H + lambda D) x = -g
   /// by conjugate gradients preconditioned with it (an inexact LM step, Wright & Holt 1985;
   /// Nocedal & Wright alg. 5.3) and factorise again only when PCG does not converge within
@@ -89,8 +89,6 @@ struct OptimizerOptions {
   double reuse_step_fraction = 0.25;
   /// Threads for linearisation; 0 = all cores.
   int threads = 0;
-  /// Called after every iteration (the CLI prints progress); may be empty.
-  std::function<void(const IterationSummary&)> progress;
   /// Chordal objective: the exact Hessian J^T J + S of the pulled-back cost
   /// (ChordalFactor::second_order) instead of Gauss-Newton's J^T J. Gauss-Newton converges only
   /// linearly on this objective, whose residuals do not vanish at the optimum (torus3D and the
@@ -102,10 +100,6 @@ struct OptimizerOptions {
   /// (docs/backend.md): fewer iterations on every one (torus3D 100 -> 4, the big-noise sphere
   /// 100 -> 9, both now converged), never slower.
   bool exact_chordal_hessian = true;
-  /// Polled before every iteration; true stops the solve there with TerminationType::kInterrupted
-  /// and the poses of the last accepted step (Ceres' SOLVER_TERMINATE_SUCCESSFULLY from an
-  /// IterationCallback). The CLI stops on SIGINT/SIGTERM this way. May be empty.
-  std::function<bool()> should_stop;
   /// Optional per-edge weights multiplying rho (GNC's weights); empty = all 1.
   std::vector<double> edge_weights;
   /// Edges with 0 < weight < coupling_weight_floor enter the cost and the gradient exactly but
@@ -121,19 +115,11 @@ struct OptimizerOptions {
   bool is_valid(std::string* error) const;
 };
 
-struct OptimizerSummary {
-  TerminationType termination = TerminationType::kFailure;
-  std::string message;
-  double initial_cost = 0.0;
-  double final_cost = 0.0;
-  int iterations = 0;
-  int successful_iterations = 0;
+/// The minimiser's result (termination, message, costs, iterations, final_lambda, the log) and
+/// the pose graph's sizes and times.
+struct OptimizerSummary : TrustRegionResult {
   /// Numeric factorisations (the other steps came from PCG on an earlier factorisation).
   int factorizations = 0;
-  /// LM's damping lambda when the solve ended (1 / trust-region radius; dog-leg: 1 / radius),
-  /// to start a related solve where this one stopped (GNC's outer loop).
-  double final_lambda = 0.0;
-  std::vector<IterationSummary> iteration_log;
   int free_poses = 0;
   int edges = 0;
   std::size_t factor_nonzeros = 0;
