@@ -129,5 +129,69 @@ TEST(ImageSequence, BadFilesNameFileLineAndWhatWasExpected) {
   fs::remove_all(empty);
 }
 
+// A plain folder: images in natural order, monocular or left/ + right/, times from times.txt,
+// from the file names, or assumed; other image formats named, not silently skipped.
+TEST(ImageSequence, ReadsPlainFoldersInNaturalOrder) {
+  const fs::path mono = scratch("plain_mono");
+  for (const char* name : {"frame_10.png", "frame_9.png", "frame_100.jpg", "notes.txt"}) write(mono / name, "x");
+  EXPECT_EQ(detect_image_layout(mono.string()), "folder");
+  ImageSequence seq = read_image_folder(mono.string());
+  EXPECT_EQ(seq.kind, SequenceKind::kMonocular);
+  EXPECT_EQ(seq.layout, "folder");
+  ASSERT_EQ(seq.frames.size(), 3U);
+  EXPECT_EQ(fs::path(seq.frames[0].image).filename(), "frame_9.png");
+  EXPECT_EQ(fs::path(seq.frames[1].image).filename(), "frame_10.png");
+  EXPECT_EQ(fs::path(seq.frames[2].image).filename(), "frame_100.jpg");
+  EXPECT_FALSE(seq.times_from_file);  // frame numbers are not times
+  EXPECT_DOUBLE_EQ(seq.frames[2].time.seconds(), 0.2);
+  EXPECT_FALSE(seq.calibration_from_dataset);
+
+  // Nanosecond names (EuRoC's) and seconds with a decimal point (TUM's) are times.
+  const fs::path stamped = scratch("plain_stamped");
+  write(stamped / "1403636579763555584.png", "x");
+  write(stamped / "1403636579813555456.png", "x");
+  seq = read_image_folder(stamped.string());
+  ASSERT_EQ(seq.frames.size(), 2U);
+  EXPECT_TRUE(seq.times_from_file);
+  EXPECT_EQ(seq.frames[1].time.nanoseconds() - seq.frames[0].time.nanoseconds(), 49999872);
+  const fs::path seconds = scratch("plain_seconds");
+  write(seconds / "1305031102.175304.png", "x");
+  write(seconds / "1305031102.211214.png", "x");
+  seq = read_image_folder(seconds.string());
+  EXPECT_TRUE(seq.times_from_file);
+  EXPECT_NEAR(seq.frames[1].time.seconds() - seq.frames[0].time.seconds(), 0.03591, 1e-6);
+  // times.txt wins, and must have one time per frame.
+  write(seconds / "times.txt", "0.5\n0.25\n");
+  expect_error([&] { read_image_folder(seconds.string()); }, seconds / "times.txt", 2, "times must increase strictly");
+  write(seconds / "times.txt", "0.5\n");
+  expect_error([&] { read_image_folder(seconds.string()); }, seconds / "times.txt", 0, "expected one time per frame");
+
+  // Stereo: left/ and right/ paired by name.
+  const fs::path stereo = scratch("plain_stereo");
+  fs::create_directories(stereo / "left");
+  fs::create_directories(stereo / "right");
+  for (const char* name : {"2.png", "10.png"}) {
+    write(stereo / "left" / name, "x");
+    write(stereo / "right" / name, "x");
+  }
+  write(stereo / "right" / "11.png", "x");
+  EXPECT_EQ(detect_image_layout(stereo.string()), "folder");
+  seq = read_image_folder(stereo.string());
+  EXPECT_EQ(seq.kind, SequenceKind::kStereo);
+  ASSERT_EQ(seq.frames.size(), 2U);
+  EXPECT_EQ(fs::path(seq.frames[0].image).filename(), "2.png");
+  EXPECT_EQ(seq.frames[1].right_image, (stereo / "right" / "10.png").string());
+  ASSERT_FALSE(seq.notes.empty());
+  write(stereo / "left" / "12.png", "x");
+  expect_error([&] { read_image_folder(stereo.string()); }, stereo / "right" / "12.png", 0, "every left image needs its right image");
+
+  // Formats cairn does not decode are named.
+  const fs::path pgm = scratch("plain_pgm");
+  write(pgm / "a.pgm", "P5");
+  write(pgm / "b.pgm", "P5");
+  expect_error([&] { read_image_folder(pgm.string()); }, pgm, 0, "holds 2 .pgm images, which cairn does not read");
+  for (const fs::path& dir : {mono, stamped, seconds, stereo, pgm}) fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace cairn::io

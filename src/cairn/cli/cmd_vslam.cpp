@@ -112,9 +112,10 @@ nlohmann::json stats_json(const eval::Statistics& s) {
 int vslam_command(const VslamFlags& flags) {
   if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
   const std::string layout = io::detect_image_layout(flags.folder);
-  io::ImageSequence seq = layout == "kitti"   ? io::read_kitti_stereo(flags.folder)
-                          : layout == "euroc" ? io::read_euroc_stereo(flags.folder)
-                                              : io::read_tum_rgbd(flags.folder);
+  io::ImageSequence seq = layout == "kitti"    ? io::read_kitti_stereo(flags.folder)
+                          : layout == "euroc"  ? io::read_euroc_stereo(flags.folder)
+                          : layout == "folder" ? io::read_image_folder(flags.folder)
+                                               : io::read_tum_rgbd(flags.folder);
   // EuRoC's cameras are not rectified: rectify every pair (Bouguet) and track the rectified
   // left camera; its ground truth is the body's moved to that camera.
   std::optional<vision::StereoRectifier> rectifier;
@@ -137,7 +138,14 @@ int vslam_command(const VslamFlags& flags) {
   } else if (!flags.camera.empty()) {
     seq.calibration = tum_preset(flags.camera);
   } else if (!seq.calibration_from_dataset) {
+    if (seq.layout == "folder") {
+      throw std::invalid_argument("a plain image folder has no calibration: give --calib FILE (fx, fy, cx, cy, distortion; stereo also baseline_m)");
+    }
     throw std::invalid_argument("a " + seq.layout + " folder has no calibration: give --camera tum-fr1|tum-fr2|tum-fr3 or --calib FILE");
+  }
+  if (seq.kind == io::SequenceKind::kStereo && !flags.mono && !(seq.calibration.baseline_m > 0.0)) {
+    throw std::invalid_argument("stereo images need the baseline between the rectified cameras: baseline_m in " +
+                                (flags.calib.empty() ? std::string("the calibration") : flags.calib) + " (or --mono for the left images only)");
   }
   const io::SequenceKind kind = flags.mono ? io::SequenceKind::kMonocular : seq.kind;
   std::size_t n = seq.frames.size();
@@ -506,7 +514,7 @@ int vslam_command(const VslamFlags& flags) {
 Runner register_vslam(CLI::App& app) {
   auto flags = std::make_shared<VslamFlags>();
   CLI::App* cmd = &app;
-  cmd->add_option("folder", flags->folder, "KITTI odometry folder (calib.txt, image_0/1 or image_l/r), EuRoC MAV folder (mav0/cam0, cam1) or TUM RGB-D folder")->required();
+  cmd->add_option("folder", flags->folder, "KITTI odometry folder (calib.txt, image_0/1 or image_l/r), EuRoC MAV folder (mav0/cam0, cam1), TUM RGB-D folder, or a plain folder: images (monocular) or left/ and right/ (rectified stereo), with --calib")->required();
   cmd->add_option("--out", flags->out, "Output directory (trajectory.tum/.kitti, keyframes.tum, map_points.ply, frames.csv, report.json, trajectory.png, features.png)");
   cmd->add_option("--camera", flags->camera, "Calibration preset for TUM RGB-D: tum-fr1, tum-fr2, tum-fr3");
   cmd->add_option("--calib", flags->calib, "Calibration YAML (fx, fy, cx, cy, k1..k3, p1, p2, baseline_m, depth_units_per_m, virtual_baseline_m)");
@@ -515,7 +523,7 @@ Runner register_vslam(CLI::App& app) {
   cmd->add_option("--features", flags->features, "ORB features per image (default 2000 stereo, 1000 RGB-D, as ORB-SLAM2)");
   cmd->add_option("--max-frames", flags->max_frames, "Process at most N frames");
   cmd->add_option("--feature-frame", flags->feature_frame, "Frame drawn in features.png (default: the middle one)");
-  cmd->add_flag("--mono", flags->mono, "Monocular: the left (KITTI) or colour (TUM) images only; the scale is not observable");
+  cmd->add_flag("--mono", flags->mono, "Monocular: the left (stereo) or colour (TUM) images only; the scale is not observable (a plain folder of images is monocular anyway)");
   cmd->add_flag("--no-local-ba", flags->no_local_ba, "Skip local bundle adjustment (visual odometry only)");
   cmd->add_flag("-q,--quiet", flags->quiet, "No progress or summary");
   cmd->add_flag("--progress", flags->progress, "Progress lines even when stderr is not a terminal");

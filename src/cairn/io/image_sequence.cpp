@@ -1,11 +1,15 @@
 #include "cairn/io/image_sequence.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <set>
 
+#include "cairn/io/file_names.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/text_reader.hpp"
 
@@ -14,24 +18,45 @@ namespace {
 
 namespace fs = std::filesystem;
 
+std::string lower_extension(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
 }  // namespace
 
 bool is_image_file_name(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".ppm" || ext == ".bmp" ||
-         ext == ".tif" || ext == ".tiff";
+  const std::string ext = lower_extension(path);
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
 }
 
 std::vector<std::string> image_files_in(const std::string& folder) {
   std::vector<std::string> names;
+  std::map<std::string, int> unread;  // image formats cairn does not decode, by extension
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(folder, ec)) {
-    if (entry.is_regular_file(ec) && is_image_file_name(entry.path().string())) names.push_back(entry.path().string());
+    if (!entry.is_regular_file(ec)) continue;
+    const std::string path = entry.path().string();
+    if (is_image_file_name(path)) {
+      names.push_back(path);
+    } else {
+      const std::string ext = lower_extension(path);
+      if (ext == ".pgm" || ext == ".ppm" || ext == ".pnm" || ext == ".bmp" || ext == ".tif" || ext == ".tiff") ++unread[ext];
+    }
   }
   if (ec) throw ParseError(folder, 0, "cannot list the folder: " + ec.message());
-  if (names.empty()) throw ParseError(folder, 0, "no images (.png, .jpg, .pgm, ...) in the folder");
-  std::sort(names.begin(), names.end());
+  if (names.empty()) {
+    if (!unread.empty()) {
+      const auto& [ext, count] = *unread.begin();
+      throw ParseError(folder, 0, "holds " + std::to_string(count) + " " + ext + " images, which cairn does not read (PNG and JPEG only): " +
+                                      "convert them first, e.g. `mogrify -format png *" + ext + "` (ImageMagick)");
+    }
+    throw ParseError(folder, 0, "no images (.png, .jpg, .jpeg) in the folder");
+  }
+  // Natural order ("frame_9" before "frame_10"); the same as by bytes for zero-padded names.
+  std::sort(names.begin(), names.end(),
+            [](const std::string& a, const std::string& b) { return natural_less(fs::path(a).filename().string(), fs::path(b).filename().string()); });
   return names;
 }
 
@@ -71,9 +96,14 @@ std::string detect_image_layout(const std::string& folder) {
   }
   if (fs::exists(dir / "rgb.txt", ec) || fs::exists(dir / "associations.txt", ec)) return "tum";
   if (fs::is_directory(dir / "mav0" / "cam0", ec) || fs::is_directory(dir / "cam0", ec)) return "euroc";
+  if (fs::is_directory(dir / "left", ec) && fs::is_directory(dir / "right", ec)) return "folder";
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    if (entry.is_regular_file(ec) && is_image_file_name(entry.path().string())) return "folder";
+  }
   throw ParseError(folder, 0,
                    "not a known image sequence: expected calib.txt with image_0/ and image_1/ (or image_l/ and image_r/) "
-                   "(KITTI odometry stereo), rgb.txt / associations.txt (TUM RGB-D), or mav0/cam0 (EuRoC)");
+                   "(KITTI odometry stereo), rgb.txt / associations.txt (TUM RGB-D), mav0/cam0 (EuRoC), left/ and right/ "
+                   "(rectified stereo images) or images (.png, .jpg) in the folder itself (monocular)");
 }
 
 CameraCalibration read_kitti_calibration(const std::string& path) {
@@ -120,6 +150,124 @@ CameraCalibration read_kitti_calibration(const std::string& path) {
   return c;
 }
 
+namespace {
+
+// The file names of left/ that have a partner of the same name in right/ (each left image must;
+// right images without a partner are counted in seq.notes).
+std::vector<std::string> paired_stereo_names(const fs::path& left, const fs::path& right, ImageSequence& seq) {
+  std::vector<std::string> names, right_names;
+  for (const std::string& p : image_files_in(left.string())) names.push_back(fs::path(p).filename().string());
+  for (const std::string& p : image_files_in(right.string())) right_names.push_back(fs::path(p).filename().string());
+  const std::set<std::string> right_set(right_names.begin(), right_names.end());
+  for (const std::string& name : names) {
+    if (!right_set.count(name)) {
+      throw ParseError((right / name).string(), 0, "missing: every left image needs its right image of the same name");
+    }
+  }
+  if (right_names.size() != names.size()) {
+    seq.notes.push_back(std::to_string(right_names.size() - names.size()) + " right images have no left partner and are ignored");
+  }
+  return names;
+}
+
+// A file name's stem as a time: an integer of 16 or more digits is nanoseconds (EuRoC's
+// 1403636579763555584.png), a number with a decimal point seconds (TUM's 1305031102.175304.png);
+// anything else (frame numbers such as KITTI's 000042.png) is not a time.
+std::optional<core::Timestamp> time_from_name(const std::string& name) {
+  const std::string stem = fs::path(name).stem().string();
+  if (stem.empty()) return std::nullopt;
+  const bool digits = std::all_of(stem.begin(), stem.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+  if (digits && stem.size() >= 16 && stem.size() <= 19) return core::Timestamp::from_nanoseconds(std::stoll(stem));
+  const std::size_t dot = stem.find('.');
+  if (dot == std::string::npos || dot == 0 || dot + 1 == stem.size() || stem.find('.', dot + 1) != std::string::npos) {
+    return std::nullopt;
+  }
+  const auto digit = [](unsigned char c) { return std::isdigit(c) != 0; };
+  if (!std::all_of(stem.begin(), stem.begin() + static_cast<std::ptrdiff_t>(dot), digit) ||
+      !std::all_of(stem.begin() + static_cast<std::ptrdiff_t>(dot) + 1, stem.end(), digit)) {
+    return std::nullopt;
+  }
+  return core::Timestamp::from_seconds(std::stod(stem));
+}
+
+// One time per frame: from `times_path` (one time in seconds per line) when it exists; else, when
+// `from_names`, from the file names if every one is a time (time_from_name) and they increase;
+// else 0.1 s apart (KITTI's 10 Hz), said in seq.notes.
+std::vector<core::Timestamp> frame_times(const fs::path& times_path, const std::vector<std::string>& names, bool from_names,
+                                         ImageSequence& seq) {
+  std::vector<core::Timestamp> stamps;
+  std::error_code ec;
+  if (fs::exists(times_path, ec)) {
+    TextReader reader(times_path.string());
+    while (reader.next_line()) {
+      if (is_blank_or_comment(reader.line())) continue;
+      const auto tokens = split_whitespace(reader.line());
+      if (tokens.size() != 1) reader.fail("expected one time in seconds per line");
+      const double t = parse_double(reader, tokens[0], "a time in seconds");
+      if (!stamps.empty() && !(t > stamps.back().seconds())) reader.fail("times must increase strictly");
+      stamps.push_back(core::Timestamp::from_seconds(t));
+    }
+    if (stamps.size() != names.size()) {
+      throw ParseError(times_path.string(), 0, "expected one time per frame: " + std::to_string(names.size()) + " frames, " +
+                                                   std::to_string(stamps.size()) + " times");
+    }
+    seq.times_from_file = true;
+    return stamps;
+  }
+  if (from_names) {
+    for (const std::string& name : names) {
+      const std::optional<core::Timestamp> t = time_from_name(name);
+      if (!t || (!stamps.empty() && !(*t > stamps.back()))) {
+        stamps.clear();
+        break;
+      }
+      stamps.push_back(*t);
+    }
+    if (!stamps.empty()) {
+      seq.times_from_file = true;
+      seq.notes.push_back("times taken from the image file names");
+      return stamps;
+    }
+  }
+  for (std::size_t k = 0; k < names.size(); ++k) stamps.push_back(core::Timestamp::from_nanoseconds(static_cast<std::int64_t>(k) * 100'000'000));
+  seq.notes.push_back(from_names ? "no times.txt and the file names are not times: frames taken as 0.1 s apart"
+                                 : "no times.txt: frames taken as 0.1 s apart (KITTI's 10 Hz)");
+  return stamps;
+}
+
+}  // namespace
+
+ImageSequence read_image_folder(const std::string& folder) {
+  const fs::path dir(folder);
+  ImageSequence seq;
+  seq.layout = "folder";
+  seq.folder = folder;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw ParseError(folder, 0, "not a folder");
+  const fs::path left = dir / "left", right = dir / "right";
+  std::vector<std::string> names;
+  if (fs::is_directory(left, ec) && fs::is_directory(right, ec)) {
+    seq.kind = SequenceKind::kStereo;
+    names = paired_stereo_names(left, right, seq);
+  } else {
+    seq.kind = SequenceKind::kMonocular;
+    for (const std::string& p : image_files_in(folder)) names.push_back(fs::path(p).filename().string());
+  }
+  const std::vector<core::Timestamp> stamps = frame_times(dir / "times.txt", names, true, seq);
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    ImageFrame f;
+    f.time = stamps[k];
+    if (seq.kind == SequenceKind::kStereo) {
+      f.image = (left / names[k]).string();
+      f.right_image = (right / names[k]).string();
+    } else {
+      f.image = (dir / names[k]).string();
+    }
+    seq.frames.push_back(std::move(f));
+  }
+  return seq;
+}
+
 ImageSequence read_kitti_stereo(const std::string& folder) {
   const fs::path dir(folder);
   ImageSequence seq;
@@ -137,39 +285,8 @@ ImageSequence read_kitti_stereo(const std::string& folder) {
   }
   seq.calibration = read_kitti_calibration((dir / "calib.txt").string());
   seq.calibration_from_dataset = true;
-  std::vector<std::string> names, right_names;
-  for (const std::string& p : image_files_in(left.string())) names.push_back(fs::path(p).filename().string());
-  for (const std::string& p : image_files_in(right.string())) right_names.push_back(fs::path(p).filename().string());
-  const std::set<std::string> right_set(right_names.begin(), right_names.end());
-  for (const std::string& name : names) {
-    if (!right_set.count(name)) {
-      throw ParseError((right / name).string(), 0, "missing: every left image needs its right image of the same name");
-    }
-  }
-  if (right_names.size() != names.size()) {
-    seq.notes.push_back(std::to_string(right_names.size() - names.size()) + " right images have no left partner and are ignored");
-  }
-  const fs::path times = dir / "times.txt";
-  std::vector<core::Timestamp> stamps;
-  if (fs::exists(times, ec)) {
-    TextReader reader(times.string());
-    while (reader.next_line()) {
-      if (is_blank_or_comment(reader.line())) continue;
-      const auto tokens = split_whitespace(reader.line());
-      if (tokens.size() != 1) reader.fail("expected one time in seconds per line");
-      const double t = parse_double(reader, tokens[0], "a time in seconds");
-      if (!stamps.empty() && !(t > stamps.back().seconds())) reader.fail("times must increase strictly");
-      stamps.push_back(core::Timestamp::from_seconds(t));
-    }
-    if (stamps.size() != names.size()) {
-      throw ParseError(times.string(), 0, "expected one time per frame: " + std::to_string(names.size()) + " frames, " +
-                                              std::to_string(stamps.size()) + " times");
-    }
-    seq.times_from_file = true;
-  } else {
-    for (std::size_t k = 0; k < names.size(); ++k) stamps.push_back(core::Timestamp::from_nanoseconds(static_cast<std::int64_t>(k) * 100'000'000));
-    seq.notes.push_back("no times.txt: frames taken as 0.1 s apart (KITTI's 10 Hz)");
-  }
+  const std::vector<std::string> names = paired_stereo_names(left, right, seq);
+  const std::vector<core::Timestamp> stamps = frame_times(dir / "times.txt", names, false, seq);
   for (std::size_t k = 0; k < names.size(); ++k) {
     ImageFrame f;
     f.time = stamps[k];

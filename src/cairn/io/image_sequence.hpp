@@ -9,6 +9,7 @@
 /// |---|---|---|---|---|
 /// | KITTI odometry stereo | `image_0/` + `image_1/` (or `image_l/` + `image_r/`), `calib.txt` | `P0:`/`P1:` lines or two unlabelled 12-number lines | `times.txt` if present, else 0.1 s apart (said in `notes`) | `poses.txt` if present (camera 0 in the first camera-0 frame) |
 /// | EuRoC MAV (stereo) | `mav0/cam0/`, `mav0/cam1/` (`data.csv`, `data/`, `sensor.yaml`) | each camera's `sensor.yaml` (pinhole, radial-tangential, `T_BS`); the pair is not rectified: `rig` holds both cameras and the images must be rectified (vision::StereoRectifier) | from `data.csv` (ns) | `mav0/state_groundtruth_estimate0/data.csv` (the body, i.e. the IMU; `rig->T_body_cam0` turns it into the left camera's) |
+/// | plain folder (`layout` "folder") | images (.png, .jpg) in the folder itself (monocular), or `left/` + `right/` with the same file names (rectified stereo) | not in the folder: give it (cairn vslam --calib; stereo needs `baseline_m`) | `times.txt` if present; else the file names when all are times (16-19 digits: nanoseconds; digits.digits: seconds); else 0.1 s apart (said in `notes`) | none |
 /// | TUM RGB-D | `rgb.txt` + `depth.txt` (or `associations.txt`), `rgb/`, `depth/` | not in the dataset: give it (cairn vslam --camera tum-fr1 / --calib) | from the lists | `groundtruth.txt` if present (T_world_rgb-camera) |
 
 #include <optional>
@@ -62,7 +63,7 @@ struct ImageFrame {
 
 struct ImageSequence {
   SequenceKind kind = SequenceKind::kStereo;
-  std::string layout;  ///< "kitti", "tum"
+  std::string layout;  ///< "kitti", "euroc", "tum", "folder"
   std::string folder;
   CameraCalibration calibration;  ///< from the dataset where it ships one (KITTI; EuRoC: the left camera's, unrectified)
   std::optional<StereoRig> rig;   ///< EuRoC: the unrectified pair
@@ -78,8 +79,13 @@ struct ImageSequence {
 };
 
 /// The layout of `folder`: "kitti" (calib.txt and a stereo image pair of folders), "tum"
-/// (rgb.txt), or throws ParseError naming what was looked for.
+/// (rgb.txt), "euroc" (mav0/cam0), "folder" (left/ and right/, or images in the folder), or
+/// throws ParseError naming what was looked for.
 std::string detect_image_layout(const std::string& folder);
+
+/// Reads a plain folder (layout above): images in natural order ("frame_9" before "frame_10"),
+/// monocular, or stereo from left/ and right/ (each left image needs its right partner).
+ImageSequence read_image_folder(const std::string& folder);
 
 /// Reads a KITTI odometry stereo folder (layout above). Every image listed in image_0 must have
 /// its partner in image_1; times.txt and poses.txt, when present, must have one line per frame.
@@ -104,11 +110,12 @@ CameraCalibration read_kitti_calibration(const std::string& path);
 /// most once, |dt| < max_difference_s). The calibration is not in the folder (left zero).
 ImageSequence read_tum_rgbd(const std::string& folder, double max_difference_s = 0.02);
 
-/// True for the image file extensions cairn reads (.png, .jpg, .jpeg, .pgm, .ppm, .bmp, .tif,
-/// .tiff; any case).
+/// True for the image file extensions cairn reads: .png, .jpg, .jpeg, any case
+/// (vision/image_file.hpp decodes PNG and JPEG only).
 bool is_image_file_name(const std::string& path);
-/// The image files directly in `folder`, sorted by name; ParseError when it cannot be listed or
-/// holds none.
+/// The image files directly in `folder`, in natural order of their names; ParseError when it
+/// cannot be listed or holds none (naming the unread format when it holds PGM, BMP or TIFF
+/// images instead).
 std::vector<std::string> image_files_in(const std::string& folder);
 
 /// Reads a TUM "timestamp filename" list (rgb.txt, depth.txt). Comments (#) are skipped.

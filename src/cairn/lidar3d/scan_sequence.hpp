@@ -23,9 +23,6 @@ struct ScanSequence {
   bool times_from_file = false;
 };
 
-/// Natural order of names: runs of digits compare by value, everything else by bytes.
-bool natural_less(const std::string& a, const std::string& b);
-
 /// The scan files of `paths` (one folder, or files). Throws ParseError for a missing path, an
 /// empty folder, or a folder mixed with files.
 std::vector<std::string> list_scans(const std::vector<std::string>& paths);
