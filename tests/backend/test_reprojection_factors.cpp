@@ -8,47 +8,12 @@
 #include <vector>
 
 #include "cairn/backend/reprojection_factors.hpp"
+#include "factor_jacobian_check.hpp"
 
 namespace cairn::backend {
 namespace {
 
-/// Max |analytic - numeric| / (1 + |numeric|) over every Jacobian entry of `factor` at `values`.
-double jacobian_error(const Factor& factor, std::vector<std::vector<double>> values,
-                      const std::vector<const Manifold*>& manifolds) {
-  const int m = factor.residual_size();
-  const std::size_t n = values.size();
-  std::vector<const double*> pointers(n);
-  for (std::size_t k = 0; k < n; ++k) pointers[k] = values[k].data();
-  std::vector<std::vector<double>> analytic(n);
-  std::vector<double*> jacobians(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    analytic[k].assign(static_cast<std::size_t>(m * manifolds[k]->tangent_size()), 0.0);
-    jacobians[k] = analytic[k].data();
-  }
-  std::vector<double> residual(m);
-  EXPECT_TRUE(factor.evaluate(pointers.data(), residual.data(), jacobians.data()));
-  double worst = 0.0;
-  const double h = 1e-6;
-  for (std::size_t k = 0; k < n; ++k) {
-    const int t = manifolds[k]->tangent_size();
-    const std::vector<double> original = values[k];
-    for (int j = 0; j < t; ++j) {
-      std::vector<double> delta(t, 0.0), plus(m), minus(m);
-      delta[j] = h;
-      manifolds[k]->plus(original.data(), delta.data(), values[k].data());
-      EXPECT_TRUE(factor.evaluate(pointers.data(), plus.data(), nullptr));
-      delta[j] = -h;
-      manifolds[k]->plus(original.data(), delta.data(), values[k].data());
-      EXPECT_TRUE(factor.evaluate(pointers.data(), minus.data(), nullptr));
-      values[k] = original;
-      for (int i = 0; i < m; ++i) {
-        const double numeric = (plus[i] - minus[i]) / (2.0 * h);
-        worst = std::max(worst, std::abs(analytic[k][i * t + j] - numeric) / (1.0 + std::abs(numeric)));
-      }
-    }
-  }
-  return worst;
-}
+using test::jacobian_error;
 
 TEST(ReprojectionFactors, BalJacobiansMatchNumericDerivatives) {
   std::mt19937 rng(7);
