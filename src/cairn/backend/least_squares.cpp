@@ -433,6 +433,19 @@ class Engine final : public TrustRegionModel {
   std::vector<double> damping_reduced_;  ///< D / mu on the reduced unknowns for this step
   // Iterative Schur: the block-diagonal preconditioner's inverse blocks.
   std::vector<Eigen::MatrixXd> preconditioner_;
+  // Iterative Schur: per entry of layout_.eliminated_factors (same index), its residual size,
+  // the offset of its eliminated Jacobian and its range of reduced terms, so that the product
+  // with the implicit Schur complement reads flat arrays instead of walking factor, variable and
+  // slot tables (prepare()).
+  struct ReducedTerm {
+    int jacobian;  ///< offset of J_c in the Jacobian buffer
+    int offset;    ///< offset of the block in the reduced vector
+    int size;      ///< the block's tangent size
+  };
+  std::vector<int> schur_residual_size_;
+  std::vector<int> schur_e_jacobian_;
+  std::vector<int> schur_term_start_;
+  std::vector<ReducedTerm> schur_terms_;
   LeastSquaresSummary* summary_ = nullptr;
   // Trust-region state: the current point's gradient (max-norm, and joined for dog-leg); an
   // accepted point whose Jacobians could not be evaluated (jacobians_with_trial_cost off) fails
@@ -860,24 +873,32 @@ void Engine::schur_product_block(int e, const double* x, double* y) const {
   const int e_size = E != Eigen::Dynamic ? E : problem_.variables[layout_.eliminated_variable[e]].manifold->tangent_size();
   const int begin = layout_.eliminated_factor_start[e];
   const int end = layout_.eliminated_factor_start[e + 1];
+  const double* jacobians = jacobians_.data();
   thread_local std::vector<VectorR> z;
   z.resize(static_cast<std::size_t>(end - begin));
   VectorE w = VectorE::Zero(e_size);
   for (int index = begin; index < end; ++index) {
-    const int f = layout_.eliminated_factors[index];
+    const int m = R != Eigen::Dynamic ? R : schur_residual_size_[static_cast<std::size_t>(index)];
     VectorR& z_f = z[static_cast<std::size_t>(index - begin)];
-    z_f = reduced_times<R, F>(f, x);
-    const ConstMap<R, E> J_e(free_jacobian(f, layout_.factor_eliminated_slot[f]), z_f.size(), e_size);
-    w.noalias() += J_e.transpose() * z_f;
+    z_f.setZero(m);
+    for (int t = schur_term_start_[static_cast<std::size_t>(index)]; t < schur_term_start_[static_cast<std::size_t>(index) + 1]; ++t) {
+      const ReducedTerm& term = schur_terms_[static_cast<std::size_t>(t)];
+      const int f_size = F != Eigen::Dynamic ? F : term.size;
+      z_f.noalias() += ConstMap<R, F>(jacobians + term.jacobian, m, f_size) * ConstVectorMap<F>(x + term.offset, f_size);
+    }
+    w.noalias() += ConstMap<R, E>(jacobians + schur_e_jacobian_[static_cast<std::size_t>(index)], m, e_size).transpose() * z_f;
   }
   const Eigen::Map<const Eigen::Matrix<double, E, E>> V_inverse(v_inverse_.data() + v_inverse_offset_[e], e_size, e_size);
   const VectorE u = V_inverse * w;
   for (int index = begin; index < end; ++index) {
-    const int f = layout_.eliminated_factors[index];
-    const VectorR& z_f = z[static_cast<std::size_t>(index - begin)];
-    const ConstMap<R, E> J_e(free_jacobian(f, layout_.factor_eliminated_slot[f]), z_f.size(), e_size);
-    const VectorR t = z_f - J_e * u;
-    add_reduced_transpose_times<R, F>(f, t, y);
+    const int m = R != Eigen::Dynamic ? R : schur_residual_size_[static_cast<std::size_t>(index)];
+    const VectorR t_f = z[static_cast<std::size_t>(index - begin)] -
+                        ConstMap<R, E>(jacobians + schur_e_jacobian_[static_cast<std::size_t>(index)], m, e_size) * u;
+    for (int t = schur_term_start_[static_cast<std::size_t>(index)]; t < schur_term_start_[static_cast<std::size_t>(index) + 1]; ++t) {
+      const ReducedTerm& term = schur_terms_[static_cast<std::size_t>(t)];
+      const int f_size = F != Eigen::Dynamic ? F : term.size;
+      VectorMap<F>(y + term.offset, f_size).noalias() += ConstMap<R, F>(jacobians + term.jacobian, m, f_size).transpose() * t_f;
+    }
   }
 }
 
@@ -1327,6 +1348,27 @@ void Engine::prepare() {
   v_inverse_.assign(v_inverse_offset_.back(), 0.0);
   residuals_.assign(layout_.residual_size, 0.0);
   jacobians_.assign(layout_.jacobian_size, 0.0);
+  if (options_.linear_solver == LinearSolverType::kIterativeSchur) {
+    const std::size_t count = layout_.eliminated_factors.size();
+    schur_residual_size_.resize(count);
+    schur_e_jacobian_.resize(count);
+    schur_term_start_.assign(1, 0);
+    schur_terms_.clear();
+    for (std::size_t index = 0; index < count; ++index) {
+      const int f = layout_.eliminated_factors[index];
+      const FactorEntry& factor = problem_.factors[f];
+      schur_residual_size_[index] = factor.residual_size;
+      schur_e_jacobian_[index] = layout_.jacobian_offset[layout_.slot_start[f] + layout_.factor_eliminated_slot[f]];
+      for (std::size_t k = 0; k < factor.variables.size(); ++k) {
+        const int v = factor.variables[k];
+        const int block = layout_.block_of[v];
+        if (block < 0 || layout_.eliminated[v]) continue;
+        schur_terms_.push_back({layout_.jacobian_offset[layout_.slot_start[f] + static_cast<int>(k)], layout_.reduced_offset[block],
+                                problem_.variables[v].manifold->tangent_size()});
+      }
+      schur_term_start_.push_back(static_cast<int>(schur_terms_.size()));
+    }
+  }
 
 }
 
