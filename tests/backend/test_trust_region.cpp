@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -234,6 +235,14 @@ TEST(TrustRegion, GradientToleranceAtTheStartTakesNoStep) {
   EXPECT_EQ(result.termination, TerminationType::kConvergence);
   EXPECT_EQ(result.iterations, 0);
   EXPECT_TRUE(model.lambdas.empty());
+}
+
+TEST(TrustRegion, ANonFiniteStartIsAFailureNotASolve) {
+  Rosenbrock model({std::numeric_limits<double>::quiet_NaN(), 1.0});
+  const TrustRegionResult result = minimize(model, tight(Algorithm::kLevenbergMarquardt));
+  EXPECT_EQ(result.termination, TerminationType::kFailure);
+  EXPECT_NE(result.message.find("not finite"), std::string::npos) << result.message;
+  EXPECT_EQ(result.iterations, 0);
 }
 
 TEST(TrustRegion, InvalidOptionsAreNamed) {

@@ -94,6 +94,9 @@ TrustRegionResult minimize(TrustRegionModel& model, const TrustRegionOptions& op
   if (!model.start(&cost, &error)) return finish(TerminationType::kFailure, error);
   result.initial_cost = cost;
   result.final_cost = cost;
+  if (!std::isfinite(cost)) {
+    return finish(TerminationType::kFailure, "the cost at the start is not finite (NaN or infinite residuals)");
+  }
 
   const double min_lambda = 1.0 / options.max_trust_region_radius;  // 0 when the radius is unbounded
   double lambda = lm ? std::max(1.0 / options.initial_trust_region_radius, min_lambda) : 0.0;
