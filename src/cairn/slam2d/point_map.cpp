@@ -2,9 +2,15 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "cairn/core/assert.hpp"
 
@@ -24,6 +30,13 @@ std::uint64_t PointMap::key(const Eigen::Vector2d& p) const {
 }
 
 namespace {
+// std::floor(x) as an integer without the library call (no SSE4.1 rounding at the default
+// target): truncation, one down where it rounded up. Exact for |x| < 2^62.
+std::int64_t floor_to_int(double x) {
+  const auto truncated = static_cast<std::int64_t>(x);
+  return truncated - (static_cast<double>(truncated) > x ? 1 : 0);
+}
+
 std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
   x ^= x >> 30;
   x *= 0xbf58476d1ce4e5b9ULL;
@@ -43,10 +56,21 @@ const PointMap::Cell* PointMap::find(std::uint64_t cell_key) const {
   }
 }
 
+const PointMap::Cell* PointMap::find(std::int64_t i, std::int64_t j) const {
+  if (dense_.empty()) return find(key(i, j));
+  const std::int64_t di = i - dense_i0_, dj = j - dense_j0_;
+  if (di < 0 || dj < 0 || di >= dense_width_ || dj >= dense_height_) return nullptr;
+  const Cell& cell = dense_[static_cast<std::size_t>(dj * dense_width_ + di)];
+  return cell.end == 0 ? nullptr : &cell;
+}
+
 void PointMap::build(const std::vector<Eigen::Vector2d>& points) {
   points_.clear();
   order_.clear();
   table_.clear();
+  sorted_.clear();
+  dense_.clear();
+  dense_width_ = dense_height_ = 0;
   points_.reserve(points.size());
   std::vector<std::uint64_t> keys;
   keys.reserve(points.size());
@@ -77,6 +101,50 @@ void PointMap::build(const std::vector<Eigen::Vector2d>& points) {
     table_[slot] = Cell{cell_key, static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)};
     begin = end;
   }
+  sorted_.resize(order_.size());
+  for (std::size_t o = 0; o < order_.size(); ++o) sorted_[o] = points_[order_[o]].position;
+  blocks_.clear();
+  for (Cell& cell : table_) {
+    if (cell.end == 0) continue;
+    cell.block = static_cast<std::uint32_t>(blocks_.size());
+    for (std::uint32_t first = cell.begin; first < cell.end; first += kBlock) {
+      const std::uint32_t last = std::min(cell.end, first + kBlock);
+      Block block{sorted_[first].x(), sorted_[first].y(), sorted_[first].x(), sorted_[first].y()};
+      for (std::uint32_t o = first + 1; o < last; ++o) {
+        block.low_x = std::min(block.low_x, sorted_[o].x());
+        block.low_y = std::min(block.low_y, sorted_[o].y());
+        block.high_x = std::max(block.high_x, sorted_[o].x());
+        block.high_y = std::max(block.high_y, sorted_[o].y());
+      }
+      blocks_.push_back(block);
+    }
+  }
+  // The dense index, when the cells' bounding box holds at most 16 cells per point (or 4096).
+  std::int64_t i_low = INT64_MAX, i_high = INT64_MIN, j_low = INT64_MAX, j_high = INT64_MIN;
+  for (const MapPoint& point : points_) {
+    const auto i = static_cast<std::int64_t>(std::floor(point.position.x() / options_.cell_size_m));
+    const auto j = static_cast<std::int64_t>(std::floor(point.position.y() / options_.cell_size_m));
+    i_low = std::min(i_low, i);
+    i_high = std::max(i_high, i);
+    j_low = std::min(j_low, j);
+    j_high = std::max(j_high, j);
+  }
+  const double box = (static_cast<double>(i_high) - static_cast<double>(i_low) + 1.0) *
+                     (static_cast<double>(j_high) - static_cast<double>(j_low) + 1.0);
+  if (box <= std::max(4096.0, 16.0 * static_cast<double>(points_.size()))) {
+    dense_i0_ = i_low;
+    dense_j0_ = j_low;
+    dense_width_ = i_high - i_low + 1;
+    dense_height_ = j_high - j_low + 1;
+    dense_.assign(static_cast<std::size_t>(dense_width_ * dense_height_), Cell{});
+    for (const Cell& cell : table_) {
+      if (cell.end == 0) continue;
+      const Eigen::Vector2d& p = points_[order_[cell.begin]].position;
+      const auto i = static_cast<std::int64_t>(std::floor(p.x() / options_.cell_size_m));
+      const auto j = static_cast<std::int64_t>(std::floor(p.y() / options_.cell_size_m));
+      dense_[static_cast<std::size_t>((j - dense_j0_) * dense_width_ + (i - dense_i0_))] = cell;
+    }
+  }
   // Normals cell by cell: the points of a cell share their candidate neighbours (the cells within
   // `reach`), gathered once per cell in the same order a per-point scan would visit them, so the
   // sums and the normals are exactly those of the per-point search. The sums are kept as the
@@ -84,48 +152,144 @@ void PointMap::build(const std::vector<Eigen::Vector2d>& points) {
   const double radius2 = options_.normal_radius_m * options_.normal_radius_m;
   const int reach = static_cast<int>(std::ceil(options_.normal_radius_m / options_.cell_size_m));
   // Cells in parallel (each point's normal is written by one task only: deterministic).
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table_.size(), 64), [&](const tbb::blocked_range<std::size_t>& range) {
-    std::vector<std::uint32_t> candidates;
+  //
+  // The candidates are copied into flat x / y arrays and a cell's points are done kPack at a
+  // time: one pass over the candidates updates the sums of kPack points, each with the
+  // candidates in the same order and the same double arithmetic as a per-point loop (a
+  // candidate outside the radius adds exactly 0), so the normals are bit-identical; the inner
+  // loop is branch-free, two lanes per SSE2 register (GCC did not vectorise the plain loop), and
+  // skips the candidate blocks out of every pack point's reach. Measured with perf on MIT CSAIL
+  // (2026-11-25): these sums were a fifth of `cairn slam2d`'s CPU time, most of it the local map
+  // rebuilt at every keyframe on the front end's thread; about 30 % less after this change
+  // (0.85 -> ~0.6 s of CPU; a shared, noisy machine).
+  constexpr int kPack = 4;
+  auto normals = [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<double> candidate_x, candidate_y;
+    struct CandidateBlock {
+      Block box;
+      std::uint32_t begin = 0, end = 0;  ///< in candidate_x / candidate_y
+    };
+    std::vector<CandidateBlock> candidate_blocks;
     for (std::size_t slot = range.begin(); slot != range.end(); ++slot) {
       const Cell& cell = table_[slot];
       if (cell.end == 0) continue;
       const MapPoint& first = points_[order_[cell.begin]];
       const auto ci = static_cast<std::int64_t>(std::floor(first.position.x() / options_.cell_size_m));
       const auto cj = static_cast<std::int64_t>(std::floor(first.position.y() / options_.cell_size_m));
-      candidates.clear();
+      candidate_x.clear();
+      candidate_y.clear();
+      candidate_blocks.clear();
       for (int di = -reach; di <= reach; ++di) {
         for (int dj = -reach; dj <= reach; ++dj) {
-          if (const Cell* other = find(key(ci + di, cj + dj)))
-            candidates.insert(candidates.end(), order_.begin() + other->begin, order_.begin() + other->end);
+          if (const Cell* other = find(ci + di, cj + dj)) {
+            const Block* block = blocks_.data() + other->block;
+            for (std::uint32_t start = other->begin; start < other->end; start += kBlock, ++block) {
+              const std::uint32_t last = std::min(other->end, start + kBlock);
+              candidate_blocks.push_back({*block, static_cast<std::uint32_t>(candidate_x.size()),
+                                          static_cast<std::uint32_t>(candidate_x.size() + (last - start))});
+              for (std::uint32_t o = start; o < last; ++o) {
+                candidate_x.push_back(sorted_[o].x());
+                candidate_y.push_back(sorted_[o].y());
+              }
+            }
+          }
         }
       }
-      for (std::uint32_t o = cell.begin; o < cell.end; ++o) {
-        MapPoint& point = points_[order_[o]];
-        double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
-        int count = 0;
-        for (const std::uint32_t k : candidates) {
-          const Eigen::Vector2d& q = points_[k].position;
-          if ((q - point.position).squaredNorm() > radius2) continue;
-          sx += q.x();
-          sy += q.y();
-          sxx += q.x() * q.x();
-          sxy += q.x() * q.y();
-          syy += q.y() * q.y();
-          ++count;
+      const double* xs = candidate_x.data();
+      const double* ys = candidate_y.data();
+      for (std::uint32_t o = cell.begin; o < cell.end; o += kPack) {
+        const int pack = static_cast<int>(std::min<std::uint32_t>(kPack, cell.end - o));
+        double px[kPack], py[kPack];
+        for (int b = 0; b < kPack; ++b) {
+          // Unused lanes repeat the last point (their sums are discarded).
+          const Eigen::Vector2d& p = points_[order_[o + static_cast<std::uint32_t>(std::min(b, pack - 1))]].position;
+          px[b] = p.x();
+          py[b] = p.y();
         }
-        if (count < options_.normal_min_neighbours) continue;
-        const Eigen::Vector2d mean = Eigen::Vector2d(sx, sy) / count;
-        Eigen::Matrix2d outer;
-        outer << sxx, sxy, sxy, syy;
-        const Eigen::Matrix2d covariance = outer / count - mean * mean.transpose();
-        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
-        const double largest = eigen.eigenvalues()(1);
-        if (!(largest > 0.0) || eigen.eigenvalues()(0) > options_.normal_max_eigenvalue_ratio * largest) continue;
-        point.normal = eigen.eigenvectors().col(0).normalized();
-        point.has_normal = true;
+        double sx[kPack] = {}, sy[kPack] = {}, sxx[kPack] = {}, sxy[kPack] = {}, syy[kPack] = {}, count[kPack] = {};
+        // A block whose box lies farther than the radius from every point of the pack adds
+        // nothing to any of them (every candidate in it has d2 >= the box's d2 > radius2) and
+        // is skipped; the others are summed in their order.
+        auto reaches = [&](const Block& bounds) {
+          for (int b = 0; b < kPack; ++b) {
+            const double dx = std::max(0.0, std::max(bounds.low_x - px[b], px[b] - bounds.high_x));
+            const double dy = std::max(0.0, std::max(bounds.low_y - py[b], py[b] - bounds.high_y));
+            if (!(dx * dx + dy * dy > radius2)) return true;
+          }
+          return false;
+        };
+#if defined(__SSE2__)
+        // Two lanes per register, two registers per pack; the candidate's products are the same
+        // for every lane. `inside` is !(d2 > radius2), the per-point loop's test.
+        const __m128d r2 = _mm_set1_pd(radius2);
+        const __m128d one = _mm_set1_pd(1.0);
+        __m128d ax[2], ay[2], axx[2], axy[2], ayy[2], an[2], bx[2], by[2];
+        for (int h = 0; h < 2; ++h) {
+          ax[h] = ay[h] = axx[h] = axy[h] = ayy[h] = an[h] = _mm_setzero_pd();
+          bx[h] = _mm_loadu_pd(px + 2 * h);
+          by[h] = _mm_loadu_pd(py + 2 * h);
+        }
+        for (const CandidateBlock& block : candidate_blocks) {
+          if (!reaches(block.box)) continue;
+          for (std::uint32_t k = block.begin; k < block.end; ++k) {
+            const __m128d qx = _mm_set1_pd(xs[k]), qy = _mm_set1_pd(ys[k]);
+            const __m128d qxx = _mm_mul_pd(qx, qx), qxy = _mm_mul_pd(qx, qy), qyy = _mm_mul_pd(qy, qy);
+            for (int h = 0; h < 2; ++h) {
+              const __m128d dx = _mm_sub_pd(qx, bx[h]), dy = _mm_sub_pd(qy, by[h]);
+              const __m128d inside = _mm_cmpngt_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), r2);
+              ax[h] = _mm_add_pd(ax[h], _mm_and_pd(inside, qx));
+              ay[h] = _mm_add_pd(ay[h], _mm_and_pd(inside, qy));
+              axx[h] = _mm_add_pd(axx[h], _mm_and_pd(inside, qxx));
+              axy[h] = _mm_add_pd(axy[h], _mm_and_pd(inside, qxy));
+              ayy[h] = _mm_add_pd(ayy[h], _mm_and_pd(inside, qyy));
+              an[h] = _mm_add_pd(an[h], _mm_and_pd(inside, one));
+            }
+          }
+        }
+        for (int h = 0; h < 2; ++h) {
+          _mm_storeu_pd(sx + 2 * h, ax[h]);
+          _mm_storeu_pd(sy + 2 * h, ay[h]);
+          _mm_storeu_pd(sxx + 2 * h, axx[h]);
+          _mm_storeu_pd(sxy + 2 * h, axy[h]);
+          _mm_storeu_pd(syy + 2 * h, ayy[h]);
+          _mm_storeu_pd(count + 2 * h, an[h]);
+        }
+#else
+        for (const CandidateBlock& block : candidate_blocks) {
+          if (!reaches(block.box)) continue;
+          for (std::uint32_t k = block.begin; k < block.end; ++k) {
+            const double qx = xs[k], qy = ys[k];
+            for (int b = 0; b < kPack; ++b) {
+              const double dx = qx - px[b], dy = qy - py[b];
+              if (dx * dx + dy * dy > radius2) continue;
+              sx[b] += qx;
+              sy[b] += qy;
+              sxx[b] += qx * qx;
+              sxy[b] += qx * qy;
+              syy[b] += qy * qy;
+              count[b] += 1.0;
+            }
+          }
+        }
+#endif
+        for (int b = 0; b < pack; ++b) {
+          MapPoint& point = points_[order_[o + static_cast<std::uint32_t>(b)]];
+          const int n = static_cast<int>(count[b]);  // exact: counts far below 2^53
+          if (n < options_.normal_min_neighbours) continue;
+          const Eigen::Vector2d mean = Eigen::Vector2d(sx[b], sy[b]) / n;
+          Eigen::Matrix2d outer;
+          outer << sxx[b], sxy[b], sxy[b], syy[b];
+          const Eigen::Matrix2d covariance = outer / n - mean * mean.transpose();
+          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
+          const double largest = eigen.eigenvalues()(1);
+          if (!(largest > 0.0) || eigen.eigenvalues()(0) > options_.normal_max_eigenvalue_ratio * largest) continue;
+          point.normal = eigen.eigenvectors().col(0).normalized();
+          point.has_normal = true;
+        }
       }
     }
-  });
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table_.size(), 64), normals);
 }
 
 const MapPoint* PointMap::nearest(const Eigen::Vector2d& query, double max_distance_m) const {
@@ -133,22 +297,30 @@ const MapPoint* PointMap::nearest(const Eigen::Vector2d& query, double max_dista
   // query when the radius is below half a cell, as in ICP's final iterations).
   const double r = std::min(max_distance_m, options_.cell_size_m);
   const double c = options_.cell_size_m;
-  const auto i_low = static_cast<std::int64_t>(std::floor((query.x() - r) / c));
-  const auto i_high = static_cast<std::int64_t>(std::floor((query.x() + r) / c));
-  const auto j_low = static_cast<std::int64_t>(std::floor((query.y() - r) / c));
-  const auto j_high = static_cast<std::int64_t>(std::floor((query.y() + r) / c));
+  const std::int64_t i_low = floor_to_int((query.x() - r) / c);
+  const std::int64_t i_high = floor_to_int((query.x() + r) / c);
+  const std::int64_t j_low = floor_to_int((query.y() - r) / c);
+  const std::int64_t j_high = floor_to_int((query.y() + r) / c);
   const MapPoint* best = nullptr;
   double best_d2 = max_distance_m * max_distance_m;
   for (std::int64_t i = i_low; i <= i_high; ++i) {
     for (std::int64_t j = j_low; j <= j_high; ++j) {
-      const Cell* cell = find(key(i, j));
+      const Cell* cell = find(i, j);
       if (cell == nullptr) continue;
-      for (std::uint32_t o = cell->begin; o < cell->end; ++o) {
-        const std::uint32_t k = order_[o];
-        const double d2 = (points_[k].position - query).squaredNorm();
-        if (d2 < best_d2) {
-          best_d2 = d2;
-          best = &points_[k];
+      // Blocks whose box is not nearer than the best so far are skipped: every point in one has
+      // d2 >= the box's d2 (rounding is monotone), and only d2 < best_d2 replaces the best.
+      const Block* block = blocks_.data() + cell->block;
+      for (std::uint32_t first = cell->begin; first < cell->end; first += kBlock, ++block) {
+        const double dx = std::max(0.0, std::max(block->low_x - query.x(), query.x() - block->high_x));
+        const double dy = std::max(0.0, std::max(block->low_y - query.y(), query.y() - block->high_y));
+        if (dx * dx + dy * dy >= best_d2) continue;
+        const std::uint32_t last = std::min(cell->end, first + kBlock);
+        for (std::uint32_t o = first; o < last; ++o) {
+          const double d2 = (sorted_[o] - query).squaredNorm();
+          if (d2 < best_d2) {
+            best_d2 = d2;
+            best = &points_[order_[o]];
+          }
         }
       }
     }

@@ -48,15 +48,33 @@ class PointMap {
     std::uint64_t key = 0;
     std::uint32_t begin = 0;
     std::uint32_t end = 0;  ///< 0 marks an empty slot (a used cell has end > begin)
+    std::uint32_t block = 0;  ///< its first block in blocks_
   };
+  /// Bounding box of kBlock consecutive points of a cell (order_[begin + kBlock b, ...)): a
+  /// query skips a block whose box lies farther than what it has already found, exactly (no
+  /// point of the block could be nearer), visiting the rest in the same order as before.
+  struct Block {
+    double low_x = 0.0, low_y = 0.0, high_x = 0.0, high_y = 0.0;
+  };
+  static constexpr std::uint32_t kBlock = 8;
   std::uint64_t key(const Eigen::Vector2d& p) const;
   static std::uint64_t key(std::int64_t i, std::int64_t j);
   const Cell* find(std::uint64_t key) const;
+  /// The cell (i, j): from the dense index when there is one, else from the hash table.
+  const Cell* find(std::int64_t i, std::int64_t j) const;
 
   PointMapOptions options_;
   std::vector<MapPoint> points_;
   std::vector<std::uint32_t> order_;  ///< point indices grouped by cell
   std::vector<Cell> table_;           ///< open addressing, linear probing, power-of-two size
+  /// The positions in order_'s order (a query reads a cell's points contiguously).
+  std::vector<Eigen::Vector2d> sorted_;
+  std::vector<Block> blocks_;
+  /// Dense index of the cells' bounding box when it is small (local maps and submaps: a few
+  /// thousand cells), cell (i, j) at (j - dense_j0_) * dense_width_ + (i - dense_i0_); empty
+  /// otherwise. A lookup is an array access instead of a hash probe.
+  std::vector<Cell> dense_;
+  std::int64_t dense_i0_ = 0, dense_j0_ = 0, dense_width_ = 0, dense_height_ = 0;
 };
 
 }  // namespace cairn::slam2d

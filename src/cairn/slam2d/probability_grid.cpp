@@ -125,6 +125,28 @@ double ProbabilityGrid::cell_probability(int i, int j) const {
   return known_[k] ? probability_of(log_odds_[k]) : 0.5;
 }
 
+double ProbabilityGrid::probability_of_log_odds(float l) { return probability_of(l); }
+
+void ProbabilityGrid::reserve(const Eigen::Vector2d& lower, const Eigen::Vector2d& upper) {
+  if (!(lower.array() <= upper.array()).all()) return;
+  if (width_ > 0) {
+    grow_to_contain(lower);
+    grow_to_contain(upper);
+    return;
+  }
+  const double r = options_.resolution_m;
+  const double i0 = std::floor(lower.x() / r), j0 = std::floor(lower.y() / r);
+  const double i1 = std::floor(upper.x() / r), j1 = std::floor(upper.y() / r);
+  CAIRN_ASSERT(std::abs(i0) < 1e8 && std::abs(j0) < 1e8 && std::abs(i1) < 1e8 && std::abs(j1) < 1e8,
+               "point too far from the origin for the grid");
+  offset_i_ = static_cast<long>(i0);
+  offset_j_ = static_cast<long>(j0);
+  width_ = static_cast<int>(i1 - i0) + 1;
+  height_ = static_cast<int>(j1 - j0) + 1;
+  log_odds_.assign(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_), 0.0f);
+  known_.assign(log_odds_.size(), 0);
+}
+
 float ProbabilityGrid::cell_log_odds(int i, int j) const {
   if (i < 0 || j < 0 || i >= width_ || j >= height_) return 0.0f;
   const std::size_t k = static_cast<std::size_t>(j * width_ + i);
