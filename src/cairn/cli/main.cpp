@@ -46,7 +46,7 @@ namespace {
   ::execv(suite.c_str(), argv);
   const int error = errno;
   std::cerr << "cairn: error: this command runs in " << suite.string() << ", which cannot be started: "
-            << std::strerror(error) << " (it is built and installed beside cairn)\n";
+            << std::strerror(error) << " (it is built beside cairn: keep the two together)\n";
   return 1;
 }
 
