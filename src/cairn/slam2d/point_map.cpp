@@ -17,6 +17,7 @@
 #endif
 
 #include "cairn/core/assert.hpp"
+#include "cairn/slam2d/cell_hash.hpp"
 
 namespace cairn::slam2d {
 
@@ -41,13 +42,6 @@ std::int64_t floor_to_int(double x) {
   return truncated - (static_cast<double>(truncated) > x ? 1 : 0);
 }
 
-std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 // A block of a cell's normal candidates: its bounding box and its range in the candidate arrays.
 struct NormalCandidateBlock {
@@ -113,7 +107,7 @@ const bool kHaveAvx = [] {
 const PointMap::Cell* PointMap::find(std::uint64_t cell_key) const {
   if (table_.empty()) return nullptr;
   const std::size_t mask = table_.size() - 1;
-  for (std::size_t slot = mix(cell_key) & mask;; slot = (slot + 1) & mask) {
+  for (std::size_t slot = mix_cell_key(cell_key) & mask;; slot = (slot + 1) & mask) {
     const Cell& cell = table_[slot];
     if (cell.end == 0) return nullptr;
     if (cell.key == cell_key) return &cell;
@@ -160,7 +154,7 @@ void PointMap::build(const std::vector<Eigen::Vector2d>& points) {
     std::size_t end = begin + 1;
     while (end < order_.size() && keys[order_[end]] == keys[order_[begin]]) ++end;
     const std::uint64_t cell_key = keys[order_[begin]];
-    std::size_t slot = mix(cell_key) & mask;
+    std::size_t slot = mix_cell_key(cell_key) & mask;
     while (table_[slot].end != 0) slot = (slot + 1) & mask;
     table_[slot] = Cell{cell_key, static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)};
     begin = end;

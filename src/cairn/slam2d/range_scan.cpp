@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "cairn/slam2d/cell_hash.hpp"
+
 namespace cairn::slam2d {
 namespace {
 std::uint64_t voxel_key(const Eigen::Vector2d& p, double size) {
@@ -11,13 +13,6 @@ std::uint64_t voxel_key(const Eigen::Vector2d& p, double size) {
   return (static_cast<std::uint64_t>(i) << 32) ^ (static_cast<std::uint64_t>(j) & 0xffffffffULL);
 }
 
-std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 }  // namespace
 
 std::vector<Eigen::Vector2d> voxel_filter(const std::vector<Eigen::Vector2d>& points, double size) {
@@ -36,7 +31,7 @@ std::vector<Eigen::Vector2d> voxel_filter(const std::vector<Eigen::Vector2d>& po
   kept.reserve(points.size());
   for (const auto& p : points) {
     const std::uint64_t key = voxel_key(p, size);
-    std::size_t slot = mix(key) & mask;
+    std::size_t slot = mix_cell_key(key) & mask;
     while (used[slot] != 0 && keys[slot] != key) slot = (slot + 1) & mask;
     if (used[slot] != 0) continue;
     used[slot] = 1;
