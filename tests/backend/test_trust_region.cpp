@@ -50,11 +50,12 @@ class Rosenbrock : public TrustRegionModel {
     const Eigen::LDLT<Eigen::Matrix2d> ldlt(A);
     if (ldlt.info() != Eigen::Success || ldlt.vectorD().minCoeff() <= 0.0) return StepQuality::kFailed;
     step = ldlt.solve(-g_);
-    if (inexact_bad_steps > 0) {  // a wild step claimed as inexact: rejected by the ratio test
-      --inexact_bad_steps;
+    if (inexact_bad_steps > 0 || exact_bad_steps > 0) {  // a wild step: rejected by the ratio test
+      const bool inexact = inexact_bad_steps > 0;
+      --(inexact ? inexact_bad_steps : exact_bad_steps);
       step *= 100.0;
       *predicted = model_decrease(step);
-      return StepQuality::kInexact;
+      return inexact ? StepQuality::kInexact : StepQuality::kExact;
     }
     *predicted = model_decrease(step);
     return StepQuality::kExact;
@@ -80,6 +81,7 @@ class Rosenbrock : public TrustRegionModel {
   std::vector<StepQuality> rejected;         // quality of every rejected step
   int fail_steps = 0;                        // the next compute_step calls that fail
   int inexact_bad_steps = 0;                 // the next steps that are wild and inexact
+  int exact_bad_steps = 0;                   // the next steps that are wild and claimed exact
 
  private:
   void linearize() {
@@ -214,7 +216,11 @@ TEST(TrustRegion, ARejectedInexactStepKeepsTheDamping) {
 
   // The same wild step claimed exact raises lambda.
   Rosenbrock exact({-1.2, 1.0});
+  exact.exact_bad_steps = 1;
   const TrustRegionResult reference = minimize(exact, tight(Algorithm::kLevenbergMarquardt));
+  ASSERT_GE(exact.lambdas.size(), 2U);
+  EXPECT_GT(exact.lambdas[1], exact.lambdas[0]);
+  EXPECT_EQ(exact.rejected.front(), StepQuality::kExact);
   EXPECT_LT(reference.final_cost, 1e-20);
 }
 

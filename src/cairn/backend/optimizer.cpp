@@ -491,8 +491,7 @@ class PoseGraphModel final : public TrustRegionModel {
     candidate_ = system_.apply(step);
     const auto t0 = Clock::now();
     *cost = system_.evaluate(candidate_);
-    candidate_evaluate_s_ = seconds_since(t0);
-    it.linearize_s += candidate_evaluate_s_;
+    it.linearize_s += seconds_since(t0);
     return std::isfinite(*cost);
   }
 
@@ -548,7 +547,6 @@ class PoseGraphModel final : public TrustRegionModel {
   std::vector<double> diagonal_;             // undamped diag(J^T J)
   Eigen::VectorXd damping_;
   std::vector<Group> candidate_;
-  double candidate_evaluate_s_ = 0.0;
 };
 
 template <class Group, class Factor>
