@@ -189,6 +189,95 @@ void rank2_update(double* block, const double* A, const double* B) {
   rank2_update_scalar<F>(block, A, B);
 }
 
+// One reduced variable of a factor on an eliminated block, for the Schur solvers' flat tables.
+struct ReducedTerm {
+  int jacobian;  ///< offset of J_c in the Jacobian buffer
+  int offset;    ///< offset of the block in the reduced vector
+  int size;      ///< the block's tangent size
+  int block;     ///< the reduced block
+};
+
+#if defined(CAIRN_SCHUR_AVX)
+// The flat tables schur_product_r2e3_avx reads (the Engine's, see prepare()).
+struct SchurProductTables {
+  const int* order;            ///< eliminated blocks in visiting order
+  const int* entry_start;      ///< eliminated block -> its entries (layout_.eliminated_factor_start)
+  const int* term_start;       ///< entry -> its reduced terms
+  const ReducedTerm* terms;
+  const int* e_jacobian;       ///< entry -> offset of its 2 x 3 J_e
+  const double* jacobians;
+  const double* v_inverse;     ///< per eliminated block, (V + D/mu)^-1, 3 x 3 column-major
+  const int* v_inverse_offset;
+};
+
+__attribute__((target("avx"))) inline double horizontal_sum(__m256d v) {
+  const __m128d pair = _mm_add_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
+  return _mm_cvtsd_f64(_mm_add_sd(pair, _mm_unpackhi_pd(pair, pair)));
+}
+
+// y += (A - W V^-1 W^T) x over the eliminated blocks order[begin..end), for factors with two
+// residuals on a 3-dimensional eliminated block and F-dimensional reduced blocks (bundle
+// adjustment): the steps of Engine::schur_product_block, with J_c x and J_c^T t four lanes at a
+// time (target "avx", no FMA). Sums are grouped differently from Eigen's SSE2 products, so the
+// result differs from schur_product_block's in the last bits. `z`: 2 doubles per entry.
+template <int F>
+__attribute__((target("avx"))) void schur_product_r2e3_avx(const SchurProductTables& T, int begin, int end,
+                                                             const double* x, double* y, double* z) {
+  constexpr int kPacks = F / 4;
+  for (int i = begin; i < end; ++i) {
+    const int e = T.order[i];
+    const int first = T.entry_start[e];
+    const int last = T.entry_start[e + 1];
+    double w0 = 0.0, w1 = 0.0, w2 = 0.0;
+    for (int index = first; index < last; ++index) {
+      __m256d sum0 = _mm256_setzero_pd(), sum1 = _mm256_setzero_pd();
+      double tail0 = 0.0, tail1 = 0.0;
+      for (int t = T.term_start[index]; t < T.term_start[index + 1]; ++t) {
+        const double* J = T.jacobians + T.terms[t].jacobian;  // 2 x F, row-major
+        const double* x_c = x + T.terms[t].offset;
+        for (int p = 0; p < kPacks; ++p) {
+          const __m256d x_p = _mm256_loadu_pd(x_c + 4 * p);
+          sum0 = _mm256_add_pd(sum0, _mm256_mul_pd(_mm256_loadu_pd(J + 4 * p), x_p));
+          sum1 = _mm256_add_pd(sum1, _mm256_mul_pd(_mm256_loadu_pd(J + F + 4 * p), x_p));
+        }
+        for (int k = 4 * kPacks; k < F; ++k) {
+          tail0 += J[k] * x_c[k];
+          tail1 += J[F + k] * x_c[k];
+        }
+      }
+      const double z0 = horizontal_sum(sum0) + tail0;
+      const double z1 = horizontal_sum(sum1) + tail1;
+      z[2 * (index - first)] = z0;
+      z[2 * (index - first) + 1] = z1;
+      const double* J_e = T.jacobians + T.e_jacobian[index];  // 2 x 3, row-major
+      w0 += J_e[0] * z0 + J_e[3] * z1;
+      w1 += J_e[1] * z0 + J_e[4] * z1;
+      w2 += J_e[2] * z0 + J_e[5] * z1;
+    }
+    const double* V = T.v_inverse + T.v_inverse_offset[e];
+    const double u0 = V[0] * w0 + V[3] * w1 + V[6] * w2;
+    const double u1 = V[1] * w0 + V[4] * w1 + V[7] * w2;
+    const double u2 = V[2] * w0 + V[5] * w1 + V[8] * w2;
+    for (int index = first; index < last; ++index) {
+      const double* J_e = T.jacobians + T.e_jacobian[index];
+      const double t0 = z[2 * (index - first)] - (J_e[0] * u0 + J_e[1] * u1 + J_e[2] * u2);
+      const double t1 = z[2 * (index - first) + 1] - (J_e[3] * u0 + J_e[4] * u1 + J_e[5] * u2);
+      const __m256d v0 = _mm256_set1_pd(t0), v1 = _mm256_set1_pd(t1);
+      for (int t = T.term_start[index]; t < T.term_start[index + 1]; ++t) {
+        const double* J = T.jacobians + T.terms[t].jacobian;
+        double* y_c = y + T.terms[t].offset;
+        for (int p = 0; p < kPacks; ++p) {
+          const __m256d sum = _mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(J + 4 * p), v0),
+                                            _mm256_mul_pd(_mm256_loadu_pd(J + F + 4 * p), v1));
+          _mm256_storeu_pd(y_c + 4 * p, _mm256_add_pd(_mm256_loadu_pd(y_c + 4 * p), sum));
+        }
+        for (int k = 4 * kPacks; k < F; ++k) y_c[k] += J[k] * t0 + J[F + k] * t1;
+      }
+    }
+  }
+}
+#endif
+
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -506,7 +595,7 @@ class Engine final : public TrustRegionModel {
   Eigen::VectorXd gradient_eliminated_;
   Eigen::VectorXd step_reduced_;
   Eigen::VectorXd step_eliminated_;
-  std::vector<double> v_inverse_;        ///< per eliminated block, (V + D/mu)^-1, row-major
+  std::vector<double> v_inverse_;        ///< per eliminated block, (V + D/mu)^-1, column-major
   std::vector<int> v_inverse_offset_;
   std::vector<double> block_values_;  ///< S in ReducedMatrix's block storage
   /// Eliminated blocks in the order the Schur complement visits them: by the first reduced
@@ -519,12 +608,7 @@ class Engine final : public TrustRegionModel {
   // offset, the offset of its eliminated Jacobian and its range of reduced terms, so that forming
   // S and the product with the implicit Schur complement read flat arrays instead of walking
   // factor, variable and slot tables, a cache miss each (prepare()).
-  struct ReducedTerm {
-    int jacobian;  ///< offset of J_c in the Jacobian buffer
-    int offset;    ///< offset of the block in the reduced vector
-    int size;      ///< the block's tangent size
-    int block;     ///< the reduced block
-  };
+  int max_entries_per_block_ = 0;  ///< most factors on one eliminated block
   std::vector<int> schur_residual_size_;
   std::vector<int> schur_residual_offset_;
   std::vector<int> schur_e_jacobian_;
@@ -1036,8 +1120,26 @@ void Engine::schur_product(const Eigen::VectorXd& x, Eigen::VectorXd& y) {
   const int n = layout_.reduced_dim;
   tbb::enumerable_thread_specific<Eigen::VectorXd> partial([n] { return Eigen::VectorXd::Zero(n); });
   const int blocks = static_cast<int>(layout_.eliminated_variable.size());
+#if defined(CAIRN_SCHUR_AVX)
+  const bool avx = kHaveAvx && fixed_r_ == 2 && fixed_e_ == 3 && (fixed_f_ == 9 || fixed_f_ == 6);
+  const SchurProductTables tables{elimination_order_.data(), layout_.eliminated_factor_start.data(), schur_term_start_.data(),
+                                  schur_terms_.data(), schur_e_jacobian_.data(), jacobians_.data(),
+                                  v_inverse_.data(), v_inverse_offset_.data()};
+#endif
   parallel_chunks(blocks, 64, [&](int begin, int end) {
     double* out = partial.local().data();
+#if defined(CAIRN_SCHUR_AVX)
+    if (avx) {
+      thread_local std::vector<double> z;
+      z.resize(2 * static_cast<std::size_t>(max_entries_per_block_));
+      if (fixed_f_ == 9) {
+        schur_product_r2e3_avx<9>(tables, begin, end, x.data(), out, z.data());
+      } else {
+        schur_product_r2e3_avx<6>(tables, begin, end, x.data(), out, z.data());
+      }
+      return;
+    }
+#endif
     for (int i = begin; i < end; ++i) {
       const int e = elimination_order_[i];
 #define CAIRN_CALL(R, E, F) schur_product_block<R, E, F>(e, x.data(), out)
@@ -1507,6 +1609,10 @@ void Engine::prepare() {
                                 problem_.variables[v].manifold->tangent_size(), block});
       }
       schur_term_start_.push_back(static_cast<int>(schur_terms_.size()));
+    }
+    max_entries_per_block_ = 0;
+    for (std::size_t e = 0; e < layout_.eliminated_variable.size(); ++e) {
+      max_entries_per_block_ = std::max(max_entries_per_block_, layout_.eliminated_factor_start[e + 1] - layout_.eliminated_factor_start[e]);
     }
   }
 
