@@ -1454,7 +1454,8 @@ double Engine::values_norm() {
   for (const auto& list : {&layout_.reduced_variable, &layout_.eliminated_variable}) {
     for (const int v : *list) {
       const VariableEntry& variable = problem_.variables[v];
-      for (int i = 0; i < variable.manifold->ambient_size(); ++i) squared += variable.values[i] * variable.values[i];
+      const int size = variable.manifold->ambient_size();  // one virtual call per variable, not per value
+      for (int i = 0; i < size; ++i) squared += variable.values[i] * variable.values[i];
     }
   }
   return std::sqrt(squared);
