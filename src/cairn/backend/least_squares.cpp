@@ -1628,14 +1628,7 @@ LeastSquaresSummary Engine::run() {
   summary.threads = options_.threads > 0 ? options_.threads : arena_.max_concurrency();
   // CHOLMOD's BLAS gets the solve's threads, not one per core spinning beside TBB's workers;
   // the caller's setting is restored when the solve ends.
-  const int caller_blas_threads = blas_threads();
-  set_blas_threads(summary.threads);
-  struct RestoreBlasThreads {
-    int threads;
-    ~RestoreBlasThreads() {
-      if (threads > 0) set_blas_threads(threads);
-    }
-  } restore_blas_threads{caller_blas_threads};
+  const ScopedBlasThreads blas(summary.threads);
   summary.factors = static_cast<int>(problem_.factors.size());
   summary.residuals = problem_.residuals;
   const auto finish = [&](LeastSquaresTermination termination, std::string message) {

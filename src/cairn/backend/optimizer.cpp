@@ -599,6 +599,8 @@ OptimizerSummary run(PoseGraphProblem<Group>& problem, const OptimizerOptions& o
 template <class Group>
 OptimizerSummary optimize(PoseGraphProblem<Group>& problem, const OptimizerOptions& options,
                           OptimizerWorkspace* workspace) {
+  // An explicit thread count holds for CHOLMOD's BLAS too (0 leaves the BLAS as it is).
+  const ScopedBlasThreads blas(options.threads);
   return with_factor<Group>(options.objective,
                             [&](auto factor) { return run<Group, decltype(factor)>(problem, options, workspace); });
 }

@@ -415,4 +415,14 @@ bool set_blas_threads(int threads) {
   return true;
 }
 
+ScopedBlasThreads::ScopedBlasThreads(int threads) {
+  const int current = blas_threads();
+  if (threads <= 0 || current <= 0 || current == threads) return;
+  if (set_blas_threads(threads)) restore_ = current;
+}
+
+ScopedBlasThreads::~ScopedBlasThreads() {
+  if (restore_ > 0) set_blas_threads(restore_);
+}
+
 }  // namespace cairn::backend

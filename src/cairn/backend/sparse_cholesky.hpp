@@ -95,6 +95,21 @@ bool set_blas_threads(int threads);
 /// OpenBLAS's current thread count, or 0 when no OpenBLAS is loaded.
 int blas_threads();
 
+/// set_blas_threads(threads) for its lifetime, then the caller's count again; threads <= 0 or
+/// equal to the current count: nothing changes. For a solve asked to use `threads` threads
+/// (OptimizerOptions::threads, LeastSquaresOptions::threads), so that `--threads 1` means one
+/// core for CHOLMOD's BLAS too. Process-wide, like set_blas_threads.
+class ScopedBlasThreads {
+ public:
+  explicit ScopedBlasThreads(int threads);
+  ~ScopedBlasThreads();
+  ScopedBlasThreads(const ScopedBlasThreads&) = delete;
+  ScopedBlasThreads& operator=(const ScopedBlasThreads&) = delete;
+
+ private:
+  int restore_ = 0;  ///< the caller's count to restore, 0: nothing was changed
+};
+
 enum class FactorizationStatus { kSuccess, kNotPositiveDefinite, kFailure };
 
 /// y = A x for a symmetric matrix stored as its upper triangle.

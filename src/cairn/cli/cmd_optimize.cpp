@@ -14,6 +14,7 @@
 #include "cairn/backend/outliers.hpp"
 #include "cairn/backend/staircase.hpp"
 #include "cairn/backend/optimizer.hpp"
+#include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/io/output_file.hpp"
@@ -86,6 +87,8 @@ nlohmann::json summary_json(const backend::OptimizerSummary& s) {
 template <class Group>
 int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io::PoseGraphT<Group>& graph,
                  io::GraphFormat out_format) {
+  // --threads holds for CHOLMOD's BLAS in every stage (solve, GNC, certificate, staircase).
+  const backend::ScopedBlasThreads blas(flags.threads);
   backend::PoseGraphProblem<Group> problem = backend::make_problem(graph, flags.input);
 
   backend::Initialization init = backend::Initialization::kFile;
