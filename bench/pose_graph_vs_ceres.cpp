@@ -42,6 +42,7 @@
 
 #include "cairn/backend/initialization.hpp"
 #include "cairn/backend/optimizer.hpp"
+#include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/io/graph_io.hpp"
 #include "cairn/io/parse_error.hpp"
 
@@ -256,6 +257,9 @@ RunResult in_child(Work work) {
   const pid_t pid = fork();
   if (pid == 0) {
     close(fds[0]);
+    // One thread means one for CHOLMOD's BLAS too, for every solver: cairn's optimiser limits
+    // OpenBLAS to its `threads` (ScopedBlasThreads), Ceres does not, so the child does it for both.
+    backend::set_blas_threads(1);
     const RunResult r = work();
     if (write(fds[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) _exit(1);
     _exit(0);
