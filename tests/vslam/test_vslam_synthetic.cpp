@@ -1,7 +1,7 @@
 // Visual SLAM on rendered stereo pairs with exact ground truth (synthetic_world.hpp): tracking
 // accuracy in a textured corridor, and its failure modes: aliasing (two rooms with identical
 // textures), a texture-less wall filling the view, fast motion, and a kidnap into the look-alike
-// room. Thresholds were measured on this code (numbers beside them) and given a margin. The
+// room (only one room mapped: undecidable; both mapped: relocalisation must refuse). Thresholds were measured on this code (numbers beside them) and given a margin. The
 // SLAM's options are its defaults throughout, plus a vocabulary for place recognition where the
 // test is about it, trained on another world's images (other seeds), never on a test's.
 
@@ -482,6 +482,13 @@ TEST(VisualSlamSynthetic, FastMotionIsTrackedOrDeclaredLostNeverWrong) {
 
 // --- d. Kidnapped into the look-alike room -----------------------------------------------------
 
+// Only room A is mapped, then the camera is carried into room B, an exact copy: this case
+// CANNOT be resolved by appearance. Every picture in B is a picture of A; any method that
+// decides from what the camera sees (bag of words, PnP, the local map, a uniqueness test over
+// the map) must take B for A, because the map holds no second place to compare with. The test
+// prints the count and asserts only what is decidable (room A tracked, the jump not absorbed).
+// The detectable version, both rooms in the map, is the next test.
+
 TEST(VisualSlamSynthetic, CountsWrongRelocalisationsAfterAKidnapIntoTheLookAlikeRoom) {
   const SyntheticWorld world = aliasing_world(11, 21);
   VisualSlamOptions options;
@@ -529,8 +536,181 @@ TEST(VisualSlamSynthetic, CountsWrongRelocalisationsAfterAKidnapIntoTheLookAlike
   EXPECT_NE(run.results[jump].health, TrackingHealth::kOk);
   // Not asserted: zero wrong relocalisations. Measured (2026-11-25): the frame after the jump is
   // relocalised into room A (0.06 m from the look-alike place there, 9.98 m from the truth) and the
-  // 15 frames after it are tracked on, all about 10 m off. With rooms this alike no camera can
-  // tell them apart; only the door views differ.
+  // 15 frames after it are tracked on, all about 10 m off. This cannot be resolved by appearance:
+  // room B is an exact copy of the only room in the map, so the relocalisation's uniqueness test
+  // has no second place to find, and no other appearance-based test could do better. Only the
+  // door views differ, and they show corridors the map does not hold either.
+}
+
+// The route that maps both look-alike rooms: corridor 0 looking at its closed end, a turn, room A
+// (with a look-around), corridor 1, room B (the same look-around, so B is mapped from the
+// room-relative poses A was), then into corridor 2.
+std::vector<core::SE3> both_rooms_route() {
+  const auto look_around = [](double z) {
+    std::vector<core::SE3> poses = test::turn(Eigen::Vector3d(0.0, 0.0, z), 0.0, -60.0 * kDeg, 10.0 * kDeg);
+    test::append(poses, test::turn(Eigen::Vector3d(0.0, 0.0, z), -60.0 * kDeg, 60.0 * kDeg, 10.0 * kDeg));
+    test::append(poses, test::turn(Eigen::Vector3d(0.0, 0.0, z), 60.0 * kDeg, 0.0, 10.0 * kDeg));
+    return poses;
+  };
+  std::vector<core::SE3> route = test::turn(Eigen::Vector3d(0.0, 0.0, -2.0), kPi, 2.0 * kPi, 10.0 * kDeg);
+  test::append(route, test::walk(Eigen::Vector3d(0.0, 0.0, -2.0), Eigen::Vector3d(0.0, 0.0, 2.0), 0.2));
+  test::append(route, look_around(2.0));
+  test::append(route, test::walk(Eigen::Vector3d(0.0, 0.0, 2.0), Eigen::Vector3d(0.0, 0.0, 12.0), 0.2, 0.0, 10.0 * kDeg, 0.0, 5.0));
+  test::append(route, look_around(12.0));
+  test::append(route, test::walk(Eigen::Vector3d(0.0, 0.0, 12.0), Eigen::Vector3d(0.0, 0.0, 16.0), 0.2));
+  return route;
+}
+
+struct Kidnap {
+  const char* name;
+  Eigen::Vector3d at;  ///< where the camera is put down (world)
+  double yaw_rad;
+};
+
+struct KidnapOutcome {
+  std::size_t lost = 0, right = 0, wrong = 0, wrong_ok = 0, wrong_relocalised = 0, relocalised_right = 0, refusals = 0;
+  std::size_t first_relocalised = 0;  ///< frames after the jump; 0: none
+  double max_error_before = 0.0;
+};
+
+// Maps both rooms (rendered once per world: `route_images`), then is kidnapped, once per entry of
+// `kidnaps`: 8 frames walking 0.7 m from `at`. A tracked frame is wrong when it is more than 0.5 m
+// from the truth in its map segment (a segment started after a jump is placed where the motion
+// model guessed: only its own motion can be compared; the main segment's frames are compared
+// absolutely).
+std::vector<KidnapOutcome> run_kidnaps(const SyntheticWorld& world, const std::vector<core::SE3>& route,
+                                       const std::vector<std::pair<cv::Mat, cv::Mat>>& route_images, const std::vector<Kidnap>& kidnaps,
+                                       double& slam_s) {
+  VisualSlamOptions options;
+  options.vocabulary = training_vocabulary();
+  const StereoCamera camera;
+  std::vector<core::SE3> truth = route;
+  std::vector<std::size_t> jumps;
+  for (const Kidnap& kidnap : kidnaps) {
+    jumps.push_back(truth.size());
+    const Eigen::Vector3d heading(std::sin(kidnap.yaw_rad), 0.0, std::cos(kidnap.yaw_rad));
+    const std::vector<core::SE3> walk = test::walk(kidnap.at, kidnap.at + 0.7 * heading, 0.1, kidnap.yaw_rad);
+    truth.insert(truth.end(), walk.begin(), walk.end());
+  }
+  jumps.push_back(truth.size());
+  SlamRun run;
+  run.truth = truth;
+  run.slam = std::make_unique<VisualSlam>(camera.calibration(), io::SequenceKind::kStereo, options);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    const auto [left, right] = k < route.size() ? route_images[k] : world.render_stereo(truth[k], camera);
+    FrameResult r = run.slam->add_stereo(core::Timestamp::from_seconds(0.1 * static_cast<double>(k)), left, right);
+    r.keypoints.clear();
+    r.keypoint_states.clear();
+    run.results.push_back(std::move(r));
+  }
+  slam_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  print_summary(kidnaps.front().name, run);
+  double max_error_before = 0.0;
+  for (std::size_t k = 0; k < route.size(); ++k) {
+    max_error_before = std::max(max_error_before, position_error(run, k, run.results[k].T_world_camera));
+  }
+  std::vector<KidnapOutcome> outcomes;
+  for (std::size_t n = 0; n < kidnaps.size(); ++n) {
+    const Kidnap& kidnap = kidnaps[n];
+    KidnapOutcome out;
+    out.max_error_before = max_error_before;
+    for (std::size_t k = jumps[n]; k < jumps[n + 1]; ++k) {
+      const FrameResult& r = run.results[k];
+      const double e = segment_error(run, k);
+      std::printf("  %s frame %3zu (after jump %zu): %-8s tracked %d reloc %d new map %d segment %d inliers %4d, error %.3f m in its "
+                  "segment, %.3f m absolute %s\n",
+                  kidnap.name, k, k - jumps[n], health_name(r.health), r.tracked ? 1 : 0, r.relocalised ? 1 : 0, r.new_map ? 1 : 0,
+                  r.segment, r.inliers, e, position_error(run, k, r.T_world_camera), r.note.c_str());
+      out.refusals += r.note.find("ambiguous relocalisation") != std::string::npos ? 1 : 0;
+      if (!r.tracked) {
+        ++out.lost;
+      } else if (e <= 0.5) {
+        ++out.right;
+        if (r.relocalised) {
+          ++out.relocalised_right;
+          if (out.first_relocalised == 0) out.first_relocalised = k - jumps[n];
+        }
+      } else {
+        ++out.wrong;
+        out.wrong_ok += r.health == TrackingHealth::kOk ? 1 : 0;
+        out.wrong_relocalised += r.relocalised ? 1 : 0;
+      }
+    }
+    for (const LoopRecord& loop : run.slam->summary().loops) {
+      if (loop.frame < jumps[n] || loop.frame >= jumps[n + 1]) continue;
+      std::printf("  %s loop/merge frame %zu -> %zu: %d PnP inliers, %d matches, %s (%s); true distance %.2f m\n", kidnap.name,
+                  loop.frame, loop.candidate_frame, loop.pnp_inliers, loop.matches, loop.decision.c_str(), loop.reason.c_str(),
+                  (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm());
+    }
+    std::printf("%s: %zu frames after the jump: %zu lost (%zu refused as ambiguous), %zu tracked right (%zu relocalised, first %zu "
+                "frames after the jump), %zu tracked wrong (%zu ok, %zu relocalised); route max error %.3f m\n",
+                kidnap.name, jumps[n + 1] - jumps[n], out.lost, out.refusals, out.right, out.relocalised_right, out.first_relocalised,
+                out.wrong, out.wrong_ok, out.wrong_relocalised, max_error_before);
+    outcomes.push_back(out);
+  }
+  const VisualSlamSummary& s = run.slam->summary();
+  std::printf("%s: %zu relocalisations, %zu refused as ambiguous; %zu loops / merges refused as ambiguous, %zu accepted\n",
+              kidnaps.front().name, s.relocalisations, s.relocalisations_ambiguous, s.loops_ambiguous, s.loops_accepted);
+  return outcomes;
+}
+
+// Both look-alike rooms are in the map (the camera walked A, corridor 1, B), then it is carried
+// off into one of them: every view of A now has a twin in the map, and relocalisation must find
+// both and refuse (the uniqueness test, tracking.cpp relocalisation_rival) instead of guessing.
+// Over two worlds (texture seeds) and two kidnap poses each, one into A and one into B, no
+// frame may be tracked wrong and reported ok, and no relocalisation may be wrong. A kidnap into
+// corridor 0, looking at its closed end (mapped, and like nothing else), must still relocalise,
+// and correctly. Corridor 1 is no such place: from it the camera sees through a door the far
+// wall of room A or B, whose twin is in the map, and a relocalisation there was refused in 3
+// of 4 tries (rival 50-85 inliers against 86-132, docs/vslam.md).
+TEST(VisualSlamSynthetic, RefusesToRelocaliseBetweenTwoMappedLookAlikeRooms) {
+  const std::vector<core::SE3> route = both_rooms_route();
+  const StereoCamera camera;
+  double render_s = 0.0, slam_s = 0.0;
+  std::size_t wrong_ok = 0, wrong_relocalised = 0, refusals = 0, distinct_relocalised = 0, runs = 0;
+  for (const std::uint64_t seed : {11u, 12u}) {
+    const SyntheticWorld world = aliasing_world(seed, seed + 10);
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<std::pair<cv::Mat, cv::Mat>> images;
+    for (const core::SE3& pose : route) images.push_back(world.render_stereo(pose, camera));
+    render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // Into a room, in room coordinates (x, z - z0): (0.6, 1.2) looking 30 deg right (the far
+    // wall and its door, the right wall) or (0.3, 1.8) looking 50 deg left (the left wall and a
+    // corner); seed 11 goes into A then B, seed 12 into B then A. Then on into corridor 0,
+    // looking at its closed end (mapped, like nothing else in the world).
+    const double first_room = seed == 11u ? 0.0 : 10.0, second_room = seed == 11u ? 10.0 : 0.0;
+    const std::string tag = "seed " + std::to_string(seed);
+    const std::string into_first = tag + (seed == 11u ? ", into A" : ", into B"), into_second = tag + (seed == 11u ? ", into B" : ", into A");
+    const std::string into_corridor = tag + ", then into corridor 0";
+    const Kidnap to_corridor{into_corridor.c_str(), Eigen::Vector3d(-0.2, 0.0, -1.5), 190.0 * kDeg};
+    for (const Kidnap& into_room : {Kidnap{into_first.c_str(), Eigen::Vector3d(0.6, 0.0, first_room + 1.2), 30.0 * kDeg},
+                                   Kidnap{into_second.c_str(), Eigen::Vector3d(0.3, 0.0, second_room + 1.8), -50.0 * kDeg}}) {
+      const std::vector<KidnapOutcome> outs = run_kidnaps(world, route, images, {into_room, to_corridor}, slam_s);
+      ++runs;
+      // The route must be tracked within the 0.5 m this test calls right, or "wrong" would mean
+      // nothing (measured 2026-11-25: 0.21-0.22 m, drift after the turn at the start).
+      EXPECT_LT(outs[0].max_error_before, 0.5) << into_room.name;
+      for (std::size_t n = 0; n < outs.size(); ++n) {
+        const KidnapOutcome& out = outs[n];
+        const char* name = n == 0 ? into_room.name : to_corridor.name;
+        wrong_ok += out.wrong_ok;
+        wrong_relocalised += out.wrong_relocalised;
+        EXPECT_EQ(out.wrong_ok, 0u) << name << ": frames reported ok more than 0.5 m from the truth";
+        EXPECT_EQ(out.wrong_relocalised, 0u) << name << ": wrong relocalisations";
+      }
+      // Not vacuous: the relocalisation saw the two rooms and said so ...
+      refusals += outs[0].refusals;
+      EXPECT_GT(outs[0].refusals, 0u) << into_room.name << ": no relocalisation was refused as ambiguous";
+      // ... and it still relocalises where the place is unique, within 3 frames, correctly.
+      distinct_relocalised += outs[1].relocalised_right > 0 ? 1 : 0;
+      EXPECT_GT(outs[1].relocalised_right, 0u) << into_room.name << ": corridor 0 was not relocalised";
+      EXPECT_LE(outs[1].first_relocalised, 3u) << into_room.name;
+    }
+  }
+  std::printf("both rooms mapped, %zu runs (a kidnap into a room, then into corridor 0): %zu wrong ok frames, %zu wrong relocalisations, "
+              "%zu ambiguous refusals, corridor 0 relocalised in %zu of %zu; render %.1f s, SLAM %.1f s\n",
+              runs, wrong_ok, wrong_relocalised, refusals, distinct_relocalised, runs, render_s, slam_s);
 }
 
 }  // namespace

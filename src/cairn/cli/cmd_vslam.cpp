@@ -454,6 +454,8 @@ int vslam_command(const VslamFlags& flags) {
                                  {"loop_queries", s.loop_queries},
                                  {"loops_accepted", s.loops_accepted},
                                  {"relocalisations", s.relocalisations},
+                                 {"relocalisations_refused_ambiguous", s.relocalisations_ambiguous},
+                                 {"loops_refused_ambiguous", s.loops_ambiguous},
                                  {"map_points_fused", s.map_points_fused},
                                  {"maps_started", s.maps_started},
                                  {"maps_merged", s.maps_merged},

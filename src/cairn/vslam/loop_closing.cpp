@@ -3,6 +3,7 @@
 
 #include "cairn/vslam/slam_state.hpp"
 
+#include <cstdio>
 #include <optional>
 
 namespace cairn::vslam {
@@ -37,7 +38,7 @@ void VisualSlam::Impl::replace_point(int old_id, int new_id) {
 // RANSAC pose, the motion-only BA, then the points of the candidate and its covisible
 // keyframes projected at that pose and the BA again. `probe` gets the keyframe at the pose
 // the candidate's part of the map gives it, with its matches to that part.
-bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe) {
+bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard) {
   probe = keyframes[static_cast<std::size_t>(current)].frame;
   std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
   std::fill(probe.outlier.begin(), probe.outlier.end(), 0);
@@ -79,12 +80,8 @@ bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& recor
   const core::SE3 change = keyframes[static_cast<std::size_t>(current)].frame.T_world_camera.inverse() * probe.T_world_camera;
   record.correction_m = change.translation().norm();
   record.correction_deg = Eigen::AngleAxisd(change.rotation_matrix()).angle() * 180.0 / 3.14159265358979323846;
-  if (segment_of(candidate) == segment_of(current)) {
-    double travelled = 0.0;
-    for (int k = std::min(candidate, current); k < std::max(candidate, current); ++k) {
-      travelled += (keyframes[static_cast<std::size_t>(k) + 1].frame.T_world_camera.translation() -
-                    keyframes[static_cast<std::size_t>(k)].frame.T_world_camera.translation()).norm();
-    }
+  if (drift_guard && segment_of(candidate) == segment_of(current)) {
+    const double travelled = travelled_between(candidate, current);
     const double allowed_m = options.loop_drift_floor_m + options.loop_drift_fraction * travelled;
     const double allowed_deg = options.loop_drift_floor_deg + options.loop_drift_deg_per_m * travelled;
     if (record.correction_m > allowed_m || record.correction_deg > allowed_deg) {
@@ -95,6 +92,41 @@ bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& recor
     }
   }
   return true;
+}
+
+// The uniqueness test of a loop or merge. ORB-SLAM2's DetectLoop / ComputeSim3 close the loop
+// with the first consistent candidate that verifies; two look-alike places (identical rooms)
+// both verify, and the drift bound above only catches a look-alike within the segment being
+// tracked, not a merge and not a candidate the drift could reach. So every other keyframe the
+// database proposed is verified as well (the same verification, without the drift bound): if
+// one verifies at another place (distinct_places: farther apart than drift between the two
+// could explain, or in another unmerged segment), the view is explained in two places and the
+// loop is refused. The same rule as a relocalisation's (tracking.cpp relocalisation_rival,
+// where it is argued) and the 2D localiser's (slam2d/localization.cpp other_fitting_place).
+std::string VisualSlam::Impl::loop_rival(int current, int candidate, const LoopRecord& record, const FrameData& probe,
+                                         const std::vector<int>& rivals) {
+  for (const int rival : rivals) {
+    // A rival in the querying keyframe's own segment, when the candidate lies in another, is the
+    // segment seeing itself: not comparable with the merge.
+    if (rival == candidate || rival == current) continue;
+    if (segment_of(rival) == segment_of(current) && segment_of(candidate) != segment_of(current)) continue;
+    LoopRecord other;
+    FrameData other_probe;
+    if (!verify_loop(current, rival, other, other_probe, false)) continue;
+    if (!distinct_places(candidate, probe.T_world_camera, rival, other_probe.T_world_camera)) continue;
+    char where[64];
+    if (segment_of(rival) == segment_of(candidate)) {
+      std::snprintf(where, sizeof where, "%.2f m from this one's",
+                    (probe.T_world_camera.inverse() * other_probe.T_world_camera).translation().norm());
+    } else {
+      std::snprintf(where, sizeof where, "in map segment %d", segment_of(rival));
+    }
+    char buffer[256];
+    std::snprintf(buffer, sizeof buffer, "ambiguous: keyframe %d verifies too (%d inlier matches against %d) at a place %s", rival,
+                  other.matches, record.matches, where);
+    return buffer;
+  }
+  return "";
 }
 
 // Loop correction (ORB-SLAM2 CorrectLoop, stereo: SE(3)): the pose graph of every keyframe
@@ -215,6 +247,8 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
   for (const auto& r : results) max_common = std::max(max_common, r.common_words);
   std::vector<std::pair<std::set<int>, int>> groups;
   std::vector<std::tuple<double, int, int>> consistent;  // score, candidate, consistency
+  std::vector<int> proposed;  // every keyframe the database returned: the rivals of the uniqueness test
+  for (const auto& r : results) proposed.push_back(static_cast<int>(r.id));
   for (const auto& r : results) {
     if (r.score < min_score || r.common_words < 0.8 * max_common) continue;
     const int candidate = static_cast<int>(r.id);
@@ -243,6 +277,14 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
     record.merge = segment_of(candidate) != segment_of(current);
     FrameData probe;
     if (verify_loop(current, candidate, record, probe)) {
+      const std::string rival = loop_rival(current, candidate, record, probe, proposed);
+      if (!rival.empty()) {
+        record.decision = "rejected";
+        record.reason = rival;
+        summary->loops.push_back(record);
+        ++summary->loops_ambiguous;
+        break;
+      }
       record.decision = "accepted";
       record.reason = std::to_string(record.matches) + " inlier matches to the candidate's neighbourhood";
       correct_loop(current, candidate, probe);
@@ -284,6 +326,18 @@ void VisualSlam::Impl::merge_with_recent(FrameResult& result) {
   }
   if (candidates.empty()) return;
   const auto start = Clock::now();
+  // The rivals of the uniqueness test: the other recent keyframes, and with a vocabulary the
+  // keyframes the database ranks best for this one (a look-alike of the place tracking was lost
+  // in may be elsewhere in the map).
+  std::vector<int> rivals = candidates;
+  const KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
+  if (options.vocabulary && !kf.bow.empty()) {
+    std::vector<std::uint32_t> exclude;
+    for (const KeyFrame& k : keyframes) {
+      if (segment_of(k.id) == own) exclude.push_back(static_cast<std::uint32_t>(k.id));
+    }
+    for (const auto& r : database.query(kf.bow, 20, exclude)) rivals.push_back(static_cast<int>(r.id));
+  }
   std::optional<LoopRecord> best_rejected;
   for (const int candidate : candidates) {
     LoopRecord record;
@@ -296,6 +350,15 @@ void VisualSlam::Impl::merge_with_recent(FrameResult& result) {
     FrameData probe;
     ++summary->merge_attempts;
     if (verify_loop(current, candidate, record, probe)) {
+      const std::string rival = loop_rival(current, candidate, record, probe, rivals);
+      if (!rival.empty()) {
+        record.decision = "rejected";
+        record.reason = rival;
+        summary->loops.push_back(record);
+        ++summary->loops_ambiguous;
+        summary->loop_s += seconds_since(start);
+        return;
+      }
       record.decision = "accepted";
       record.reason = std::to_string(record.matches) + " inlier matches to the keyframes tracked last before this segment";
       correct_loop(current, candidate, probe);

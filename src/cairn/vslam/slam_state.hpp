@@ -270,7 +270,26 @@ struct VisualSlam::Impl {
   // within TH_HIGH and, when the second best is on the same level, better than ratio x it.
   // Points the frame already holds are skipped. Returns the new matches.
   int search_by_projection(FrameData& f, const std::vector<int>& ids, double th, bool count_visible);
-  int track_local_map(FrameData& f, double* sigma_position_m, int* given);
+  // update_statistics false: a trial (a rival place of a relocalisation) that leaves the map's
+  // found / visible counts and the reference keyframe as they were.
+  int track_local_map(FrameData& f, double* sigma_position_m, int* given, bool update_statistics = true);
+
+  // --- Relocalisation and its uniqueness (tracking.cpp) ---
+  // The first stage against keyframe `kf` (ORB-SLAM2 Relocalization's per-candidate steps):
+  // `f`'s keypoints matched to the keyframe's points, PnP RANSAC, the motion-only BA. `f` gets
+  // the pose and the inlier matches; returns the inliers (0 below 15 matches or PnP inliers).
+  int match_pose_to_keyframe(FrameData& f, int kf, const std::vector<std::uint32_t>* frame_nodes, int* matches = nullptr);
+  // Path length along the keyframes from a to b, and whether poses of two views, as the map
+  // around keyframes a and b gives them, are two places: they differ by more than the drift
+  // (loop_drift_*) the keyframes between a and b could have gathered, or a and b lie in
+  // different (unmerged) map segments, whose relation is unknown.
+  double travelled_between(int a, int b) const;
+  bool distinct_places(int kf_a, const core::SE3& T_world_a, int kf_b, const core::SE3& T_world_b) const;
+  // The uniqueness test of a relocalisation: `f`, accepted through `accepted_kf` with `inliers`
+  // after the local map, against every other candidate keyframe. Returns the reason when another
+  // place passes the same test (the frame must stay lost), else "".
+  std::string relocalisation_rival(const FrameData& f, int inliers, int accepted_kf, const std::vector<int>& candidates,
+                                   const std::vector<std::uint32_t>* frame_nodes);
 
   // --- Keyframes and local mapping (local_mapping.cpp) ---
   bool need_keyframe(const FrameData& f, int inliers) const;
@@ -304,7 +323,13 @@ struct VisualSlam::Impl {
   // RANSAC pose, the motion-only BA, then the points of the candidate and its covisible
   // keyframes projected at that pose and the BA again. `probe` gets the keyframe at the pose
   // the candidate's part of the map gives it, with its matches to that part.
-  bool verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe);
+  // drift_guard false: without the drift bound (a rival of the uniqueness test).
+  bool verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard = true);
+  // The uniqueness test of a verified loop or merge (current -> candidate, `record`, `probe`):
+  // each of `rivals` (but those of the querying keyframe's own segment when the candidate lies
+  // in another) is verified as a loop (no drift bound); one that verifies at another place
+  // (distinct_places) makes the loop ambiguous. Returns "" when unique, else the reason.
+  std::string loop_rival(int current, int candidate, const LoopRecord& record, const FrameData& probe, const std::vector<int>& rivals);
   // Loop correction (ORB-SLAM2 CorrectLoop, stereo: SE(3)): the pose graph of every keyframe
   // (consecutive keyframes, covisibility edges of >= 100 shared points, the loop edge; unit
   // information as ORB-SLAM2's essential graph; keyframe 0 fixed) optimised on the back end;

@@ -91,7 +91,11 @@ struct VisualSlamOptions {
   int loop_consistency = 3;            ///< consecutive keyframes whose candidates agree (ORB-SLAM2 mnCovisibilityConsistencyTh)
   int loop_min_pnp_inliers = 20;       ///< descriptor matches to, and PnP RANSAC inliers of, the candidate's points (ORB-SLAM2 ComputeSim3: 20 and 20)
   int loop_min_matches = 40;           ///< map-point matches after projecting the candidate's neighbourhood (ORB-SLAM2: 40)
-  int relocalisation_min_inliers = 50; ///< ORB-SLAM2 Relocalization: 50
+  /// ORB-SLAM2 Relocalization: 50. Also the uniqueness test (cairn's; tracking.cpp
+  /// relocalisation_rival): when another candidate passes it at another place (farther than the
+  /// loop_drift_* bounds allow, or in another unmerged segment) the frame stays lost. Loops and
+  /// merges are tested alike with their own verification (loop_closing.cpp loop_rival).
+  int relocalisation_min_inliers = 50;
   /// A loop within a map segment is refused when it would move the keyframe further than the
   /// drift the keyframes since the candidate could have gathered: floor + fraction x distance
   /// travelled, floor + deg_per_m x distance for the rotation (stereo visual odometry drifts
@@ -172,6 +176,9 @@ struct VisualSlamSummary {
   std::size_t local_bas = 0, reference_fallbacks = 0;
   double local_ba_s = 0.0;
   std::size_t loop_queries = 0, loops_accepted = 0, relocalisations = 0, global_bas = 0;
+  /// Relocalisations refused because another place verified as well (the frame stayed lost),
+  /// and loops / merges refused for the same reason (tracking.cpp relocalisation_rival, loop_closing.cpp loop_rival).
+  std::size_t relocalisations_ambiguous = 0, loops_ambiguous = 0;
   std::size_t map_points_fused = 0;
   std::size_t maps_started = 0, maps_merged = 0;  ///< segments beyond the first; merges of two
   std::size_t merge_attempts = 0;  ///< verifications of a new segment against the keyframes tracked last before it
