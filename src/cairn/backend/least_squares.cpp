@@ -425,6 +425,33 @@ class ReducedMatrix {
     return column_block_offset_[c][it - rows.begin()];
   }
 
+  /// y += S x over the block storage (S's upper blocks; diagonal blocks whole), every block
+  /// F x F: the product PCG on the previous factorisation needs, without the CSC's row indices
+  /// (a third of its memory traffic) and with fixed-size products instead of one scattered
+  /// update per value.
+  template <int F>
+  void multiply(const double* blocks, const double* x, double* y) const {
+    using Block = Eigen::Map<const Eigen::Matrix<double, F, F>>;
+    using Vector = Eigen::Map<Eigen::Matrix<double, F, 1>>;
+    using ConstVector = Eigen::Map<const Eigen::Matrix<double, F, 1>>;
+    const int block_count = static_cast<int>(column_rows_.size());
+    for (int c = 0; c < block_count; ++c) {
+      const ConstVector x_c(x + offset_[c]);
+      Eigen::Matrix<double, F, 1> y_c = Eigen::Matrix<double, F, 1>::Zero();
+      for (std::size_t k = 0; k < column_rows_[c].size(); ++k) {
+        const int r = column_rows_[c][k];
+        const Block B(blocks + column_block_offset_[c][k]);
+        if (r == c) {
+          y_c.noalias() += B * x_c;
+        } else {
+          Vector(y + offset_[r]).noalias() += B * x_c;
+          y_c.noalias() += B.transpose() * ConstVector(x + offset_[r]);
+        }
+      }
+      Vector(y + offset_[c]) += y_c;
+    }
+  }
+
   /// Writes the upper triangle of the block storage into the CSC values (same pattern).
   void to_csc(const double* blocks, double* values) const {
     const int block_count = static_cast<int>(column_rows_.size());
@@ -1217,8 +1244,22 @@ bool Engine::solve_with_previous_factor(const UpperCsc& S, const Eigen::VectorXd
   cholesky_.solve_in_place(r, z);
   p = z;
   double rz = r.dot(z);
+  // S p: from the block storage where every reduced block has one fixed size (bundle
+  // adjustment's cameras), else from the CSC values (which hold the damping already).
+  const auto multiply = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) {
+    if (fixed_f_ == 9 || fixed_f_ == 6) {
+      out = Eigen::Map<const Eigen::VectorXd>(damping_reduced_.data(), n).cwiseProduct(in);
+      if (fixed_f_ == 9) {
+        reduced_->multiply<9>(block_values_.data(), in.data(), out.data());
+      } else {
+        reduced_->multiply<6>(block_values_.data(), in.data(), out.data());
+      }
+    } else {
+      symmetric_multiply(S, in, out);
+    }
+  };
   for (int k = 0; k < options_.reuse_max_cg_iterations; ++k) {
-    symmetric_multiply(S, p, q);
+    multiply(p, q);
     const double pq = p.dot(q);
     if (!(pq > 0.0)) break;
     const double alpha = rz / pq;
