@@ -6,6 +6,7 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -63,6 +64,36 @@ ProbabilityGrid max_pooled(const ProbabilityGrid& fine, int factor) {
   return ProbabilityGrid::from_cells(options, ci0, cj0, width, height, std::move(log_odds), std::move(known));
 }
 
+// Below this occupancy probability an observed cell counts as empty: with the default grid (a hit
+// raises the log-odds by 0.20, a miss lowers them by 0.04) a cell below 0.4 was crossed by at
+// least 5 times as many rays as ended in it, plus 10.
+constexpr double kFreeProbability = 0.4;
+
+// The fraction of `points_sensor` that, placed at `T_grid_sensor`, land in a cell of `grid` whose
+// 3 x 3 neighbourhood is all observed and empty (kFreeProbability): the scan sees something
+// where the map saw through. The neighbourhood keeps a point on a wall, a cell or so off after
+// noise and voxel filtering, from counting; unobserved cells never count (the map may lack a
+// place; it does not contradict it).
+double free_space_fraction(const ProbabilityGrid& grid, const std::vector<Eigen::Vector2d>& points_sensor,
+                           const core::SE2& T_grid_sensor) {
+  if (points_sensor.empty()) return 0.0;
+  const double r = grid.resolution();
+  std::size_t in_free = 0;
+  for (const Eigen::Vector2d& p_sensor : points_sensor) {
+    const Eigen::Vector2d p = T_grid_sensor * p_sensor;
+    const double gi = std::floor(p.x() / r) - static_cast<double>(grid.offset_i());
+    const double gj = std::floor(p.y() / r) - static_cast<double>(grid.offset_j());
+    if (!(gi >= 1.0 && gj >= 1.0 && gi < grid.width() - 1 && gj < grid.height() - 1)) continue;
+    const int i = static_cast<int>(gi), j = static_cast<int>(gj);
+    bool free = true;
+    for (int dj = -1; dj <= 1 && free; ++dj)
+      for (int di = -1; di <= 1 && free; ++di)
+        free = grid.cell_known(i + di, j + dj) && grid.cell_probability(i + di, j + dj) < kFreeProbability;
+    if (free) ++in_free;
+  }
+  return static_cast<double>(in_free) / static_cast<double>(points_sensor.size());
+}
+
 }  // namespace
 
 bool Localizer2dOptions::is_valid(std::string* error) const {
@@ -76,6 +107,8 @@ bool Localizer2dOptions::is_valid(std::string* error) const {
     problems << "verification_min_inlier_fraction must be in [0, 1]; ";
   if (!(verification_min_degeneracy >= 0.0 && verification_min_degeneracy <= 0.5))
     problems << "verification_min_degeneracy must be in [0, 0.5]; ";
+  if (!(verification_max_free_fraction >= 0.0 && verification_max_free_fraction <= 1.0))
+    problems << "verification_max_free_fraction must be in [0, 1]; ";
   if (global_searches_per_scan < 1) problems << "global_searches_per_scan must be >= 1; ";
   if (round_robin_searches_per_scan < 0 || round_robin_searches_per_scan > global_searches_per_scan)
     problems << "round_robin_searches_per_scan must be in [0, global_searches_per_scan]; ";
@@ -155,6 +188,9 @@ struct Localizer2d::Impl {
   core::SE2 T_map_laser;       ///< last pose (tracking)
   core::SE2 previous_odom;
   int failures_in_a_row = 0;
+  /// Tracking: a match put scan points where the map saw empty space, and no scan has verified
+  /// the tracked pose since (see add_scan); the pose is at most `degraded` meanwhile.
+  bool contradicted = false;
   /// The prior for the search order: the map-from-odometry transform before being lost.
   std::optional<core::SE2> prior_T_map_odom;
   bool order_stale = true;
@@ -318,8 +354,17 @@ struct Localizer2d::Impl {
       ++summary.rejected_by_reason[candidate.reason];
       return std::nullopt;
     }
+    const double free_fraction =
+        free_space_fraction(map.submaps[static_cast<std::size_t>(submap_index[static_cast<std::size_t>(s)])].grid, points,
+                            candidate.T_anchor_keyframe);
+    if (free_fraction > options.verification_max_free_fraction) {
+      ++summary.rejected_matches;
+      ++summary.rejected_by_reason["scan points where the map saw empty space"];
+      return std::nullopt;
+    }
     ++summary.verified_matches;
     LocalizationMatch match;
+    match.free_space_fraction = free_fraction;
     match.scan = scan_index;
     match.time = time;
     match.submap = submap_index[static_cast<std::size_t>(s)];
@@ -366,6 +411,7 @@ struct Localizer2d::Impl {
     if (state == LocalizationState::kTracking) {
       if (agrees(match.T_map_laser, T_map_laser)) {
         ++summary.tracking_checks_agreeing;
+        contradicted = false;  // a verified match (free space included) at the tracked pose
         return;
       }
       for (const core::SE2& T_map_odom : refuted)
@@ -559,6 +605,32 @@ struct Localizer2d::Impl {
         break;
       }
     }
+    // The accepted place itself turned by a quarter or half turn: a room symmetric but for what
+    // lies behind the robot looks the same both ways round. The ranking keeps one pose per
+    // place, so such a rival never enters it (simulated office, put down in the middle room
+    // facing away from its post: relocalised 180 degrees off, the match verified at 0.94-0.96).
+    const int holding = found ? -1 : submap_holding(T_map_accepted.translation());
+    for (const double turn : {std::numbers::pi, 0.5 * std::numbers::pi, -0.5 * std::numbers::pi}) {
+      if (holding < 0) break;
+      const Submap& submap = submaps[static_cast<std::size_t>(holding)];
+      BranchAndBoundOptions window = matching.loop_search;
+      window.linear_search_window_m = coarse_options.cell_m;
+      window.angular_search_window_rad = options.confirmation_window_rad;
+      const core::SE2 guess(T_map_accepted.x(), T_map_accepted.y(), T_map_accepted.angle() + turn);
+      const BranchAndBoundResult fine = match_branch_and_bound(*submap.stack, points, submap.T_world_submap.inverse() * guess,
+                                                               matching.loop_min_score, window);
+      ++summary.uniqueness_tests;
+      // The submap's grid may hold the turned view too poorly for its score: then ICP against
+      // the whole map from the turned pose itself decides.
+      const IcpResult fit = match_icp(tracking_map, points, fine.found ? submap.T_world_submap * fine.T_map_sensor : guess,
+                                      nullptr, icp_options);
+      if (fit.inlier_fraction >= options.verification_min_inlier_fraction && fit.rms_m <= matching.loop_max_rms_m &&
+          fit.degeneracy >= options.verification_min_degeneracy &&
+          std::abs(core::wrap_angle(fit.T_map_sensor.angle() - T_map_accepted.angle())) > 0.25 * std::numbers::pi) {
+        found = fit.T_map_sensor;
+        break;
+      }
+    }
     summary.times.confirmation_search_s += seconds_since(start);
     return found;
   }
@@ -602,6 +674,7 @@ struct Localizer2d::Impl {
 
   void start_searching(std::optional<core::SE2> prior) {
     state = LocalizationState::kSearching;
+    contradicted = false;
     refuted.clear();
     prior_T_map_odom = prior;
     order_stale = true;
@@ -705,9 +778,32 @@ LocalizationResult Localizer2d::add_scan(const io::LaserScan& scan) {
           result.covariance = icp.hessian.inverse();
         m.T_map_laser = icp.T_map_sensor;
         m.failures_in_a_row = 0;
+        // What the scan sees where the map saw through (the submap holding the pose): a robot
+        // carried to a place whose scans still half fit where it was puts points there.
+        const int holding = m.submap_holding(icp.T_map_sensor.translation());
+        if (holding >= 0) {
+          const Impl::Submap& submap = m.submaps[static_cast<std::size_t>(holding)];
+          result.free_space_fraction = free_space_fraction(
+              m.map.submaps[static_cast<std::size_t>(m.submap_index[static_cast<std::size_t>(holding)])].grid,
+              points.matching, submap.T_world_submap.inverse() * icp.T_map_sensor);
+        }
+        // Once contradicted, the pose stays suspect until a scan verifies it (the verification
+        // thresholds, free space included): the unexplained points of a wrong pose can move
+        // into space the map never saw while the robot turns (simulated kidnapping: 10 % in
+        // empty space for 14 scans, then none, at 0.70-0.72 inliers, 9 m off).
+        if (result.free_space_fraction > m.options.verification_max_free_fraction) {
+          m.contradicted = true;
+        } else if (icp.inlier_fraction >= m.options.verification_min_inlier_fraction && icp.rms_m <= o.loop_max_rms_m &&
+                   icp.degeneracy >= m.options.verification_min_degeneracy) {
+          m.contradicted = false;
+        }
         if (icp.inlier_fraction < m.options.ok_min_inlier_fraction) {
           next = Health::kDegraded;
           reason = "few scan points agree with the map (inlier fraction " + fixed(icp.inlier_fraction, 3) + ")";
+        } else if (m.contradicted) {
+          next = Health::kDegraded;
+          reason = "scan points where the map saw empty space (" + fixed(100.0 * result.free_space_fraction, 1) +
+                   " % now); degraded until a scan verifies the pose";
         } else if (icp.degeneracy < o.degraded_min_degeneracy) {
           next = Health::kDegraded;
           reason = "degenerate geometry (degeneracy " + fixed(icp.degeneracy, 4) +

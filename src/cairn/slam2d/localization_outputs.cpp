@@ -152,7 +152,7 @@ void write_localization_png(const ProbabilityGrid& grid, const std::vector<Local
 void write_localization_csv(const std::vector<LocalizationResult>& results, const std::string& path) {
   io::write_output(path, [&](std::ostream& out) {
     out << "time_s,state,health,localised,x_m,y_m,theta_rad,confidence,degeneracy,rms_m,sigma_x_m,sigma_y_m,"
-           "sigma_theta_rad,relocalised,dead_reckoning,matching_points\n";
+           "sigma_theta_rad,relocalised,dead_reckoning,matching_points,free_space_fraction\n";
     std::string line;
     for (const LocalizationResult& s : results) {
       line = s.time.to_seconds_string();
@@ -174,6 +174,8 @@ void write_localization_csv(const std::vector<LocalizationResult>& results, cons
       line += s.relocalised ? ",1" : ",0";
       line += s.dead_reckoning ? ",1," : ",0,";
       line += std::to_string(s.matching_points);
+      line += ',';
+      io::append_number(line, s.free_space_fraction);
       line += '\n';
       out << line;
     }
@@ -249,6 +251,7 @@ nlohmann::json localization_report_json(const Localizer2d& localizer, const Loca
                        {"verification_min_inlier_fraction", options.verification_min_inlier_fraction},
                        {"max_rms_m", m.loop_max_rms_m},
                        {"verification_min_degeneracy", options.verification_min_degeneracy},
+                       {"verification_max_free_fraction", options.verification_max_free_fraction},
                        {"ambiguity_window_m", m.loop_ambiguity_window_m},
                        {"ambiguity_distance_m", m.loop_ambiguity_distance_m},
                        {"ambiguity_angle_rad", m.loop_ambiguity_angle_rad},
@@ -269,6 +272,7 @@ nlohmann::json localization_report_json(const Localizer2d& localizer, const Loca
                           {"inlier_fraction", e.inlier_fraction},
                           {"rms_m", e.rms_m},
                           {"degeneracy", e.degeneracy},
+                          {"free_space_fraction", e.free_space_fraction},
                           {"T_map_laser", pose_json(e.T_map_laser)}});
     }
     relocalisations.push_back({{"scan", r.scan},
