@@ -3,6 +3,8 @@
 
 #include "cairn/vslam/slam_state.hpp"
 
+#include "cairn/core/assert.hpp"
+
 namespace cairn::vslam {
 
 bool VisualSlam::Impl::need_keyframe(const FrameData& f, int inliers) const {
@@ -235,6 +237,72 @@ void VisualSlam::Impl::cull_points() {
     }
   }
   recent_points = std::move(keep);
+}
+
+// ORB-SLAM2 LocalMapping::KeyFrameCulling (Mur-Artal & Tardos, T-RO 2017, Sec. V-E; ORB-SLAM
+// T-RO 2015 Sec. VI-E): "discard all the keyframes in the local map whose 90 % of the map points
+// have been seen in at least other three keyframes in the same or finer scale". As ORB-SLAM2's
+// code: the local keyframes are the newest one's covisible ones (>= min_covisible_points shared);
+// with stereo / depth only the keyframe's close points count (0 < depth <= ThDepth); a point is
+// examined only when its observation weight (a stereo observation counting 2) exceeds 3, and is
+// redundant when >= 3 other keyframes see it at a level <= this keyframe's level + 1; culled when
+// redundant > keyframe_culling_redundancy (ORB-SLAM2: 0.9) x counted. Kept: keyframe 0 (the
+// gauge), the first keyframe of a segment (the segment's origin and its weak link to the one
+// before), keyframes of other segments (judged by nothing this segment sees, as cull_points'
+// points) and the candidates of pending loop consistency checks (ORB-SLAM2's SetNotErase). Local mapping is synchronous here, so no relocalisation or loop
+// verification is under way while this runs.
+void VisualSlam::Impl::cull_keyframes() {
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  constexpr int kObservers = 3;
+  for (const auto& [shared, kf] : covisible(current, options.min_covisible_points)) {
+    const KeyFrame& k = keyframes[static_cast<std::size_t>(kf)];
+    if (kf == 0 || k.bad || k.starts_segment || kf == reference_keyframe || segment_of(kf) != segment_of(current) ||
+        pending_loop_candidates.count(kf)) {
+      continue;
+    }
+    int counted = 0, redundant = 0;
+    for (std::size_t i = 0; i < k.frame.size(); ++i) {
+      const int id = k.frame.map_point[i];
+      if (id < 0) continue;
+      const MapPoint& mp = points[static_cast<std::size_t>(id)];
+      if (mp.bad) continue;
+      if (kind != io::SequenceKind::kMonocular && (k.frame.depth[i] > close_depth_m || k.frame.depth[i] < 0)) continue;
+      ++counted;
+      if (observation_weight(mp) <= kObservers) continue;
+      const int level = k.frame.keypoints[i].octave;
+      int observers = 0;
+      for (const auto& [other, idx] : mp.observations) {
+        if (other == kf) continue;
+        if (keyframes[static_cast<std::size_t>(other)].frame.keypoints[static_cast<std::size_t>(idx)].octave <= level + 1 &&
+            ++observers >= kObservers) {
+          break;
+        }
+      }
+      if (observers >= kObservers) ++redundant;
+    }
+    if (redundant > options.keyframe_culling_redundancy * counted) cull_keyframe(kf);
+  }
+}
+
+// ORB-SLAM2 KeyFrame::SetBadFlag.
+void VisualSlam::Impl::cull_keyframe(int kf) {
+  KeyFrame& k = keyframes[static_cast<std::size_t>(kf)];
+  CAIRN_ASSERT(kf > 0 && !k.starts_segment && !k.bad, "keyframe 0 and the first keyframe of a segment are never culled");
+  // The parent: the previous good keyframe of the same segment (one exists: its first keyframe is
+  // never culled). The loop closer's consecutive chain then runs through the good keyframes only.
+  int parent = kf - 1;
+  while (parent > 0 && (keyframes[static_cast<std::size_t>(parent)].bad || segment_of(parent) != segment_of(kf))) --parent;
+  k.parent = parent;
+  k.T_parent_keyframe = keyframes[static_cast<std::size_t>(parent)].frame.T_world_camera.inverse() * k.frame.T_world_camera;
+  for (std::size_t i = 0; i < k.frame.size(); ++i) {
+    const int id = k.frame.map_point[i];
+    if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) erase_observation(id, kf);
+  }
+  std::fill(k.frame.map_point.begin(), k.frame.map_point.end(), -1);
+  if (options.vocabulary) database.erase(static_cast<std::uint32_t>(kf));
+  for (auto& [group, count] : consistent_groups) group.erase(kf);
+  k.bad = true;
+  ++summary->keyframes_culled;
 }
 
 // Keyframes sharing at least `min_shared` good points with keyframe `kf`, most first.

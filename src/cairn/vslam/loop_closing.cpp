@@ -140,7 +140,13 @@ void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData&
   for (std::size_t k = 0; k < n; ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
   const core::SE3 T_loop = probe.T_world_camera;
   io::PoseGraph3D graph;
-  for (std::size_t k = 0; k < n; ++k) graph.vertices.push_back({static_cast<std::int64_t>(k), old_poses[k]});
+  // Culled keyframes are not in the graph; the chain below joins the good ones around them.
+  std::vector<int> good;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (keyframes[k].bad) continue;
+    good.push_back(static_cast<int>(k));
+    graph.vertices.push_back({static_cast<std::int64_t>(k), old_poses[k]});
+  }
   auto add_edge = [&](int a, int b, const core::SE3& T_a_b, double weight = 1.0) {
     io::GraphEdge<core::SE3> e;
     e.from = a;
@@ -152,12 +158,15 @@ void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData&
   // Consecutive keyframes; into the first keyframe of a segment the link is only the motion
   // model's guess across the lost stretch: a weight of 1e-6 keeps the graph connected without
   // holding the segments where the guess put them.
-  for (std::size_t k = 1; k < n; ++k) {
-    add_edge(static_cast<int>(k) - 1, static_cast<int>(k), old_poses[k - 1].inverse() * old_poses[k], keyframes[k].starts_segment ? 1e-6 : 1.0);
+  for (std::size_t g = 1; g < good.size(); ++g) {
+    const auto a = static_cast<std::size_t>(good[g - 1]), b = static_cast<std::size_t>(good[g]);
+    add_edge(good[g - 1], good[g], old_poses[a].inverse() * old_poses[b], keyframes[b].starts_segment ? 1e-6 : 1.0);
   }
-  for (std::size_t k = 0; k < n; ++k) {
-    for (const auto& [shared, other] : covisible(static_cast<int>(k), 100)) {
-      if (other < static_cast<int>(k) - 1) add_edge(other, static_cast<int>(k), old_poses[static_cast<std::size_t>(other)].inverse() * old_poses[k]);
+  for (std::size_t g = 0; g < good.size(); ++g) {
+    const int k = good[g];
+    const int previous = g > 0 ? good[g - 1] : -1;
+    for (const auto& [shared, other] : covisible(k, 100)) {
+      if (other < previous) add_edge(other, k, old_poses[static_cast<std::size_t>(other)].inverse() * old_poses[static_cast<std::size_t>(k)]);
     }
   }
   add_edge(candidate, current, old_poses[static_cast<std::size_t>(candidate)].inverse() * T_loop);
@@ -168,7 +177,7 @@ void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData&
   solver.function_tolerance = 1e-9;
   solver.threads = 1;
   backend::optimize(problem, solver);
-  for (std::size_t k = 0; k < n; ++k) keyframes[k].frame.T_world_camera = problem.T_world_pose[k];
+  for (const int k : good) keyframes[static_cast<std::size_t>(k)].frame.T_world_camera = problem.T_world_pose[static_cast<std::size_t>(problem.index_of(k))];
   for (MapPoint& mp : points) {
     if (mp.bad) continue;
     const auto r = static_cast<std::size_t>(mp.reference_keyframe);
@@ -197,7 +206,7 @@ void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData&
   if (options.global_ba_after_loop) {
     const auto start = Clock::now();
     std::set<int> all;
-    for (std::size_t k = 0; k < n; ++k) all.insert(static_cast<int>(k));
+    all.insert(good.begin(), good.end());
     bundle_adjustment(all, 10, 10);
     ++summary->global_bas;
     summary->global_ba_s += seconds_since(start);
@@ -226,7 +235,7 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
   // merge with another segment may come at any keyframe.
   const bool too_early = current < 2 * options.loop_min_keyframes_apart || current < last_loop_keyframe + options.loop_min_keyframes_apart;
   bool other_segments = false;
-  for (const KeyFrame& other : keyframes) other_segments = other_segments || segment_of(other.id) != segment_of(current);
+  for (const KeyFrame& other : keyframes) other_segments = other_segments || (!other.bad && segment_of(other.id) != segment_of(current));
   if (!options.loop_closure || (too_early && !other_segments)) {
     database.add(static_cast<std::uint32_t>(current), kf.bow);
     summary->loop_s += seconds_since(start);
@@ -246,6 +255,7 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
   int max_common = 0;
   for (const auto& r : results) max_common = std::max(max_common, r.common_words);
   std::vector<std::pair<std::set<int>, int>> groups;
+  std::set<int> candidates_seen;
   std::vector<std::tuple<double, int, int>> consistent;  // score, candidate, consistency
   std::vector<int> proposed;  // every keyframe the database returned: the rivals of the uniqueness test
   for (const auto& r : results) proposed.push_back(static_cast<int>(r.id));
@@ -253,6 +263,7 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
     if (r.score < min_score || r.common_words < 0.8 * max_common) continue;
     const int candidate = static_cast<int>(r.id);
     if (too_early && segment_of(candidate) == segment_of(current)) continue;
+    candidates_seen.insert(candidate);
     std::set<int> group{candidate};
     for (const auto& [shared, k] : covisible(candidate, options.min_covisible_points)) group.insert(k);
     int consistency = 0;
@@ -264,6 +275,7 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
     if (consistency + 1 >= options.loop_consistency) consistent.emplace_back(r.score, candidate, consistency + 1);
   }
   consistent_groups = std::move(groups);
+  pending_loop_candidates = std::move(candidates_seen);
   std::sort(consistent.begin(), consistent.end(), std::greater<>());
   for (const auto& [score, candidate, consistency] : consistent) {
     LoopRecord record;
@@ -299,6 +311,7 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
       result.loop_closed = true;
       last_loop_keyframe = current;
       consistent_groups.clear();
+      pending_loop_candidates.clear();
       break;
     }
     record.decision = "rejected";
@@ -322,7 +335,7 @@ void VisualSlam::Impl::merge_with_recent(FrameResult& result) {
   if (age > options.merge_recent_keyframes_of_new_map) return;
   std::vector<int> candidates;
   for (int k = current - 1; k >= 0 && candidates.size() < 8; --k) {
-    if (segment_of(k) != own) candidates.push_back(k);
+    if (segment_of(k) != own && !keyframes[static_cast<std::size_t>(k)].bad) candidates.push_back(k);
   }
   if (candidates.empty()) return;
   const auto start = Clock::now();

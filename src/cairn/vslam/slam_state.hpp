@@ -125,6 +125,13 @@ struct KeyFrame {
   bool starts_segment = false;  // the first keyframe of a segment: no odometry link to the one before
   vision::BowVector bow;              // empty without a vocabulary
   std::vector<std::uint32_t> nodes;   // per keypoint, its vocabulary node two levels below the root
+  // Culled as redundant (ORB-SLAM2 KeyFrame::SetBadFlag): out of the covisibility graph, its
+  // points' observations and the database; kept only so that frames referring to it still have
+  // a pose, through `parent` (an earlier keyframe of its segment, good when culled, maybe culled
+  // since) and the relative pose at culling time (ORB-SLAM2's mTcp).
+  bool bad = false;
+  int parent = -1;
+  core::SE3 T_parent_keyframe;
 };
 
 
@@ -176,6 +183,7 @@ struct VisualSlam::Impl {
   vision::BowDatabase database;
   int last_loop_keyframe = 0;
   std::vector<std::pair<std::set<int>, int>> consistent_groups;  // ORB-SLAM2 mvConsistentGroups
+  std::set<int> pending_loop_candidates;  // the candidates behind consistent_groups: never culled (ORB-SLAM2 SetNotErase)
   // The Atlas: map segments, merged by union-find.
   int segment = 0;
   std::vector<int> segment_parent{0};
@@ -187,6 +195,18 @@ struct VisualSlam::Impl {
   int segment_of(int kf) const { return find(keyframes[static_cast<std::size_t>(kf)].segment); }
   // Per frame: reference keyframe and the pose relative to it, for the final trajectory.
   std::vector<std::pair<int, core::SE3>> relative;
+  // A keyframe's pose; a culled one's through its chain of parents (ORB-SLAM2's trajectory
+  // writer walks mpParent with mTcp the same way).
+  core::SE3 keyframe_pose(int kf) const {
+    if (!keyframes[static_cast<std::size_t>(kf)].bad) return keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera;
+    core::SE3 T_parent_kf;
+    while (keyframes[static_cast<std::size_t>(kf)].bad) {
+      const KeyFrame& k = keyframes[static_cast<std::size_t>(kf)];
+      T_parent_kf = k.T_parent_keyframe * T_parent_kf;
+      kf = k.parent;
+    }
+    return keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera * T_parent_kf;
+  }
 
   Impl(const io::CameraCalibration& c, io::SequenceKind k, const VisualSlamOptions& o)
       : camera(c), kind(k), options(o), orb(o.orb), orb_initialisation(doubled(o.orb)) {
@@ -305,6 +325,17 @@ struct VisualSlam::Impl {
   int triangulate_new_points(int current, int count);
   // ORB-SLAM2 LocalMapping::MapPointCulling (stereo: 3 observations, a stereo one counting 2).
   void cull_points();
+  // ORB-SLAM2 LocalMapping::KeyFrameCulling (T-RO 2017 Sec. V-E): a keyframe covisible with the
+  // newest one whose close map points (stereo/RGB-D: depth below ThDepth) are, for >= 90 % of
+  // them, seen by at least 3 other keyframes at the same, a finer or the next coarser level
+  // (ORB-SLAM2's scaleLeveli <= scaleLevel + 1) is culled (cull_keyframe). Never keyframe 0, the
+  // first keyframe of a segment, one of another segment, or a pending loop candidate.
+  void cull_keyframes();
+  // ORB-SLAM2 KeyFrame::SetBadFlag: the keyframe's observations erased (points left with too few
+  // observations culled, as erase_observation does), out of the database, its parent the
+  // previous good keyframe of its segment, so that the consecutive chain of the loop closer's
+  // pose graph stays connected through the keyframes that remain.
+  void cull_keyframe(int kf);
   // Keyframes sharing at least `min_shared` good points with keyframe `kf`, most first.
   std::vector<std::pair<int, int>> covisible(int kf, int min_shared) const;
   // ORB-SLAM2 Optimizer::LocalBundleAdjustment: the newest keyframe and its covisible ones.

@@ -525,10 +525,15 @@ int VisualSlam::Impl::match_pose_to_keyframe(FrameData& f, int kf, const std::ve
 }
 
 double VisualSlam::Impl::travelled_between(int a, int b) const {
+  // Along the good keyframes (a culled one's pose is no longer optimised), through keyframe_pose
+  // at the ends should either be culled.
   double travelled = 0.0;
-  for (int k = std::min(a, b); k < std::max(a, b); ++k) {
-    travelled += (keyframes[static_cast<std::size_t>(k) + 1].frame.T_world_camera.translation() -
-                  keyframes[static_cast<std::size_t>(k)].frame.T_world_camera.translation()).norm();
+  Eigen::Vector3d previous = keyframe_pose(std::min(a, b)).translation();
+  for (int k = std::min(a, b) + 1; k <= std::max(a, b); ++k) {
+    if (keyframes[static_cast<std::size_t>(k)].bad && k != std::max(a, b)) continue;
+    const Eigen::Vector3d position = keyframe_pose(k).translation();
+    travelled += (position - previous).norm();
+    previous = position;
   }
   return travelled;
 }
@@ -680,7 +685,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
         }
       } else if (lost) {
         for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && candidates.size() < 9; --kf) {
-          if (kf != candidates.front()) candidates.push_back(kf);
+          if (kf != candidates.front() && !keyframes[static_cast<std::size_t>(kf)].bad) candidates.push_back(kf);
         }
       }
       for (const int kf : candidates) {
@@ -717,7 +722,9 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
               if (k < 8 || ranked[k].score >= 0.75 * ranked.front().score) rival_keyframes.push_back(static_cast<int>(ranked[k].id));
             }
           } else {
-            for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && rival_keyframes.size() < 8; --kf) rival_keyframes.push_back(kf);
+            for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && rival_keyframes.size() < 8; --kf) {
+              if (!keyframes[static_cast<std::size_t>(kf)].bad) rival_keyframes.push_back(kf);
+            }
           }
         }
       }
@@ -842,6 +849,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
           triangulate_new_points(static_cast<int>(keyframes.size()) - 1, options.triangulation_keyframes);
         }
         if (options.local_ba) local_bundle_adjustment();
+        if (options.keyframe_culling && kind != io::SequenceKind::kMonocular) cull_keyframes();
         detect_and_close_loop(result);
         if (!result.loop_closed) merge_with_recent(result);
         // The frame is the keyframe: it takes the pose the bundle adjustment and any loop

@@ -33,6 +33,7 @@ std::string VisualSlamOptions::problems() const {
     add("the loop drift bounds must be >= 0");
   }
   if (!(triangulation_match_ratio > 0.0 && triangulation_match_ratio <= 1.0)) add("triangulation_match_ratio must be in (0, 1]");
+  if (!(keyframe_culling_redundancy > 0.0 && keyframe_culling_redundancy <= 1.0)) add("keyframe_culling_redundancy must be in (0, 1]");
   return out;
 }
 
@@ -131,7 +132,7 @@ std::vector<core::SE3> VisualSlam::trajectory() const {
   std::vector<core::SE3> out;
   out.reserve(impl_->relative.size());
   for (const auto& [kf, T_kf_frame] : impl_->relative) {
-    out.push_back(kf < 0 ? core::SE3() : impl_->keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera * T_kf_frame);
+    out.push_back(kf < 0 ? core::SE3() : impl_->keyframe_pose(kf) * T_kf_frame);
   }
   return out;
 }
@@ -147,13 +148,17 @@ int VisualSlam::main_segment() const { return impl_->keyframes.empty() ? 0 : imp
 
 std::vector<core::SE3> VisualSlam::keyframe_poses() const {
   std::vector<core::SE3> out;
-  for (const auto& kf : impl_->keyframes) out.push_back(kf.frame.T_world_camera);
+  for (const auto& kf : impl_->keyframes) {
+    if (!kf.bad) out.push_back(kf.frame.T_world_camera);
+  }
   return out;
 }
 
 std::vector<std::size_t> VisualSlam::keyframe_frames() const {
   std::vector<std::size_t> out;
-  for (const auto& kf : impl_->keyframes) out.push_back(kf.frame.index);
+  for (const auto& kf : impl_->keyframes) {
+    if (!kf.bad) out.push_back(kf.frame.index);
+  }
   return out;
 }
 

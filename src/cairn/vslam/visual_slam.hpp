@@ -17,11 +17,11 @@
 ///   or seen by too few keyframes after two keyframes), local bundle adjustment on the least-squares
 ///   engine (backend/least_squares.hpp; keyframe poses and points, points eliminated by Schur,
 ///   the covisible keyframes free, the others that see their points fixed; 5 iterations, outliers
-///   removed, 10 more), outlier observations erased.
+///   removed, 10 more), outlier observations erased; keyframe culling (KeyFrameCulling: a covisible
+///   keyframe whose close points other keyframes already see is removed, VisualSlamOptions::keyframe_culling).
 ///
 /// Poses are T_world_camera, world = the first frame's camera (x right, y down, z forward).
-/// Not in this version (docs/vslam.md): triangulation between keyframes, fusion of duplicate map
-/// points, keyframe culling, bag-of-words loop closure and relocalisation, monocular, the Atlas.
+/// What is not in this version: docs/vslam.md, "Not in this version".
 
 #include <Eigen/Core>
 #include <memory>
@@ -76,6 +76,13 @@ struct VisualSlamOptions {
   /// bag-of-words-node restriction the epipolar search still lets wrong matches through.
   int triangulation_keyframes = 0;
   double triangulation_match_ratio = 0.6;  ///< best / second best descriptor distance along the epipolar band
+  /// Cull redundant keyframes after each local BA (ORB-SLAM2 LocalMapping::KeyFrameCulling, T-RO
+  /// 2017 Sec. V-E): a keyframe covisible with the newest one, >= 90 % of whose close points are
+  /// seen by >= 3 other keyframes at the same or a finer level (ORB-SLAM2: up to one level
+  /// coarser). Stereo and RGB-D only. Default and measurements: docs/vslam.md.
+  bool keyframe_culling = true;
+  /// The fraction of a keyframe's close points that must be redundant (ORB-SLAM2: 0.9), in (0, 1].
+  double keyframe_culling_redundancy = 0.9;
   /// Place recognition for loop closure and relocalisation (DBoW2-style, vision/vocabulary.hpp);
   /// null = neither (tracking loss then tries the 8 most recent keyframes only). It must not have
   /// been trained on the images it is used on.
@@ -182,6 +189,9 @@ struct VisualSlamSummary {
   std::size_t map_points_fused = 0;
   std::size_t maps_started = 0, maps_merged = 0;  ///< segments beyond the first; merges of two
   std::size_t merge_attempts = 0;  ///< verifications of a new segment against the keyframes tracked last before it
+  /// Keyframes culled as redundant (VisualSlamOptions::keyframe_culling); `keyframes` counts every
+  /// keyframe made, so the map holds keyframes - keyframes_culled.
+  std::size_t keyframes_culled = 0;
   double loop_s = 0.0, global_ba_s = 0.0;
   std::vector<LoopRecord> loops;  ///< every candidate that reached verification, and why
 };
@@ -206,6 +216,7 @@ class VisualSlam {
   /// Every frame's pose, through its reference keyframe at the keyframe's current (bundle-
   /// adjusted) pose, as ORB-SLAM2 writes its trajectory.
   std::vector<core::SE3> trajectory() const;
+  /// The keyframes in the map (culled ones left out), in order of creation.
   std::vector<core::SE3> keyframe_poses() const;
   std::vector<std::size_t> keyframe_frames() const;
   /// Per frame, the map segment it belongs to now (merges applied; the segment of keyframe 0 is
