@@ -625,6 +625,7 @@ class Engine final : public TrustRegionModel {
   std::vector<double> v_inverse_;        ///< per eliminated block, (V + D/mu)^-1, column-major
   std::vector<int> v_inverse_offset_;
   std::vector<double> block_values_;  ///< S in ReducedMatrix's block storage
+  std::vector<std::vector<double>> partial_pool_;  ///< the other threads' sums of S's blocks
   /// Eliminated blocks in the order the Schur complement visits them: by the first reduced
   /// block they touch, so that consecutive blocks update nearby parts of S (cache locality).
   std::vector<int> elimination_order_;
@@ -1288,22 +1289,30 @@ bool Engine::solve_system(double mu_inverse, int& cg_iterations, bool* inexact) 
   // Per-thread partial sums of S's blocks, the rhs and diag(J^T J). The first thread to start
   // accumulates into block_values_ itself, so a single-threaded solve copies nothing (S of the
   // 318-camera BAL problem is dense, 4.1 million values).
+  // The other threads' block sums live in partial_pool_, kept from one iteration to the next:
+  // allocating 33 MB per thread and iteration cost page faults on every iteration.
   struct Partial {
     double* values = nullptr;
-    std::vector<double> own;
+    bool own = false;  ///< values is one of partial_pool_'s buffers
     Eigen::VectorXd rhs;
     Eigen::VectorXd diagonal;
   };
   const std::size_t nonzeros = reduced_->blocks_size();
   block_values_.assign(nonzeros, 0.0);
+  const std::size_t max_threads = static_cast<std::size_t>(std::max(1, arena_.max_concurrency()));
+  if (partial_pool_.size() < max_threads - 1) partial_pool_.resize(max_threads - 1);
   std::atomic<bool> claimed{false};
+  std::atomic<std::size_t> next_buffer{0};
   tbb::enumerable_thread_specific<Partial> partial([&] {
-    Partial p{nullptr, {}, Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n)};
+    Partial p{nullptr, false, Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n)};
     if (!claimed.exchange(true)) {
       p.values = block_values_.data();
     } else {
-      p.own.assign(nonzeros, 0.0);
-      p.values = p.own.data();
+      const std::size_t k = next_buffer++;
+      CAIRN_ASSERT(k < partial_pool_.size(), "Engine: more threads than the arena's concurrency");
+      partial_pool_[k].assign(nonzeros, 0.0);
+      p.values = partial_pool_[k].data();
+      p.own = true;
     }
     return p;
   });
@@ -1330,12 +1339,24 @@ bool Engine::solve_system(double mu_inverse, int& cg_iterations, bool* inexact) 
   });
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
   Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(n);
+  std::vector<const double*> others;
   for (const Partial& part : partial) {
-    if (!part.own.empty()) {
-      for (std::size_t i = 0; i < nonzeros; ++i) block_values_[i] += part.own[i];
-    }
+    if (part.own) others.push_back(part.values);
     rhs += part.rhs;
     diagonal += part.diagonal;
+  }
+  if (!others.empty()) {
+    // The sum over threads in the same order as before (block_values_ + each other thread's),
+    // split over ranges of the storage.
+    constexpr int kRange = 1 << 16;
+    const int ranges = static_cast<int>((nonzeros + kRange - 1) / kRange);
+    parallel(ranges, 1, [&](int range) {
+      const std::size_t begin = static_cast<std::size_t>(range) * kRange;
+      const std::size_t end = std::min(nonzeros, begin + kRange);
+      for (const double* other : others) {
+        for (std::size_t i = begin; i < end; ++i) block_values_[i] += other[i];
+      }
+    });
   }
   reduced_->to_csc(block_values_.data(), S.value.data());
   // LM damping D / mu on the reduced unknowns, D = diag(J^T J) clamped (Ceres).
