@@ -26,21 +26,16 @@
 namespace cairn::cli {
 namespace {
 
-struct Localize2dFlags {
+struct Localize2dFlags : LogReplayFlags {
   std::string log;
   std::string map;
   std::string out;
   std::string config;
   std::vector<std::string> set;
   std::string ground_truth;
-  long max_scans = 0;
   long first_scan = 0;
   int global_searches_per_scan = 0;
   int confirmations = 0;
-  bool lenient = false;
-  bool quiet = false;
-  bool progress = false;
-  bool overwrite = false;
 };
 
 core::SE3 to_se3(const core::SE2& T) {
@@ -260,13 +255,7 @@ Runner register_localize2d(CLI::App& app) {
   app.add_option("--confirmations", flags->confirmations,
                  "Scans whose verified matches must agree before a pose is accepted (default 2)");
   app.add_option("--first-scan", flags->first_scan, "Start at this scan of the log (0-based)");
-  app.add_option("--max-scans", flags->max_scans, "Process only N scans");
-  app.add_flag("--lenient", flags->lenient, "Skip malformed log records (counted) instead of stopping");
-  app.add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
-  app.add_flag("--progress", flags->progress,
-               "Progress as a line every 200 scans on stderr, also when stderr is not a terminal");
-  app.add_flag("--overwrite", flags->overwrite,
-               "Write into an --out directory that already holds files (those of the same names are replaced)");
+  flags->LogReplayFlags::add_to(app);
   return [flags]() { return localize2d_command(*flags); };
 }
 

@@ -29,7 +29,7 @@ namespace cairn::cli {
 namespace {
 
 
-struct Slam2dFlags {
+struct Slam2dFlags : LogReplayFlags {
   std::string log;
   std::string out;
   std::string config;
@@ -37,11 +37,6 @@ struct Slam2dFlags {
   std::string relations;
   std::string save_map;
   std::vector<std::string> set;
-  long max_scans = 0;
-  bool lenient = false;
-  bool quiet = false;
-  bool progress = false;
-  bool overwrite = false;
   bool print_config = false;
 };
 
@@ -193,14 +188,8 @@ Runner register_slam2d(CLI::App& app) {
   app.add_option("--relations", flags->relations, "Freiburg relations file: print the relations metric at the end");
   app.add_option("--save-map", flags->save_map,
                  "Also write the finished map (submaps, grids, poses) for cairn localize2d --map (docs/formats.md)");
-  app.add_option("--max-scans", flags->max_scans, "Process only the first N scans");
-  app.add_flag("--lenient", flags->lenient, "Skip malformed log records (counted) instead of stopping");
   app.add_flag("--print-config", flags->print_config, "Print the configuration in effect (YAML) and exit unless LOG is given");
-  app.add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
-  app.add_flag("--progress", flags->progress,
-               "Progress as a line every 200 scans on stderr, also when stderr is not a terminal");
-  app.add_flag("--overwrite", flags->overwrite,
-               "Write into an --out directory that already holds files (those of the same names are replaced)");
+  flags->LogReplayFlags::add_to(app);
   return [flags]() { return slam2d_command(*flags); };
 }
 

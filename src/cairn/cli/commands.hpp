@@ -40,6 +40,17 @@ struct GraphReadFlags {
   io::GraphReadOptions options() const;
 };
 
+/// Flags shared by the commands that replay a CARMEN log scan by scan (slam2d, localize2d).
+struct LogReplayFlags {
+  long max_scans = 0;
+  bool lenient = false;
+  bool quiet = false;
+  bool progress = false;
+  bool overwrite = false;
+
+  void add_to(CLI::App& command);
+};
+
 /// Prints "cairn: warning: <text>" to stderr.
 void warn(const std::string& text);
 

@@ -1,0 +1,14 @@
+#include "cairn/cli/commands.hpp"
+
+namespace cairn::cli {
+
+void LogReplayFlags::add_to(CLI::App& command) {
+  command.add_option("--max-scans", max_scans, "Process only N scans");
+  command.add_flag("--lenient", lenient, "Skip malformed log records (counted) instead of stopping");
+  command.add_flag("-q,--quiet", quiet, "Print nothing on success");
+  command.add_flag("--progress", progress, "Progress as a line every 200 scans on stderr, also when stderr is not a terminal");
+  command.add_flag("--overwrite", overwrite,
+                   "Write into an --out directory that already holds files (those of the same names are replaced)");
+}
+
+}  // namespace cairn::cli
