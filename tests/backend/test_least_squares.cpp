@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdlib>
 #include <random>
 #include <vector>
 
@@ -257,6 +258,13 @@ TEST(LeastSquares, ReproducesCeresIterationCostsOnProblem16) {
     EXPECT_NEAR(summary.iteration_log[k].cost, ceres[k], 0.5e-6 * ceres[k]) << "iteration " << k + 1;
   }
   EXPECT_EQ(summary.termination, LeastSquaresTermination::kConvergence);
+}
+
+TEST(LeastSquares, ScalarSchurKernelsWhenAvxIsTurnedOff) {
+  // Run by ctest a second time with CAIRN_NO_AVX=1 (tests/backend/CMakeLists.txt) together with
+  // the solver tests, so that the scalar kernels are exercised on a CPU with AVX too.
+  if (std::getenv("CAIRN_NO_AVX") == nullptr) GTEST_SKIP() << "CAIRN_NO_AVX is not set: the kernels follow the CPU";
+  EXPECT_FALSE(schur_kernels_use_avx());
 }
 
 TEST(LeastSquares, SchurSolversAgreeOnARealBalProblem) {

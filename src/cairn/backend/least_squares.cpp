@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <limits>
 #include <sstream>
@@ -175,7 +176,7 @@ __attribute__((target("avx"))) void rank2_update_avx(double* block, const double
 }
 const bool kHaveAvx = [] {
   __builtin_cpu_init();
-  return __builtin_cpu_supports("avx") != 0;
+  return __builtin_cpu_supports("avx") != 0 && std::getenv("CAIRN_NO_AVX") == nullptr;
 }();
 #endif
 template <int F>
@@ -1871,6 +1872,14 @@ MarginalCovariances marginal_covariances(LeastSquaresProblem& problem, const std
 LeastSquaresSummary solve(LeastSquaresProblem& problem, const LeastSquaresOptions& options) {
   Engine engine(problem, options);
   return engine.run();
+}
+
+bool schur_kernels_use_avx() {
+#if defined(CAIRN_SCHUR_AVX)
+  return kHaveAvx;
+#else
+  return false;
+#endif
 }
 
 double evaluate_cost(const LeastSquaresProblem& problem) {

@@ -240,4 +240,9 @@ Eigen::Matrix<double, N, N> square_root_information(const Eigen::Matrix<double, 
 /// Cost 1/2 sum rho(||r||^2) at the current values; NaN when a factor cannot be evaluated.
 double evaluate_cost(const LeastSquaresProblem& problem);
 
+/// Whether the Schur solvers' kernels for two-residual factors (bundle adjustment) run with AVX:
+/// true on a CPU with AVX unless the environment variable CAIRN_NO_AVX is set when the process
+/// starts, which selects the scalar kernels (the same arithmetic, for testing them on any CPU).
+bool schur_kernels_use_avx();
+
 }  // namespace cairn::backend
