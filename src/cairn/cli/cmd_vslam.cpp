@@ -296,13 +296,13 @@ int vslam_command(const VslamFlags& flags) {
     io::write_ply(o, map_points, "cairn vslam map points, world = the first camera (x right, y down, z forward)");
   });
   io::write_output(out.staging_path("frames.csv"), [&](std::ostream& o) {
-    o << "frame,time_s,health,tracked,segment,keyframe,relocalised,loop_closed,new_map,features,stereo_points,first_stage_matches,used_reference,inliers,inlier_ratio,"
+    o << "frame,time_s,health,tracked,segment,keyframe,relocalised,loop_closed,new_map,features,stereo_points,first_stage_matches,used_reference,used_image_alignment,inliers,inlier_ratio,"
          "sigma_position_m,features_ms,stereo_ms,tracking_ms,mapping_ms,total_ms,note\n";
     for (const auto& r : results) {
       o << r.frame << ',' << r.time.to_seconds_string() << ',' << vslam::to_string(r.health) << ',' << (r.tracked ? 1 : 0) << ','
         << segments[r.frame] << ',' << (r.keyframe ? 1 : 0) << ',' << (r.relocalised ? 1 : 0) << ',' << (r.loop_closed ? 1 : 0) << ','
         << (r.new_map ? 1 : 0) << ',' << r.features << ',' << r.stereo_points << ',' << r.motion_matches << ','
-        << (r.used_reference ? 1 : 0) << ',' << r.inliers << ',' << r.inlier_ratio << ',' << r.sigma_position_m << ','
+        << (r.used_reference ? 1 : 0) << ',' << (r.used_image_alignment ? 1 : 0) << ',' << r.inliers << ',' << r.inlier_ratio << ',' << r.sigma_position_m << ','
         << 1e3 * r.times.features_s << ',' << 1e3 * r.times.stereo_s << ',' << 1e3 * r.times.tracking_s << ','
         << 1e3 * r.times.mapping_s << ',' << 1e3 * r.times.total_s << ",\"" << r.note << "\"\n";
     }
@@ -460,6 +460,8 @@ int vslam_command(const VslamFlags& flags) {
                                  {"keyframes_culled", s.keyframes_culled},
                                  {"loops_refused_ambiguous", s.loops_ambiguous},
                                  {"map_points_fused", s.map_points_fused},
+                                 {"fusion_observations_added", s.fusion_observations},
+                                 {"image_alignment_poses", s.image_alignment_poses},
                                  {"maps_started", s.maps_started},
                                  {"maps_merged", s.maps_merged},
                                  {"merge_attempts_with_recent_keyframes", s.merge_attempts},

@@ -249,6 +249,7 @@ FrameResult VisualSlam::Impl::initialise_monocular(FrameData f, FrameResult resu
   result.note = "monocular initialisation with frame " + std::to_string(init_reference.index) + ": " + note + "; scale unobservable (median depth set to 1)";
   reference_keyframe = k1.id;
   last = std::move(f);
+  T_world_last_tracked = last.T_world_camera;
   have_last = true;
   have_velocity = false;
   relative.emplace_back(reference_keyframe, core::SE3());

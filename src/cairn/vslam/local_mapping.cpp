@@ -239,6 +239,102 @@ void VisualSlam::Impl::cull_points() {
   recent_points = std::move(keep);
 }
 
+int VisualSlam::Impl::fuse_into(int kf, const std::vector<int>& ids, double th) {
+  FrameData& f = keyframes[static_cast<std::size_t>(kf)].frame;
+  const core::SE3 T_cw = f.T_world_camera.inverse();
+  const Eigen::Vector3d center = f.T_world_camera.translation();
+  int fused = 0;
+  for (const int id : ids) {
+    if (points[static_cast<std::size_t>(id)].bad || points[static_cast<std::size_t>(id)].observations.count(kf)) continue;
+    const MapPoint& mp = points[static_cast<std::size_t>(id)];
+    double u, v, ur, z;
+    if (!project(T_cw, mp.p_world, u, v, ur, z)) continue;
+    const Eigen::Vector3d po = mp.p_world - center;
+    const double distance = po.norm();
+    if (distance < 0.8 * mp.min_distance || distance > 1.2 * mp.max_distance) continue;
+    if (po.dot(mp.normal) < 0.5 * distance) continue;
+    const int level = predict_level(mp, distance);
+    const double r = th * scales[static_cast<std::size_t>(level)];
+    int best = 256, best_j = -1;
+    for (const int j : features_in_area(f, u, v, r, level - 1, level)) {
+      const auto sj = static_cast<std::size_t>(j);
+      const double ex = u - f.undistorted[sj].x(), ey = v - f.undistorted[sj].y();
+      double e2 = ex * ex + ey * ey;
+      const bool stereo = f.u_right[sj] >= 0;
+      if (stereo) e2 += (ur - f.u_right[sj]) * (ur - f.u_right[sj]);
+      if (e2 * inv_sigma2[static_cast<std::size_t>(f.keypoints[sj].octave)] > (stereo ? options.chi2_stereo : options.chi2_mono)) continue;
+      const int d = vision::descriptor_distance(mp.descriptor.ptr(), f.descriptors.ptr(j));
+      if (d < best) {
+        best = d;
+        best_j = j;
+      }
+    }
+    if (best_j < 0 || best > options.max_descriptor_distance / 2) continue;
+    const auto sj = static_cast<std::size_t>(best_j);
+    const int held = f.map_point[sj];
+    if (held >= 0 && !points[static_cast<std::size_t>(held)].bad) {
+      if (held == id) continue;
+      // The point with more observations survives (ORB-SLAM2 MapPoint::Replace).
+      const bool keep_held = points[static_cast<std::size_t>(held)].observations.size() > mp.observations.size();
+      const int survivor = keep_held ? held : id;
+      replace_point(keep_held ? id : held, survivor);
+      update_descriptor(points[static_cast<std::size_t>(survivor)]);
+      update_normal_and_depth(points[static_cast<std::size_t>(survivor)]);
+    } else {
+      points[static_cast<std::size_t>(id)].observations[kf] = best_j;
+      f.map_point[sj] = id;
+      ++summary->fusion_observations;
+    }
+    ++fused;
+  }
+  return fused;
+}
+
+// ORB-SLAM2 LocalMapping::SearchInNeighbors: the targets are the newest keyframe's 10 most
+// covisible keyframes (20 for monocular) and each one's 5 most covisible; the newest keyframe's
+// points are fused into every target, then every target's points into the newest keyframe,
+// then the newest keyframe's points get their descriptors and normals again.
+void VisualSlam::Impl::search_in_neighbours(int current) {
+  const std::size_t first = kind == io::SequenceKind::kMonocular ? 20 : 10;
+  std::vector<int> targets;
+  std::set<int> seen{current};
+  std::vector<std::pair<int, int>> neighbours = covisible(current, 1);
+  if (neighbours.size() > first) neighbours.resize(first);
+  for (const auto& [n, kf] : neighbours) {
+    if (keyframes[static_cast<std::size_t>(kf)].bad || !seen.insert(kf).second) continue;
+    targets.push_back(kf);
+  }
+  const std::size_t first_count = targets.size();
+  for (std::size_t t = 0; t < first_count; ++t) {
+    std::vector<std::pair<int, int>> second = covisible(targets[t], 1);
+    if (second.size() > 5) second.resize(5);
+    for (const auto& [n, kf] : second) {
+      if (keyframes[static_cast<std::size_t>(kf)].bad || !seen.insert(kf).second) continue;
+      targets.push_back(kf);
+    }
+  }
+  for (const int kf : targets) {
+    std::vector<int> ids;
+    for (const int id : keyframes[static_cast<std::size_t>(current)].frame.map_point) {
+      if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) ids.push_back(id);
+    }
+    fuse_into(kf, ids, 3.0);
+  }
+  std::vector<int> candidates;
+  std::set<int> added;
+  for (const int kf : targets) {
+    for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
+      if (id >= 0 && !points[static_cast<std::size_t>(id)].bad && added.insert(id).second) candidates.push_back(id);
+    }
+  }
+  fuse_into(current, candidates, 3.0);
+  for (const int id : keyframes[static_cast<std::size_t>(current)].frame.map_point) {
+    if (id < 0 || points[static_cast<std::size_t>(id)].bad) continue;
+    update_descriptor(points[static_cast<std::size_t>(id)]);
+    update_normal_and_depth(points[static_cast<std::size_t>(id)]);
+  }
+}
+
 // ORB-SLAM2 LocalMapping::KeyFrameCulling (Mur-Artal & Tardos, T-RO 2017, Sec. V-E; ORB-SLAM
 // T-RO 2015 Sec. VI-E): "discard all the keyframes in the local map whose 90 % of the map points
 // have been seen in at least other three keyframes in the same or finer scale". As ORB-SLAM2's

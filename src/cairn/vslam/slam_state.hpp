@@ -22,6 +22,7 @@
 #include "cairn/backend/problem.hpp"
 #include "cairn/io/pose_graph.hpp"
 #include "cairn/backend/reprojection_factors.hpp"
+#include "cairn/vision/image_alignment.hpp"
 #include "cairn/vslam/visual_slam.hpp"
 
 namespace cairn::vslam {
@@ -102,6 +103,7 @@ struct FrameData {
   std::vector<char> outlier;
   std::vector<std::vector<int>> grid;
   core::SE3 T_world_camera;
+  vision::SmallBlurryImage sbi;  // PTAM's small blurry image of the frame (empty: not made)
   std::size_t size() const { return keypoints.size(); }
 };
 
@@ -171,6 +173,9 @@ struct VisualSlam::Impl {
   std::vector<KeyFrame> keyframes;
   std::vector<int> recent_points;
   FrameData last;
+  // The last tracked frame's pose: `last` keeps that frame's matches while lost, but its pose
+  // then follows the motion model's guesses.
+  core::SE3 T_world_last_tracked;
   bool have_last = false;
   bool have_velocity = false;
   core::SE3 velocity;  // T_last_current of the last step: T_current = T_last * velocity
@@ -325,6 +330,14 @@ struct VisualSlam::Impl {
   int triangulate_new_points(int current, int count);
   // ORB-SLAM2 LocalMapping::MapPointCulling (stereo: 3 observations, a stereo one counting 2).
   void cull_points();
+  // ORB-SLAM2 LocalMapping::SearchInNeighbors: duplicates between the newest keyframe and its
+  // first and second covisible neighbours fused (fuse_into both ways).
+  void search_in_neighbours(int current);
+  // ORB-SLAM2 ORBmatcher::Fuse(pKF, vpMapPoints, th = 3): each point projected into keyframe kf
+  // and matched to the best keypoint near it (predicted level or one finer, chi^2 of the
+  // reprojection within the 95 % bound, descriptor within TH_LOW); a keypoint holding another
+  // point keeps the one with more observations, a free one takes the point. Returns the fusions.
+  int fuse_into(int kf, const std::vector<int>& ids, double th);
   // ORB-SLAM2 LocalMapping::KeyFrameCulling (T-RO 2017 Sec. V-E): a keyframe covisible with the
   // newest one whose close map points (stereo/RGB-D: depth below ThDepth) are, for >= 90 % of
   // them, seen by at least 3 other keyframes at the same, a finer or the next coarser level
@@ -390,7 +403,7 @@ struct VisualSlam::Impl {
   FrameResult initialise_monocular(FrameData f, FrameResult result, FrameTimes times, Clock::time_point start, Clock::time_point tracking_start);
 
   // --- One frame (tracking.cpp) ---
-  FrameResult track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, FrameTimes times,
+  FrameResult track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, vision::SmallBlurryImage sbi, FrameTimes times,
                     Clock::time_point start);
 };
 

@@ -593,8 +593,8 @@ std::string VisualSlam::Impl::relocalisation_rival(const FrameData& f, int inlie
   return "";
 }
 
-FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, FrameTimes times,
-                  Clock::time_point start) {
+FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, vision::SmallBlurryImage sbi,
+                                    FrameTimes times, Clock::time_point start) {
   FrameResult result;
   result.frame = frames;
   result.time = time;
@@ -602,6 +602,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
   result.stereo_points = static_cast<int>(stereo.matched);
   const auto tracking_start = Clock::now();
   FrameData f = make_frame(time, left, stereo);
+  f.sbi = std::move(sbi);
   bool mapped = false;
   if (keyframes.empty() && kind == io::SequenceKind::kMonocular) return initialise_monocular(std::move(f), result, times, start, tracking_start);
   if (keyframes.empty()) {
@@ -656,10 +657,53 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
       inliers = optimize_pose(f);
       drop_outliers(f);
     }
-    if (inliers < std::max(30, matches / 2)) {
+    // Stage 1b: the prediction explains too little, or there was none (lost). PTAM's answer to
+    // fast turns and motion blur (Klein & Murray, ECCV 2008, Sec. 4): the rotation since the last
+    // tracked frame from the two small blurry images (vision/image_alignment.hpp), then the last
+    // frame's points searched around it as in stage 1. The images' "rotation" also absorbs the
+    // shift a translation makes at the scene's depth, so it is tried with no translation and,
+    // when there is a velocity, with the velocity's; the most inliers win. A local search from
+    // the last tracked pose: it cannot jump to a look-alike place, so no uniqueness test; after
+    // being lost the relocalisation's inlier count still applies (below).
+    const double motion_radius = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px
+                                 : kind == io::SequenceKind::kRgbd ? options.motion_search_radius_rgbd_px
+                                                                   : options.motion_search_radius_mono_px;
+    const bool prediction_failed = inliers < std::max(30, matches / 2);
+    if (options.image_alignment && prediction_failed && have_last && !last.sbi.empty() && !f.sbi.empty()) {
+      const bool predicted = have_velocity && !lost;
+      const Eigen::Matrix3d R_guess = predicted ? Eigen::Matrix3d(velocity.rotation_matrix().transpose()) : Eigen::Matrix3d::Identity();
+      vision::RotationAlignmentOptions ao;
+      ao.min_correlation = options.image_alignment_min_correlation;
+      const vision::RotationAlignment a = vision::align_rotation(last.sbi, f.sbi, camera, R_guess, ao);
+      if (a.ok) {
+        std::vector<Eigen::Vector3d> shifts{Eigen::Vector3d::Zero()};
+        if (predicted) shifts.push_back(velocity.translation());
+        for (const Eigen::Vector3d& t_last_current : shifts) {
+          FrameData trial = f;
+          std::fill(trial.map_point.begin(), trial.map_point.end(), -1);
+          std::fill(trial.outlier.begin(), trial.outlier.end(), 0);
+          trial.T_world_camera = T_world_last_tracked * core::SE3(core::SO3::from_matrix(a.R_current_previous.transpose()), t_last_current);
+          int trial_matches = search_from_last(trial, last, motion_radius);
+          if (trial_matches < options.min_motion_matches) {
+            std::fill(trial.map_point.begin(), trial.map_point.end(), -1);
+            trial_matches = search_from_last(trial, last, 2.0 * motion_radius);
+          }
+          if (trial_matches < options.min_motion_matches) continue;
+          const int trial_inliers = optimize_pose(trial);
+          drop_outliers(trial);
+          if (trial_inliers > inliers) {
+            f = std::move(trial);
+            inliers = trial_inliers;
+            matches = trial_matches;
+            result.used_image_alignment = true;
+          }
+        }
+      }
+    }
+    if (prediction_failed) {
       // The prediction explains too little (fast motion, or no prediction): the reference
       // keyframe's points by descriptor, a PnP RANSAC pose, then the same optimisation; the
-      // better of the two is kept.
+      // best of the three (prediction, images' rotation, reference keyframe) is kept.
       // When lost, the most recent keyframes are tried too (a bounded stand-in for ORB-SLAM2's
       // bag-of-words relocalisation over the whole map).
       std::vector<int> candidates{reference_keyframe >= 0 ? reference_keyframe : static_cast<int>(keyframes.size()) - 1};
@@ -698,6 +742,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
           inliers = alternative_inliers;
           matches = alternative_matches;
           result.used_reference = true;
+          result.used_image_alignment = false;
           accepted_keyframe = kf;
         }
         if (inliers >= 30) break;
@@ -736,6 +781,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
         if (use_nodes) relocalisation_nodes = std::move(frame_nodes);
       }
     }
+    if (result.used_image_alignment) ++summary->image_alignment_poses;
     const bool relocalising = was_lost || jumped;
     // Neither the prediction nor the reference keyframe explained the frame (fewer than the 30
     // first-stage inliers the fallback stops at): the local map then searches around a pose that
@@ -848,13 +894,16 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
         } else if (options.triangulation_keyframes > 0) {
           triangulate_new_points(static_cast<int>(keyframes.size()) - 1, options.triangulation_keyframes);
         }
+        if (options.fuse_points) search_in_neighbours(static_cast<int>(keyframes.size()) - 1);
         if (options.local_ba) local_bundle_adjustment();
         if (options.keyframe_culling && kind != io::SequenceKind::kMonocular) cull_keyframes();
         detect_and_close_loop(result);
         if (!result.loop_closed) merge_with_recent(result);
         // The frame is the keyframe: it takes the pose the bundle adjustment and any loop
-        // correction gave the keyframe (its trajectory entry is relative to it).
+        // correction gave the keyframe (its trajectory entry is relative to it), and its points
+        // as fusion, culling and loop fusion left them.
         f.T_world_camera = keyframes.back().frame.T_world_camera;
+        f.map_point = keyframes.back().frame.map_point;
         times.mapping_s = seconds_since(mapping_start);
         result.keyframe = true;
       }
@@ -873,6 +922,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
     // Tracking may have relocalised into another segment, or a merge may have renamed it.
     segment = segment_of(reference_keyframe);
     last = std::move(f);
+    T_world_last_tracked = last.T_world_camera;
     have_last = true;
     const KeyFrame& ref = keyframes[static_cast<std::size_t>(reference_keyframe)];
     relative.emplace_back(reference_keyframe, ref.frame.T_world_camera.inverse() * last.T_world_camera);

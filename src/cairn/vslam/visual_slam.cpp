@@ -70,6 +70,11 @@ void count(VisualSlamSummary& s, const FrameResult& r) {
 void check_gray(const cv::Mat& image, const char* what) {
   if (image.empty() || image.type() != CV_8UC1) throw std::invalid_argument(std::string(what) + " must be a non-empty 8-bit grey image");
 }
+// The frame's small blurry image when the tracker may use it (and the image is large enough).
+vision::SmallBlurryImage small_blurry_image(const cv::Mat& gray, const VisualSlamOptions& options) {
+  if (!options.image_alignment || gray.cols < 64 || gray.rows < 64) return {};
+  return vision::make_small_blurry_image(gray);
+}
 }  // namespace
 
 FrameResult VisualSlam::add_stereo(core::Timestamp time, const cv::Mat& left, const cv::Mat& right) {
@@ -83,11 +88,12 @@ FrameResult VisualSlam::add_stereo(core::Timestamp time, const cv::Mat& left, co
   FrameTimes times;
   vision::Features fl, fr;
   tbb::parallel_invoke([&] { fl = impl_->orb.extract(left); }, [&] { fr = impl_->orb.extract(right); });
+  vision::SmallBlurryImage sbi = small_blurry_image(left, options_);
   times.features_s = seconds_since(start);
   const auto stereo_start = Clock::now();
   const vision::StereoMatches stereo = vision::match_stereo(fl, fr, impl_->camera, options_.stereo);
   times.stereo_s = seconds_since(stereo_start);
-  FrameResult r = impl_->track(time, fl, stereo, times, start);
+  FrameResult r = impl_->track(time, fl, stereo, std::move(sbi), times, start);
   count(summary_, r);
   return r;
 }
@@ -101,12 +107,13 @@ FrameResult VisualSlam::add_rgbd(core::Timestamp time, const cv::Mat& gray, cons
   const auto start = Clock::now();
   FrameTimes times;
   vision::Features f = impl_->orb.extract(gray);
+  vision::SmallBlurryImage sbi = small_blurry_image(gray, options_);
   times.features_s = seconds_since(start);
   const auto stereo_start = Clock::now();
   const std::vector<Eigen::Vector2d> undistorted = vision::undistort_keypoints(f.keypoints, impl_->camera);
   const vision::StereoMatches stereo = vision::depth_from_rgbd(f.keypoints, undistorted, depth, impl_->camera);
   times.stereo_s = seconds_since(stereo_start);
-  FrameResult r = impl_->track(time, f, stereo, times, start);
+  FrameResult r = impl_->track(time, f, stereo, std::move(sbi), times, start);
   count(summary_, r);
   return r;
 }
@@ -119,11 +126,12 @@ FrameResult VisualSlam::add_monocular(core::Timestamp time, const cv::Mat& gray)
   const auto start = Clock::now();
   FrameTimes times;
   vision::Features f = (impl_->keyframes.empty() ? impl_->orb_initialisation : impl_->orb).extract(gray);
+  vision::SmallBlurryImage sbi = small_blurry_image(gray, options_);
   times.features_s = seconds_since(start);
   vision::StereoMatches none;
   none.u_right.assign(f.keypoints.size(), -1.0);
   none.depth_m.assign(f.keypoints.size(), -1.0);
-  FrameResult r = impl_->track(time, f, none, times, start);
+  FrameResult r = impl_->track(time, f, none, std::move(sbi), times, start);
   count(summary_, r);
   return r;
 }

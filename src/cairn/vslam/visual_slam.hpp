@@ -81,6 +81,11 @@ struct VisualSlamOptions {
   /// seen by >= 3 other keyframes at the same or a finer level (ORB-SLAM2: up to one level
   /// coarser). Stereo and RGB-D only. Default and measurements: docs/vslam.md.
   bool keyframe_culling = true;
+  /// Fuse duplicate points after each new keyframe (ORB-SLAM2 LocalMapping::SearchInNeighbors
+  /// with ORBmatcher::Fuse): the newest keyframe's points projected into its covisible keyframes
+  /// and theirs into it; a keypoint that already holds another point merges the two. Without it
+  /// a physical point seen from several keyframes is often several map points, each seen once.
+  bool fuse_points = true;
   /// The fraction of a keyframe's close points that must be redundant (ORB-SLAM2: 0.9), in (0, 1].
   double keyframe_culling_redundancy = 0.9;
   /// Place recognition for loop closure and relocalisation (DBoW2-style, vision/vocabulary.hpp);
@@ -94,6 +99,13 @@ struct VisualSlamOptions {
   /// 0.0197 m but the desk revisit no longer verified (15 PnP inliers < 20); off, 60 frames at
   /// 0.0140 m with the revisit verified and merged.
   bool bow_restricted_matching = false;
+  /// When the motion model's prediction explains too little (or tracking was lost), predict the
+  /// rotation from the whole image before falling back to descriptor matching: PTAM's small
+  /// blurry images (Klein & Murray, ECCV 2008, Sec. 4; vision/image_alignment.hpp), aligned
+  /// with the last tracked frame's, then the last frame's points are searched around that pose.
+  bool image_alignment = true;
+  /// ECC correlation below which the images' rotation is not used.
+  double image_alignment_min_correlation = 0.7;
   int loop_min_keyframes_apart = 10;   ///< no loop with the last 10 keyframes, none within 10 of the last loop (ORB-SLAM2)
   int loop_consistency = 3;            ///< consecutive keyframes whose candidates agree (ORB-SLAM2 mnCovisibilityConsistencyTh)
   int loop_min_pnp_inliers = 20;       ///< descriptor matches to, and PnP RANSAC inliers of, the candidate's points (ORB-SLAM2 ComputeSim3: 20 and 20)
@@ -146,6 +158,7 @@ struct FrameResult {
   int stereo_points = 0;       ///< keypoints with a stereo match or depth
   int motion_matches = 0;      ///< matches of the first stage (prediction or reference)
   bool used_reference = false; ///< the first stage fell back to the reference keyframe
+  bool used_image_alignment = false; ///< the first stage's pose came from the images' rotation (PTAM SBI)
   int inliers = 0;             ///< map-point matches after the local map's pose optimisation
   double inlier_ratio = 0.0;   ///< inliers / matches given to that optimisation
   bool keyframe = false;
@@ -181,12 +194,15 @@ struct VisualSlamSummary {
   std::size_t frames = 0, frames_ok = 0, frames_degraded = 0, frames_lost = 0;
   std::size_t keyframes = 0, map_points = 0, map_points_culled = 0;
   std::size_t local_bas = 0, reference_fallbacks = 0;
+  /// Frames whose first-stage pose came from the images' rotation (VisualSlamOptions::image_alignment).
+  std::size_t image_alignment_poses = 0;
   double local_ba_s = 0.0;
   std::size_t loop_queries = 0, loops_accepted = 0, relocalisations = 0, global_bas = 0;
   /// Relocalisations refused because another place verified as well (the frame stayed lost),
   /// and loops / merges refused for the same reason (tracking.cpp relocalisation_rival, loop_closing.cpp loop_rival).
   std::size_t relocalisations_ambiguous = 0, loops_ambiguous = 0;
-  std::size_t map_points_fused = 0;
+  std::size_t map_points_fused = 0;  ///< duplicates merged (loop closure and SearchInNeighbors)
+  std::size_t fusion_observations = 0;  ///< observations added to existing points by SearchInNeighbors
   std::size_t maps_started = 0, maps_merged = 0;  ///< segments beyond the first; merges of two
   std::size_t merge_attempts = 0;  ///< verifications of a new segment against the keyframes tracked last before it
   /// Keyframes culled as redundant (VisualSlamOptions::keyframe_culling); `keyframes` counts every
