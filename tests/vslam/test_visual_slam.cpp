@@ -227,11 +227,13 @@ void run_tum_place_recognition(bool bow_restricted) {
               "map segments (%zu started, %zu merged)\n",
               tracked.size(), ape.statistics.rmse, ape.statistics.max, in_other_maps, s.maps_started - s.maps_merged, s.maps_started,
               s.maps_merged);
-  // Coverage: most frames are tracked in some map; how many end in the main one depends on
-  // which merges the verification accepts (measured 60 of 149, docs/vslam.md), so only a third
-  // is asserted.
+  // Coverage and the accuracy target (ATE <= 0.025 m at every 4th frame). Measured
+  // 2026-11-25 (docs/vslam.md): 147 of 149 frames in the main map at 0.0165 m (brute force) and
+  // 0.0169 m (vocabulary nodes); before the image-alignment start and the fusion of duplicates
+  // the main map held 60 frames, so these bounds are what those two changes brought.
   EXPECT_GT(tracked.size() + in_other_maps, seq.frames.size() * 3 / 4);
-  EXPECT_GT(tracked.size(), seq.frames.size() / 3);
+  EXPECT_GE(tracked.size(), seq.frames.size() * 9 / 10);
+  EXPECT_LE(ape.statistics.rmse, 0.025);
   EXPECT_LT(ape.statistics.max, 0.5) << "a tracked or relocalised pose far from the truth";
 }
 

@@ -95,9 +95,10 @@ struct VisualSlamOptions {
   bool loop_closure = true;
   /// Match relocalisation, fallback and loop candidates only within vocabulary nodes (ORB-SLAM2's
   /// SearchByBoW, ratio 0.75) instead of by brute force (ratio 0.7). Off by default, measured on
-  /// TUM fr1/desk every 4th frame (2026-11-25, docs/vslam.md): on, 82 frames in the main map at
-  /// 0.0197 m but the desk revisit no longer verified (15 PnP inliers < 20); off, 60 frames at
-  /// 0.0140 m with the revisit verified and merged.
+  /// TUM fr1/desk every 4th frame (2026-11-25, docs/vslam.md): before the image-alignment start,
+  /// on gave 82 frames in the main map at 0.0197 m but the desk revisit no longer verified (15
+  /// PnP inliers < 20), off 60 frames at 0.0140 m with the revisit merged; since it, both give
+  /// 147 frames (0.0169 and 0.0165 m).
   bool bow_restricted_matching = false;
   /// When the motion model's prediction explains too little (or tracking was lost), predict the
   /// rotation from the whole image before falling back to descriptor matching: PTAM's small
