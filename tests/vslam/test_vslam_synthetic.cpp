@@ -789,3 +789,309 @@ TEST(VisualSlamSynthetic, KeyframeCullingThinsARoomSeenAgainAndAgain) {
 
 }  // namespace
 }  // namespace cairn::vslam
+
+// --- Monocular loop route (scratch, for Sim(3) loop closure) ------------------------------------
+
+namespace cairn::vslam {
+namespace {
+
+// A 16 m x 16 m room (x, z in [-8, 8], floor 1.3 m below the camera, ceiling 1.5 m above) with a
+// textured pillar (1.2 m square, floor to ceiling) at its centre and two low crates beside it;
+// every face has its own seed (no aliasing).
+SyntheticWorld monocular_loop_world() {
+  SyntheticWorld world;
+  const Eigen::Vector3d room_lower(-8.0, kRoomCeilingY, -8.0), room_upper(8.0, kFloorY, 8.0);
+  world.add_room(room_lower, room_upper, room_textures(400), room_lower);
+  // A box [lower, upper] seen from outside: four sides and its top (when below the ceiling).
+  std::uint64_t seed = 420;
+  auto box = [&](const Eigen::Vector3d& lower, const Eigen::Vector3d& upper) {
+    for (int axis : {0, 2}) {
+      for (double side : {lower[axis], upper[axis]}) {
+        Eigen::Vector3d l = lower, u = upper;
+        l[axis] = u[axis] = side;
+        world.add_wall(axis, l, u, seeded(++seed), lower);
+      }
+    }
+    if (lower.y() > kRoomCeilingY) {
+      world.add_wall(1, lower, Eigen::Vector3d(upper.x(), lower.y(), upper.z()), seeded(++seed), lower);
+    }
+  };
+  box(Eigen::Vector3d(-0.6, kRoomCeilingY, -0.6), Eigen::Vector3d(0.6, kFloorY, 0.6));  // the pillar
+  box(Eigen::Vector3d(0.8, 0.5, 0.5), Eigen::Vector3d(1.5, kFloorY, 1.2));             // crates, tops 0.5 and 0.2 m below the camera
+  box(Eigen::Vector3d(-1.4, 0.2, -1.3), Eigen::Vector3d(-0.7, kFloorY, -0.8));
+  return world;
+}
+
+// A closed loop of four straight legs joined by right turns of radius `corner_m` (a rounded
+// rectangle whose legs are `leg_x_m` and `leg_z_m` long, corners excluded), starting half way
+// along a leg at `start` heading `yaw0_rad`; the camera looks along the direction of travel plus
+// `yaw_offset_rad`. Poses every step_m of arc length from 0 to `length_m` (past one circuit it
+// goes round again).
+std::vector<core::SE3> rounded_loop(const Eigen::Vector3d& start, double yaw0_rad, double leg_x_m, double leg_z_m, double corner_m,
+                                    double step_m, double length_m, double yaw_offset_rad = 0.0) {
+  struct Piece {
+    double length;
+    bool arc;
+  };
+  const double quarter = 0.5 * kPi * corner_m;
+  const std::vector<Piece> pieces{{0.5 * leg_x_m, false}, {quarter, true}, {leg_z_m, false}, {quarter, true},
+                                  {leg_x_m, false},       {quarter, true}, {leg_z_m, false}, {quarter, true},
+                                  {0.5 * leg_x_m, false}};
+  double circuit = 0.0;
+  for (const Piece& piece : pieces) circuit += piece.length;
+  auto pose_at = [&](double s) {
+    s = std::fmod(s, circuit);
+    Eigen::Vector3d p = start;
+    double yaw = yaw0_rad;
+    for (const Piece& piece : pieces) {
+      const double l = std::min(s, piece.length);
+      const Eigen::Vector3d forward(std::sin(yaw), 0.0, std::cos(yaw)), right(std::cos(yaw), 0.0, -std::sin(yaw));
+      if (!piece.arc) {
+        p += l * forward;
+      } else {
+        const Eigen::Vector3d c = p + corner_m * right;
+        const double turned = l / corner_m;
+        p = c - corner_m * Eigen::Vector3d(std::cos(yaw + turned), 0.0, -std::sin(yaw + turned));
+        yaw += turned;
+      }
+      s -= l;
+      if (s <= 0.0) break;
+    }
+    return test::camera_pose(p, yaw + yaw_offset_rad);
+  };
+  const int steps = std::max(1, static_cast<int>(std::lround(length_m / step_m)));
+  std::vector<core::SE3> poses;
+  for (int k = 0; k <= steps; ++k) poses.push_back(pose_at(static_cast<double>(k) / static_cast<double>(steps) * length_m));
+  return poses;
+}
+
+// Sum of the distances between consecutive positions of frames [from, to).
+double path_length(const std::vector<Eigen::Vector3d>& p, std::size_t from, std::size_t to) {
+  double s = 0.0;
+  for (std::size_t k = from + 1; k < to; ++k) s += (p[k] - p[k - 1]).norm();
+  return s;
+}
+
+// What drifted by a frame: the estimate (frames from the initialisation's reference frame on)
+// aligned to the truth by the Sim(3) (Umeyama, with scale) of the first quarter of the circuit.
+struct MonocularDrift {
+  double scale_first_quarter = 0.0;  ///< metres per map unit over the first quarter
+  double error_at_end = 0.0, mean_error_last10 = 0.0, max_error = 0.0;
+  double ratio_early = 0.0, ratio_last10 = 0.0;  ///< estimated / true distance travelled
+  double scale_drift() const { return ratio_last10 / ratio_early; }
+};
+
+// `reference`: the initialisation's reference frame (the map's origin); `init`: the first tracked
+// frame; `quarter_end`: the first quarter ends there; `end`: the drift is measured at frames up to it.
+MonocularDrift monocular_drift(const char* name, const std::vector<core::SE3>& truth, const std::vector<core::SE3>& estimate,
+                               std::size_t reference, std::size_t init, std::size_t quarter_end, std::size_t end) {
+  std::vector<Eigen::Vector3d> est, gt;
+  for (std::size_t k = reference; k <= end; ++k) {
+    est.push_back(estimate[k].translation());
+    gt.push_back(truth[k].translation());
+  }
+  const std::size_t n = est.size(), quarter = quarter_end - reference;
+  Eigen::Matrix3Xd a(3, static_cast<Eigen::Index>(quarter)), b(3, static_cast<Eigen::Index>(quarter));
+  for (std::size_t k = 0; k < quarter; ++k) {
+    a.col(static_cast<Eigen::Index>(k)) = est[k];
+    b.col(static_cast<Eigen::Index>(k)) = gt[k];
+  }
+  const Eigen::Matrix4d sim3 = Eigen::umeyama(a, b, true);
+  MonocularDrift d;
+  d.scale_first_quarter = sim3.block<3, 1>(0, 0).norm();
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double e = (sim3.block<3, 3>(0, 0) * est[k] + sim3.block<3, 1>(0, 3) - gt[k]).norm();
+    errors.push_back(e);
+    d.max_error = std::max(d.max_error, e);
+    d.error_at_end = e;
+  }
+  for (std::size_t k = n - 10; k < n; ++k) d.mean_error_last10 += errors[k] / 10.0;
+  const std::size_t early = init - reference + 10;
+  d.ratio_early = path_length(est, early, early + 11) / path_length(gt, early, early + 11);
+  d.ratio_last10 = path_length(est, n - 11, n) / path_length(gt, n - 11, n);
+  std::printf("%s: Sim(3) of frames %zu-%zu: %.4f m per map unit; at frame %zu: error %.3f m, mean over its last 10 frames %.3f m, max "
+              "on the way %.3f m; distance estimated / true, frames %zu-%zu %.4f, last 10 %.4f: scale drift %.3f\n",
+              name, reference, quarter_end - 1, d.scale_first_quarter, end, d.error_at_end, d.mean_error_last10, d.max_error, init + 10,
+              init + 20, d.ratio_early, d.ratio_last10, d.scale_drift());
+  std::printf("%s: scale along the way (distance estimated / true per 20 frames, relative to frames %zu-%zu):", name, init + 10, init + 20);
+  for (std::size_t k = init - reference; k + 20 < n; k += 20) {
+    std::printf(" %zu: %.3f", k + reference, path_length(est, k, k + 21) / path_length(gt, k, k + 21) / d.ratio_early);
+  }
+  std::printf("\n");
+  return d;
+}
+
+// ATE after a Sim(3) alignment of the whole of frames [from, to] (evo_ape --align --correct_scale):
+// RMSE and max of the position error.
+std::pair<double, double> ate_sim3(const std::vector<core::SE3>& truth, const std::vector<core::SE3>& estimate, std::size_t from,
+                                   std::size_t to) {
+  const auto n = static_cast<Eigen::Index>(to - from + 1);
+  Eigen::Matrix3Xd a(3, n), b(3, n);
+  for (std::size_t k = from; k <= to; ++k) {
+    a.col(static_cast<Eigen::Index>(k - from)) = estimate[k].translation();
+    b.col(static_cast<Eigen::Index>(k - from)) = truth[k].translation();
+  }
+  const Eigen::Matrix4d S = Eigen::umeyama(a, b, true);
+  double sum = 0.0, worst = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double e = (S.topLeftCorner<3, 3>() * a.col(k) + S.topRightCorner<3, 1>() - b.col(k)).norm();
+    sum += e * e;
+    worst = std::max(worst, e);
+  }
+  return {std::sqrt(sum / static_cast<double>(n)), worst};
+}
+
+// Monocular SLAM round a closed loop with visible drift (scale drift above all), for Sim(3) loop
+// closure. The route: a rounded square in the middle of the room (centre line 7 m a side: legs
+// of 4 m joined by right turns of radius 1.5 m, 25.4 m round), 0.15 m per frame, started half way
+// along a leg and continued 1.5 m past the start; the camera looks 60 degrees left of the
+// direction of travel, outward at the walls 4.5-11 m away (a monocular camera cannot turn on the
+// spot; here it always translates, partly sideways, and turns 5.7 degrees per frame in the
+// corners). Back at the start (frame 169) it stands where it started, looking the same way.
+// Tried first (2026-11-25, loops off): looking inward at the pillar (orbit, radius 2.5 m) or along
+// a 2 m ring corridor round a 5 m block: every frame tracked, drift at the return only 0.002 and
+// 0.16 m, scale drift 1.00 and 1.03; looking outward from a 2.5 m orbit: 0.13 m, 1.09; along the
+// ring looking at its outer wall 1 m away, or 45 degrees left in it: lost for 107 and 147 frames.
+// This route looking 90 degrees left: 0.13 m, 1.02; 75 left: 0.18 m, 1.03; 45 left: every frame
+// "ok" but the scale collapses (distance per frame 0.01 of the start's by the end, error 8 m).
+// The images are rendered once and run twice: with loop closure (what is printed frame by frame,
+// and every loop candidate) and without (the drift at the return that a loop has to remove).
+TEST(VisualSlamSynthetic, MonocularLoopIsClosedOverSim3) {
+  const SyntheticWorld world = monocular_loop_world();
+  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner, step = 0.15, extra = 1.5;
+  const double circuit_m = 4.0 * leg + 2.0 * kPi * corner;
+  // Half way along the leg at z = -mid heading -x, the room's centre to the right.
+  const std::vector<core::SE3> truth =
+      rounded_loop(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, step, circuit_m + extra, -60.0 * kDeg);
+  const std::size_t return_frame =
+      static_cast<std::size_t>(std::lround(circuit_m / (circuit_m + extra) * static_cast<double>(truth.size() - 1)));
+  // Within a centimetre of the start (frames fall every step_m of the whole route, not of the circuit).
+  ASSERT_LT((truth[return_frame].translation() - truth.front().translation()).norm(), 0.02);
+  const StereoCamera camera;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<cv::Mat> images;
+  for (const core::SE3& pose : truth) images.push_back(world.render(pose, camera));
+  const double render_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  auto run_monocular = [&](bool loop_closure, bool verbose) {
+    VisualSlamOptions options;
+    options.vocabulary = training_vocabulary();
+    options.loop_closure = loop_closure;
+    SlamRun run;
+    run.truth = truth;
+    run.render_s = render_s;
+    run.slam = std::make_unique<VisualSlam>(camera.calibration(), io::SequenceKind::kMonocular, options);
+    for (std::size_t k = 0; k < truth.size(); ++k) {
+      const auto t1 = std::chrono::steady_clock::now();
+      FrameResult r = run.slam->add_monocular(core::Timestamp::from_seconds(0.1 * static_cast<double>(k)), images[k]);
+      run.slam_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+      if (verbose) {
+        std::printf("  frame %3zu (yaw %6.1f deg): %-8s kf %d loop %d features %4d motion matches %4d%s%s inliers %4d %s\n", k,
+                    yaw_of(truth[k]) / kDeg, health_name(r.health), r.keyframe ? 1 : 0, r.loop_closed ? 1 : 0, r.features,
+                    r.motion_matches, r.used_reference ? " (reference)" : "", r.used_image_alignment ? " (image alignment)" : "", r.inliers,
+                    r.note.c_str());
+      }
+      r.keypoints.clear();
+      r.keypoint_states.clear();
+      run.results.push_back(std::move(r));
+    }
+    return run;
+  };
+
+  const SlamRun run = run_monocular(true, true);
+  print_summary("monocular loop route", run);
+  const VisualSlamSummary& s = run.slam->summary();
+  for (const LoopRecord& loop : s.loops) {
+    std::printf("  loop candidate frame %zu -> %zu: score %.3f, %d Sim(3) RANSAC inliers, %d matches, %s (%s), correction %.3f %.2f deg (map "
+                "units), scale %.4f; true distance %.2f m\n",
+                loop.frame, loop.candidate_frame, loop.score, loop.pnp_inliers, loop.matches, loop.decision.c_str(), loop.reason.c_str(),
+                loop.correction_m, loop.correction_deg, loop.scale, (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm());
+  }
+
+  // The first tracked frame initialised the map with an earlier reference frame (the map's origin).
+  auto initialisation = [&](const SlamRun& r, std::size_t& reference) {
+    std::size_t init = 0;
+    while (init < truth.size() && !r.results[init].tracked) ++init;
+    reference = init;
+    if (init < truth.size()) {
+      const std::string& note = r.results[init].note;
+      const std::size_t at = note.find("with frame ");
+      if (at != std::string::npos) reference = static_cast<std::size_t>(std::stoul(note.substr(at + 11)));
+    }
+    return init;
+  };
+  std::size_t reference = 0;
+  const std::size_t init = initialisation(run, reference);
+  ASSERT_LT(init, 15u) << "no monocular initialisation";
+  std::size_t tracked = 0, ok = 0, longest_lost = 0, lost_run = 0, first_loop = truth.size(), weakest = init;
+  std::vector<core::SE3> online;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    const FrameResult& r = run.results[k];
+    online.push_back(r.T_world_camera);
+    if (r.loop_closed && first_loop == truth.size()) first_loop = k;
+    if (k < init) continue;
+    tracked += r.tracked ? 1 : 0;
+    ok += r.health == TrackingHealth::kOk ? 1 : 0;
+    lost_run = r.tracked ? 0 : lost_run + 1;
+    longest_lost = std::max(longest_lost, lost_run);
+    if (k > init && r.inliers < run.results[weakest].inliers) weakest = k;
+  }
+  const std::size_t after_init = truth.size() - init;
+  const std::size_t quarter_end = reference + (return_frame - reference) / 4;
+  // Loop closure on: as reported up to the frame before the first loop closure (or the return),
+  // and the final trajectory (corrected by the loops) at the end.
+  monocular_drift("loops on, as reported before the first loop", truth, online, reference, init, quarter_end,
+                  std::min(return_frame, first_loop - 1));
+  const MonocularDrift corrected =
+      monocular_drift("loops on, final trajectory", truth, run.slam->trajectory(), reference, init, quarter_end, truth.size() - 1);
+  // The same images without loop closure: the drift at the return that a loop has to remove.
+  const SlamRun open = run_monocular(false, false);
+  std::size_t open_reference = 0;
+  const std::size_t open_init = initialisation(open, open_reference);
+  ASSERT_EQ(open_init, init);
+  std::vector<core::SE3> open_online;
+  for (const FrameResult& r : open.results) open_online.push_back(r.T_world_camera);
+  const MonocularDrift drift =
+      monocular_drift("loops off, as reported", truth, open_online, open_reference, open_init, quarter_end, return_frame);
+  monocular_drift("loops off, final trajectory", truth, open.slam->trajectory(), open_reference, open_init, quarter_end, return_frame);
+  const auto [ate_loops, ate_loops_max] = ate_sim3(truth, run.slam->trajectory(), init, truth.size() - 1);
+  const auto [ate_open, ate_open_max] = ate_sim3(truth, open.slam->trajectory(), init, truth.size() - 1);
+  std::printf("monocular loop route, ATE after a Sim(3) alignment of every frame from %zu: with loop closure %.3f m RMSE (max %.3f m), "
+              "without %.3f m (max %.3f m)\n",
+              init, ate_loops, ate_loops_max, ate_open, ate_open_max);
+  std::printf("monocular loop route: %zu frames, initialised at frame %zu (reference %zu); after it %zu / %zu tracked, %zu ok (longest "
+              "lost run %zu; fewest inliers %d at frame %zu); %zu ok, %zu degraded, %zu lost in all; %zu keyframes; %zu loop queries, %zu "
+              "candidates, %zu accepted (first loop closed at frame %zu); circuit %.2f m; without loops at the return (frame %zu): "
+              "error %.3f m, scale drift %.3f; with loops, final trajectory: error at the end %.3f m, max %.3f m; render %.1f s, SLAM "
+              "%.1f s + %.1f s\n",
+              truth.size(), init, reference, tracked, after_init, ok, longest_lost, run.results[weakest].inliers, weakest, s.frames_ok,
+              s.frames_degraded, s.frames_lost, s.keyframes, s.loop_queries, s.loops.size(), s.loops_accepted, first_loop, circuit_m,
+              return_frame, drift.error_at_end, drift.scale_drift(), corrected.error_at_end, corrected.max_error, render_s, run.slam_s,
+              open.slam_s);
+  // Measured 2026-11-25 (docs/vslam.md): every frame after the first ok; without loop closure
+  // 0.42 m off at the return with a scale drift of 1.075 and a Sim(3) ATE of 0.122 m; with it the
+  // loop 158 -> 1 is verified over Sim(3) (31 RANSAC inliers, 325 matches, scale 1.030), the end
+  // is 0.005 m off, the scale drift 1.005 and the ATE 0.062 m. What this does not show: that the
+  // scale of the correction matters. Forced to 1 (tried once), the loop gave 0.006 m, 1.004 and
+  // 0.063 m: at the loop the two maps' units differ by 3 % only, and the essential graph, the
+  // fusion and the global BA after it fix the rest.
+  EXPECT_GE(10 * tracked, 9 * after_init);
+  EXPECT_GT(drift.error_at_end, 0.2) << "the route must drift for the loop to have something to correct";
+  int true_loops = 0;
+  for (const LoopRecord& loop : s.loops) {
+    if (loop.decision != "accepted") continue;
+    // The views' true distance: keyframes looking outward at walls 4.5-11 m away see the same
+    // place from up to about 2 m apart.
+    const double apart = (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm();
+    EXPECT_LT(apart, 2.5) << "a loop between frames " << loop.frame << " and " << loop.candidate_frame;
+    true_loops += apart < 2.5 ? 1 : 0;
+  }
+  EXPECT_GE(true_loops, 1);
+  EXPECT_LT(corrected.error_at_end, 0.1);
+  EXPECT_LT(std::abs(corrected.scale_drift() - 1.0), 0.03);
+  EXPECT_LT(ate_loops, 0.75 * ate_open);
+}
+
+}  // namespace
+}  // namespace cairn::vslam

@@ -483,10 +483,10 @@ int vslam_command(const VslamFlags& flags) {
                                                          {"decision", l.decision},
                                                          {"reason", l.reason},
                                                          {"correction_m", l.correction_m},
-                                                         {"correction_deg", l.correction_deg}});
+                                                         {"correction_deg", l.correction_deg},
+                                                         {"scale", l.scale}});
   }
-  report["not_implemented"] = {"monocular loop closure (Sim(3)) and new map segments", "Sim(3) loops", "fusion of duplicate points outside loop closures (without it keyframe culling at ORB-SLAM2's 90 % finds nothing to cull)",
-                               "local mapping in its own thread"};
+  report["not_implemented"] = {"new map segments for monocular runs", "local mapping in its own thread"};
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
   out.commit();
 

@@ -3,6 +3,13 @@
 
 #include "cairn/vslam/slam_state.hpp"
 
+#include <Eigen/Geometry>
+#include <array>
+#include <limits>
+#include <random>
+
+#include "cairn/backend/sim3_factors.hpp"
+
 #include <cstdio>
 #include <optional>
 
@@ -33,29 +40,10 @@ void VisualSlam::Impl::replace_point(int old_id, int new_id) {
   ++summary->map_points_fused;
 }
 
-// Geometric verification of a loop candidate (stereo / RGB-D: SE(3), ORB-SLAM2 ComputeSim3
-// with the scale fixed): the keyframe's keypoints matched to the candidate's points, a PnP
-// RANSAC pose, the motion-only BA, then the points of the candidate and its covisible
-// keyframes projected at that pose and the BA again. `probe` gets the keyframe at the pose
-// the candidate's part of the map gives it, with its matches to that part.
-bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard) {
-  probe = keyframes[static_cast<std::size_t>(current)].frame;
-  std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
-  std::fill(probe.outlier.begin(), probe.outlier.end(), 0);
-  const KeyFrame& query = keyframes[static_cast<std::size_t>(current)];
-  const int matches = match_to_keyframe(probe, query.nodes.size() == probe.size() ? &query.nodes : nullptr, keyframes[static_cast<std::size_t>(candidate)]);
-  if (matches < options.loop_min_pnp_inliers) {
-    record.reason = std::to_string(matches) + " descriptor matches to the candidate's points (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
-    return false;
-  }
-  record.pnp_inliers = pnp_ransac(probe);
-  if (record.pnp_inliers < options.loop_min_pnp_inliers) {
-    record.reason = "PnP RANSAC: " + std::to_string(record.pnp_inliers) + " inliers of " + std::to_string(matches) + " (< " +
-                    std::to_string(options.loop_min_pnp_inliers) + ")";
-    return false;
-  }
-  optimize_pose(probe);
-  drop_outliers(probe);
+// The points of the candidate and its 10 most covisible keyframes projected into the probe at
+// its pose (3 px x 2.5 or 4 x level scale), then the motion-only BA: the loop's inlier matches,
+// at least loop_min_matches (ORB-SLAM2 ComputeSim3: 40) for the loop to stand.
+bool VisualSlam::Impl::match_candidate_neighbourhood(int candidate, FrameData& probe, LoopRecord& record) {
   std::vector<int> ids;
   std::vector<std::pair<int, int>> group = covisible(candidate, options.min_covisible_points);
   if (group.size() > 10) group.resize(10);
@@ -73,6 +61,34 @@ bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& recor
                     " inlier matches (< " + std::to_string(options.loop_min_matches) + ")";
     return false;
   }
+  return true;
+}
+
+// Geometric verification of a loop candidate (stereo / RGB-D: SE(3), ORB-SLAM2 ComputeSim3
+// with the scale fixed): the keyframe's keypoints matched to the candidate's points, a PnP
+// RANSAC pose, the motion-only BA, then the points of the candidate and its covisible
+// keyframes projected at that pose and the BA again. `probe` gets the keyframe at the pose
+// the candidate's part of the map gives it, with its matches to that part.
+bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard) {
+  if (kind == io::SequenceKind::kMonocular) return verify_loop_sim3(current, candidate, record, probe, drift_guard);
+  probe = keyframes[static_cast<std::size_t>(current)].frame;
+  std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
+  std::fill(probe.outlier.begin(), probe.outlier.end(), 0);
+  const KeyFrame& query = keyframes[static_cast<std::size_t>(current)];
+  const int matches = match_to_keyframe(probe, query.nodes.size() == probe.size() ? &query.nodes : nullptr, keyframes[static_cast<std::size_t>(candidate)]);
+  if (matches < options.loop_min_pnp_inliers) {
+    record.reason = std::to_string(matches) + " descriptor matches to the candidate's points (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
+    return false;
+  }
+  record.pnp_inliers = pnp_ransac(probe);
+  if (record.pnp_inliers < options.loop_min_pnp_inliers) {
+    record.reason = "PnP RANSAC: " + std::to_string(record.pnp_inliers) + " inliers of " + std::to_string(matches) + " (< " +
+                    std::to_string(options.loop_min_pnp_inliers) + ")";
+    return false;
+  }
+  optimize_pose(probe);
+  drop_outliers(probe);
+  if (!match_candidate_neighbourhood(candidate, probe, record)) return false;
   // The correction the loop asks for, against the drift the keyframes between the two could
   // have gathered (cairn's guard against look-alike places, as slam2d's loop windows: a true
   // loop moves the keyframe by what odometry drifted, an aliased one by the distance between
@@ -88,6 +104,137 @@ bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& recor
       record.reason = "correction " + std::to_string(record.correction_m) + " m / " + std::to_string(record.correction_deg) +
                       " deg exceeds the drift possible over the " + std::to_string(travelled) + " m travelled since the candidate (" +
                       std::to_string(allowed_m) + " m / " + std::to_string(allowed_deg) + " deg): a look-alike place";
+      return false;
+    }
+  }
+  return true;
+}
+
+// Monocular verification: Sim(3), the scale having drifted (ORB-SLAM2 LoopClosing::ComputeSim3
+// and Sim3Solver; Mur-Artal & Tardos, T-RO 2015, Sec. VII-B). The keyframe's keypoints are
+// matched to the candidate's points by descriptor; where the keypoint holds a point of its own,
+// the pair gives two 3D points, one in each camera's frame. RANSAC (300 iterations, 3 pairs,
+// Horn's closed form with scale as Umeyama 1991 writes it) finds S_12 with x1 = S_12 x2; a pair
+// is an inlier when both projections (x2 into image 1 by S_12, x1 into image 2 by S_12^-1)
+// fall within chi^2 9.21 of the keypoints (ORB-SLAM2's threshold). The best set is refitted.
+// Then the candidate's neighbourhood is projected at the similarity's rigid equivalent (R,
+// t / s) and the motion-only BA run as for SE(3). The drift guard bounds the rotation only: the
+// map's unit drifts, so a distance bound would mean nothing.
+bool VisualSlam::Impl::verify_loop_sim3(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard) {
+  const KeyFrame& query = keyframes[static_cast<std::size_t>(current)];
+  const KeyFrame& other = keyframes[static_cast<std::size_t>(candidate)];
+  probe = query.frame;
+  std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
+  std::fill(probe.outlier.begin(), probe.outlier.end(), 0);
+  const int matches = match_to_keyframe(probe, query.nodes.size() == probe.size() ? &query.nodes : nullptr, other);
+  if (matches < options.loop_min_pnp_inliers) {
+    record.reason = std::to_string(matches) + " descriptor matches to the candidate's points (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
+    return false;
+  }
+  struct Pair {
+    std::size_t i, j;  // keypoint in the keyframe, keypoint of the point in the candidate
+    int point;         // the candidate's point
+    Eigen::Vector3d x1, x2;
+  };
+  const core::SE3 T1_cw = query.frame.T_world_camera.inverse(), T2_cw = other.frame.T_world_camera.inverse();
+  std::vector<Pair> pairs;
+  for (std::size_t i = 0; i < probe.size(); ++i) {
+    const int theirs = probe.map_point[i], own = query.frame.map_point[i];
+    if (theirs < 0 || own < 0 || own == theirs || points[static_cast<std::size_t>(own)].bad) continue;
+    const auto it = points[static_cast<std::size_t>(theirs)].observations.find(candidate);
+    if (it == points[static_cast<std::size_t>(theirs)].observations.end()) continue;
+    pairs.push_back({i, static_cast<std::size_t>(it->second), theirs, T1_cw * points[static_cast<std::size_t>(own)].p_world,
+                     T2_cw * points[static_cast<std::size_t>(theirs)].p_world});
+  }
+  const auto pair_count = static_cast<int>(pairs.size());
+  if (pair_count < options.loop_min_pnp_inliers) {
+    record.reason = std::to_string(pair_count) + " matches with a point on both sides (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
+    return false;
+  }
+  const auto pixel_error2 = [&](const FrameData& f, std::size_t k, const Eigen::Vector3d& x) {
+    if (!(x.z() > 1e-9)) return std::numeric_limits<double>::infinity();
+    const double du = camera.fx * x.x() / x.z() + camera.cx - f.undistorted[k].x();
+    const double dv = camera.fy * x.y() / x.z() + camera.cy - f.undistorted[k].y();
+    return (du * du + dv * dv) * inv_sigma2[static_cast<std::size_t>(f.keypoints[k].octave)];
+  };
+  const auto count_inliers = [&](const core::Sim3& S12, std::vector<char>& in) {
+    const core::Sim3 S21 = S12.inverse();
+    int n = 0;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      in[k] = pixel_error2(query.frame, pairs[k].i, S12 * pairs[k].x2) < 9.21 && pixel_error2(other.frame, pairs[k].j, S21 * pairs[k].x1) < 9.21;
+      n += in[k] ? 1 : 0;
+    }
+    return n;
+  };
+  const auto fit = [&](const std::vector<std::size_t>& use, core::Sim3& S12) {
+    Eigen::Matrix3Xd src(3, static_cast<Eigen::Index>(use.size())), dst(3, static_cast<Eigen::Index>(use.size()));
+    for (std::size_t k = 0; k < use.size(); ++k) {
+      src.col(static_cast<Eigen::Index>(k)) = pairs[use[k]].x2;
+      dst.col(static_cast<Eigen::Index>(k)) = pairs[use[k]].x1;
+    }
+    const Eigen::Matrix4d M = Eigen::umeyama(src, dst, true);
+    if (!M.allFinite() || !(M.topLeftCorner<3, 3>().determinant() > 1e-12)) return false;
+    S12 = core::Sim3::from_matrix(M);
+    return true;
+  };
+  std::mt19937 rng(static_cast<std::uint32_t>(current) * 7919u + static_cast<std::uint32_t>(candidate));
+  std::uniform_int_distribution<std::size_t> pick(0, pairs.size() - 1);
+  std::vector<char> in(pairs.size()), best_in;
+  core::Sim3 best;
+  int best_count = 0;
+  for (int iteration = 0; iteration < 300; ++iteration) {
+    std::vector<std::size_t> sample{pick(rng), pick(rng), pick(rng)};
+    if (sample[0] == sample[1] || sample[0] == sample[2] || sample[1] == sample[2]) continue;
+    core::Sim3 S12;
+    if (!fit(sample, S12)) continue;
+    const int n = count_inliers(S12, in);
+    if (n > best_count) {
+      best_count = n;
+      best = S12;
+      best_in = in;
+    }
+  }
+  if (best_count >= 3) {
+    std::vector<std::size_t> use;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      if (best_in[k]) use.push_back(k);
+    }
+    core::Sim3 refit;
+    if (fit(use, refit)) {
+      const int n = count_inliers(refit, in);
+      if (n >= best_count) {
+        best_count = n;
+        best = refit;
+        best_in = in;
+      }
+    }
+  }
+  record.pnp_inliers = best_count;
+  if (best_count < options.loop_min_pnp_inliers) {
+    record.reason = "Sim(3) RANSAC: " + std::to_string(best_count) + " inliers of " + std::to_string(pair_count) + " (< " +
+                    std::to_string(options.loop_min_pnp_inliers) + ")";
+    return false;
+  }
+  record.scale = best.scale();
+  // The keyframe in the candidate's map: S_1w = S_12 S_2w, whose rigid equivalent (R, t / s) is
+  // the camera pose the projection and the BA start from.
+  const core::Sim3 S1w = best * core::Sim3(T2_cw);
+  probe.T_world_camera = core::SE3(S1w.so3(), S1w.translation() / S1w.scale()).inverse();
+  std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (best_in[k]) probe.map_point[pairs[k].i] = pairs[k].point;
+  }
+  if (!match_candidate_neighbourhood(candidate, probe, record)) return false;
+  const core::SE3 change = query.frame.T_world_camera.inverse() * probe.T_world_camera;
+  record.correction_m = change.translation().norm();  // in the map's (drifting) unit
+  record.correction_deg = Eigen::AngleAxisd(change.rotation_matrix()).angle() * 180.0 / 3.14159265358979323846;
+  if (drift_guard && segment_of(candidate) == segment_of(current)) {
+    const double travelled = travelled_between(candidate, current);
+    const double allowed_deg = options.loop_drift_floor_deg + options.loop_drift_deg_per_m * travelled;
+    if (record.correction_deg > allowed_deg) {
+      record.reason = "correction " + std::to_string(record.correction_deg) + " deg exceeds the rotation drift possible over the " +
+                      std::to_string(travelled) + " map units travelled since the candidate (" + std::to_string(allowed_deg) +
+                      " deg): a look-alike place";
       return false;
     }
   }
@@ -133,8 +280,17 @@ std::string VisualSlam::Impl::loop_rival(int current, int candidate, const LoopR
 // (consecutive keyframes, covisibility edges of >= 100 shared points, the loop edge; unit
 // information as ORB-SLAM2's essential graph; keyframe 0 fixed) optimised on the back end;
 // points follow their reference keyframe; the keyframe's loop matches fuse its points into the
-// old ones; then a global bundle adjustment.
-void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData& probe) {
+// old ones; then a global bundle adjustment. Monocular: the same over Sim(3) (correct_poses_sim3).
+void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData& probe, double scale) {
+  if (kind == io::SequenceKind::kMonocular) {
+    correct_poses_sim3(current, candidate, probe, scale);
+  } else {
+    correct_poses_se3(current, candidate, probe);
+  }
+  fuse_loop_and_adjust(current, probe);
+}
+
+void VisualSlam::Impl::correct_poses_se3(int current, int candidate, const FrameData& probe) {
   const std::size_t n = keyframes.size();
   std::vector<core::SE3> old_poses(n);
   for (std::size_t k = 0; k < n; ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
@@ -187,6 +343,108 @@ void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData&
     const auto r = static_cast<std::size_t>(reference_keyframe);
     last.T_world_camera = keyframes[r].frame.T_world_camera * (old_poses[r].inverse() * last.T_world_camera);
   }
+}
+
+// Monocular loop correction over Sim(3) (ORB-SLAM2 LoopClosing::CorrectLoop and
+// Optimizer::OptimizeEssentialGraph; Strasdat, Montiel & Davison, RSS 2010). The keyframe's
+// corrected similarity S_cw = (s R', s t'), with (R', t') the rigid pose the verification found
+// in the candidate's map and s the Sim(3) scale, is passed to its covisible keyframes through
+// their rigid poses relative to it (S_kw = T_kc S_cw), and their points follow (X' = S_kw^-1
+// T_kw X). The essential graph over Sim(3) (variables S_world_keyframe, backend/sim3_factors.hpp;
+// consecutive keyframes and covisibility edges of >= 100 points with the uncorrected relative
+// poses, the loop edge candidate -> keyframe with the corrected ones, unit information, the
+// candidate fixed as in ORB-SLAM2) then spreads the correction, scale included; each keyframe
+// takes the rigid part (R, t) of its similarity, and each point moves with the keyframe that
+// corrected it or its reference: X' = S_after S_before^-1 X.
+void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const FrameData& probe, double scale) {
+  const std::size_t n = keyframes.size();
+  std::vector<core::SE3> old_poses(n);
+  for (std::size_t k = 0; k < n; ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
+  const core::SE3 T_cw_found = probe.T_world_camera.inverse();
+  const core::Sim3 S_cw_corrected(T_cw_found.so3(), scale * T_cw_found.translation(), scale);
+  std::vector<core::Sim3> before(n);  // S_world_keyframe the graph starts from
+  for (std::size_t k = 0; k < n; ++k) before[k] = core::Sim3(old_poses[k]);
+  std::vector<int> connected{current};
+  for (const auto& [shared, k] : covisible(current, options.min_covisible_points)) {
+    if (!keyframes[static_cast<std::size_t>(k)].bad && k != candidate) connected.push_back(k);
+  }
+  const core::SE3& T_wc = old_poses[static_cast<std::size_t>(current)];
+  for (const int k : connected) {
+    const core::Sim3 S_kw = core::Sim3(old_poses[static_cast<std::size_t>(k)].inverse() * T_wc) * S_cw_corrected;
+    before[static_cast<std::size_t>(k)] = S_kw.inverse();
+  }
+  std::vector<int> corrected_by(points.size(), -1);
+  for (const int k : connected) {
+    for (const int id : keyframes[static_cast<std::size_t>(k)].frame.map_point) {
+      if (id < 0 || points[static_cast<std::size_t>(id)].bad || corrected_by[static_cast<std::size_t>(id)] >= 0) continue;
+      MapPoint& mp = points[static_cast<std::size_t>(id)];
+      mp.p_world = before[static_cast<std::size_t>(k)] * (old_poses[static_cast<std::size_t>(k)].inverse() * mp.p_world);
+      corrected_by[static_cast<std::size_t>(id)] = k;
+    }
+  }
+  std::vector<int> good;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!keyframes[k].bad) good.push_back(static_cast<int>(k));
+  }
+  backend::LeastSquaresProblem problem;
+  std::vector<std::array<double, 8>> values(n);
+  std::vector<int> var(n, -1);
+  for (const int k : good) {
+    backend::sim3_to_values(before[static_cast<std::size_t>(k)], values[static_cast<std::size_t>(k)].data());
+    var[static_cast<std::size_t>(k)] = problem.add_variable(values[static_cast<std::size_t>(k)].data(), backend::sim3_manifold());
+  }
+  problem.set_constant(var[static_cast<std::size_t>(candidate)]);
+  const auto add_edge = [&](int a, int b, const core::Sim3& S_a_b, double weight) {
+    const backend::Sim3SquareRootInformation L = std::sqrt(weight) * backend::Sim3SquareRootInformation::Identity();
+    problem.add_factor(std::make_unique<backend::Sim3RelativeFactor>(S_a_b, L), {var[static_cast<std::size_t>(a)], var[static_cast<std::size_t>(b)]});
+  };
+  for (std::size_t g = 1; g < good.size(); ++g) {
+    const auto a = static_cast<std::size_t>(good[g - 1]), b = static_cast<std::size_t>(good[g]);
+    add_edge(good[g - 1], good[g], core::Sim3(old_poses[a].inverse() * old_poses[b]), keyframes[b].starts_segment ? 1e-6 : 1.0);
+  }
+  for (std::size_t g = 0; g < good.size(); ++g) {
+    const int k = good[g];
+    const int previous = g > 0 ? good[g - 1] : -1;
+    for (const auto& [shared, other] : covisible(k, 100)) {
+      if (other < previous) {
+        add_edge(other, k, core::Sim3(old_poses[static_cast<std::size_t>(other)].inverse() * old_poses[static_cast<std::size_t>(k)]), 1.0);
+      }
+    }
+  }
+  add_edge(candidate, current, before[static_cast<std::size_t>(candidate)].inverse() * before[static_cast<std::size_t>(current)], 1.0);
+  backend::LeastSquaresOptions lso;
+  lso.linear_solver = backend::LinearSolverType::kSparseNormalCholesky;
+  lso.max_iterations = 20;
+  lso.threads = 1;
+  backend::solve(problem, lso);
+  std::vector<core::Sim3> after = before;
+  for (const int k : good) {
+    after[static_cast<std::size_t>(k)] = backend::sim3_from_values(values[static_cast<std::size_t>(k)].data());
+    keyframes[static_cast<std::size_t>(k)].frame.T_world_camera = after[static_cast<std::size_t>(k)].to_se3();
+  }
+  for (std::size_t id = 0; id < points.size(); ++id) {
+    MapPoint& mp = points[id];
+    if (mp.bad) continue;
+    const auto r = static_cast<std::size_t>(corrected_by[id] >= 0 ? corrected_by[id] : mp.reference_keyframe);
+    if (keyframes[r].bad) continue;
+    mp.p_world = after[r] * (before[r].inverse() * mp.p_world);
+    update_normal_and_depth(mp);
+  }
+  if (reference_keyframe >= 0) {
+    const auto r = static_cast<std::size_t>(reference_keyframe);
+    const auto move = [&](const core::SE3& T) { return (after[r] * before[r].inverse() * core::Sim3(T)).to_se3(); };
+    last.T_world_camera = move(last.T_world_camera);
+    T_world_last_tracked = move(T_world_last_tracked);
+  }
+}
+
+// After either correction: the keyframe's keypoints matched to the old part of the map take its
+// points (ORB-SLAM2 CorrectLoop's fusion of the loop matches), then a global bundle adjustment.
+void VisualSlam::Impl::fuse_loop_and_adjust(int current, const FrameData& probe) {
+  std::vector<int> good;
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    if (!keyframes[k].bad) good.push_back(static_cast<int>(k));
+  }
   // Fuse: the keyframe's keypoints matched to the old part of the map take its points.
   KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
   for (std::size_t i = 0; i < probe.size(); ++i) {
@@ -219,14 +477,6 @@ void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData&
 // loop_consistency - 1 keyframes; then verified, best score first.
 void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
   if (!options.vocabulary) return;
-  if (kind == io::SequenceKind::kMonocular) {
-    // Monocular loops need Sim(3) (scale drifts); not implemented: keyframes only go into the
-    // database, for relocalisation.
-    KeyFrame& kf = keyframes.back();
-    kf.bow = options.vocabulary->transform(kf.frame.descriptors, nullptr, &kf.nodes, bow_levels_up());
-    database.add(static_cast<std::uint32_t>(kf.id), kf.bow);
-    return;
-  }
   const auto start = Clock::now();
   const int current = static_cast<int>(keyframes.size()) - 1;
   KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
@@ -299,7 +549,7 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
       }
       record.decision = "accepted";
       record.reason = std::to_string(record.matches) + " inlier matches to the candidate's neighbourhood";
-      correct_loop(current, candidate, probe);
+      correct_loop(current, candidate, probe, record.scale);
       if (record.merge) {
         // The segment being tracked joins the candidate's (the older one keeps its id).
         const int a = segment_of(current), b = segment_of(candidate);
@@ -374,7 +624,7 @@ void VisualSlam::Impl::merge_with_recent(FrameResult& result) {
       }
       record.decision = "accepted";
       record.reason = std::to_string(record.matches) + " inlier matches to the keyframes tracked last before this segment";
-      correct_loop(current, candidate, probe);
+      correct_loop(current, candidate, probe, record.scale);
       const int a = segment_of(current), b = segment_of(candidate);
       segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
       ++summary->maps_merged;

@@ -369,6 +369,11 @@ struct VisualSlam::Impl {
   // the candidate's part of the map gives it, with its matches to that part.
   // drift_guard false: without the drift bound (a rival of the uniqueness test).
   bool verify_loop(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard = true);
+  // The candidate's neighbourhood projected into the probe, then the motion-only BA; false (with
+  // record.reason) below loop_min_matches inliers.
+  bool match_candidate_neighbourhood(int candidate, FrameData& probe, LoopRecord& record);
+  // Monocular: Sim(3) (ORB-SLAM2 ComputeSim3 / Sim3Solver); record.scale gets the scale.
+  bool verify_loop_sim3(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard);
   // The uniqueness test of a verified loop or merge (current -> candidate, `record`, `probe`):
   // each of `rivals` (but those of the querying keyframe's own segment when the candidate lies
   // in another) is verified as a loop (no drift bound); one that verifies at another place
@@ -379,7 +384,10 @@ struct VisualSlam::Impl {
   // information as ORB-SLAM2's essential graph; keyframe 0 fixed) optimised on the back end;
   // points follow their reference keyframe; the keyframe's loop matches fuse its points into the
   // old ones; then a global bundle adjustment.
-  void correct_loop(int current, int candidate, const FrameData& probe);
+  void correct_loop(int current, int candidate, const FrameData& probe, double scale = 1.0);
+  void correct_poses_se3(int current, int candidate, const FrameData& probe);
+  void correct_poses_sim3(int current, int candidate, const FrameData& probe, double scale);
+  void fuse_loop_and_adjust(int current, const FrameData& probe);
   // ORB-SLAM2 LoopClosing::DetectLoop: candidates from the database scoring at least as well as
   // the keyframe's worst covisible neighbour and sharing at least 80 % of the best candidate's
   // words, kept only when their covisibility group was also a candidate group for the previous

@@ -188,7 +188,8 @@ struct LoopRecord {
   std::string decision;       ///< "accepted" or "rejected"
   std::string reason;
   bool merge = false;         ///< the candidate lies in another map segment: accepting it merges the two
-  double correction_m = 0.0, correction_deg = 0.0;  ///< how far the keyframe moved (accepted)
+  double correction_m = 0.0, correction_deg = 0.0;  ///< how far the keyframe moved (accepted; monocular: in map units)
+  double scale = 1.0;         ///< monocular: the Sim(3) scale between the keyframe's and the candidate's maps
 };
 
 struct VisualSlamSummary {
