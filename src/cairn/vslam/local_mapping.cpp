@@ -27,7 +27,13 @@ bool VisualSlam::Impl::need_keyframe(const FrameData& f, int inliers) const {
   const bool c1 = static_cast<int>(f.index) - last_keyframe_frame >= options.keyframe_max_frames;
   const double ratio = kind == io::SequenceKind::kMonocular ? 0.9 : options.keyframe_tracked_ratio;  // ORB-SLAM2 thRefRatio
   const bool c2 = (inliers < ratio * reference_points || need_close) && inliers > options.lost_below_inliers;
-  return c2 || (c1 && inliers > options.lost_below_inliers);
+  bool c3 = false;  // monocular: turned by a share of the field of view (monocular_keyframe_turn_fov)
+  if (kind == io::SequenceKind::kMonocular && options.monocular_keyframe_turn_fov > 0.0 && !keyframes.empty()) {
+    const double fov = 2.0 * std::atan(0.5 * static_cast<double>(width) / camera.fx);
+    const double turned = Eigen::AngleAxisd(keyframes.back().frame.T_world_camera.rotation_matrix().transpose() * f.T_world_camera.rotation_matrix()).angle();
+    c3 = turned > options.monocular_keyframe_turn_fov * fov && inliers > options.lost_below_inliers;
+  }
+  return c2 || c3 || (c1 && inliers > options.lost_below_inliers);
 }
 
 void VisualSlam::Impl::insert_keyframe(FrameData& f, bool starts_segment) {

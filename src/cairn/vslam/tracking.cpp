@@ -164,7 +164,9 @@ void VisualSlam::Impl::set_bad(int point) {
 }
 
 // ORB-SLAM2 ORBmatcher::SearchByProjection(CurrentFrame, LastFrame, th, bMono) without the
-// rotation-histogram check (stereo and RGB-D do not use it).
+// rotation-histogram check (ORB-SLAM2's TrackWithMotionModel uses it for every sensor,
+// ORBmatcher(0.9, true); tried for monocular on the synthetic loop route, 2026-11-25, it moved a
+// scale collapse from frame 67 to frame 112 without preventing it, and was not kept).
 int VisualSlam::Impl::search_from_last(FrameData& current, const FrameData& previous, double radius_px) {
   const core::SE3 T_cw = current.T_world_camera.inverse();
   int matches = 0;

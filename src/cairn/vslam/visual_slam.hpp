@@ -62,6 +62,16 @@ struct VisualSlamOptions {
   int keyframe_close_tracked = 100;      ///< ... or fewer tracked close points than this
   int keyframe_close_untracked = 70;     ///<     while more untracked close points than this
   int keyframe_max_frames = 10;          ///< and at least one keyframe per this many frames (the frame rate)
+  /// Monocular only: also a keyframe once the camera has turned more than this fraction of the
+  /// horizontal field of view since the last keyframe (0 = off). cairn's, not ORB-SLAM2's (DSO
+  /// makes keyframes on a change of the field of view, Engel et al., PAMI 2018, Sec. 3.1). A
+  /// monocular map only grows by triangulation between keyframes; turning fast between two of
+  /// them, the view's new side has no points, the matches shrink to a strip at one edge, a
+  /// strip of wall at one depth cannot tell a turn from a sideways step, and a wrong pose that
+  /// becomes a keyframe triangulates wrong depths: on the synthetic loop route looking 45
+  /// degrees left of the travel the scale collapsed to 0.013 of itself with every frame `ok`
+  /// (measured 2026-11-25, docs/vslam.md).
+  double monocular_keyframe_turn_fov = 0.2;
   int max_local_ba_keyframes = 20;       ///< covisible keyframes optimised (most shared points first)
   int min_covisible_points = 15;         ///< keyframes sharing fewer points are not covisible
   int local_map_keyframes = 40;          ///< keyframes whose points make the local map
