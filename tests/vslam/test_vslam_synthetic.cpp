@@ -922,6 +922,17 @@ MonocularDrift monocular_drift(const char* name, const std::vector<core::SE3>& t
   return d;
 }
 
+// The monocular loop route: a rounded square about the room's centre (legs of 4 m, corners of
+// radius 1.5 m, 25.4 m round), 0.15 m per frame, started half way along the leg at z = -3.5
+// heading -x (the centre to the right) and continued 1.5 m past the start; the camera looks
+// `yaw_offset_rad` off the direction of travel. `circuit_m` gets the length of one circuit.
+std::vector<core::SE3> monocular_loop_route(double yaw_offset_rad, double& circuit_m, double& extra_m) {
+  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner, step = 0.15;
+  extra_m = 1.5;
+  circuit_m = 4.0 * leg + 2.0 * kPi * corner;
+  return rounded_loop(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, step, circuit_m + extra_m, yaw_offset_rad);
+}
+
 // ATE after a Sim(3) alignment of the whole of frames [from, to] (evo_ape --align --correct_scale):
 // RMSE and max of the position error.
 std::pair<double, double> ate_sim3(const std::vector<core::SE3>& truth, const std::vector<core::SE3>& estimate, std::size_t from,
@@ -959,11 +970,8 @@ std::pair<double, double> ate_sim3(const std::vector<core::SE3>& truth, const st
 // and every loop candidate) and without (the drift at the return that a loop has to remove).
 TEST(VisualSlamSynthetic, MonocularLoopIsClosedOverSim3) {
   const SyntheticWorld world = monocular_loop_world();
-  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner, step = 0.15, extra = 1.5;
-  const double circuit_m = 4.0 * leg + 2.0 * kPi * corner;
-  // Half way along the leg at z = -mid heading -x, the room's centre to the right.
-  const std::vector<core::SE3> truth =
-      rounded_loop(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, step, circuit_m + extra, -60.0 * kDeg);
+  double circuit_m = 0.0, extra = 0.0;
+  const std::vector<core::SE3> truth = monocular_loop_route(-60.0 * kDeg, circuit_m, extra);
   const std::size_t return_frame =
       static_cast<std::size_t>(std::lround(circuit_m / (circuit_m + extra) * static_cast<double>(truth.size() - 1)));
   // Within a centimetre of the start (frames fall every step_m of the whole route, not of the circuit).
@@ -1108,10 +1116,8 @@ namespace {
 // of view (VisualSlamOptions::monocular_keyframe_turn_fov) holds it. Both runs on one rendering.
 TEST(VisualSlamSynthetic, MonocularScaleHoldsThroughFastTurns) {
   const SyntheticWorld world = monocular_loop_world();
-  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner, step = 0.15, extra = 1.5;
-  const double circuit_m = 4.0 * leg + 2.0 * kPi * corner;
-  const std::vector<core::SE3> truth =
-      rounded_loop(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, step, circuit_m + extra, -45.0 * kDeg);
+  double circuit_m = 0.0, extra = 0.0;
+  const std::vector<core::SE3> truth = monocular_loop_route(-45.0 * kDeg, circuit_m, extra);
   const StereoCamera camera;
   std::vector<cv::Mat> images;
   for (const core::SE3& pose : truth) images.push_back(world.render(pose, camera));
