@@ -416,7 +416,11 @@ int vslam_command(const VslamFlags& flags) {
                        {"degraded_below_inliers", options.degraded_below_inliers},
                        {"local_ba", options.local_ba},
                        {"keyframe_culling", options.keyframe_culling},
-                       {"keyframe_culling_redundancy", options.keyframe_culling_redundancy}};
+                       {"keyframe_culling_redundancy", options.keyframe_culling_redundancy},
+                       {"image_alignment", options.image_alignment},
+                       {"image_alignment_min_correlation", options.image_alignment_min_correlation},
+                       {"fuse_points", options.fuse_points},
+                       {"monocular_keyframe_turn_fov", options.monocular_keyframe_turn_fov}};
   report["summary"] = {{"frames", s.frames},
                        {"ok", s.frames_ok},
                        {"degraded", s.frames_degraded},
