@@ -290,6 +290,27 @@ void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData&
   fuse_loop_and_adjust(current, probe);
 }
 
+// The essential graph's edges over the good keyframes (ORB-SLAM2 OptimizeEssentialGraph, without
+// the spanning tree: consecutive keyframes stand in for it), each (a, b, weight): consecutive
+// keyframes, and every earlier keyframe sharing >= 100 points. Into the first keyframe of a
+// segment the consecutive link is only the motion model's guess across the lost stretch: a
+// weight of 1e-6 keeps the graph connected without holding the segments where the guess put
+// them. Both corrections measure the edges on the uncorrected poses.
+std::vector<std::tuple<int, int, double>> VisualSlam::Impl::essential_graph_edges(const std::vector<int>& good) const {
+  std::vector<std::tuple<int, int, double>> edges;
+  for (std::size_t g = 1; g < good.size(); ++g) {
+    edges.emplace_back(good[g - 1], good[g], keyframes[static_cast<std::size_t>(good[g])].starts_segment ? 1e-6 : 1.0);
+  }
+  for (std::size_t g = 0; g < good.size(); ++g) {
+    const int k = good[g];
+    const int previous = g > 0 ? good[g - 1] : -1;
+    for (const auto& [shared, other] : covisible(k, 100)) {
+      if (other < previous) edges.emplace_back(other, k, 1.0);
+    }
+  }
+  return edges;
+}
+
 void VisualSlam::Impl::correct_poses_se3(int current, int candidate, const FrameData& probe) {
   const std::size_t n = keyframes.size();
   std::vector<core::SE3> old_poses(n);
@@ -311,19 +332,8 @@ void VisualSlam::Impl::correct_poses_se3(int current, int candidate, const Frame
     e.information *= weight;
     graph.edges.push_back(e);
   };
-  // Consecutive keyframes; into the first keyframe of a segment the link is only the motion
-  // model's guess across the lost stretch: a weight of 1e-6 keeps the graph connected without
-  // holding the segments where the guess put them.
-  for (std::size_t g = 1; g < good.size(); ++g) {
-    const auto a = static_cast<std::size_t>(good[g - 1]), b = static_cast<std::size_t>(good[g]);
-    add_edge(good[g - 1], good[g], old_poses[a].inverse() * old_poses[b], keyframes[b].starts_segment ? 1e-6 : 1.0);
-  }
-  for (std::size_t g = 0; g < good.size(); ++g) {
-    const int k = good[g];
-    const int previous = g > 0 ? good[g - 1] : -1;
-    for (const auto& [shared, other] : covisible(k, 100)) {
-      if (other < previous) add_edge(other, k, old_poses[static_cast<std::size_t>(other)].inverse() * old_poses[static_cast<std::size_t>(k)]);
-    }
+  for (const auto& [a, b, weight] : essential_graph_edges(good)) {
+    add_edge(a, b, old_poses[static_cast<std::size_t>(a)].inverse() * old_poses[static_cast<std::size_t>(b)], weight);
   }
   add_edge(candidate, current, old_poses[static_cast<std::size_t>(candidate)].inverse() * T_loop);
   graph.fixed.push_back(0);
@@ -398,18 +408,8 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
     const backend::Sim3SquareRootInformation L = std::sqrt(weight) * backend::Sim3SquareRootInformation::Identity();
     problem.add_factor(std::make_unique<backend::Sim3RelativeFactor>(S_a_b, L), {var[static_cast<std::size_t>(a)], var[static_cast<std::size_t>(b)]});
   };
-  for (std::size_t g = 1; g < good.size(); ++g) {
-    const auto a = static_cast<std::size_t>(good[g - 1]), b = static_cast<std::size_t>(good[g]);
-    add_edge(good[g - 1], good[g], core::Sim3(old_poses[a].inverse() * old_poses[b]), keyframes[b].starts_segment ? 1e-6 : 1.0);
-  }
-  for (std::size_t g = 0; g < good.size(); ++g) {
-    const int k = good[g];
-    const int previous = g > 0 ? good[g - 1] : -1;
-    for (const auto& [shared, other] : covisible(k, 100)) {
-      if (other < previous) {
-        add_edge(other, k, core::Sim3(old_poses[static_cast<std::size_t>(other)].inverse() * old_poses[static_cast<std::size_t>(k)]), 1.0);
-      }
-    }
+  for (const auto& [a, b, weight] : essential_graph_edges(good)) {
+    add_edge(a, b, core::Sim3(old_poses[static_cast<std::size_t>(a)].inverse() * old_poses[static_cast<std::size_t>(b)]), weight);
   }
   add_edge(candidate, current, before[static_cast<std::size_t>(candidate)].inverse() * before[static_cast<std::size_t>(current)], 1.0);
   backend::LeastSquaresOptions lso;
@@ -469,6 +469,42 @@ void VisualSlam::Impl::fuse_loop_and_adjust(int current, const FrameData& probe)
     ++summary->global_bas;
     summary->global_ba_s += seconds_since(start);
   }
+}
+
+// One loop or merge candidate (record.candidate; record.merge says whether it lies in another
+// segment): verified, tested for uniqueness against `rivals`, and when it stands the map is
+// corrected and the two segments joined (the older one keeps its id). The record gets its
+// decision and reason (accepted: its matches and `accepted_reason`); accepted and ambiguous
+// records go into the summary here, rejected ones are the caller's (a loop query keeps them
+// all, a merge attempt only the closest).
+VisualSlam::Impl::LoopOutcome VisualSlam::Impl::try_loop(int current, LoopRecord& record, const std::vector<int>& rivals,
+                                                         const char* accepted_reason, FrameResult& result) {
+  const int candidate = static_cast<int>(record.candidate);
+  FrameData probe;
+  if (!verify_loop(current, candidate, record, probe)) {
+    record.decision = "rejected";
+    return LoopOutcome::kRejected;
+  }
+  const std::string rival = loop_rival(current, candidate, record, probe, rivals);
+  if (!rival.empty()) {
+    record.decision = "rejected";
+    record.reason = rival;
+    summary->loops.push_back(record);
+    ++summary->loops_ambiguous;
+    return LoopOutcome::kAmbiguous;
+  }
+  record.decision = "accepted";
+  record.reason = std::to_string(record.matches) + accepted_reason;
+  correct_loop(current, candidate, probe, record.scale);
+  if (record.merge) {
+    const int a = segment_of(current), b = segment_of(candidate);
+    segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    ++summary->maps_merged;
+  }
+  summary->loops.push_back(record);
+  ++summary->loops_accepted;
+  result.loop_closed = true;
+  return LoopOutcome::kAccepted;
 }
 
 // ORB-SLAM2 LoopClosing::DetectLoop: candidates from the database scoring at least as well as
@@ -537,35 +573,17 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
     record.min_covisible_score = min_score;
     record.consistency = consistency;
     record.merge = segment_of(candidate) != segment_of(current);
-    FrameData probe;
-    if (verify_loop(current, candidate, record, probe)) {
-      const std::string rival = loop_rival(current, candidate, record, probe, proposed);
-      if (!rival.empty()) {
-        record.decision = "rejected";
-        record.reason = rival;
-        summary->loops.push_back(record);
-        ++summary->loops_ambiguous;
-        break;
-      }
-      record.decision = "accepted";
-      record.reason = std::to_string(record.matches) + " inlier matches to the candidate's neighbourhood";
-      correct_loop(current, candidate, probe, record.scale);
-      if (record.merge) {
-        // The segment being tracked joins the candidate's (the older one keeps its id).
-        const int a = segment_of(current), b = segment_of(candidate);
-        segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-        ++summary->maps_merged;
-      }
+    const LoopOutcome outcome = try_loop(current, record, proposed, " inlier matches to the candidate's neighbourhood", result);
+    if (outcome == LoopOutcome::kRejected) {
       summary->loops.push_back(record);
-      ++summary->loops_accepted;
-      result.loop_closed = true;
+      continue;
+    }
+    if (outcome == LoopOutcome::kAccepted) {
       last_loop_keyframe = current;
       consistent_groups.clear();
       pending_loop_candidates.clear();
-      break;
     }
-    record.decision = "rejected";
-    summary->loops.push_back(record);
+    break;
   }
   summary->loop_s += seconds_since(start);
 }
@@ -610,31 +628,11 @@ void VisualSlam::Impl::merge_with_recent(FrameResult& result) {
     record.candidate_frame = keyframes[static_cast<std::size_t>(candidate)].frame.index;
     record.score = -1.0;  // proposed by recency, not by the bag of words
     record.merge = true;
-    FrameData probe;
     ++summary->merge_attempts;
-    if (verify_loop(current, candidate, record, probe)) {
-      const std::string rival = loop_rival(current, candidate, record, probe, rivals);
-      if (!rival.empty()) {
-        record.decision = "rejected";
-        record.reason = rival;
-        summary->loops.push_back(record);
-        ++summary->loops_ambiguous;
-        summary->loop_s += seconds_since(start);
-        return;
-      }
-      record.decision = "accepted";
-      record.reason = std::to_string(record.matches) + " inlier matches to the keyframes tracked last before this segment";
-      correct_loop(current, candidate, probe, record.scale);
-      const int a = segment_of(current), b = segment_of(candidate);
-      segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-      ++summary->maps_merged;
-      ++summary->loops_accepted;
-      summary->loops.push_back(record);
-      result.loop_closed = true;
+    if (try_loop(current, record, rivals, " inlier matches to the keyframes tracked last before this segment", result) != LoopOutcome::kRejected) {
       summary->loop_s += seconds_since(start);
       return;
     }
-    record.decision = "rejected";
     if (!best_rejected || record.matches + record.pnp_inliers > best_rejected->matches + best_rejected->pnp_inliers) best_rejected = record;
   }
   if (best_rejected) summary->loops.push_back(*best_rejected);  // the closest attempt of this keyframe

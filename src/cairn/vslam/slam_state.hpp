@@ -16,6 +16,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <set>
+#include <tuple>
 #include <unordered_map>
 #include "cairn/backend/least_squares.hpp"
 #include "cairn/backend/optimizer.hpp"
@@ -385,6 +386,7 @@ struct VisualSlam::Impl {
   // points follow their reference keyframe; the keyframe's loop matches fuse its points into the
   // old ones; then a global bundle adjustment.
   void correct_loop(int current, int candidate, const FrameData& probe, double scale = 1.0);
+  std::vector<std::tuple<int, int, double>> essential_graph_edges(const std::vector<int>& good) const;
   void correct_poses_se3(int current, int candidate, const FrameData& probe);
   void correct_poses_sim3(int current, int candidate, const FrameData& probe, double scale);
   void fuse_loop_and_adjust(int current, const FrameData& probe);
@@ -393,6 +395,10 @@ struct VisualSlam::Impl {
   // words, kept only when their covisibility group was also a candidate group for the previous
   // loop_consistency - 1 keyframes; then verified, best score first.
   void detect_and_close_loop(FrameResult& result);
+  enum class LoopOutcome { kRejected, kAmbiguous, kAccepted };
+  // One loop or merge candidate verified, tested for uniqueness and, when it stands, closed
+  // (loop_closing.cpp try_loop).
+  LoopOutcome try_loop(int current, LoopRecord& record, const std::vector<int>& rivals, const char* accepted_reason, FrameResult& result);
   void merge_with_recent(FrameResult& result);
 
   // --- Monocular initialisation (ORB-SLAM2 Initializer, Mur-Artal et al. T-RO 2015 Sec. IV) (initialisation.cpp) ---

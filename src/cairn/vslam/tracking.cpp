@@ -638,17 +638,20 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
     f.T_world_camera = have_velocity && !lost ? last.T_world_camera * velocity : last.T_world_camera;
     int matches = 0;
     const bool was_lost = lost;
-    if (have_last && have_velocity && !lost) {
-      // ORB-SLAM2 TrackWithMotionModel: th 7 for stereo, 15 for RGB-D.
-      const double radius = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px
-                            : kind == io::SequenceKind::kRgbd ? options.motion_search_radius_rgbd_px
-                                                              : options.motion_search_radius_mono_px;
-      matches = search_from_last(f, last, radius);
-      if (matches < options.min_motion_matches) {
-        std::fill(f.map_point.begin(), f.map_point.end(), -1);
-        matches = search_from_last(f, last, 2.0 * radius);
+    // ORB-SLAM2 TrackWithMotionModel: th 7 for stereo, 15 for RGB-D (cairn: 7, see the option).
+    const double motion_radius = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px
+                                 : kind == io::SequenceKind::kRgbd ? options.motion_search_radius_rgbd_px
+                                                                   : options.motion_search_radius_mono_px;
+    // The last frame's points around f's pose, the radius doubled when too few match.
+    const auto search_around = [&](FrameData& frame) {
+      int n = search_from_last(frame, last, motion_radius);
+      if (n < options.min_motion_matches) {
+        std::fill(frame.map_point.begin(), frame.map_point.end(), -1);
+        n = search_from_last(frame, last, 2.0 * motion_radius);
       }
-    }
+      return n;
+    };
+    if (have_last && have_velocity && !lost) matches = search_around(f);
     int inliers = 0;
     int accepted_keyframe = -1;  // the keyframe whose matches gave the first stage's pose (fallback / relocalisation)
     std::vector<int> relocalisation_candidates;
@@ -667,9 +670,6 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
     // when there is a velocity, with the velocity's; the most inliers win. A local search from
     // the last tracked pose: it cannot jump to a look-alike place, so no uniqueness test; after
     // being lost the relocalisation's inlier count still applies (below).
-    const double motion_radius = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px
-                                 : kind == io::SequenceKind::kRgbd ? options.motion_search_radius_rgbd_px
-                                                                   : options.motion_search_radius_mono_px;
     const bool prediction_failed = inliers < std::max(30, matches / 2);
     if (options.image_alignment && prediction_failed && have_last && !last.sbi.empty() && !f.sbi.empty()) {
       const bool predicted = have_velocity && !lost;
@@ -685,11 +685,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
           std::fill(trial.map_point.begin(), trial.map_point.end(), -1);
           std::fill(trial.outlier.begin(), trial.outlier.end(), 0);
           trial.T_world_camera = T_world_last_tracked * core::SE3(core::SO3::from_matrix(a.R_current_previous.transpose()), t_last_current);
-          int trial_matches = search_from_last(trial, last, motion_radius);
-          if (trial_matches < options.min_motion_matches) {
-            std::fill(trial.map_point.begin(), trial.map_point.end(), -1);
-            trial_matches = search_from_last(trial, last, 2.0 * motion_radius);
-          }
+          const int trial_matches = search_around(trial);
           if (trial_matches < options.min_motion_matches) continue;
           const int trial_inliers = optimize_pose(trial);
           drop_outliers(trial);
