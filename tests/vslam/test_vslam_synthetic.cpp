@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "cairn/eval/ape.hpp"
+#include "cairn/io/trajectory.hpp"
 #include "cairn/vision/features.hpp"
 #include "cairn/vision/vocabulary.hpp"
 #include "cairn/vslam/visual_slam.hpp"
@@ -933,24 +935,18 @@ std::vector<core::SE3> monocular_loop_route(double yaw_offset_rad, double& circu
   return rounded_loop(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, step, circuit_m + extra_m, yaw_offset_rad);
 }
 
-// ATE after a Sim(3) alignment of the whole of frames [from, to] (evo_ape --align --correct_scale):
-// RMSE and max of the position error.
+// ATE after a Sim(3) alignment of the whole of frames [from, to] (cairn eval's, as
+// evo_ape --align --correct_scale): RMSE and max of the position error.
 std::pair<double, double> ate_sim3(const std::vector<core::SE3>& truth, const std::vector<core::SE3>& estimate, std::size_t from,
                                    std::size_t to) {
-  const auto n = static_cast<Eigen::Index>(to - from + 1);
-  Eigen::Matrix3Xd a(3, n), b(3, n);
-  for (std::size_t k = from; k <= to; ++k) {
-    a.col(static_cast<Eigen::Index>(k - from)) = estimate[k].translation();
-    b.col(static_cast<Eigen::Index>(k - from)) = truth[k].translation();
-  }
-  const Eigen::Matrix4d S = Eigen::umeyama(a, b, true);
-  double sum = 0.0, worst = 0.0;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const double e = (S.topLeftCorner<3, 3>() * a.col(k) + S.topRightCorner<3, 1>() - b.col(k)).norm();
-    sum += e * e;
-    worst = std::max(worst, e);
-  }
-  return {std::sqrt(sum / static_cast<double>(n)), worst};
+  io::Trajectory reference, estimated;  // no stamps: paired by index
+  reference.poses.assign(truth.begin() + static_cast<std::ptrdiff_t>(from), truth.begin() + static_cast<std::ptrdiff_t>(to) + 1);
+  estimated.poses.assign(estimate.begin() + static_cast<std::ptrdiff_t>(from), estimate.begin() + static_cast<std::ptrdiff_t>(to) + 1);
+  eval::ApeOptions sim3;
+  sim3.alignment.method = eval::AlignmentMethod::kSim3;
+  const eval::ApeResult ape = eval::evaluate_ape(reference, estimated, sim3);
+  EXPECT_TRUE(ape.outcome.ok()) << ape.outcome.message;
+  return {ape.statistics.rmse, ape.statistics.max};
 }
 
 // Monocular SLAM round a closed loop with visible drift (scale drift above all), for Sim(3) loop
