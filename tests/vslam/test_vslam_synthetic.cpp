@@ -250,7 +250,7 @@ double yaw_of(const core::SE3& T_world_camera) {
 // --- b. Aliasing: no loop between look-alike rooms --------------------------------------------
 
 // Every verified loop candidate with the true distance between the two cameras; returns the
-// accepted ones joining cameras more than 1 m apart.
+// accepted loops and verified revisits joining cameras more than 1 m apart.
 int print_loops_and_count_false(const SlamRun& run) {
   int false_loops = 0;
   for (const LoopRecord& loop : run.slam->summary().loops) {
@@ -260,7 +260,7 @@ int print_loops_and_count_false(const SlamRun& run) {
                 loop.frame, loop.candidate_frame, loop.score, loop.min_covisible_score, loop.consistency, loop.pnp_inliers, loop.matches,
                 loop.decision.c_str(), loop.reason.c_str(), loop.correction_m, loop.correction_deg, run.truth[loop.frame].translation().z(),
                 run.truth[loop.candidate_frame].translation().z(), metres);
-    if (loop.decision == "accepted" && metres > 1.0) ++false_loops;
+    if ((loop.decision == "accepted" || loop.decision == "revisit") && metres > 1.0) ++false_loops;
   }
   return false_loops;
 }

@@ -469,6 +469,7 @@ int vslam_command(const VslamFlags& flags) {
                                  {"maps_started", s.maps_started},
                                  {"maps_merged", s.maps_merged},
                                  {"merge_attempts_with_recent_keyframes", s.merge_attempts},
+                                 {"revisits_verified", s.revisits_verified},
                                  {"global_bundle_adjustments", s.global_bas},
                                  {"loop_s", s.loop_s},
                                  {"global_ba_s", s.global_ba_s},
@@ -495,9 +496,9 @@ int vslam_command(const VslamFlags& flags) {
   out.commit();
 
   if (!flags.quiet) {
-    std::printf("%zu frames: %zu ok, %zu degraded, %zu lost; %zu relocalisations, %zu loops closed, %zu new maps (%zu merged); %zu keyframes, %zu map points; per frame median %.1f ms "
+    std::printf("%zu frames: %zu ok, %zu degraded, %zu lost; %zu relocalisations, %zu loops closed, %zu revisits verified, %zu new maps (%zu merged); %zu keyframes, %zu map points; per frame median %.1f ms "
                 "(tracking %.1f ms, ORB %.1f ms, mapping %.1f ms)\n",
-                s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loops_accepted, s.maps_started, s.maps_merged,
+                s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loops_accepted, s.revisits_verified, s.maps_started, s.maps_merged,
                 s.keyframes, map_points.size(), spread(total).median * 1e3,
                 spread(tracking).median * 1e3, spread(features_s).median * 1e3, spread(mapping).median * 1e3);
     if (!evaluation.is_null() && evaluation.contains("ate_sim3_aligned_m")) {

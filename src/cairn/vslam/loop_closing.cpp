@@ -585,7 +585,63 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
     }
     break;
   }
+  if (!result.loop_closed) verify_revisit(current, neighbours);
   summary->loop_s += seconds_since(start);
+}
+
+// A return that tracking closed by itself. ORB-SLAM2's DetectLoop leaves out the keyframes
+// covisible with the query: when tracking the local map has already matched the old place's
+// points (TUM fr1/desk: the keyframe at frame 97 shares 102 points with frame 23's), there is
+// no loop left to correct and nothing is reported. cairn reports it, verified: an old keyframe
+// of the same segment (outside the last loop_min_keyframes_apart) that shares points with this
+// one, and that some keyframe in between did not see (the place went out of view and came
+// back), is verified as a loop candidate is (verify_loop, the drift bound included) and
+// recorded with decision "revisit" and the correction the verification found; the map is left
+// as it is. One candidate per keyframe (the one sharing most points), and none within
+// loop_min_keyframes_apart keyframes of the last verified revisit.
+void VisualSlam::Impl::verify_revisit(int current, const std::vector<std::pair<int, int>>& neighbours) {
+  if (last_revisit_keyframe >= 0 && current < last_revisit_keyframe + options.loop_min_keyframes_apart) return;
+  int best = -1, best_shared = 0;
+  for (const auto& [shared, k] : neighbours) {
+    if (k > current - options.loop_min_keyframes_apart || shared <= best_shared || keyframes[static_cast<std::size_t>(k)].bad ||
+        segment_of(k) != segment_of(current)) {
+      continue;
+    }
+    std::set<int> saw_it;
+    for (const auto& [n, j] : covisible(k, options.min_covisible_points)) saw_it.insert(j);
+    bool left_view = false;
+    for (int j = k + 1; j < current && !left_view; ++j) {
+      left_view = !keyframes[static_cast<std::size_t>(j)].bad && segment_of(j) == segment_of(current) && saw_it.count(j) == 0;
+    }
+    if (!left_view) continue;
+    best = k;
+    best_shared = shared;
+  }
+  if (best < 0) return;
+  const KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
+  const KeyFrame& old = keyframes[static_cast<std::size_t>(best)];
+  LoopRecord record;
+  record.keyframe = static_cast<std::size_t>(current);
+  record.candidate = static_cast<std::size_t>(best);
+  record.frame = kf.frame.index;
+  record.candidate_frame = old.frame.index;
+  record.score = kf.bow.empty() || old.bow.empty() ? -1.0 : vision::Vocabulary::score(kf.bow, old.bow);
+  FrameData probe;
+  if (verify_loop(current, best, record, probe)) {
+    char buffer[256];
+    std::snprintf(buffer, sizeof buffer,
+                  "joined by tracking (%d points shared); verified with %d inlier matches, %.3f m / %.2f deg from the tracked pose: "
+                  "nothing to correct",
+                  best_shared, record.matches, record.correction_m, record.correction_deg);
+    record.decision = "revisit";
+    record.reason = buffer;
+    ++summary->revisits_verified;
+    last_revisit_keyframe = current;
+  } else {
+    record.decision = "rejected";
+    record.reason = "a revisit joined by tracking (" + std::to_string(best_shared) + " points shared) that did not verify: " + record.reason;
+  }
+  summary->loops.push_back(record);
 }
 
 // A young map segment (its first `merge_recent_keyframes_of_new_map` keyframes) tries to merge

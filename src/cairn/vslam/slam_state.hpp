@@ -188,6 +188,7 @@ struct VisualSlam::Impl {
   // Place recognition.
   vision::BowDatabase database;
   int last_loop_keyframe = 0;
+  int last_revisit_keyframe = -1;  // the last keyframe whose revisit was verified (verify_revisit)
   std::vector<std::pair<std::set<int>, int>> consistent_groups;  // ORB-SLAM2 mvConsistentGroups
   std::set<int> pending_loop_candidates;  // the candidates behind consistent_groups: never culled (ORB-SLAM2 SetNotErase)
   // The Atlas: map segments, merged by union-find.
@@ -400,6 +401,10 @@ struct VisualSlam::Impl {
   // (loop_closing.cpp try_loop).
   LoopOutcome try_loop(int current, LoopRecord& record, const std::vector<int>& rivals, const char* accepted_reason, FrameResult& result);
   void merge_with_recent(FrameResult& result);
+  // A return to a place that tracking the local map already joined (the old keyframe shares
+  // points with the new one, so DetectLoop leaves it out): found in the covisibility graph,
+  // verified as a loop would be, recorded with decision "revisit"; nothing is corrected.
+  void verify_revisit(int current, const std::vector<std::pair<int, int>>& neighbours);
 
   // --- Monocular initialisation (ORB-SLAM2 Initializer, Mur-Artal et al. T-RO 2015 Sec. IV) (initialisation.cpp) ---
   // Level-0 keypoints of the reference matched to the frame within 100 px (ORB-SLAM2

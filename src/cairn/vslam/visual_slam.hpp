@@ -195,7 +195,7 @@ struct LoopRecord {
   double min_covisible_score = 0.0;  ///< the query's lowest score with its covisible keyframes
   int consistency = 0;        ///< consecutive keyframes with agreeing candidates
   int pnp_inliers = 0, matches = 0;
-  std::string decision;       ///< "accepted" or "rejected"
+  std::string decision;       ///< "accepted", "rejected", or "revisit" (a return tracking had already joined: verified, nothing corrected)
   std::string reason;
   bool merge = false;         ///< the candidate lies in another map segment: accepting it merges the two
   double correction_m = 0.0, correction_deg = 0.0;  ///< how far the keyframe moved (accepted; monocular: in map units)
@@ -217,6 +217,9 @@ struct VisualSlamSummary {
   std::size_t fusion_observations = 0;  ///< observations added to existing points by SearchInNeighbors
   std::size_t maps_started = 0, maps_merged = 0;  ///< segments beyond the first; merges of two
   std::size_t merge_attempts = 0;  ///< verifications of a new segment against the keyframes tracked last before it
+  /// Returns to a place that tracking joined to the old map by itself (the old keyframe shares
+  /// points with the new one), verified as a loop (decision "revisit" in `loops`); no correction.
+  std::size_t revisits_verified = 0;
   /// Keyframes culled as redundant (VisualSlamOptions::keyframe_culling); `keyframes` counts every
   /// keyframe made, so the map holds keyframes - keyframes_culled.
   std::size_t keyframes_culled = 0;
