@@ -1150,3 +1150,89 @@ TEST(VisualSlamSynthetic, MonocularScaleHoldsThroughFastTurns) {
 
 }  // namespace
 }  // namespace cairn::vslam
+
+namespace cairn::vslam {
+namespace {
+
+// The Atlas for one camera: the monocular loop route (60 degrees left, as the loop test) with
+// the lens covered for frames [45, 80) (5.2 m, the second corner included: uniform grey images).
+// Tracking must say `lost` under the cover, start a new map segment by a two-view initialisation
+// once the images come back (the view then is of walls the first map never saw), and merge it
+// into the first map over Sim(3) when the camera comes back to the start; afterwards every
+// tracked frame is in the first map, and no merge or loop joins views more than 2.5 m apart.
+TEST(VisualSlamSynthetic, MonocularNewMapAfterTheLensIsCoveredMergesAtTheReturn) {
+  const SyntheticWorld world = monocular_loop_world();
+  double circuit_m = 0.0, extra = 0.0;
+  const std::vector<core::SE3> truth = monocular_loop_route(-60.0 * kDeg, circuit_m, extra);
+  const std::size_t cover_from = 45, cover_to = 80;
+  const StereoCamera camera;
+  VisualSlamOptions options;
+  options.vocabulary = training_vocabulary();
+  VisualSlam slam(camera.calibration(), io::SequenceKind::kMonocular, options);
+  std::vector<FrameResult> results;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    const cv::Mat image = k >= cover_from && k < cover_to ? cv::Mat(camera.height, camera.width, CV_8UC1, cv::Scalar(128))
+                                                          : world.render(truth[k], camera);
+    FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(0.1 * static_cast<double>(k)), image);
+    if (k + 5 >= cover_from && (k < cover_to + 15 || r.new_map || r.loop_closed || r.health != TrackingHealth::kOk)) {
+      std::printf("  frame %3zu%s: %-8s segment %d kf %d new map %d reloc %d loop %d inliers %4d %s\n", k,
+                  k >= cover_from && k < cover_to ? " (covered)" : "", health_name(r.health), r.segment, r.keyframe ? 1 : 0, r.new_map ? 1 : 0,
+                  r.relocalised ? 1 : 0, r.loop_closed ? 1 : 0, r.inliers, r.note.c_str());
+    }
+    r.keypoints.clear();
+    r.keypoint_states.clear();
+    results.push_back(std::move(r));
+  }
+  const VisualSlamSummary& s = slam.summary();
+  for (const LoopRecord& loop : s.loops) {
+    if (loop.decision == "rejected") continue;
+    std::printf("  %s frame %zu -> %zu: %s (%s), scale %.4f, correction %.3f %.2f deg (map units); true distance %.2f m\n",
+                loop.merge ? "merge" : "loop", loop.frame, loop.candidate_frame, loop.decision.c_str(), loop.reason.c_str(), loop.scale,
+                loop.correction_m, loop.correction_deg, (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm());
+  }
+  std::size_t covered_ok = 0, new_map_at = truth.size(), merged_at = truth.size(), init = truth.size();
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    const FrameResult& r = results[k];
+    if (r.tracked && init == truth.size()) init = k;
+    if (k >= cover_from && k < cover_to) covered_ok += r.health == TrackingHealth::kOk ? 1 : 0;
+    if (k >= cover_to && r.new_map && new_map_at == truth.size()) new_map_at = k;
+    if (k > new_map_at && r.loop_closed && merged_at == truth.size()) merged_at = k;
+  }
+  // Every tracked frame in the first map at the end, and the whole of them against the truth.
+  const std::vector<int> segments = slam.frame_segments();
+  const std::vector<core::SE3> estimate = slam.trajectory();
+  std::vector<core::SE3> truth_tracked, estimate_tracked;
+  std::size_t tracked = 0, outside_main = 0;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    if (!results[k].tracked) continue;
+    ++tracked;
+    if (segments[k] != slam.main_segment()) {
+      ++outside_main;
+      continue;
+    }
+    truth_tracked.push_back(truth[k]);
+    estimate_tracked.push_back(estimate[k]);
+  }
+  const auto [ate, ate_max] = ate_sim3(truth_tracked, estimate_tracked, 0, truth_tracked.size() - 1);
+  int far_joins = 0;
+  for (const LoopRecord& loop : s.loops) {
+    if (loop.decision == "rejected") continue;
+    far_joins += (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm() > 2.5 ? 1 : 0;
+  }
+  std::printf("monocular, lens covered for frames %zu-%zu: initialised at %zu; %zu covered frames reported ok; new map at frame %zu, "
+              "merged at frame %zu; %zu maps started, %zu merged, %zu relocalisations; %zu tracked frames, %zu outside the first map; "
+              "Sim(3) ATE of the first map's %zu frames %.3f m (max %.3f m); %d joins of views > 2.5 m apart\n",
+              cover_from, cover_to - 1, init, covered_ok, new_map_at, merged_at, s.maps_started, s.maps_merged, s.relocalisations, tracked,
+              outside_main, truth_tracked.size(), ate, ate_max, far_joins);
+  EXPECT_LT(init, 15u);
+  EXPECT_EQ(covered_ok, 0u) << "a frame of a covered lens reported ok";
+  EXPECT_LE(new_map_at, cover_to + 10) << "no new map within 10 frames of the lens being uncovered";
+  EXPECT_GE(s.maps_merged, 1u);
+  EXPECT_EQ(far_joins, 0) << "a merge or loop joined views more than 2.5 m apart";
+  EXPECT_EQ(outside_main, 0u) << "tracked frames left outside the first map";
+  EXPECT_GE(tracked, truth.size() - (cover_to - cover_from) - 25);
+  EXPECT_LT(ate, 0.25);
+}
+
+}  // namespace
+}  // namespace cairn::vslam

@@ -491,7 +491,7 @@ int vslam_command(const VslamFlags& flags) {
                                                          {"correction_deg", l.correction_deg},
                                                          {"scale", l.scale}});
   }
-  report["not_implemented"] = {"new map segments for monocular runs", "local mapping in its own thread"};
+  report["not_implemented"] = {"local mapping in its own thread"};
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
   out.commit();
 

@@ -160,50 +160,51 @@ bool VisualSlam::Impl::reconstruct_two_views(const FrameData& a, const FrameData
   return true;
 }
 
-FrameResult VisualSlam::Impl::initialise_monocular(FrameData f, FrameResult result, FrameTimes times, Clock::time_point start, Clock::time_point tracking_start) {
-  result.health = TrackingHealth::kLost;
-  result.tracked = false;
-  auto finish = [&]() {
-    relative.emplace_back(-1, core::SE3());
-    times.tracking_s = seconds_since(tracking_start);
-    result.times = times;
-    result.times.total_s = seconds_since(start);
-    ++frames;
-    return result;
-  };
+// Feeds one frame to the two-view initialisation (ORB-SLAM2 Tracking::MonocularInitialization):
+// the first frame with > 100 features becomes the reference; a later one with >= 100 matches to
+// it that reconstructs (reconstruct_two_views) makes a map of two keyframes, otherwise it becomes
+// the reference when it has too few matches. The reference keyframe is put at T_world_reference
+// and the points scaled so that their median depth in it is `median_depth`: the scale is not
+// observable with one camera. The new keyframes belong to `segment` (the caller's current one),
+// the first starting it; both get their bag of words, the first goes into the database and the
+// second only when `add_second_to_database` (a caller that queries with it adds it then). On
+// success f is the second keyframe (pose and points), reference_keyframe is it, and the
+// reference frame's trajectory entry is keyframe 0's of the new map; `made` counts its points.
+bool VisualSlam::Impl::two_view_map(FrameData& f, const core::SE3& T_world_reference, double median_depth, bool add_second_to_database,
+                                    std::string& note, int& made, double& inlier_ratio, double& mapping_s) {
   if (!have_init_reference) {
     if (f.size() > 100) {
-      init_reference = std::move(f);
+      init_reference = f;
       have_init_reference = true;
-      result.note = "monocular initialisation: reference frame";
+      note = "monocular initialisation: reference frame";
     } else {
-      result.note = "monocular initialisation: too few features (" + std::to_string(f.size()) + ")";
+      note = "monocular initialisation: too few features (" + std::to_string(f.size()) + ")";
     }
-    return finish();
+    return false;
   }
   const std::vector<std::pair<int, int>> matches = match_for_initialisation(init_reference, f);
   if (matches.size() < 100) {
-    result.note = "monocular initialisation: " + std::to_string(matches.size()) + " matches to the reference (< 100): this frame is the new reference";
-    if (f.size() > 100) init_reference = std::move(f);
-    return finish();
+    note = "monocular initialisation: " + std::to_string(matches.size()) + " matches to the reference (< 100): this frame is the new reference";
+    if (f.size() > 100) init_reference = f;
+    return false;
   }
   core::SE3 T_f_ref;
   std::vector<std::pair<int, Eigen::Vector3d>> reconstructed;
-  std::string note;
-  if (!reconstruct_two_views(init_reference, f, matches, T_f_ref, reconstructed, note)) {
-    result.note = "monocular initialisation: " + note;
-    return finish();
+  std::string model;
+  if (!reconstruct_two_views(init_reference, f, matches, T_f_ref, reconstructed, model)) {
+    note = "monocular initialisation: " + model;
+    return false;
   }
-  // Scale: the median depth of the points in the reference is 1 (ORB-SLAM2; the scale is not
-  // observable with one camera).
   std::vector<double> depths;
   for (const auto& [i, X] : reconstructed) depths.push_back(X.z());
   std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
-  const double scale = 1.0 / depths[depths.size() / 2];
-  init_reference.T_world_camera = core::SE3();
-  f.T_world_camera = core::SE3(T_f_ref.so3(), T_f_ref.translation() * scale).inverse();
+  const double scale = median_depth / depths[depths.size() / 2];
+  init_reference.T_world_camera = T_world_reference;
+  f.T_world_camera = T_world_reference * core::SE3(T_f_ref.so3(), T_f_ref.translation() * scale).inverse();
   std::fill(init_reference.map_point.begin(), init_reference.map_point.end(), -1);
+  std::fill(init_reference.outlier.begin(), init_reference.outlier.end(), 0);
   std::fill(f.map_point.begin(), f.map_point.end(), -1);
+  std::fill(f.outlier.begin(), f.outlier.end(), 0);
   std::unordered_map<int, int> match_of;
   for (const auto& [i, j] : matches) match_of[i] = j;
   FrameData reference = init_reference;
@@ -214,7 +215,7 @@ FrameResult VisualSlam::Impl::initialise_monocular(FrameData f, FrameResult resu
   for (const auto& [i, X] : reconstructed) {
     const int j = match_of[i];
     MapPoint mp;
-    mp.p_world = X * scale;
+    mp.p_world = T_world_reference * (X * scale);
     mp.descriptor = k0.frame.descriptors.row(i).clone();
     mp.first_keyframe = mp.reference_keyframe = k0.id;
     mp.observations[k0.id] = i;
@@ -223,31 +224,53 @@ FrameResult VisualSlam::Impl::initialise_monocular(FrameData f, FrameResult resu
     const int id = static_cast<int>(points.size()) - 1;
     k0.frame.map_point[static_cast<std::size_t>(i)] = id;
     k1.frame.map_point[static_cast<std::size_t>(j)] = id;
-    f.map_point[static_cast<std::size_t>(j)] = id;
     update_normal_and_depth(points.back());
     update_descriptor(points.back());
     ++summary->map_points;
   }
   if (options.vocabulary) {
-    for (KeyFrame* kf : {&k0, &k1}) {
-      kf->bow = options.vocabulary->transform(kf->frame.descriptors, nullptr, &kf->nodes, bow_levels_up());
-      database.add(static_cast<std::uint32_t>(kf->id), kf->bow);
-    }
+    for (KeyFrame* kf : {&k0, &k1}) kf->bow = options.vocabulary->transform(kf->frame.descriptors, nullptr, &kf->nodes, bow_levels_up());
+    database.add(static_cast<std::uint32_t>(k0.id), k0.bow);
+    if (add_second_to_database) database.add(static_cast<std::uint32_t>(k1.id), k1.bow);
   }
   const auto mapping_start = Clock::now();
-  bundle_adjustment({k0.id, k1.id}, 20, 0);  // ORB-SLAM2: a global BA of the two keyframes
-  times.mapping_s = seconds_since(mapping_start);
+  bundle_adjustment({k0.id, k1.id}, 20, 0);  // ORB-SLAM2: a global BA of the two keyframes (the first held)
+  mapping_s = seconds_since(mapping_start);
   f.T_world_camera = keyframes.back().frame.T_world_camera;
-  for (std::size_t i = 0; i < f.size(); ++i) f.map_point[i] = keyframes.back().frame.map_point[i];
-  // The reference frame's trajectory entry becomes keyframe 0's.
+  f.map_point = keyframes.back().frame.map_point;
+  // The reference frame's trajectory entry becomes the new map's first keyframe's.
   relative[init_reference.index] = {k0.id, core::SE3()};
+  reference_keyframe = k1.id;
+  have_init_reference = false;
+  made = static_cast<int>(reconstructed.size());
+  inlier_ratio = static_cast<double>(reconstructed.size()) / static_cast<double>(matches.size());
+  note = "monocular initialisation with frame " + std::to_string(init_reference.index) + ": " + model;
+  return true;
+}
+
+FrameResult VisualSlam::Impl::initialise_monocular(FrameData f, FrameResult result, FrameTimes times, Clock::time_point start, Clock::time_point tracking_start) {
+  result.health = TrackingHealth::kLost;
+  result.tracked = false;
+  std::string note;
+  int made = 0;
+  double ratio = 0.0;
+  const bool ok = two_view_map(f, core::SE3(), 1.0, true, note, made, ratio, times.mapping_s);
+  result.note = note;
+  if (!ok) {
+    relative.emplace_back(-1, core::SE3());
+    times.tracking_s = seconds_since(tracking_start);
+    result.times = times;
+    result.times.total_s = seconds_since(start);
+    ++frames;
+    return result;
+  }
   result.tracked = true;
   result.health = TrackingHealth::kOk;
   result.keyframe = true;
-  result.inliers = static_cast<int>(reconstructed.size());
-  result.inlier_ratio = static_cast<double>(reconstructed.size()) / static_cast<double>(matches.size());
-  result.note = "monocular initialisation with frame " + std::to_string(init_reference.index) + ": " + note + "; scale unobservable (median depth set to 1)";
-  reference_keyframe = k1.id;
+  result.inliers = made;
+  result.inlier_ratio = ratio;
+  // Scale: the median depth of the points in the reference is 1 (ORB-SLAM2).
+  result.note += "; scale unobservable (median depth set to 1)";
   last = std::move(f);
   T_world_last_tracked = last.T_world_camera;
   have_last = true;

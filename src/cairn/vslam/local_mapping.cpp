@@ -437,7 +437,7 @@ void VisualSlam::Impl::local_bundle_adjustment() {
   summary->local_ba_s += seconds_since(start);
 }
 
-// Bundle adjustment on the engine of the keyframes `local` (free, but keyframe 0) and every
+// Bundle adjustment on the engine of the keyframes `local` (free, but anchors_segment's) and every
 // point they see, the other keyframes that see those points fixed; `first` LM iterations with
 // Huber, chi^2 outliers removed, `second` more without the kernel, outlier observations erased.
 void VisualSlam::Impl::bundle_adjustment(const std::set<int>& local, int first, int second_iterations) {
@@ -461,7 +461,7 @@ void VisualSlam::Impl::bundle_adjustment(const std::set<int>& local, int first, 
     auto& v = pose_values[kf];
     backend::se3_to_values(keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera, v.data());
     pose_var[kf] = problem.add_variable(v.data(), backend::se3_manifold());
-    if (constant || kf == 0) problem.set_constant(pose_var[kf]);
+    if (constant || anchors_segment(kf)) problem.set_constant(pose_var[kf]);
   };
   for (const int kf : local) add_pose(kf, false);
   for (const int kf : fixed) add_pose(kf, true);
@@ -518,7 +518,7 @@ void VisualSlam::Impl::bundle_adjustment(const std::set<int>& local, int first, 
     std::map<int, int> second_pose;
     for (auto& [kf, v] : pose_values) {
       second_pose[kf] = second.add_variable(v.data(), backend::se3_manifold());
-      if (fixed.count(kf) || kf == 0) second.set_constant(second_pose[kf]);
+      if (fixed.count(kf) || anchors_segment(kf)) second.set_constant(second_pose[kf]);
     }
     std::swap(pose_var, second_pose);
     for (const int id : local_points) {
@@ -533,7 +533,7 @@ void VisualSlam::Impl::bundle_adjustment(const std::set<int>& local, int first, 
     if (is_outlier[e]) erase_observation(edges[e].point, edges[e].kf);
   }
   for (const int kf : local) {
-    if (kf != 0) keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera = backend::se3_from_values(pose_values[kf].data());
+    if (!anchors_segment(kf)) keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera = backend::se3_from_values(pose_values[kf].data());
   }
   for (const int id : local_points) {
     MapPoint& mp = points[static_cast<std::size_t>(id)];

@@ -375,8 +375,18 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
   std::vector<core::Sim3> before(n);  // S_world_keyframe the graph starts from
   for (std::size_t k = 0; k < n; ++k) before[k] = core::Sim3(old_poses[k]);
   std::vector<int> connected{current};
-  for (const auto& [shared, k] : covisible(current, options.min_covisible_points)) {
-    if (!keyframes[static_cast<std::size_t>(k)].bad && k != candidate) connected.push_back(k);
+  if (segment_of(candidate) != segment_of(current)) {
+    // A merge (ORB-SLAM3 LoopClosing::MergeLocal): the keyframe's whole segment, in its own frame
+    // and unit, is moved by the similarity before the graph spreads what remains.
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!keyframes[k].bad && static_cast<int>(k) != current && segment_of(static_cast<int>(k)) == segment_of(current)) {
+        connected.push_back(static_cast<int>(k));
+      }
+    }
+  } else {
+    for (const auto& [shared, k] : covisible(current, options.min_covisible_points)) {
+      if (!keyframes[static_cast<std::size_t>(k)].bad && k != candidate) connected.push_back(k);
+    }
   }
   const core::SE3& T_wc = old_poses[static_cast<std::size_t>(current)];
   for (const int k : connected) {
@@ -651,7 +661,7 @@ void VisualSlam::Impl::verify_revisit(int current, const std::vector<std::pair<i
 // segments, as a loop is verified. Needs no vocabulary. The candidates are near in time, so a
 // look-alike elsewhere is not among them.
 void VisualSlam::Impl::merge_with_recent(FrameResult& result) {
-  if (options.merge_recent_keyframes_of_new_map <= 0 || kind == io::SequenceKind::kMonocular) return;
+  if (options.merge_recent_keyframes_of_new_map <= 0) return;
   const int current = static_cast<int>(keyframes.size()) - 1;
   const int own = segment_of(current);
   int age = 0;

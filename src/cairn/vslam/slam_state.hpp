@@ -200,6 +200,13 @@ struct VisualSlam::Impl {
     return s;
   }
   int segment_of(int kf) const { return find(keyframes[static_cast<std::size_t>(kf)].segment); }
+  // The keyframe that holds its segment's gauge in bundle adjustment: the first keyframe of a
+  // segment not merged into an older one (keyframe 0 always; ORB-SLAM3 fixes each map's first
+  // keyframe). Without it a young segment's local BA has no fixed pose at all.
+  bool anchors_segment(int kf) const {
+    const KeyFrame& k = keyframes[static_cast<std::size_t>(kf)];
+    return k.starts_segment && find(k.segment) == k.segment;
+  }
   // Per frame: reference keyframe and the pose relative to it, for the final trajectory.
   std::vector<std::pair<int, core::SE3>> relative;
   // A keyframe's pose; a culled one's through its chain of parents (ORB-SLAM2's trajectory
@@ -419,7 +426,21 @@ struct VisualSlam::Impl {
   // `note` says which model and why it failed.
   bool reconstruct_two_views(const FrameData& a, const FrameData& b, const std::vector<std::pair<int, int>>& matches, core::SE3& T_b_a,
                              std::vector<std::pair<int, Eigen::Vector3d>>& points_a, std::string& note) const;
+  // One frame of the two-view initialisation of a map (segment): false (with `note`) until
+  // init_reference and `f` reconstruct; then two keyframes and their points, the reference at
+  // T_world_reference with the points' median depth in it `median_depth` (initialisation.cpp).
+  bool two_view_map(FrameData& f, const core::SE3& T_world_reference, double median_depth, bool add_second_to_database, std::string& note,
+                    int& made, double& inlier_ratio, double& mapping_s);
   FrameResult initialise_monocular(FrameData f, FrameResult result, FrameTimes times, Clock::time_point start, Clock::time_point tracking_start);
+  // Monocular, lost for new_map_after_lost_frames: the frame fed to the two-view initialisation of
+  // a new map segment; on success `result` reports it (tracking.cpp).
+  void start_monocular_segment(FrameData& f, FrameResult& result, FrameTimes& times);
+  // Monocular: the next lost frame goes to start_monocular_segment.
+  bool initialising_new_segment() const {
+    return kind == io::SequenceKind::kMonocular && lost && options.new_map_after_lost_frames > 0 &&
+           lost_frames + 1 >= options.new_map_after_lost_frames;
+  }
+  double median_point_depth(int kf) const;
 
   // --- One frame (tracking.cpp) ---
   FrameResult track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, vision::SmallBlurryImage sbi, FrameTimes times,

@@ -865,6 +865,8 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
         lost = false;
         lost_frames = 0;
         have_velocity = false;
+      } else if (options.new_map_after_lost_frames > 0 && kind == io::SequenceKind::kMonocular && lost_frames >= options.new_map_after_lost_frames) {
+        start_monocular_segment(f, result, times);
       }
     } else {
       lost_frames = 0;
@@ -940,6 +942,66 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
   result.times.total_s = seconds_since(start);
   ++frames;
   return result;
+}
+
+// The Atlas for one camera (ORB-SLAM3 Tracking::Track: a map lost for good is set aside and the
+// next frames initialise a new one). A lost frame that did not relocalise is fed to the two-view
+// initialisation (initialisation.cpp two_view_map), the first of them as its reference; when two
+// views reconstruct, they start a new map segment. Its first keyframe is put where tracking was
+// lost and its unit is a guess, the median depth of the last reference keyframe's points
+// (ORB-SLAM2 KeyFrame::ComputeSceneMedianDepth), so that an unmerged segment is drawn near its
+// place at about the right size; the Sim(3) of a merge (loop_closing.cpp) corrects both. The
+// segment's first keyframe then holds its gauge (anchors_segment) until a merge.
+void VisualSlam::Impl::start_monocular_segment(FrameData& f, FrameResult& result, FrameTimes& times) {
+  if (lost_frames == options.new_map_after_lost_frames) have_init_reference = false;  // a fresh reference for this loss
+  const double median_depth = median_point_depth(reference_keyframe);
+  const int previous_segment = segment;
+  segment = static_cast<int>(segment_parent.size());
+  segment_parent.push_back(segment);
+  FrameData attempt = f;
+  std::string note;
+  int made = 0;
+  double ratio = 0.0, init_mapping_s = 0.0;
+  if (!two_view_map(attempt, T_world_last_tracked, median_depth, false, note, made, ratio, init_mapping_s)) {
+    segment_parent.pop_back();
+    segment = previous_segment;
+    result.note += "; new map: " + note;
+    return;
+  }
+  f = std::move(attempt);
+  const auto mapping_start = Clock::now();
+  detect_and_close_loop(result);
+  if (!result.loop_closed) merge_with_recent(result);
+  f.T_world_camera = keyframes.back().frame.T_world_camera;
+  f.map_point = keyframes.back().frame.map_point;
+  times.mapping_s += init_mapping_s + seconds_since(mapping_start);
+  ++summary->maps_started;
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, "lost for %d frames: new map segment %d started by ", lost_frames, segment);
+  result.note = buffer + note + " (its unit a guess: the median depth of the last map's points)";
+  result.new_map = true;
+  result.keyframe = true;
+  result.tracked = true;
+  result.health = TrackingHealth::kDegraded;
+  result.inliers = made;
+  result.inlier_ratio = ratio;
+  lost = false;
+  lost_frames = 0;
+  have_velocity = false;
+}
+
+// The median depth of a keyframe's points in its camera (ORB-SLAM2 KeyFrame::ComputeSceneMedianDepth); 1 without any.
+double VisualSlam::Impl::median_point_depth(int kf) const {
+  if (kf < 0) return 1.0;
+  const KeyFrame& k = keyframes[static_cast<std::size_t>(kf)];
+  const core::SE3 T_camera_world = k.frame.T_world_camera.inverse();
+  std::vector<double> depths;
+  for (const int id : k.frame.map_point) {
+    if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) depths.push_back((T_camera_world * points[static_cast<std::size_t>(id)].p_world).z());
+  }
+  if (depths.empty()) return 1.0;
+  std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
+  return depths[depths.size() / 2] > 0.0 ? depths[depths.size() / 2] : 1.0;
 }
 
 }  // namespace cairn::vslam

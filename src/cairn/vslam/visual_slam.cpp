@@ -125,7 +125,10 @@ FrameResult VisualSlam::add_monocular(core::Timestamp time, const cv::Mat& gray)
   if (gray.cols != impl_->width || gray.rows != impl_->height) throw std::invalid_argument("the image size changed within the sequence");
   const auto start = Clock::now();
   FrameTimes times;
-  vision::Features f = (impl_->keyframes.empty() ? impl_->orb_initialisation : impl_->orb).extract(gray);
+  // Twice the features while a map is being initialised, the first or a new segment's (ORB-SLAM3
+  // uses mpIniORBextractor whenever its active map is not initialised).
+  const bool initialising = impl_->keyframes.empty() || impl_->initialising_new_segment();
+  vision::Features f = (initialising ? impl_->orb_initialisation : impl_->orb).extract(gray);
   vision::SmallBlurryImage sbi = small_blurry_image(gray, options_);
   times.features_s = seconds_since(start);
   vision::StereoMatches none;
