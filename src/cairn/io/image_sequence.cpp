@@ -111,7 +111,7 @@ CameraCalibration read_kitti_calibration(const std::string& path) {
   std::vector<std::vector<double>> rows;
   std::vector<std::string> labels;
   std::optional<std::vector<double>> p0, p1;
-  std::size_t unlabelled = 0;
+  std::size_t unlabelled = 0, p1_line = 0;
   while (reader.next_line()) {
     if (is_blank_or_comment(reader.line())) continue;
     std::vector<std::string_view> tokens = split_whitespace(reader.line());
@@ -128,8 +128,12 @@ CameraCalibration read_kitti_calibration(const std::string& path) {
     }
     std::vector<double> values;
     for (const auto& t : tokens) values.push_back(parse_double(reader, t, "a projection-matrix entry"));
-    if (label == "P0" || (label.empty() && unlabelled == 0)) p0 = values;
-    else p1 = values;
+    if (label == "P0" || (label.empty() && unlabelled == 0)) {
+      p0 = values;
+    } else {
+      p1 = values;
+      p1_line = reader.line_number();
+    }
     if (label.empty()) ++unlabelled;
   }
   if (!p0 || !p1) throw ParseError(path, 0, "expected the projection matrices P0 and P1 (labelled, or the first two lines)");
@@ -143,6 +147,9 @@ CameraCalibration read_kitti_calibration(const std::string& path) {
     throw ParseError(path, 0, "P0 and P1 differ in fx, cx or cy: the images are not a rectified stereo pair");
   }
   c.baseline_m = -((*p1)[3] - (*p0)[3]) / c.fx;
+  if (!std::isfinite(c.baseline_m)) {  // a subnormal fx (1e-310) or P1[0,3] near -DBL_MAX overflows
+    throw ParseError(path, p1_line, "the baseline -(P1[0,3] - P0[0,3]) / fx is not a finite number: expected fx and P1[0,3] of a real camera");
+  }
   if (!(c.baseline_m > 0.0)) {
     throw ParseError(path, 0, "P1[0,3] - P0[0,3] must be negative (camera 1 right of camera 0), found a baseline of " +
                                   std::to_string(c.baseline_m) + " m");
@@ -177,7 +184,9 @@ std::optional<core::Timestamp> time_from_name(const std::string& name) {
   const std::string stem = fs::path(name).stem().string();
   if (stem.empty()) return std::nullopt;
   const bool digits = std::all_of(stem.begin(), stem.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
-  if (digits && stem.size() >= 16 && stem.size() <= 19) return core::Timestamp::from_nanoseconds(std::stoll(stem));
+  // parse_nanoseconds / parse_seconds: nullopt (not a time) beyond int64 nanoseconds, where
+  // std::stoll threw std::out_of_range and Timestamp::from_seconds overflowed.
+  if (digits && stem.size() >= 16 && stem.size() <= 19) return core::Timestamp::parse_nanoseconds(stem);
   const std::size_t dot = stem.find('.');
   if (dot == std::string::npos || dot == 0 || dot + 1 == stem.size() || stem.find('.', dot + 1) != std::string::npos) {
     return std::nullopt;
@@ -187,7 +196,7 @@ std::optional<core::Timestamp> time_from_name(const std::string& name) {
       !std::all_of(stem.begin() + static_cast<std::ptrdiff_t>(dot) + 1, stem.end(), digit)) {
     return std::nullopt;
   }
-  return core::Timestamp::from_seconds(std::stod(stem));
+  return core::Timestamp::parse_seconds(stem);
 }
 
 // One time per frame: from `times_path` (one time in seconds per line) when it exists; else, when
@@ -203,9 +212,15 @@ std::vector<core::Timestamp> frame_times(const fs::path& times_path, const std::
       if (is_blank_or_comment(reader.line())) continue;
       const auto tokens = split_whitespace(reader.line());
       if (tokens.size() != 1) reader.fail("expected one time in seconds per line");
-      const double t = parse_double(reader, tokens[0], "a time in seconds");
-      if (!stamps.empty() && !(t > stamps.back().seconds())) reader.fail("times must increase strictly");
-      stamps.push_back(core::Timestamp::from_seconds(t));
+      // Parsed to the nanosecond and bounded (Timestamp::from_seconds overflows beyond 9.2e9 s),
+      // and compared as stored: two times less than 1 ns apart would be one stamp.
+      const std::optional<core::Timestamp> t = core::Timestamp::parse_seconds(tokens[0]);
+      if (!t) reader.fail("expected a time in seconds (a finite number at most 9.2e9 s from 0), found " + quote_token(tokens[0]));
+      if (!stamps.empty() && !(*t > stamps.back())) {
+        reader.fail("times must increase strictly (to the nanosecond): " + t->to_seconds_string() + " s follows " +
+                    stamps.back().to_seconds_string() + " s");
+      }
+      stamps.push_back(*t);
     }
     if (stamps.size() != names.size()) {
       throw ParseError(times_path.string(), 0, "expected one time per frame: " + std::to_string(names.size()) + " frames, " +

@@ -31,6 +31,10 @@ constexpr std::string_view kMagic = "CAIRN_BOW_VOCABULARY";
 constexpr std::uint32_t kFormatVersion = 1;
 constexpr std::size_t kHeaderBytes = 8 * 4;
 constexpr std::size_t kNodeRecordBytes = 4 + 4 + 32 + 8;
+// Largest node weight a vocabulary may hold. An idf weight is log(images / images with the word),
+// below 23 for 2^32 images; far larger weights are corrupt, and near DBL_MAX they make transform()
+// sum to infinity and return NaN weights.
+constexpr double kMaxNodeWeight = 1e6;
 
 int distance(const Descriptor& a, const Descriptor& b) {
   return std::popcount(a[0] ^ b[0]) + std::popcount(a[1] ^ b[1]) + std::popcount(a[2] ^ b[2]) +
@@ -345,6 +349,11 @@ class VocabularyBuilder {
       }
       if (!(v.weight_[i] >= 0.0) || !std::isfinite(v.weight_[i])) {
         return Problem{i, "node " + std::to_string(i) + " has weight " + std::to_string(v.weight_[i]) + ", expected a finite number >= 0"};
+      }
+      if (v.weight_[i] > kMaxNodeWeight) {
+        char weight[32];
+        std::snprintf(weight, sizeof weight, "%g", v.weight_[i]);
+        return Problem{i, "node " + std::to_string(i) + " has weight " + weight + ", expected at most 1e6 (an idf weight, log(images / images with the word))"};
       }
     }
     v.link_children();
@@ -845,7 +854,8 @@ Vocabulary VocabularyBuilder::parse_dbow2_text(const std::string& path, const st
   if (v.parent_.size() < 2) fail(lines.size(), "expected node lines after the header, found none");
   if (const auto problem = link_and_check(v)) {
     std::string message = problem->message;
-    if (problem->node != 0 && v.word_of_node_[problem->node] == Vocabulary::kNoWord &&
+    // (first_child_ is empty when the check stopped before linking, e.g. at a weight)
+    if (problem->node != 0 && problem->node + 1 < v.first_child_.size() && v.word_of_node_[problem->node] == Vocabulary::kNoWord &&
         v.first_child_[problem->node] == v.first_child_[problem->node + 1]) {
       message = "node " + std::to_string(problem->node) + " is marked as inner (is-leaf 0) but no node has it as parent";
     }
