@@ -62,9 +62,11 @@ double ate(const io::Trajectory& reference, const io::Trajectory& estimate) {
 
 // Simulates `scenario` with `seed`, writes its files (the log goes through the CARMEN reader
 // exactly as `cairn slam2d` reads it) and runs the pipeline scan by scan.
-SimRun run_simulated(const std::string& scenario_name, std::uint64_t seed, const Slam2dOptions& options = {}) {
+SimRun run_simulated(const std::string& scenario_name, std::uint64_t seed, const Slam2dOptions& options = {},
+                     const std::function<void(sim::Scenario&)>& adjust = {}) {
   auto scenario = sim::make_scenario(scenario_name);
   EXPECT_TRUE(scenario.has_value());
+  if (adjust) adjust(*scenario);
   SimRun run;
   run.truth = sim::simulate(*scenario, seed);
   const fs::path dir = temp_dir(scenario_name + "-" + std::to_string(seed));
@@ -296,6 +298,30 @@ TEST(Slam2dScenarios, KidnappingStartsASegmentAndAcceptsNothingFalse) {
   EXPECT_LE(*ok_again_at, *lost_at + 10);
   EXPECT_GE(s.segments.size(), 2u);
   EXPECT_EQ(loops.false_accepted, 0);
+}
+
+// Issue 20, kidnapping seed 4 of bench/slam2d_recovery.py (dropped in top-room-3 heading 2.4 rad,
+// 5.3 m from where it was picked up): the scan after the drop half-matches the corridor map, and
+// an ICP restart without the odometry prior slid 6.2 m along the corridor (position sigma 0.71 m)
+// into a look-alike room; the next scans matched there at 98 %, and 9 loop closures up to 11 m
+// off followed (measured 2026-11-25). A restart must now pin the position: the kidnapping is
+// declared lost and a new segment started, as in the other nine seeds, and nothing false accepted.
+TEST(Slam2dScenarios, KidnappingIntoALookAlikeRoomAcceptsNothingFalse) {
+  const SimRun run = run_simulated("kidnapping", 4, {}, [](sim::Scenario& scenario) {
+    scenario.kidnap.drop_place = "top-room-3";
+    scenario.kidnap.drop_heading_rad = 2.4;
+  });
+  const auto& s = run.slam->summary();
+  const LoopCheck loops = check_loops(run);
+  std::optional<std::size_t> lost_at;
+  for (const auto& e : s.health_events) {
+    if (!lost_at && e.to == Health::kLost && e.scan >= 551) lost_at = e.scan;
+  }
+  std::printf("kidnapping seed 4 (top-room-3): lost at scan %zu, %zu segments, %zu merges, %d loops accepted (%d false), ATE %.3f m\n",
+              lost_at.value_or(0), s.segments.size(), s.merges.size(), loops.accepted, loops.false_accepted, run.ate_rmse_m);
+  EXPECT_EQ(loops.false_accepted, 0);
+  ASSERT_TRUE(lost_at.has_value()) << "the kidnapping (scan 551) must make the state lost";
+  EXPECT_LE(*lost_at, 556u);
 }
 
 // Issue 20, building-yard (seed 1): out through door A into a yard where most scans see nothing
