@@ -787,5 +787,26 @@ TEST(ReaderFuzzRegression, VocabularyWeightNearDblMaxIsRefused) {
   fs::remove_all(dir);
 }
 
+TEST(ReaderFuzzRegression, EurocResolutionBeyondIntAndEmptyFileNamesAreRefused) {
+  // resolution: [1e300, 480] was converted to int (undefined behaviour); a data.csv line
+  // "123," was accepted with the image folder itself as the image.
+  const fs::path dir = scratch("regression_euroc");
+  const fs::path mav = dir / "mav0";
+  std::string yaml = euroc_sensor_yaml(-0.0216401454975);
+  yaml.replace(yaml.find("[752, 480]"), 10, "[1e300, 480]");
+  write(mav / "cam0" / "sensor.yaml", yaml);
+  core::SE3 T;
+  expect_parse_error([&] { read_euroc_camera((mav / "cam0" / "sensor.yaml").string(), &T); }, mav / "cam0" / "sensor.yaml", 16,
+                     "whole pixels");
+  write(mav / "cam0" / "sensor.yaml", euroc_sensor_yaml(-0.0216401454975));
+  EXPECT_EQ(read_euroc_camera((mav / "cam0" / "sensor.yaml").string(), &T).width, 752);
+  write(mav / "cam1" / "sensor.yaml", euroc_sensor_yaml(0.0883));
+  const std::string csv = "#timestamp [ns],filename\n1403636579763555584,1403636579763555584.png\n1403636579813555456, \n";
+  write(mav / "cam0" / "data.csv", csv);
+  write(mav / "cam1" / "data.csv", csv);
+  expect_parse_error([&] { read_euroc_stereo(dir.string()); }, mav / "cam0" / "data.csv", 3, "image file name");
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace cairn::io

@@ -490,7 +490,11 @@ CameraCalibration read_euroc_camera(const std::string& path, core::SE3* T_body_c
   }
   line = yaml_list(lines, "resolution", v, path);
   if (line > 0) {
-    if (v.size() != 2 || !(v[0] >= 1.0) || !(v[1] >= 1.0)) throw ParseError(path, line, "resolution: expected [width, height]");
+    // Bounded before the conversion to int (beyond INT_MAX it is undefined behaviour).
+    if (v.size() != 2 || !(v[0] >= 1.0) || !(v[1] >= 1.0) || !(v[0] <= 1e6) || !(v[1] <= 1e6) || v[0] != std::floor(v[0]) ||
+        v[1] != std::floor(v[1])) {
+      throw ParseError(path, line, "resolution: expected [width, height] in whole pixels from 1 to 1000000");
+    }
     c.width = static_cast<int>(v[0]);
     c.height = static_cast<int>(v[1]);
   }
@@ -534,6 +538,7 @@ ImageSequence read_euroc_stereo(const std::string& folder) {
       std::string name(f[1]);
       while (!name.empty() && (name.back() == ' ' || name.back() == '\r')) name.pop_back();
       while (!name.empty() && name.front() == ' ') name.erase(name.begin());
+      if (name.empty()) reader.fail("expected an image file name after the timestamp, found none");
       out.emplace_back(*t, (csv.parent_path() / "data" / name).string());
     }
     if (out.empty()) throw ParseError(csv.string(), 0, "no images listed");
