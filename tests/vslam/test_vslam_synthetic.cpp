@@ -1101,12 +1101,6 @@ TEST(VisualSlamSynthetic, MonocularLoopIsClosedOverSim3) {
   EXPECT_LT(ate_loops, 0.75 * ate_open);
 }
 
-}  // namespace
-}  // namespace cairn::vslam
-
-namespace cairn::vslam {
-namespace {
-
 // The monocular loop route looking 45 degrees left of the travel instead of 60, loop closure off:
 // here ORB-SLAM2's keyframe rules alone let the scale collapse in the corners (measured
 // 2026-11-25: the distance per frame fell to 0.013 of its early value, the error reached 8 m,
@@ -1149,12 +1143,6 @@ TEST(VisualSlamSynthetic, MonocularScaleHoldsThroughFastTurns) {
   EXPECT_LT(on.scale_drift, 1.25);
   EXPECT_LT(on.ate, 0.3);
 }
-
-}  // namespace
-}  // namespace cairn::vslam
-
-namespace cairn::vslam {
-namespace {
 
 // The Atlas for one camera: the monocular loop route (60 degrees left, as the loop test) with
 // the lens covered for frames [45, 80) (5.2 m, the second corner included: uniform grey images).
