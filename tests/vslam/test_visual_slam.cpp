@@ -238,7 +238,8 @@ void run_tum_place_recognition(bool bow_restricted) {
               s.maps_merged);
   // Coverage and the accuracy target (ATE <= 0.025 m at every 4th frame). Measured
   // 2026-11-25 (docs/vslam.md): 147 of 149 frames in the main map at 0.0165 m (brute force) and
-  // 0.0169 m (vocabulary nodes); before the image-alignment start and the fusion of duplicates
+  // 0.0169 m (vocabulary nodes), 0.0163 m and 0.0172 m once a merge joins the segments before
+  // its global bundle adjustment (second session); before the image-alignment start and the fusion of duplicates
   // the main map held 60 frames, so these bounds are what those two changes brought.
   EXPECT_GT(tracked.size() + in_other_maps, seq.frames.size() * 3 / 4);
   EXPECT_GE(tracked.size(), seq.frames.size() * 9 / 10);

@@ -287,6 +287,10 @@ void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData&
   } else {
     correct_poses_se3(current, candidate, probe);
   }
+  // A merge joins the two segments (the older keeps its id) before the global bundle
+  // adjustment, so that the younger one's first keyframe no longer holds a gauge of its own.
+  const int a = segment_of(current), b = segment_of(candidate);
+  if (a != b) segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
   fuse_loop_and_adjust(current, probe);
 }
 
@@ -298,8 +302,18 @@ void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData&
 // them. Both corrections measure the edges on the uncorrected poses.
 std::vector<std::tuple<int, int, double>> VisualSlam::Impl::essential_graph_edges(const std::vector<int>& good) const {
   std::vector<std::tuple<int, int, double>> edges;
-  for (std::size_t g = 1; g < good.size(); ++g) {
-    edges.emplace_back(good[g - 1], good[g], keyframes[static_cast<std::size_t>(good[g])].starts_segment ? 1e-6 : 1.0);
+  // The consecutive chain runs within each segment (keyframes of two unmerged segments may
+  // alternate after a relocalisation back into the older one: their relative pose means
+  // nothing); a keyframe whose previous one lies in another segment is also linked to it at
+  // 1e-6, which keeps the graph connected.
+  std::map<int, int> last_of_segment;
+  for (std::size_t g = 0; g < good.size(); ++g) {
+    const int k = good[g];
+    const int seg = segment_of(k);
+    const auto it = last_of_segment.find(seg);
+    if (it != last_of_segment.end()) edges.emplace_back(it->second, k, keyframes[static_cast<std::size_t>(k)].starts_segment ? 1e-6 : 1.0);
+    if (g > 0 && (it == last_of_segment.end() || it->second != good[g - 1])) edges.emplace_back(good[g - 1], k, 1e-6);
+    last_of_segment[seg] = k;
   }
   for (std::size_t g = 0; g < good.size(); ++g) {
     const int k = good[g];
@@ -363,9 +377,11 @@ void VisualSlam::Impl::correct_poses_se3(int current, int candidate, const Frame
 // T_kw X). The essential graph over Sim(3) (variables S_world_keyframe, backend/sim3_factors.hpp;
 // consecutive keyframes and covisibility edges of >= 100 points with the uncorrected relative
 // poses, the loop edge candidate -> keyframe with the corrected ones, unit information, the
-// candidate fixed as in ORB-SLAM2) then spreads the correction, scale included; each keyframe
-// takes the rigid part (R, t) of its similarity, and each point moves with the keyframe that
-// corrected it or its reference: X' = S_after S_before^-1 X.
+// candidate fixed as in ORB-SLAM2; in a merge the younger segment is moved whole instead, and
+// the older side's keyframe is fixed) then spreads the correction, scale included; each keyframe
+// takes the rigid part (R, t) of its similarity, each point moves with the keyframe that
+// corrected it or its reference: X' = S_after S_before^-1 X, and each frame's pose relative to
+// its reference keyframe is scaled with it.
 void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const FrameData& probe, double scale) {
   const std::size_t n = keyframes.size();
   std::vector<core::SE3> old_poses(n);
@@ -374,24 +390,32 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
   const core::Sim3 S_cw_corrected(T_cw_found.so3(), scale * T_cw_found.translation(), scale);
   std::vector<core::Sim3> before(n);  // S_world_keyframe the graph starts from
   for (std::size_t k = 0; k < n; ++k) before[k] = core::Sim3(old_poses[k]);
-  std::vector<int> connected{current};
+  const core::SE3& T_wc = old_poses[static_cast<std::size_t>(current)];
+  std::vector<int> connected;  // keyframes given a corrected similarity before the graph
+  int held = candidate;        // the graph's fixed keyframe
   if (segment_of(candidate) != segment_of(current)) {
-    // A merge (ORB-SLAM3 LoopClosing::MergeLocal): the keyframe's whole segment, in its own frame
-    // and unit, is moved by the similarity before the graph spreads what remains.
+    // A merge (ORB-SLAM3 LoopClosing::MergeLocal): the younger segment (the larger id; the older
+    // holds keyframe 0 or was there first), in its own frame and unit, is moved whole by the
+    // similarity between the two maps' frames, then the graph spreads what remains. M maps the
+    // current keyframe's world into the candidate's (S_cw_corrected^-1 T_cw), or the reverse.
+    const bool move_current = segment_of(current) > segment_of(candidate);
+    const int moved = move_current ? segment_of(current) : segment_of(candidate);
+    const core::Sim3 M = move_current ? S_cw_corrected.inverse() * core::Sim3(T_wc.inverse()) : core::Sim3(T_wc) * S_cw_corrected;
+    if (!move_current) held = current;
     for (std::size_t k = 0; k < n; ++k) {
-      if (!keyframes[k].bad && static_cast<int>(k) != current && segment_of(static_cast<int>(k)) == segment_of(current)) {
-        connected.push_back(static_cast<int>(k));
-      }
+      if (keyframes[k].bad || segment_of(static_cast<int>(k)) != moved) continue;
+      connected.push_back(static_cast<int>(k));
+      before[k] = M * core::Sim3(old_poses[k]);
     }
   } else {
+    connected.push_back(current);
     for (const auto& [shared, k] : covisible(current, options.min_covisible_points)) {
       if (!keyframes[static_cast<std::size_t>(k)].bad && k != candidate) connected.push_back(k);
     }
-  }
-  const core::SE3& T_wc = old_poses[static_cast<std::size_t>(current)];
-  for (const int k : connected) {
-    const core::Sim3 S_kw = core::Sim3(old_poses[static_cast<std::size_t>(k)].inverse() * T_wc) * S_cw_corrected;
-    before[static_cast<std::size_t>(k)] = S_kw.inverse();
+    for (const int k : connected) {
+      const core::Sim3 S_kw = core::Sim3(old_poses[static_cast<std::size_t>(k)].inverse() * T_wc) * S_cw_corrected;
+      before[static_cast<std::size_t>(k)] = S_kw.inverse();
+    }
   }
   std::vector<int> corrected_by(points.size(), -1);
   for (const int k : connected) {
@@ -413,7 +437,7 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
     backend::sim3_to_values(before[static_cast<std::size_t>(k)], values[static_cast<std::size_t>(k)].data());
     var[static_cast<std::size_t>(k)] = problem.add_variable(values[static_cast<std::size_t>(k)].data(), backend::sim3_manifold());
   }
-  problem.set_constant(var[static_cast<std::size_t>(candidate)]);
+  problem.set_constant(var[static_cast<std::size_t>(held)]);
   const auto add_edge = [&](int a, int b, const core::Sim3& S_a_b, double weight) {
     const backend::Sim3SquareRootInformation L = std::sqrt(weight) * backend::Sim3SquareRootInformation::Identity();
     problem.add_factor(std::make_unique<backend::Sim3RelativeFactor>(S_a_b, L), {var[static_cast<std::size_t>(a)], var[static_cast<std::size_t>(b)]});
@@ -439,6 +463,13 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
     if (keyframes[r].bad) continue;
     mp.p_world = after[r] * (before[r].inverse() * mp.p_world);
     update_normal_and_depth(mp);
+  }
+  // Around keyframe k the map is now after[k] applied to its old camera coordinates, so a
+  // frame's pose relative to its reference keyframe is scaled by after[k]'s scale as well (the
+  // trajectory composes keyframe poses with these; ORB-SLAM2 leaves them unscaled).
+  for (auto& [r, T_r_frame] : relative) {
+    if (r < 0 || keyframes[static_cast<std::size_t>(r)].bad) continue;
+    T_r_frame = core::SE3(T_r_frame.so3(), after[static_cast<std::size_t>(r)].scale() * T_r_frame.translation());
   }
   if (reference_keyframe >= 0) {
     const auto r = static_cast<std::size_t>(reference_keyframe);
@@ -506,11 +537,7 @@ VisualSlam::Impl::LoopOutcome VisualSlam::Impl::try_loop(int current, LoopRecord
   record.decision = "accepted";
   record.reason = std::to_string(record.matches) + accepted_reason;
   correct_loop(current, candidate, probe, record.scale);
-  if (record.merge) {
-    const int a = segment_of(current), b = segment_of(candidate);
-    segment_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-    ++summary->maps_merged;
-  }
+  if (record.merge) ++summary->maps_merged;
   summary->loops.push_back(record);
   ++summary->loops_accepted;
   result.loop_closed = true;
@@ -601,20 +628,24 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
 
 // A return that tracking closed by itself. ORB-SLAM2's DetectLoop leaves out the keyframes
 // covisible with the query: when tracking the local map has already matched the old place's
-// points (TUM fr1/desk: the keyframe at frame 97 shares 102 points with frame 23's), there is
+// points (TUM fr1/desk: the keyframe at frame 97 shares about 100 points with frame 23's), there is
 // no loop left to correct and nothing is reported. cairn reports it, verified: an old keyframe
 // of the same segment (outside the last loop_min_keyframes_apart) that shares points with this
 // one, and that some keyframe in between did not see (the place went out of view and came
 // back), is verified as a loop candidate is (verify_loop, the drift bound included) and
 // recorded with decision "revisit" and the correction the verification found; the map is left
-// as it is. One candidate per keyframe (the one sharing most points), and none within
-// loop_min_keyframes_apart keyframes of the last verified revisit.
+// as it is. One candidate per keyframe (the one sharing most points), each old keyframe tried
+// once, and none within loop_min_keyframes_apart keyframes of the last verified revisit. Not
+// for monocular runs.
 void VisualSlam::Impl::verify_revisit(int current, const std::vector<std::pair<int, int>>& neighbours) {
+  // Monocular: the Sim(3) verification needs matches whose two sides are different points, and
+  // a revisit's matches are the same points; there is nothing it could verify.
+  if (kind == io::SequenceKind::kMonocular) return;
   if (last_revisit_keyframe >= 0 && current < last_revisit_keyframe + options.loop_min_keyframes_apart) return;
   int best = -1, best_shared = 0;
   for (const auto& [shared, k] : neighbours) {
     if (k > current - options.loop_min_keyframes_apart || shared <= best_shared || keyframes[static_cast<std::size_t>(k)].bad ||
-        segment_of(k) != segment_of(current)) {
+        segment_of(k) != segment_of(current) || revisit_tried.count(k) > 0) {
       continue;
     }
     std::set<int> saw_it;
@@ -628,6 +659,7 @@ void VisualSlam::Impl::verify_revisit(int current, const std::vector<std::pair<i
     best_shared = shared;
   }
   if (best < 0) return;
+  revisit_tried.insert(best);  // one verification per old keyframe, whatever its outcome
   const KeyFrame& kf = keyframes[static_cast<std::size_t>(current)];
   const KeyFrame& old = keyframes[static_cast<std::size_t>(best)];
   LoopRecord record;

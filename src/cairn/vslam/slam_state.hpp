@@ -189,6 +189,7 @@ struct VisualSlam::Impl {
   vision::BowDatabase database;
   int last_loop_keyframe = 0;
   int last_revisit_keyframe = -1;  // the last keyframe whose revisit was verified (verify_revisit)
+  std::set<int> revisit_tried;      // old keyframes verify_revisit has tried
   std::vector<std::pair<std::set<int>, int>> consistent_groups;  // ORB-SLAM2 mvConsistentGroups
   std::set<int> pending_loop_candidates;  // the candidates behind consistent_groups: never culled (ORB-SLAM2 SetNotErase)
   // The Atlas: map segments, merged by union-find.
