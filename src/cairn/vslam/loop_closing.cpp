@@ -473,7 +473,10 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
   }
   if (reference_keyframe >= 0) {
     const auto r = static_cast<std::size_t>(reference_keyframe);
-    const auto move = [&](const core::SE3& T) { return (after[r] * before[r].inverse() * core::Sim3(T)).to_se3(); };
+    // The last frame's pose is in the old world, as the points were before the correction: it
+    // moves as they did, by after[r] applied to its old camera coordinates (before[r] is the
+    // corrected start of a keyframe that took the loop's similarity, not its old pose).
+    const auto move = [&](const core::SE3& T) { return (after[r] * core::Sim3(old_poses[r].inverse() * T)).to_se3(); };
     last.T_world_camera = move(last.T_world_camera);
     T_world_last_tracked = move(T_world_last_tracked);
   }
