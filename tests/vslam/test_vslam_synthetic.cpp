@@ -1225,5 +1225,80 @@ TEST(VisualSlamSynthetic, MonocularNewMapAfterTheLensIsCoveredMergesAtTheReturn)
   EXPECT_LT(ate, 0.25);
 }
 
+// The merge whose querying keyframe lies in the older segment: two laps of the monocular loop
+// route with the lens covered twice. Under the first cover (frames 45-79) tracking is lost and
+// segment 1 starts after it; under the second (frames 150-174, in segment 1) it is lost again
+// and, back at the start, relocalises into segment 0, which maps the second lap; when the second
+// lap reaches the stretch only segment 1 saw, a keyframe of segment 0 recognises segment 1's
+// keyframes and the younger segment 1 is moved onto segment 0.
+TEST(VisualSlamSynthetic, MonocularMergeFromTheOlderSegmentMovesTheYoungerOne) {
+  const SyntheticWorld world = monocular_loop_world();
+  double circuit_m = 0.0, extra = 0.0;
+  monocular_loop_route(-60.0 * kDeg, circuit_m, extra);
+  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner;
+  const std::vector<core::SE3> truth =
+      rounded_loop(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, 0.15, 2.0 * circuit_m + extra, -60.0 * kDeg);
+  const auto covered = [](std::size_t k) { return (k >= 45 && k < 80) || (k >= 150 && k < 175); };
+  const StereoCamera camera;
+  VisualSlamOptions options;
+  options.vocabulary = training_vocabulary();
+  VisualSlam slam(camera.calibration(), io::SequenceKind::kMonocular, options);
+  std::vector<FrameResult> results;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    const cv::Mat image = covered(k) ? cv::Mat(camera.height, camera.width, CV_8UC1, cv::Scalar(128)) : world.render(truth[k], camera);
+    FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(0.1 * static_cast<double>(k)), image);
+    if (r.new_map || r.loop_closed || r.relocalised || (r.health == TrackingHealth::kLost && !covered(k))) {
+      std::printf("  frame %3zu: %-8s segment %d new map %d reloc %d loop %d inliers %4d %s\n", k, health_name(r.health), r.segment,
+                  r.new_map ? 1 : 0, r.relocalised ? 1 : 0, r.loop_closed ? 1 : 0, r.inliers, r.note.c_str());
+    }
+    r.keypoints.clear();
+    r.keypoint_states.clear();
+    results.push_back(std::move(r));
+  }
+  const VisualSlamSummary& s = slam.summary();
+  for (const LoopRecord& loop : s.loops) {
+    if (loop.decision == "rejected") continue;
+    std::printf("  %s frame %zu (segment %d) -> %zu (segment %d): %s (%s), scale %.4f; true distance %.2f m\n", loop.merge ? "merge" : "loop",
+                loop.frame, results[loop.frame > 0 ? loop.frame - 1 : 0].segment, loop.candidate_frame, results[loop.candidate_frame].segment,
+                loop.decision.c_str(), loop.reason.c_str(), loop.scale, (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm());
+  }
+  const std::vector<int> segments = slam.frame_segments();
+  const std::vector<core::SE3> estimate = slam.trajectory();
+  std::vector<core::SE3> truth_tracked, estimate_tracked;
+  std::size_t tracked = 0, outside_main = 0;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    if (!results[k].tracked) continue;
+    ++tracked;
+    if (segments[k] != slam.main_segment()) {
+      ++outside_main;
+      continue;
+    }
+    truth_tracked.push_back(truth[k]);
+    estimate_tracked.push_back(estimate[k]);
+  }
+  const auto [ate, ate_max] = ate_sim3(truth_tracked, estimate_tracked, 0, truth_tracked.size() - 1);
+  // The older segment keeps its frame: the map's first pose (frame 0, the initialisation's
+  // reference) stays where the initialisation put it, at the origin.
+  const double origin_moved = estimate.front().translation().norm();
+  const double origin_turned_deg = Eigen::AngleAxisd(estimate.front().rotation_matrix()).angle() / kDeg;
+  int merges_from_older = 0, far_joins = 0;
+  for (const LoopRecord& loop : s.loops) {
+    if (loop.decision != "accepted") continue;
+    far_joins += (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm() > 2.5 ? 1 : 0;
+    merges_from_older += loop.merge && results[loop.frame - 1].segment == 0 && results[loop.candidate_frame].segment == 1 ? 1 : 0;
+  }
+  std::printf("two laps, lens covered twice: %zu frames, %zu tracked, %zu outside the first map; %zu maps started, %zu merged (%d "
+              "queried from segment 0), %zu relocalisations; frame 0 now %.4f map units and %.3f deg from the origin; Sim(3) ATE %.3f m "
+              "(max %.3f m); %d joins of views > 2.5 m apart\n",
+              truth.size(), tracked, outside_main, s.maps_started, s.maps_merged, merges_from_older, s.relocalisations, origin_moved,
+              origin_turned_deg, ate, ate_max, far_joins);
+  ASSERT_GE(merges_from_older, 1) << "the scenario did not produce a merge queried from the older segment";
+  EXPECT_EQ(far_joins, 0);
+  EXPECT_EQ(outside_main, 0u);
+  EXPECT_LT(origin_moved, 0.05);
+  EXPECT_LT(origin_turned_deg, 2.0);
+  EXPECT_LT(ate, 0.25);
+}
+
 }  // namespace
 }  // namespace cairn::vslam
