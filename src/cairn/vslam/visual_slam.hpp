@@ -139,7 +139,9 @@ struct VisualSlamOptions {
   /// The Atlas (ORB-SLAM3, Campos et al. 2021, Sec. IV): after this many lost frames in a row, a
   /// frame with enough stereo/depth points starts a new map segment (its own keyframes and
   /// points, placed where the motion model guessed, with no constraint to the old ones); a
-  /// verified loop between segments merges them (the same verification as a loop). 0 = never.
+  /// monocular run feeds its lost frames to a new two-view initialisation instead (the segment
+  /// placed where tracking was lost, its unit guessed). A verified loop between segments merges
+  /// them (the same verification as a loop; Sim(3) for monocular). 0 = never.
   int new_map_after_lost_frames = 3;
   /// A new segment's first this-many keyframes each try to merge with the 8 keyframes tracked
   /// last before it (verified as a loop; no vocabulary needed). 0 = only place recognition merges.
