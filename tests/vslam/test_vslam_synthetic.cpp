@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
+#include <tuple>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -1145,6 +1147,64 @@ TEST(VisualSlamSynthetic, MonocularScaleHoldsThroughFastTurns) {
   EXPECT_LT(on.ate, 0.3);
 }
 
+// A monocular run of `truth` with the lens covered (uniform grey images) where `covered` says so;
+// frames for which `show` holds are printed. The results keep no keypoints.
+std::vector<FrameResult> run_monocular_covered(VisualSlam& slam, const SyntheticWorld& world, const std::vector<core::SE3>& truth,
+                                               const StereoCamera& camera, const std::function<bool(std::size_t)>& covered,
+                                               const std::function<bool(std::size_t, const FrameResult&)>& show) {
+  std::vector<FrameResult> results;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    const cv::Mat image = covered(k) ? cv::Mat(camera.height, camera.width, CV_8UC1, cv::Scalar(128)) : world.render(truth[k], camera);
+    FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(0.1 * static_cast<double>(k)), image);
+    if (show(k, r)) {
+      std::printf("  frame %3zu%s: %-8s segment %d kf %d new map %d reloc %d loop %d inliers %4d %s\n", k, covered(k) ? " (covered)" : "",
+                  health_name(r.health), r.segment, r.keyframe ? 1 : 0, r.new_map ? 1 : 0, r.relocalised ? 1 : 0, r.loop_closed ? 1 : 0,
+                  r.inliers, r.note.c_str());
+    }
+    r.keypoints.clear();
+    r.keypoint_states.clear();
+    results.push_back(std::move(r));
+  }
+  return results;
+}
+
+// The tracked frames at the end of a run: how many, how many outside the first map, and the
+// Sim(3) ATE (RMSE, max) of those in it against the truth.
+struct MainMapResult {
+  std::size_t tracked = 0, outside_main = 0, in_main = 0;
+  double ate = 0.0, ate_max = 0.0;
+};
+MainMapResult main_map_against_truth(const VisualSlam& slam, const std::vector<FrameResult>& results, const std::vector<core::SE3>& truth) {
+  const std::vector<int> segments = slam.frame_segments();
+  const std::vector<core::SE3> estimate = slam.trajectory();
+  std::vector<core::SE3> truth_tracked, estimate_tracked;
+  MainMapResult m;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    if (!results[k].tracked) continue;
+    ++m.tracked;
+    if (segments[k] != slam.main_segment()) {
+      ++m.outside_main;
+      continue;
+    }
+    truth_tracked.push_back(truth[k]);
+    estimate_tracked.push_back(estimate[k]);
+  }
+  m.in_main = truth_tracked.size();
+  std::tie(m.ate, m.ate_max) = ate_sim3(truth_tracked, estimate_tracked, 0, truth_tracked.size() - 1);
+  return m;
+}
+
+// Accepted loops and merges joining views more than 2.5 m apart (the loop test's rule: keyframes
+// looking at walls 4.5-11 m away see the same place from up to about 2 m apart).
+int far_joins(const VisualSlamSummary& s, const std::vector<core::SE3>& truth) {
+  int n = 0;
+  for (const LoopRecord& loop : s.loops) {
+    if (loop.decision != "accepted") continue;
+    n += (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm() > 2.5 ? 1 : 0;
+  }
+  return n;
+}
+
 // The Atlas for one camera: the monocular loop route (60 degrees left, as the loop test) with
 // the lens covered for frames [45, 80) (5.2 m, the second corner included: uniform grey images).
 // Tracking must say `lost` under the cover, start a new map segment by a two-view initialisation
@@ -1160,20 +1220,11 @@ TEST(VisualSlamSynthetic, MonocularNewMapAfterTheLensIsCoveredMergesAtTheReturn)
   VisualSlamOptions options;
   options.vocabulary = training_vocabulary();
   VisualSlam slam(camera.calibration(), io::SequenceKind::kMonocular, options);
-  std::vector<FrameResult> results;
-  for (std::size_t k = 0; k < truth.size(); ++k) {
-    const cv::Mat image = k >= cover_from && k < cover_to ? cv::Mat(camera.height, camera.width, CV_8UC1, cv::Scalar(128))
-                                                          : world.render(truth[k], camera);
-    FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(0.1 * static_cast<double>(k)), image);
-    if (k + 5 >= cover_from && (k < cover_to + 15 || r.new_map || r.loop_closed || r.health != TrackingHealth::kOk)) {
-      std::printf("  frame %3zu%s: %-8s segment %d kf %d new map %d reloc %d loop %d inliers %4d %s\n", k,
-                  k >= cover_from && k < cover_to ? " (covered)" : "", health_name(r.health), r.segment, r.keyframe ? 1 : 0, r.new_map ? 1 : 0,
-                  r.relocalised ? 1 : 0, r.loop_closed ? 1 : 0, r.inliers, r.note.c_str());
-    }
-    r.keypoints.clear();
-    r.keypoint_states.clear();
-    results.push_back(std::move(r));
-  }
+  const std::vector<FrameResult> results = run_monocular_covered(
+      slam, world, truth, camera, [&](std::size_t k) { return k >= cover_from && k < cover_to; },
+      [&](std::size_t k, const FrameResult& r) {
+        return k + 5 >= cover_from && (k < cover_to + 15 || r.new_map || r.loop_closed || r.health != TrackingHealth::kOk);
+      });
   const VisualSlamSummary& s = slam.summary();
   for (const LoopRecord& loop : s.loops) {
     if (loop.decision == "rejected") continue;
@@ -1190,39 +1241,21 @@ TEST(VisualSlamSynthetic, MonocularNewMapAfterTheLensIsCoveredMergesAtTheReturn)
     if (k > new_map_at && r.loop_closed && merged_at == truth.size()) merged_at = k;
   }
   // Every tracked frame in the first map at the end, and the whole of them against the truth.
-  const std::vector<int> segments = slam.frame_segments();
-  const std::vector<core::SE3> estimate = slam.trajectory();
-  std::vector<core::SE3> truth_tracked, estimate_tracked;
-  std::size_t tracked = 0, outside_main = 0;
-  for (std::size_t k = 0; k < truth.size(); ++k) {
-    if (!results[k].tracked) continue;
-    ++tracked;
-    if (segments[k] != slam.main_segment()) {
-      ++outside_main;
-      continue;
-    }
-    truth_tracked.push_back(truth[k]);
-    estimate_tracked.push_back(estimate[k]);
-  }
-  const auto [ate, ate_max] = ate_sim3(truth_tracked, estimate_tracked, 0, truth_tracked.size() - 1);
-  int far_joins = 0;
-  for (const LoopRecord& loop : s.loops) {
-    if (loop.decision == "rejected") continue;
-    far_joins += (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm() > 2.5 ? 1 : 0;
-  }
+  const MainMapResult m = main_map_against_truth(slam, results, truth);
+  const int far = far_joins(s, truth);
   std::printf("monocular, lens covered for frames %zu-%zu: initialised at %zu; %zu covered frames reported ok; new map at frame %zu, "
               "merged at frame %zu; %zu maps started, %zu merged, %zu relocalisations; %zu tracked frames, %zu outside the first map; "
               "Sim(3) ATE of the first map's %zu frames %.3f m (max %.3f m); %d joins of views > 2.5 m apart\n",
-              cover_from, cover_to - 1, init, covered_ok, new_map_at, merged_at, s.maps_started, s.maps_merged, s.relocalisations, tracked,
-              outside_main, truth_tracked.size(), ate, ate_max, far_joins);
+              cover_from, cover_to - 1, init, covered_ok, new_map_at, merged_at, s.maps_started, s.maps_merged, s.relocalisations, m.tracked,
+              m.outside_main, m.in_main, m.ate, m.ate_max, far);
   EXPECT_LT(init, 15u);
   EXPECT_EQ(covered_ok, 0u) << "a frame of a covered lens reported ok";
   EXPECT_LE(new_map_at, cover_to + 10) << "no new map within 10 frames of the lens being uncovered";
   EXPECT_GE(s.maps_merged, 1u);
-  EXPECT_EQ(far_joins, 0) << "a merge or loop joined views more than 2.5 m apart";
-  EXPECT_EQ(outside_main, 0u) << "tracked frames left outside the first map";
-  EXPECT_GE(tracked, truth.size() - (cover_to - cover_from) - 25);
-  EXPECT_LT(ate, 0.25);
+  EXPECT_EQ(far, 0) << "a merge or loop joined views more than 2.5 m apart";
+  EXPECT_EQ(m.outside_main, 0u) << "tracked frames left outside the first map";
+  EXPECT_GE(m.tracked, truth.size() - (cover_to - cover_from) - 25);
+  EXPECT_LT(m.ate, 0.25);
 }
 
 // The merge whose querying keyframe lies in the older segment: two laps of the monocular loop
@@ -1243,18 +1276,10 @@ TEST(VisualSlamSynthetic, MonocularMergeFromTheOlderSegmentMovesTheYoungerOne) {
   VisualSlamOptions options;
   options.vocabulary = training_vocabulary();
   VisualSlam slam(camera.calibration(), io::SequenceKind::kMonocular, options);
-  std::vector<FrameResult> results;
-  for (std::size_t k = 0; k < truth.size(); ++k) {
-    const cv::Mat image = covered(k) ? cv::Mat(camera.height, camera.width, CV_8UC1, cv::Scalar(128)) : world.render(truth[k], camera);
-    FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(0.1 * static_cast<double>(k)), image);
-    if (r.new_map || r.loop_closed || r.relocalised || (r.health == TrackingHealth::kLost && !covered(k))) {
-      std::printf("  frame %3zu: %-8s segment %d new map %d reloc %d loop %d inliers %4d %s\n", k, health_name(r.health), r.segment,
-                  r.new_map ? 1 : 0, r.relocalised ? 1 : 0, r.loop_closed ? 1 : 0, r.inliers, r.note.c_str());
-    }
-    r.keypoints.clear();
-    r.keypoint_states.clear();
-    results.push_back(std::move(r));
-  }
+  const std::vector<FrameResult> results =
+      run_monocular_covered(slam, world, truth, camera, covered, [&](std::size_t k, const FrameResult& r) {
+        return r.new_map || r.loop_closed || r.relocalised || (r.health == TrackingHealth::kLost && !covered(k));
+      });
   const VisualSlamSummary& s = slam.summary();
   for (const LoopRecord& loop : s.loops) {
     if (loop.decision == "rejected") continue;
@@ -1262,42 +1287,29 @@ TEST(VisualSlamSynthetic, MonocularMergeFromTheOlderSegmentMovesTheYoungerOne) {
                 loop.frame, results[loop.frame > 0 ? loop.frame - 1 : 0].segment, loop.candidate_frame, results[loop.candidate_frame].segment,
                 loop.decision.c_str(), loop.reason.c_str(), loop.scale, (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm());
   }
-  const std::vector<int> segments = slam.frame_segments();
-  const std::vector<core::SE3> estimate = slam.trajectory();
-  std::vector<core::SE3> truth_tracked, estimate_tracked;
-  std::size_t tracked = 0, outside_main = 0;
-  for (std::size_t k = 0; k < truth.size(); ++k) {
-    if (!results[k].tracked) continue;
-    ++tracked;
-    if (segments[k] != slam.main_segment()) {
-      ++outside_main;
-      continue;
-    }
-    truth_tracked.push_back(truth[k]);
-    estimate_tracked.push_back(estimate[k]);
-  }
-  const auto [ate, ate_max] = ate_sim3(truth_tracked, estimate_tracked, 0, truth_tracked.size() - 1);
+  const MainMapResult m = main_map_against_truth(slam, results, truth);
+  const core::SE3 first = slam.trajectory().front();
   // The older segment keeps its frame: the map's first pose (frame 0, the initialisation's
   // reference) stays where the initialisation put it, at the origin.
-  const double origin_moved = estimate.front().translation().norm();
-  const double origin_turned_deg = Eigen::AngleAxisd(estimate.front().rotation_matrix()).angle() / kDeg;
-  int merges_from_older = 0, far_joins = 0;
+  const double origin_moved = first.translation().norm();
+  const double origin_turned_deg = Eigen::AngleAxisd(first.rotation_matrix()).angle() / kDeg;
+  const int far = far_joins(s, truth);
+  int merges_from_older = 0;
   for (const LoopRecord& loop : s.loops) {
-    if (loop.decision != "accepted") continue;
-    far_joins += (truth[loop.frame].translation() - truth[loop.candidate_frame].translation()).norm() > 2.5 ? 1 : 0;
-    merges_from_older += loop.merge && results[loop.frame - 1].segment == 0 && results[loop.candidate_frame].segment == 1 ? 1 : 0;
+    merges_from_older +=
+        loop.decision == "accepted" && loop.merge && results[loop.frame - 1].segment == 0 && results[loop.candidate_frame].segment == 1 ? 1 : 0;
   }
   std::printf("two laps, lens covered twice: %zu frames, %zu tracked, %zu outside the first map; %zu maps started, %zu merged (%d "
               "queried from segment 0), %zu relocalisations; frame 0 now %.4f map units and %.3f deg from the origin; Sim(3) ATE %.3f m "
               "(max %.3f m); %d joins of views > 2.5 m apart\n",
-              truth.size(), tracked, outside_main, s.maps_started, s.maps_merged, merges_from_older, s.relocalisations, origin_moved,
-              origin_turned_deg, ate, ate_max, far_joins);
+              truth.size(), m.tracked, m.outside_main, s.maps_started, s.maps_merged, merges_from_older, s.relocalisations, origin_moved,
+              origin_turned_deg, m.ate, m.ate_max, far);
   ASSERT_GE(merges_from_older, 1) << "the scenario did not produce a merge queried from the older segment";
-  EXPECT_EQ(far_joins, 0);
-  EXPECT_EQ(outside_main, 0u);
+  EXPECT_EQ(far, 0);
+  EXPECT_EQ(m.outside_main, 0u);
   EXPECT_LT(origin_moved, 0.05);
   EXPECT_LT(origin_turned_deg, 2.0);
-  EXPECT_LT(ate, 0.25);
+  EXPECT_LT(m.ate, 0.25);
 }
 
 }  // namespace

@@ -114,13 +114,8 @@ int VisualSlam::Impl::triangulate_new_points(int current, int count) {
     const core::SE3 T1_cw = f1.T_world_camera.inverse(), T2_cw = f2.T_world_camera.inverse();
     if (kind == io::SequenceKind::kMonocular) {
       // ORB-SLAM2: baseline / the neighbour's median scene depth at least 0.01.
-      std::vector<double> depths;
-      for (const int id : f2.map_point) {
-        if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) depths.push_back((T2_cw * points[static_cast<std::size_t>(id)].p_world).z());
-      }
-      if (depths.empty()) continue;
-      std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
-      if ((O2 - O1).norm() / depths[depths.size() / 2] < 0.01) continue;
+      const std::optional<double> depth = median_point_depth(k2_id);
+      if (!depth || (O2 - O1).norm() / *depth < 0.01) continue;
     } else if ((O2 - O1).norm() < stereo_baseline) {
       continue;  // ORB-SLAM2: no triangulation below the stereo baseline
     }

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <numeric>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
@@ -441,7 +442,8 @@ struct VisualSlam::Impl {
     return kind == io::SequenceKind::kMonocular && lost && options.new_map_after_lost_frames > 0 &&
            lost_frames + 1 >= options.new_map_after_lost_frames;
   }
-  double median_point_depth(int kf) const;
+  // The median depth of keyframe kf's points in its camera; none without points (tracking.cpp).
+  std::optional<double> median_point_depth(int kf) const;
 
   // --- One frame (tracking.cpp) ---
   FrameResult track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, vision::SmallBlurryImage sbi, FrameTimes times,

@@ -954,7 +954,8 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
 // segment's first keyframe then holds its gauge (anchors_segment) until a merge.
 void VisualSlam::Impl::start_monocular_segment(FrameData& f, FrameResult& result, FrameTimes& times) {
   if (lost_frames == options.new_map_after_lost_frames) have_init_reference = false;  // a fresh reference for this loss
-  const double median_depth = median_point_depth(reference_keyframe);
+  const std::optional<double> last_depth = reference_keyframe >= 0 ? median_point_depth(reference_keyframe) : std::nullopt;
+  const double median_depth = last_depth && *last_depth > 0.0 ? *last_depth : 1.0;
   const int previous_segment = segment;
   segment = static_cast<int>(segment_parent.size());
   segment_parent.push_back(segment);
@@ -990,18 +991,17 @@ void VisualSlam::Impl::start_monocular_segment(FrameData& f, FrameResult& result
   have_velocity = false;
 }
 
-// The median depth of a keyframe's points in its camera (ORB-SLAM2 KeyFrame::ComputeSceneMedianDepth); 1 without any.
-double VisualSlam::Impl::median_point_depth(int kf) const {
-  if (kf < 0) return 1.0;
+// The median depth of a keyframe's points in its camera (ORB-SLAM2 KeyFrame::ComputeSceneMedianDepth); none without points.
+std::optional<double> VisualSlam::Impl::median_point_depth(int kf) const {
   const KeyFrame& k = keyframes[static_cast<std::size_t>(kf)];
   const core::SE3 T_camera_world = k.frame.T_world_camera.inverse();
   std::vector<double> depths;
   for (const int id : k.frame.map_point) {
     if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) depths.push_back((T_camera_world * points[static_cast<std::size_t>(id)].p_world).z());
   }
-  if (depths.empty()) return 1.0;
+  if (depths.empty()) return std::nullopt;
   std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
-  return depths[depths.size() / 2] > 0.0 ? depths[depths.size() / 2] : 1.0;
+  return depths[depths.size() / 2];
 }
 
 }  // namespace cairn::vslam
