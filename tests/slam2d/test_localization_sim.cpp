@@ -3,7 +3,7 @@
 // reuse and localisation", "Measured") records the numbers.
 //
 // The world: the office plan (office_world) furnished with cabinets and shelves at irregular
-// places (furnished_office), so that every part of the ring corridor looks different. The plain
+// places (OfficeOptions::furnished), so that every part of the ring corridor looks different. The plain
 // office is half-turn symmetric but for one pillar: there two places explain every scan and the
 // right outcome is to stay lost (the `kidnapping` scenario; docs/slam2d.md). Real buildings are
 // furnished; the furniture is what makes a place identifiable at all.
@@ -51,44 +51,6 @@ fs::path temp_dir(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("cairn-test-localization-sim-" + name + "-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   return dir;
-}
-
-// The office (default plan: 28 m x 20.8 m, ring corridor 2.4 m wide, centre lines 1.2 m from its
-// walls) with furniture against the walls: every piece leaves >= 0.75 m to the corridor centre
-// lines and the rooms' centre lines the routes drive, and none stands in a doorway.
-sim::WorldWithRoute furnished_office(const sim::OfficeOptions& plan) {
-  sim::WorldWithRoute office = sim::office_world(plan);
-  sim::World& world = office.world;
-  const sim::OfficeFloor floor(plan);
-  const Vector2 o = floor.origin();
-  auto box = [&](double x0, double y0, double x1, double y1) { world.add_rectangle(o + Vector2(x0, y0), o + Vector2(x1, y1)); };
-  // Ring corridor (bottom leg y 5-7.4, top leg 13.4-15.8, west leg x 0-2.4, east leg 25.6-28).
-  // The plan is half-turn symmetric about its centre, (x, y) -> (28 - x, 20.8 - y): no piece
-  // lies within 2 m of another's image, so no stretch of the ring looks like its image.
-  box(5.2, 5.0, 6.4, 5.45);     // bottom leg, against the rooms
-  box(19.0, 5.0, 19.6, 5.35);
-  box(8.0, 6.95, 9.6, 7.4);     // bottom leg, against the block
-  box(23.0, 7.0, 23.5, 7.4);
-  box(12.0, 15.4, 12.5, 15.8);  // top leg, against the rooms
-  box(14.2, 15.35, 15.6, 15.8);
-  box(9.0, 13.4, 9.8, 13.8);    // top leg, against the block
-  box(0.0, 9.0, 0.45, 10.2);    // west leg, outer wall
-  box(27.6, 7.8, 28.0, 8.3);    // east leg, outer wall
-  box(25.6, 11.6, 26.0, 12.4);  // east leg, against the block
-  box(0.6, 15.4, 1.4, 15.8);    // the two top corners
-  box(25.4, 15.45, 26.4, 15.8);
-  // One shelf per room against its east wall, each at another distance from the corridor and of
-  // another length: no room looks like another, shifted or turned half round.
-  const double room_width = plan.width_m / plan.rooms_per_row;
-  const double y4 = floor.depth_m() - plan.room_depth_m;
-  for (int i = 0; i < plan.rooms_per_row; ++i) {
-    const double x1 = (i + 1) * room_width;
-    const double bottom_y = 1.4 + 0.7 * i;
-    box(x1 - 0.45, bottom_y, x1, bottom_y + 0.8 + 0.25 * i);
-    const double top_y = y4 + 0.6 + 0.6 * i;
-    box(x1 - 0.45, top_y, x1, top_y + 0.7 + 0.3 * i);
-  }
-  return office;
 }
 
 struct SimulatedLog {
@@ -209,8 +171,9 @@ SeedResult run_seed(std::uint64_t seed, Drop drop, const fs::path& dir) {
   const auto start = std::chrono::steady_clock::now();
   SeedResult result;
   result.seed = seed;
-  const sim::OfficeOptions plan;
-  const sim::WorldWithRoute office = furnished_office(plan);
+  sim::OfficeOptions plan;
+  plan.furnished = true;
+  const sim::WorldWithRoute office = sim::office_world(plan);
   const sim::OfficeFloor floor(plan);
   sim::TrajectoryOptions one_lap;
   one_lap.laps = 1;
@@ -263,8 +226,10 @@ SeedResult run_seed(std::uint64_t seed, Drop drop, const fs::path& dir) {
     char name[64];
     std::snprintf(name, sizeof name, "ring (%.1f, %.1f)", at.x(), at.y());
     result.drop_place = name;
-    route = floor.ring_from(at, seed % 2 == 1);
-    route.insert(route.begin(), at);
+    const std::vector<Vector2> ring = floor.ring_from(at, seed % 2 == 1);
+    route.reserve(ring.size() + 1);
+    route.push_back(at);
+    route.insert(route.end(), ring.begin(), ring.end());
   }
   std::vector<sim::TrajectorySample> after = sim::generate_trajectory(route, one_lap, false, drop_heading_rad);
   after.resize(std::min(after.size(), static_cast<std::size_t>(kAfterJumpS / one_lap.sample_period_s)));

@@ -32,6 +32,40 @@ std::optional<std::pair<int, int>> parse_room(std::string_view place, int rooms_
   return std::make_pair(row, index);
 }
 
+/// OfficeOptions::furnished's pieces, in plan coordinates of the default plan (28 m x 20.8 m:
+/// ring corridor's bottom leg y 5-7.4, top leg 13.4-15.8, west leg x 0-2.4, east leg 25.6-28).
+/// The plan is half-turn symmetric about its centre, (x, y) -> (28 - x, 20.8 - y): no piece lies
+/// within 2 m of another's image.
+void add_furniture(World& world, const OfficeFloor& floor, const OuterDoors& doors) {
+  CAIRN_ASSERT(doors.west_width_m <= 0.0 && doors.east_width_m <= 0.0, "a furnished office floor has no outer doors");
+  const OfficeOptions& o = floor.options();
+  const Vector2 origin = floor.origin();
+  auto box = [&](double x0, double y0, double x1, double y1) { world.add_rectangle(origin + Vector2(x0, y0), origin + Vector2(x1, y1)); };
+  box(5.2, 5.0, 6.4, 5.45);  // bottom leg, against the rooms
+  box(19.0, 5.0, 19.6, 5.35);
+  box(8.0, 6.95, 9.6, 7.4);  // bottom leg, against the block
+  box(23.0, 7.0, 23.5, 7.4);
+  box(12.0, 15.4, 12.5, 15.8);  // top leg, against the rooms
+  box(14.2, 15.35, 15.6, 15.8);
+  box(9.0, 13.4, 9.8, 13.8);    // top leg, against the block
+  box(0.0, 9.0, 0.45, 10.2);    // west leg, outer wall
+  box(27.6, 7.8, 28.0, 8.3);    // east leg, outer wall
+  box(25.6, 11.6, 26.0, 12.4);  // east leg, against the block
+  box(0.6, 15.4, 1.4, 15.8);    // the two top corners
+  box(25.4, 15.45, 26.4, 15.8);
+  // One shelf per room against its east wall, each at another distance from the corridor and of
+  // another length.
+  const double room_width = o.width_m / o.rooms_per_row;
+  const double y4 = floor.depth_m() - o.room_depth_m;
+  for (int i = 0; i < o.rooms_per_row; ++i) {
+    const double x1 = (i + 1) * room_width;
+    const double bottom_y = 1.4 + 0.7 * i;
+    box(x1 - 0.45, bottom_y, x1, bottom_y + 0.8 + 0.25 * i);
+    const double top_y = y4 + 0.6 + 0.6 * i;
+    box(x1 - 0.45, top_y, x1, top_y + 0.7 + 0.3 * i);
+  }
+}
+
 }  // namespace
 
 void check_office_options(const OfficeOptions& o, const std::string& prefix, std::vector<std::string>& problems) {
@@ -51,6 +85,14 @@ void check_office_options(const OfficeOptions& o, const std::string& prefix, std
   above(o.block_depth_m, 2.0, prefix + ".block_depth_m");
   above(o.door_width_m, 0.5, prefix + ".door_width_m");
   if (o.people < 0 || o.people > 8) problems.push_back(prefix + ".people must be in [0, 8]");
+  if (o.furnished) {
+    const OfficeOptions plan;
+    if (o.rooms_per_row != plan.rooms_per_row || o.width_m != plan.width_m || o.room_depth_m != plan.room_depth_m ||
+        o.corridor_width_m != plan.corridor_width_m || o.block_depth_m != plan.block_depth_m || o.door_width_m != plan.door_width_m) {
+      problems.push_back(prefix + ".furnished: the furniture is laid out for the default plan (4 rooms per row, 28 m wide, rooms 5 m "
+                                  "deep, corridor 2.4 m, block 6 m, doors 1 m); leave the plan's sizes at their defaults");
+    }
+  }
   if (o.rooms_per_row >= 2) {
     above(o.width_m / o.rooms_per_row, std::max(3.0, o.door_width_m + 1.0), prefix + ".width_m / rooms_per_row");
     above((o.width_m - 2 * o.corridor_width_m) / 3.0, o.door_width_m + 3.0,
@@ -193,6 +235,8 @@ void add_office_floor(World& world, const OfficeFloor& floor, const OuterDoors& 
   world.circles.push_back({at(c + 0.5 * block_room_width, block_mid_y), 0.6});
   world.circles.push_back({at(c + 2.5 * block_room_width, block_mid_y), 0.6});
   world.circles.push_back({at(c + 1.5 * block_room_width + 2.2, block_mid_y), 0.5});
+
+  if (o.furnished) add_furniture(world, floor, doors);
 
   // People: eight tracks 0.45 m from a wall (0.5 m of free space to the route's lane) or in
   // rooms the route never enters; the first `people` of them are used.

@@ -51,6 +51,15 @@ struct OfficeOptions {
   /// People walking back and forth (0..8): along the corridors beside the robot's lane, and in
   /// rooms the route does not enter. They do not avoid the robot, nor it them.
   int people = 0;
+  /// Furniture at irregular places: 12 cabinets along the ring corridor (two of them in its top
+  /// corners) and a shelf against the east wall of every room, each room's at another distance
+  /// from the corridor and of another length. No piece lies within 2 m of another's half-turn
+  /// image, so no stretch of the ring and no room looks like another, shifted or turned half
+  /// round: the bare plan is half-turn symmetric but for one pillar, and there a robot that does
+  /// not know where it is cannot tell the two halves apart. Every piece leaves >= 0.75 m to the
+  /// centre lines the routes drive and none stands in a doorway. Laid out for the default plan
+  /// (check_office_options refuses it on another) and for floors without outer doors.
+  bool furnished = false;
 };
 
 /// Checks an office plan; every problem is appended to `problems`, each naming `prefix`.field.
