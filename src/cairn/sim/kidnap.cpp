@@ -10,13 +10,14 @@
 
 namespace cairn::sim {
 
-std::vector<Vector2> route_after_drop(const OfficeFloor& floor, std::string_view place) {
+std::vector<Vector2> route_after_drop(const OfficeFloor& floor, std::string_view place, int rings) {
   const auto center = floor.place_center(place);
   CAIRN_ASSERT(center.has_value(), "route_after_drop: unknown place (check is_valid first)");
+  CAIRN_ASSERT(rings >= 1, "route_after_drop: at least one ring");
   const Vector2 exit = floor.place_exit(place);
   std::vector<Vector2> route = {*center, exit};
   const std::vector<Vector2> ring = floor.ring_from(exit, true);
-  route.insert(route.end(), ring.begin(), ring.end());
+  for (int i = 0; i < rings; ++i) route.insert(route.end(), ring.begin(), ring.end());
   return route;
 }
 

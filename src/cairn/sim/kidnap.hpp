@@ -27,14 +27,19 @@ struct KidnapOptions {
   std::string drop_place = "top-room-0";
   /// Its heading when put down, radians (0 = +x, east).
   double drop_heading_rad = 0.0;
+  /// How many times it then drives round the ring corridor (1-5). A merge of the segment started
+  /// after the drop needs evidence along a long stretch of mapped corridor (slam2d's
+  /// merge_min_spread_m); one lap gives some drop places too little of it.
+  int rings_after = 1;
 
   /// The smallest distance between pick-up and drop the validation accepts, metres.
   static constexpr double kMinimumJumpM = 3.0;
 };
 
 /// The route after the drop: from the place's centre out of its door onto the ring corridor,
-/// once round it counter-clockwise and back to the door. Precondition: floor.place_center(place).
-std::vector<Vector2> route_after_drop(const OfficeFloor& floor, std::string_view place);
+/// `rings` times round it counter-clockwise and back to the door. Preconditions:
+/// floor.place_center(place), rings >= 1.
+std::vector<Vector2> route_after_drop(const OfficeFloor& floor, std::string_view place, int rings = 1);
 
 /// `before` up to and including its last sample at most `time_s` after its first, then every
 /// sample of `after`, re-stamped to follow on one sample period later, one after another.

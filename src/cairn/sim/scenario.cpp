@@ -174,6 +174,9 @@ void check_mission(const Scenario& s, std::vector<std::string>& problems) {
   }
   if (s.kidnap_enabled) {
     if (!(s.kidnap.time_s > 0.0)) problems.push_back(found("kidnap.time_s must be > 0", s.kidnap.time_s));
+    if (s.kidnap.rings_after < 1 || s.kidnap.rings_after > 5) {
+      problems.push_back("kidnap.rings_after must be in [1, 5] (found " + std::to_string(s.kidnap.rings_after) + ")");
+    }
     if (office_ok && !OfficeFloor(s.office).place_center(s.kidnap.drop_place)) {
       std::string names;
       for (const auto& n : OfficeFloor(s.office).place_names()) names += (names.empty() ? "" : ", ") + n;
@@ -568,7 +571,11 @@ std::vector<Parameter> parameters(Scenario& s) {
     add("office.corridor_width_m", "m", "width of the ring corridor", &s.office.corridor_width_m);
     add("office.block_depth_m", "m", "depth of the central block of three rooms", &s.office.block_depth_m);
     add("office.door_width_m", "m", "door opening", &s.office.door_width_m);
-    if (with_people) add("office.people", "", "people walking back and forth (0-8)", &s.office.people);
+    if (with_people) {
+      add("office.people", "", "people walking back and forth (0-8)", &s.office.people);
+      add("office.furnished", "", "cabinets along the corridors and a shelf in every room at irregular places, which break "
+          "the plan's half-turn symmetry (default plan only)", &s.office.furnished);
+    }
   };
   switch (s.world) {
     case WorldKind::kOffice:
@@ -578,6 +585,7 @@ std::vector<Parameter> parameters(Scenario& s) {
         add("kidnap.drop_place", "", "and put down at the centre of this room (bottom-room-<i>, top-room-<i>, middle-room)",
             &s.kidnap.drop_place);
         add("kidnap.drop_heading_rad", "rad", "facing this way (0 = east)", &s.kidnap.drop_heading_rad);
+        add("kidnap.rings_after", "", "then drives round the ring corridor this many times (1-5)", &s.kidnap.rings_after);
       }
       break;
     case WorldKind::kBuildingYard:
@@ -850,7 +858,7 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
     TrajectoryOptions after_options = trajectory;
     after_options.laps = 1;
     const std::vector<TrajectorySample> after =
-        generate_trajectory(route_after_drop(OfficeFloor(scenario.office), scenario.kidnap.drop_place), after_options,
+        generate_trajectory(route_after_drop(OfficeFloor(scenario.office), scenario.kidnap.drop_place, scenario.kidnap.rings_after), after_options,
                             false, scenario.kidnap.drop_heading_rad);
     std::size_t first_after = 0;
     result.truth = splice_kidnap(before, after, scenario.kidnap.time_s, &first_after);
