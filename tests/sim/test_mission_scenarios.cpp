@@ -345,6 +345,42 @@ TEST(Kidnapping, TimeAndPlaceAreParametersAndAreChecked) {
   EXPECT_NE(why.find("at least 3 m apart"), std::string::npos) << why;
 }
 
+// kidnap.rings_after adds whole rounds of the ring after the drop; office.furnished adds 20 boxes
+// (12 cabinets, a shelf in each of the 8 rooms: 80 walls) and only on the default plan.
+TEST(Kidnapping, RingsAfterAndFurnitureAreParametersAndAreChecked) {
+  auto path_after_drop = [](const SimulationResult& r) {
+    double length = 0.0;
+    for (std::size_t k = r.mission->kidnap->first_sample_after + 1; k < r.truth.size(); ++k)
+      length += (r.truth[k].T_world_body.translation() - r.truth[k - 1].T_world_body.translation()).norm();
+    return length;
+  };
+  std::string why;
+  Scenario once = *make_scenario("kidnapping");
+  Scenario twice = once;
+  twice.kidnap.rings_after = 2;
+  twice.office.furnished = true;
+  ASSERT_TRUE(twice.is_valid(&why)) << why;
+  const SimulationResult r1 = simulate(once, 1);
+  const SimulationResult r2 = simulate(twice, 1);
+  // The ring's centre lines are 2 x (25.6 + 8.4) = 68 m round; its corners are rounded.
+  const double extra_m = path_after_drop(r2) - path_after_drop(r1);
+  EXPECT_GT(extra_m, 60.0);
+  EXPECT_LT(extra_m, 68.0);
+  EXPECT_EQ(r2.world.world.walls.size(), r1.world.world.walls.size() + 80);
+
+  for (const int rings : {0, 6}) {
+    Scenario bad = *make_scenario("kidnapping");
+    bad.kidnap.rings_after = rings;
+    EXPECT_FALSE(bad.is_valid(&why));
+    EXPECT_NE(why.find("kidnap.rings_after must be in [1, 5]"), std::string::npos) << why;
+  }
+  Scenario wide = *make_scenario("kidnapping");
+  wide.office.furnished = true;
+  wide.office.width_m = 32.0;
+  EXPECT_FALSE(wide.is_valid(&why));
+  EXPECT_NE(why.find("office.furnished: the furniture is laid out for the default plan"), std::string::npos) << why;
+}
+
 TEST(LongAbsence, TheWestWingIsRevisitedAfterMoreThanFiveMinutesAnd200m) {
   const SimulationResult& r = simulated("long-absence");
   const auto& segments = r.mission->segments;
