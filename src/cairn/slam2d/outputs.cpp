@@ -318,7 +318,8 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                         {"path_length_m", g.path_length_m},
                         {"extent_m", {{"min", {g.min_world.x(), g.min_world.y()}}, {"max", {g.max_world.x(), g.max_world.y()}}}},
                         {"merged_with", g.merged_with},
-                        {"started_because", g.started_because}});
+                        {"started_because", g.started_because},
+                        {"odometry_link_trusted", g.odometry_link_trusted}});
   }
   report["segments"] = segments;
   // Segment groups that nothing joined to segment 0: their placement rests on odometry alone.

@@ -151,8 +151,9 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (merge_searches_per_keyframe < 0 || merge_confirmations < 1 || merge_max_misses_in_a_row < 1)
     problems << "segments: merge_searches_per_keyframe >= 0, merge_confirmations >= 1, merge_max_misses_in_a_row >= 1; ";
   if (!(merge_max_distance_m >= 0.0 && merge_min_spread_m >= 0.0 && merge_min_spread_corroborated_m >= 0.0 &&
-        merge_odometry_radius_m >= 0.0 && merge_odometry_angle_rad >= 0.0 && merge_agreement_m > 0.0 && merge_agreement_rad > 0.0))
-    problems << "segments: merge distances and angles must be >= 0 (agreement > 0); ";
+        merge_odometry_radius_m >= 0.0 && merge_odometry_angle_rad >= 0.0 && merge_agreement_m > 0.0 && merge_agreement_rad > 0.0 &&
+        merge_support_gap_m > 0.0 && merge_miss_coverage_m >= 0.0))
+    problems << "segments: merge distances and angles must be >= 0 (agreement and support gap > 0); ";
   if (!(search_budget_per_keyframe > 0.0 && search_budget_burst >= 1.0 && global_search_max_range_m > 0.0) ||
       global_search_every_n_keyframes < 1)
     problems << "search_budget: per_keyframe > 0, burst >= 1, global_search_max_range_m > 0, global_search_every_n_keyframes >= 1; ";
@@ -785,22 +786,21 @@ struct Slam2d::Impl {
       pending.keyframes.push_back(candidate.keyframe);
       pending.misses_in_a_row = 0;
     }
-    // Support: agreeing matches from distinct keyframes spread over a stretch of path long enough
-    // to leave a room and see its surroundings (one room may have a twin the map holds and the
-    // true one it does not).
-    double first_m = 1e300, last_m = -1e300;
-    for (const int k : pending.keyframes) {
-      first_m = std::min(first_m, keyframes[static_cast<std::size_t>(k)].path_length_m);
-      last_m = std::max(last_m, keyframes[static_cast<std::size_t>(k)].path_length_m);
-    }
-    const double spread_m = last_m - first_m;
+    // Support: agreeing matches from distinct keyframes along a stretch of path long enough to
+    // leave a room and see its surroundings (one room may have a twin the map holds and the true
+    // one it does not). The path between consecutive supporting keyframes counts, each gap up to
+    // merge_support_gap_m: a placement kept through a stretch the other map never covered (no
+    // test there counts against it, count_misses) gains nothing from that stretch.
+    const double spread_m = supported_path_m(pending);
     const int support = static_cast<int>(pending.candidates.size());
     // Odometry is independent evidence: a placement close to where the segment link (odometry)
     // puts the keyframe needs a short stretch of support; one far from it (a kidnapping, a
-    // symmetric floor plan seen from an unmapped twin) needs a long one.
-    const core::SE2 placed = delta * T_world_keyframe;
-    const bool corroborated = (placed.translation() - T_world_keyframe.translation()).norm() <= options.merge_odometry_radius_m &&
-                              std::abs(core::wrap_angle(placed.angle() - T_world_keyframe.angle())) <= options.merge_odometry_angle_rad;
+    // symmetric floor plan seen from an unmapped twin) needs a long one. Only when the links are
+    // trusted: after a loss on consistent scans the robot may have been carried, and a wrong
+    // placement may lie near the stale odometry by chance (measured: a kidnapping 7 m off).
+    const bool corroborated = odometry_chain_trusted(submaps[static_cast<std::size_t>(candidate.submap)].segment,
+                                                     keyframes[static_cast<std::size_t>(candidate.keyframe)].segment, summary) &&
+                              near_odometry(delta, T_world_keyframe);
     const double needed_m = corroborated ? options.merge_min_spread_corroborated_m : options.merge_min_spread_m;
     if (support < options.merge_confirmations || spread_m < needed_m) {
       candidate.reason = "verified across segments; " + std::to_string(support) + " agreeing matches over " + std::to_string(spread_m) +
@@ -809,9 +809,13 @@ struct Slam2d::Impl {
       return;
     }
     // Competing placements: another live hypothesis of the same groups with support of its own.
+    // Odometry is evidence scans cannot give: a placement near the odometry link is not held up
+    // by one far from it (on a floor plan symmetric under a half turn the twin placement is
+    // supported by the scans as long as the true one), only by another near it.
     for (const PendingMerge& other : pending_merges) {
       if (&other == &pending || other.candidates.size() < 2) continue;
       if (group_of(other.group_a) != group_a || group_of(other.group_b) != group_b) continue;
+      if (corroborated && !near_odometry(other.delta, T_world_keyframe)) continue;
       candidate.reason = "verified across segments and confirmed, but another placement of the same segments is also "
                          "supported (hypothesis " + std::to_string(other.id) + "); waiting until one is refuted";
       return;
@@ -840,8 +844,50 @@ struct Slam2d::Impl {
     ++summary.merges_refused_as_ambiguous;
   }
 
+  // Whether every segment link on the odometry chain between segments `a` and `b` (the starts of
+  // the segments after the older one, up to the younger) is trusted (SegmentInfo).
+  static bool odometry_chain_trusted(int a, int b, const Slam2dSummary& summary) {
+    for (int s = std::min(a, b) + 1; s <= std::max(a, b); ++s)
+      if (!summary.segments[static_cast<std::size_t>(s)].odometry_link_trusted) return false;
+    return true;
+  }
+
+  // Whether the placement `delta` moves a keyframe at `T_world_keyframe` (its group's estimate,
+  // placed by the odometry link) by less than merge_odometry_radius_m / merge_odometry_angle_rad.
+  bool near_odometry(const core::SE2& delta, const core::SE2& T_world_keyframe) const {
+    const core::SE2 placed = delta * T_world_keyframe;
+    return (placed.translation() - T_world_keyframe.translation()).norm() <= options.merge_odometry_radius_m &&
+           std::abs(core::wrap_angle(placed.angle() - T_world_keyframe.angle())) <= options.merge_odometry_angle_rad;
+  }
+
+  // The path a placement's support covers: between consecutive supporting keyframes (in path
+  // order), each gap counted up to merge_support_gap_m.
+  double supported_path_m(const PendingMerge& pending) const {
+    std::vector<double> along;
+    for (const int k : pending.keyframes) along.push_back(keyframes[static_cast<std::size_t>(k)].path_length_m);
+    std::sort(along.begin(), along.end());
+    double path_m = 0.0;
+    for (std::size_t i = 1; i < along.size(); ++i) path_m += std::min(along[i] - along[i - 1], options.merge_support_gap_m);
+    return path_m;
+  }
+
+  // Whether a keyframe of `group` lies within merge_miss_coverage_m of `T_world_pose`.
+  bool covered_by_group(int group, const core::SE2& T_world_pose) const {
+    for (const Keyframe& kf : keyframes) {
+      if (group_of(kf.segment) == group &&
+          (kf.T_world_laser.translation() - T_world_pose.translation()).norm() <= options.merge_miss_coverage_m)
+        return true;
+    }
+    return false;
+  }
+
   // A search that tested a pending merge's placement and found nothing agreeing there counts
   // against it; a hypothesis missed at least twice and more often than supported is dropped.
+  // Nothing found where the other group's robot never passed (no keyframe of it within
+  // merge_miss_coverage_m of the pose the placement gives) does not count: a right placement is
+  // tested there whenever the robot drives where the other map never was, or saw only from afar
+  // (a kidnapped robot's ring beyond the part mapped before), and the map need not hold what
+  // the scan sees. A verified match elsewhere always counts.
   void count_misses(Slam2dSummary& summary) {
     // Per hypothesis tested by this job: contradicted when every one of its tests contradicts it.
     std::map<int, bool> contradicted;
@@ -854,6 +900,9 @@ struct Slam2d::Impl {
       // is, or a verified match elsewhere. A match rejected for degeneracy, ambiguity or a poor
       // fit says nothing either way (a corridor seen along its axis).
       const std::optional<LoopCandidate>& found = job.found[i];
+      if (!found &&
+          !covered_by_group(group_of(it->group_a), it->delta * keyframes[static_cast<std::size_t>(job.searches[i].header.keyframe)].T_world_laser))
+        continue;
       const bool against =
           !found || (found->accepted &&
                      !agree(it->delta * keyframes[static_cast<std::size_t>(found->keyframe)].T_world_laser, implied_pose(*found)));
@@ -1169,6 +1218,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
       next = Health::kLost;
       start_segment = true;
       m.probation = o.segment_confirm_scans;
+      summary_.segments[static_cast<std::size_t>(m.segment)].odometry_link_trusted = true;
       reason = segment_name + " on probation: this scan does not match its seed; the seed is dropped and this scan seeds it";
     }
   } else if (m.bad_matches_in_a_row >= o.lost_after_scans) {
@@ -1195,6 +1245,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
       info.first_keyframe = k;
       info.merged_with = m.segment;
       info.started_because = reason + "lost at scan " + std::to_string(scan_index);
+      info.odometry_link_trusted = false;  // until a seed of it is dropped on probation
       summary_.segments.push_back(info);
       reason += "new map segment " + std::to_string(m.segment) + " started from this scan";
     } else {

@@ -37,13 +37,19 @@
 ///  - Merging: segments not joined by a loop closure (groups) are searched for each other. A
 ///    verified match across groups proposes a placement (the rigid move of the keyframe's group
 ///    onto the matched one); later keyframes test it where it puts them. A placement is merged
-///    after `merge_confirmations` agreeing verified matches from distinct keyframes spread over
-///    `merge_min_spread_corroborated_m` of path when it agrees with the odometry link (moves the
-///    keyframe less than `merge_odometry_radius_m` / `merge_odometry_angle_rad`), or over
-///    `merge_min_spread_m` when it does not, and then only if no other supported placement of
-///    the same groups competes and the scan is unique over the whole map (no submap of another
-///    group scores within the ambiguity margin elsewhere, every heading). A placement not found
-///    again where it says `merge_max_misses_in_a_row` times is dropped. The merged group moves
+///    after `merge_confirmations` agreeing verified matches from distinct keyframes supporting
+///    `merge_min_spread_corroborated_m` of path when it agrees with a trusted odometry link
+///    (moves the keyframe less than `merge_odometry_radius_m` / `merge_odometry_angle_rad`, and
+///    every segment link between the two is SegmentInfo::odometry_link_trusted), or
+///    `merge_min_spread_m` when it does not (the path between consecutive supporting keyframes,
+///    each gap counted up to `merge_support_gap_m`), and then only if no other supported
+///    placement of the same groups competes (for a corroborated one: no other near the odometry
+///    link) and, when not corroborated, the scan is unique over the whole map (no submap of
+///    another group scores within the ambiguity margin elsewhere, every heading). A placement
+///    not found again where
+///    it says `merge_max_misses_in_a_row` times is dropped; a search that finds nothing counts
+///    against it only where the other group's robot passed (`merge_miss_coverage_m`), so a right
+///    placement survives the stretches the other map never saw. The merged group moves
 ///    rigidly onto the other, the matches become loop-closure edges, the graph is solved, and
 ///    GNC still has the last word at the end. A wrong merge is as bad as a wrong loop: a kidnapped
 ///    robot in an unmapped twin of a mapped room (a floor plan symmetric under a half turn) sees
@@ -158,11 +164,17 @@ struct Slam2dOptions {
   double merge_agreement_m = 0.5;            ///< two matches agree on the relative placement ...
   double merge_agreement_rad = 0.1;          ///< ... within these
   int merge_confirmations = 3;               ///< agreeing matches (distinct keyframes) to merge ...
-  double merge_min_spread_m = 40.0;          ///< ... spread over at least this much path, or ...
+  double merge_min_spread_m = 40.0;          ///< ... supporting at least this much path, or ...
   double merge_min_spread_corroborated_m = 2.0;  ///< ... this much when odometry agrees:
   double merge_odometry_radius_m = 3.0;      ///< the merge moves the keyframe less than this ...
   double merge_odometry_angle_rad = 0.3;     ///< ... and turns it less than this
   int merge_max_misses_in_a_row = 10;        ///< a placement not found this often in a row is dropped
+  /// The path a placement's support covers: the path between consecutive supporting keyframes,
+  /// each gap counted up to this (a stretch where the other map found nothing supports nothing).
+  double merge_support_gap_m = 3.0;
+  /// A test that finds nothing where a placement puts the keyframe counts against it only when
+  /// a keyframe of the other group lies within this of that pose (its robot was there).
+  double merge_miss_coverage_m = 2.0;
   /// Global searches and the merge's map-wide uniqueness test use the scan's points within this
   /// range (a coarser angle step); verification always uses all of them.
   double global_search_max_range_m = 10.0;
@@ -223,6 +235,12 @@ struct SegmentInfo {
   int keyframes = 0;
   double path_length_m = 0.0;
   std::string started_because;    ///< empty for the first segment
+  /// Whether the odometry across the loss that started it may place it: true when a seed of it
+  /// was dropped on probation (the failed scans did not even match each other: a sensor fault
+  /// while the wheels went on), false when its first seed held (a consistent view the map did
+  /// not explain: the robot may have been carried). Only a trusted chain of segment links lets
+  /// odometry corroborate a merge. Always true for the first segment.
+  bool odometry_link_trusted = true;
   /// The segment it ended up joined with (the lowest id of its group; itself when unmerged
   /// with any lower segment). Filled at finish() and by merges.
   int merged_with = 0;
