@@ -89,6 +89,7 @@ std::vector<Key> keys(Slam2dOptions& o) {
       {"segments", "link_rotation_sigma_rad", &o.segment_link_rotation_sigma_rad, "weak odometry edge, rotation"},
       {"segments", "min_keyframes", &o.min_segment_keyframes, "a lost segment with fewer mapped keyframes restarts in place"},
       {"segments", "confirm_scans", &o.segment_confirm_scans, "scans in a row that must match a new segment's seed (probation)"},
+      {"segments", "trusted_link_min_inlier_fraction", &o.segment_trusted_link_min_inlier_fraction, "odometry places a new segment when the failed matches explained this share on average"},
       {"segments", "merge_searches_per_keyframe", &o.merge_searches_per_keyframe, "windowed merge searches per keyframe (hypothesis tests, then around the estimate)"},
       {"segments", "merge_max_distance_m", &o.merge_max_distance_m, "windowed merge searches: submap centre within this of the guess"},
       {"segments", "merge_confirmations", &o.merge_confirmations, "agreeing verified matches (distinct keyframes) a merge needs"},

@@ -148,6 +148,8 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (lost_after_scans < 1) problems << "lost_after_scans must be >= 1; ";
   if (!(segment_link_translation_sigma_m > 0.0 && segment_link_rotation_sigma_rad > 0.0)) problems << "segment link sigmas must be > 0; ";
   if (min_segment_keyframes < 1 || segment_confirm_scans < 1) problems << "segments: min_keyframes and confirm_scans must be >= 1; ";
+  if (!(segment_trusted_link_min_inlier_fraction >= 0.0 && segment_trusted_link_min_inlier_fraction <= 1.0))
+    problems << "segments: trusted_link_min_inlier_fraction must be in [0, 1]; ";
   if (merge_searches_per_keyframe < 0 || merge_confirmations < 1 || merge_max_misses_in_a_row < 1)
     problems << "segments: merge_searches_per_keyframe >= 0, merge_confirmations >= 1, merge_max_misses_in_a_row >= 1; ";
   if (!(merge_max_distance_m >= 0.0 && merge_min_spread_m >= 0.0 && merge_min_spread_corroborated_m >= 0.0 &&
@@ -179,6 +181,7 @@ struct Slam2d::Impl {
   core::SE2 previous_local;
   double path_length_m = 0.0;
   int bad_matches_in_a_row = 0;
+  double failed_inlier_sum = 0.0;  ///< inlier fractions of those failed matches, summed
   Health health = Health::kOk;
   std::size_t loops_since_optimization = 0;
   int keyframes_since_optimization = 0;
@@ -887,7 +890,10 @@ struct Slam2d::Impl {
   // merge_miss_coverage_m of the pose the placement gives) does not count: a right placement is
   // tested there whenever the robot drives where the other map never was, or saw only from afar
   // (a kidnapped robot's ring beyond the part mapped before), and the map need not hold what
-  // the scan sees. A verified match elsewhere always counts.
+  // the scan sees. A verified match elsewhere always counts, and so does every test of a
+  // placement near the odometry link (it puts the robot where its own segment's path suggests,
+  // which is no kidnapping; exempting those kept near-duplicate placements alive that blocked a
+  // merge on ACES with scans below 50 % inliers kept out of the map).
   void count_misses(Slam2dSummary& summary) {
     // Per hypothesis tested by this job: contradicted when every one of its tests contradicts it.
     std::map<int, bool> contradicted;
@@ -900,8 +906,8 @@ struct Slam2d::Impl {
       // is, or a verified match elsewhere. A match rejected for degeneracy, ambiguity or a poor
       // fit says nothing either way (a corridor seen along its axis).
       const std::optional<LoopCandidate>& found = job.found[i];
-      if (!found &&
-          !covered_by_group(group_of(it->group_a), it->delta * keyframes[static_cast<std::size_t>(job.searches[i].header.keyframe)].T_world_laser))
+      const core::SE2& T_world_tested = keyframes[static_cast<std::size_t>(job.searches[i].header.keyframe)].T_world_laser;
+      if (!found && !near_odometry(it->delta, T_world_tested) && !covered_by_group(group_of(it->group_a), it->delta * T_world_tested))
         continue;
       const bool against =
           !found || (found->accepted &&
@@ -1175,8 +1181,10 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
     // leave the failed-match counter as it is
   } else if (!matched) {
     ++m.bad_matches_in_a_row;
+    m.failed_inlier_sum += record.inlier_fraction;
   } else {
     m.bad_matches_in_a_row = 0;
+    m.failed_inlier_sum = 0.0;
   }
   Health next = Health::kOk;
   std::string reason;
@@ -1245,13 +1253,18 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
       info.first_keyframe = k;
       info.merged_with = m.segment;
       info.started_because = reason + "lost at scan " + std::to_string(scan_index);
-      info.odometry_link_trusted = false;  // until a seed of it is dropped on probation
+      // The failed matches still explained part of each scan at the odometry's prediction: the
+      // robot is about where odometry says and the map fits poorly there. Otherwise trusted only
+      // once a seed is dropped on probation (below).
+      info.odometry_link_trusted =
+          m.failed_inlier_sum / static_cast<double>(std::max(1, m.bad_matches_in_a_row)) >= o.segment_trusted_link_min_inlier_fraction;
       summary_.segments.push_back(info);
       reason += "new map segment " + std::to_string(m.segment) + " started from this scan";
     } else {
       reason += segment_name + " restarted from this scan (it had " + std::to_string(mapped) + " mapped keyframes)";
     }
     m.bad_matches_in_a_row = 0;
+    m.failed_inlier_sum = 0.0;
   }
   if (start_segment) {
     m.local_map_start = static_cast<int>(m.keyframes.size());

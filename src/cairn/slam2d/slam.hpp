@@ -47,9 +47,10 @@
 ///    link) and, when not corroborated, the scan is unique over the whole map (no submap of
 ///    another group scores within the ambiguity margin elsewhere, every heading). A placement
 ///    not found again where
-///    it says `merge_max_misses_in_a_row` times is dropped; a search that finds nothing counts
-///    against it only where the other group's robot passed (`merge_miss_coverage_m`), so a right
-///    placement survives the stretches the other map never saw. The merged group moves
+///    it says `merge_max_misses_in_a_row` times is dropped; for a placement far from the
+///    odometry link, a search that finds nothing counts against it only where the other group's
+///    robot passed (`merge_miss_coverage_m`), so a kidnapping's right placement survives the
+///    stretches the other map never saw. The merged group moves
 ///    rigidly onto the other, the matches become loop-closure edges, the graph is solved, and
 ///    GNC still has the last word at the end. A wrong merge is as bad as a wrong loop: a kidnapped
 ///    robot in an unmapped twin of a mapped room (a floor plan symmetric under a half turn) sees
@@ -156,6 +157,11 @@ struct Slam2dOptions {
   /// A (re)started segment is on probation (still `lost`) until this many scans in a row match
   /// its map with at least degraded_min_inlier_fraction; a failure drops the seed and reseeds.
   int segment_confirm_scans = 3;
+  /// A new segment's odometry link is trusted (SegmentInfo::odometry_link_trusted) when the
+  /// failed matches that declared it lost explained at least this share of their scans at the
+  /// predicted pose on average (the map fits poorly where the robot is), or once a seed of it is
+  /// dropped on probation (garbage); otherwise the robot may have been carried.
+  double segment_trusted_link_min_inlier_fraction = 0.1;
   int merge_searches_per_keyframe = 2;       ///< windowed merge searches, nearest submaps first
   double merge_max_distance_m = 30.0;        ///< windowed merge searches: submap centre distance
   /// While other groups exist, one whole-submap search every this many keyframes (outside the
@@ -172,8 +178,9 @@ struct Slam2dOptions {
   /// The path a placement's support covers: the path between consecutive supporting keyframes,
   /// each gap counted up to this (a stretch where the other map found nothing supports nothing).
   double merge_support_gap_m = 3.0;
-  /// A test that finds nothing where a placement puts the keyframe counts against it only when
-  /// a keyframe of the other group lies within this of that pose (its robot was there).
+  /// A test that finds nothing where a placement far from the odometry link puts the keyframe
+  /// counts against it only when a keyframe of the other group lies within this of that pose
+  /// (its robot was there).
   double merge_miss_coverage_m = 2.0;
   /// Global searches and the merge's map-wide uniqueness test use the scan's points within this
   /// range (a coarser angle step); verification always uses all of them.
@@ -235,11 +242,14 @@ struct SegmentInfo {
   int keyframes = 0;
   double path_length_m = 0.0;
   std::string started_because;    ///< empty for the first segment
-  /// Whether the odometry across the loss that started it may place it: true when a seed of it
-  /// was dropped on probation (the failed scans did not even match each other: a sensor fault
-  /// while the wheels went on), false when its first seed held (a consistent view the map did
-  /// not explain: the robot may have been carried). Only a trusted chain of segment links lets
-  /// odometry corroborate a merge. Always true for the first segment.
+  /// Whether the odometry across the loss that started it may place it: true when the failed
+  /// matches that declared it lost still explained part of their scans at the predicted pose
+  /// (Slam2dOptions::segment_trusted_link_min_inlier_fraction: the map fits poorly where the
+  /// robot is), or when a seed of it was dropped on probation (the failed scans did not even
+  /// match each other: a sensor fault while the wheels went on); false when the scans matched
+  /// nothing at the prediction yet formed a consistent view (the robot may have been carried).
+  /// Only a trusted chain of segment links lets odometry corroborate a merge. Always true for
+  /// the first segment.
   bool odometry_link_trusted = true;
   /// The segment it ended up joined with (the lowest id of its group; itself when unmerged
   /// with any lower segment). Filled at finish() and by merges.
