@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """Issue 20's simulated recovery study: `cairn simulate` + `cairn slam2d` on the failure scenarios,
-ten seeds each, and a check of every accepted loop closure and merge against the ground truth.
+ten seeds each (kidnapping twice: in the plain office, and in the furnished one with two rounds of
+the ring after the drop), and a check of every accepted loop closure and merge against the ground
+truth.
 
     python3 bench/slam2d_recovery.py build/src/cairn/cli/cairn [--out /tmp/slam2d-recovery]
 
