@@ -101,7 +101,7 @@ std::vector<Key> keys(Slam2dOptions& o) {
       {"segments", "merge_agreement_rad", &o.merge_agreement_rad, "... and this"},
       {"segments", "merge_max_misses_in_a_row", &o.merge_max_misses_in_a_row, "a placement not found again this often in a row is dropped"},
       {"segments", "merge_support_gap_m", &o.merge_support_gap_m, "supported path: each gap between supporting keyframes counts up to this"},
-      {"segments", "merge_miss_coverage_m", &o.merge_miss_coverage_m, "a failed test counts against a placement only within this of the other map's keyframes"},
+      {"segments", "merge_miss_coverage_m", &o.merge_miss_coverage_m, "a failed test counts against a placement far from the odometry link only within this of the other map's keyframes"},
       {"search_budget", "per_keyframe", &o.search_budget_per_keyframe, "search tokens each keyframe adds"},
       {"search_budget", "burst", &o.search_budget_burst, "most tokens the budget holds"},
       {"search_budget", "global_search_every_n_keyframes", &o.global_search_every_n_keyframes, "one whole-submap search per this many keyframes while segments are unmerged"},
