@@ -35,6 +35,7 @@ fs::path temp_dir(const std::string& name) {
 
 struct SimRun {
   sim::SimulationResult truth;
+  io::Trajectory reference;  ///< the ground truth as a trajectory (body poses)
   std::unique_ptr<Slam2d> slam;
   std::vector<eval::Relation> relations;
   double ate_rmse_m = 0.0;
@@ -76,17 +77,17 @@ SimRun run_simulated(const std::string& scenario_name, std::uint64_t seed, const
   run.slam = std::make_unique<Slam2d>(options);
   for (const auto& scan : log.scans) run.slam->add_scan(scan);
   run.slam->finish();
-  io::Trajectory reference, odometry;
+  io::Trajectory odometry;
   for (const auto& sample : run.truth.truth) {
-    reference.stamps.push_back(sample.stamp);
-    reference.poses.push_back(lift(sample.T_world_body));
+    run.reference.stamps.push_back(sample.stamp);
+    run.reference.poses.push_back(lift(sample.T_world_body));
   }
   for (const auto& scan : log.scans) {
     odometry.stamps.push_back(scan.time);
     odometry.poses.push_back(lift(scan.T_odom_laser));
   }
-  run.ate_rmse_m = ate(reference, to_trajectory(*run.slam));
-  run.odometry_ate_rmse_m = ate(reference, odometry);
+  run.ate_rmse_m = ate(run.reference, to_trajectory(*run.slam));
+  run.odometry_ate_rmse_m = ate(run.reference, odometry);
   run.relations_result = eval::evaluate_relations(run.relations, to_matrix_trajectory(*run.slam));
   EXPECT_TRUE(run.relations_result.outcome.ok()) << run.relations_result.outcome.message;
   fs::remove_all(dir);
@@ -349,18 +350,14 @@ TEST(Slam2dScenarios, KidnappingInAFurnishedOfficeMergesAtTheTruePlace) {
   const LoopCheck loops = check_loops(run);
   ASSERT_GE(s.segments.size(), 2u);
   const core::Timestamp seeded = run.slam->trajectory()[s.segments[1].first_scan].time;
-  io::Trajectory reference, after_seed;
-  for (const auto& sample : run.truth.truth) {
-    reference.stamps.push_back(sample.stamp);
-    reference.poses.push_back(lift(sample.T_world_body));
-  }
+  io::Trajectory after_seed;
   const io::Trajectory estimate = to_trajectory(*run.slam);
   for (std::size_t k = 0; k < estimate.stamps.size(); ++k) {
     if (estimate.stamps[k] < seeded) continue;
     after_seed.stamps.push_back(estimate.stamps[k]);
     after_seed.poses.push_back(estimate.poses[k]);
   }
-  const double ate_after_seed = ate(reference, after_seed);
+  const double ate_after_seed = ate(run.reference, after_seed);
   std::printf("furnished kidnapping seed 7: segment 1 from scan %zu (odometry link trusted %d), %zu merges (first at scan %zu, moved "
               "%.2f m), %d loops accepted (%d false), ATE %.3f m (from the seed on %.3f m)\n",
               s.segments[1].first_scan, s.segments[1].odometry_link_trusted ? 1 : 0, s.merges.size(),
