@@ -357,6 +357,8 @@ TEST(Localization, RejectsInvalidOptionsAndMapsWithoutPoints) {
   Localizer2dOptions bad;
   bad.confirmations = 0;
   bad.ok_min_inlier_fraction = 0.2;  // below tracking_min_inlier_fraction
+  bad.look_alike_min_observed_fraction = 0.0;
+  bad.look_alike_places = -1;
   try {
     Localizer2d localizer(small_map(), bad);
     ADD_FAILURE() << "invalid options accepted";
@@ -364,6 +366,8 @@ TEST(Localization, RejectsInvalidOptionsAndMapsWithoutPoints) {
     // Every problem at once.
     EXPECT_NE(std::string(e.what()).find("confirmations"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("ok_min_inlier_fraction"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("look_alike_min_observed_fraction"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("look_alike_places"), std::string::npos) << e.what();
   }
   SavedMap2D empty = small_map();
   for (auto& submap : empty.submaps) submap.points_submap.clear();

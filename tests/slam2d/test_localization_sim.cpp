@@ -12,7 +12,7 @@
 // then a second run with other noise through the same world: from the office start, localised
 // from no prior, picked up after a while and put down elsewhere (the odometry shows no motion
 // across the jump): on the ring corridor (KidnappedRobotTenSeeds) or in a room, mostly unmapped
-// (DISABLED_KidnappedIntoRoomsTenSeeds, a known limit). The seed sets the noise of both runs, the
+// (KidnappedIntoRoomsTenSeeds). The seed sets the noise of both runs, the
 // time of the pick-up, where the robot is put down and its heading.
 
 #include <gtest/gtest.h>
@@ -153,6 +153,9 @@ struct SeedResult {
   std::optional<std::size_t> relocalised_after;  ///< scans from the jump to the relocalisation
   std::size_t wrong_relocalisations = 0, wrong_ok = 0, ok_scans = 0, scans = 0;
   double max_ok_error_m = 0.0;
+  /// Acceptances the localiser refused (Localizer2dSummary): a partly mapped place fitted too,
+  /// or the pose put scan points where another submap saw empty space.
+  std::size_t partly_mapped_look_alikes = 0, refused_empty_space_elsewhere = 0;
   double map_s = 0.0, localise_s = 0.0, total_s = 0.0;
 };
 
@@ -164,7 +167,7 @@ constexpr double kAfterJumpS = 40.0;
 
 // Where the second run's robot is put down: a point of the ring corridor (mapped, and told
 // apart by its furniture) or the centre of a room (mostly unmapped: the map saw it through its
-// door; see DISABLED_KidnappedIntoRoomsTenSeeds).
+// door; see KidnappedIntoRoomsTenSeeds).
 enum class Drop { kRing, kRoom };
 
 SeedResult run_seed(std::uint64_t seed, Drop drop, const fs::path& dir) {
@@ -265,6 +268,8 @@ SeedResult run_seed(std::uint64_t seed, Drop drop, const fs::path& dir) {
       result.max_ok_error_m = std::max(result.max_ok_error_m, (T_map_laser_true.inverse() * r.T_map_laser).translation().norm());
     }
   }
+  result.partly_mapped_look_alikes = localizer.summary().partly_mapped_look_alikes;
+  result.refused_empty_space_elsewhere = localizer.summary().refused_empty_space_elsewhere;
   const auto end = std::chrono::steady_clock::now();
   result.localise_s = std::chrono::duration<double>(end - localise_start).count();
   result.total_s = std::chrono::duration<double>(end - start).count();
@@ -276,11 +281,12 @@ std::string text(const std::optional<std::size_t>& scans) { return scans ? std::
 void print(const SeedResult& r) {
   std::printf("seed %2llu: pick-up %.0f s, put down in %-18s (%.1f m away): localised at scan %s; after the jump not ok %s, "
               "lost %s, mapped view %s, relocalised %s scans; %zu ok of %zu scans, max ok error %.3f m, wrong: %zu "
-              "relocalisations %zu ok; map %.1f s, localisation %.1f s\n",
+              "relocalisations %zu ok; refused: %zu partly mapped look-alike, %zu empty space elsewhere; map %.1f s, "
+              "localisation %.1f s\n",
               static_cast<unsigned long long>(r.seed), r.pick_up_s, r.drop_place.c_str(), r.jump_m, text(r.start_fix).c_str(),
               text(r.noticed_after).c_str(), text(r.lost_after).c_str(), text(r.mapped_view_after).c_str(),
               text(r.relocalised_after).c_str(), r.ok_scans, r.scans, r.max_ok_error_m, r.wrong_relocalisations, r.wrong_ok,
-              r.map_s, r.localise_s);
+              r.partly_mapped_look_alikes, r.refused_empty_space_elsewhere, r.map_s, r.localise_s);
 }
 
 // Ten seeds, ten kidnappings onto the ring corridor. Every seed: localised before the
@@ -318,19 +324,33 @@ TEST(LocalizationSimulation, KidnappedRobotTenSeeds) {
   fs::remove_all(dir);
 }
 
-// The known limit (docs/slam2d.md, Known limits), kept runnable by hand
-// (--gtest_also_run_disabled_tests): put down in the middle of a room the map saw only through
-// its door, the robot sees what it would see in a room the map holds whole, when the furniture
-// that tells them apart is out of view; the map lacks the true place, so no test against the
-// map can tell. Measured (2026-11-25): 6 of the 10 seeds relocalised in a mapped room 7-21 m away.
-TEST(LocalizationSimulation, DISABLED_KidnappedIntoRoomsTenSeeds) {
+// Ten seeds, ten kidnappings into the middle of a room (seven of them into rooms the map run saw
+// only through their doors). There the robot sees what it would see in a twin room the
+// map holds whole while the furniture that tells the rooms apart is out of view; only the map's
+// partial view of the true room fits as well (Localizer2dOptions::look_alike_places). Every
+// seed: no wrong relocalisation, no wrong ok pose, lost after the jump, and relocalised before
+// the end of the run (out of the room and along the ring: how soon is printed, not asserted;
+// where a partly mapped twin fits, not before the robot has left the room). Before the
+// partly-mapped look-alike test (2026-11-28) 6 of the 10 seeds relocalised in a room 7-21 m away.
+TEST(LocalizationSimulation, KidnappedIntoRoomsTenSeeds) {
   const fs::path dir = temp_dir("kidnapping-rooms");
+  std::size_t wrong_relocalisations = 0, wrong_ok = 0, refusals = 0;
+  double total_s = 0.0;
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
     const SeedResult r = run_seed(seed, Drop::kRoom, dir);
+    total_s += r.total_s;
     print(r);
+    wrong_relocalisations += r.wrong_relocalisations;
+    wrong_ok += r.wrong_ok;
+    refusals += r.partly_mapped_look_alikes + r.refused_empty_space_elsewhere;
     EXPECT_EQ(r.wrong_relocalisations, 0u) << "seed " << seed;
     EXPECT_EQ(r.wrong_ok, 0u) << "seed " << seed;
+    EXPECT_TRUE(r.start_fix.has_value()) << "seed " << seed << ": not localised before the kidnapping";
+    EXPECT_TRUE(r.lost_after.has_value()) << "seed " << seed << ": never lost after the kidnapping";
+    EXPECT_TRUE(r.relocalised_after.has_value()) << "seed " << seed << ": not relocalised";
   }
+  std::printf("10 seeds: %zu wrong relocalisations, %zu wrong ok poses, %zu acceptances refused; %.1f s\n",
+              wrong_relocalisations, wrong_ok, refusals, total_s);
   fs::remove_all(dir);
 }
 

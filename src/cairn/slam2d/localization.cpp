@@ -69,28 +69,30 @@ ProbabilityGrid max_pooled(const ProbabilityGrid& fine, int factor) {
 // least 5 times as many rays as ended in it, plus 10.
 constexpr double kFreeProbability = 0.4;
 
-// The fraction of `points_sensor` that, placed at `T_grid_sensor`, land in a cell of `grid` whose
-// 3 x 3 neighbourhood is all observed and empty (kFreeProbability): the scan sees something
-// where the map saw through. The neighbourhood keeps a point on a wall, a cell or so off after
-// noise and voxel filtering, from counting; unobserved cells never count (the map may lack a
-// place; it does not contradict it).
+// Whether `p_grid` (grid frame) lies in a cell of `grid` whose 3 x 3 neighbourhood is all observed
+// and empty (kFreeProbability): where the map saw through. The neighbourhood keeps a point on a
+// wall, a cell or so off after noise and voxel filtering, from counting; unobserved cells never
+// count (the map may lack a place; it does not contradict it).
+bool in_observed_empty_space(const ProbabilityGrid& grid, const Eigen::Vector2d& p_grid) {
+  const double r = grid.resolution();
+  const double gi = std::floor(p_grid.x() / r) - static_cast<double>(grid.offset_i());
+  const double gj = std::floor(p_grid.y() / r) - static_cast<double>(grid.offset_j());
+  if (!(gi >= 1.0 && gj >= 1.0 && gi < grid.width() - 1 && gj < grid.height() - 1)) return false;
+  const int i = static_cast<int>(gi), j = static_cast<int>(gj);
+  for (int dj = -1; dj <= 1; ++dj)
+    for (int di = -1; di <= 1; ++di)
+      if (!grid.cell_known(i + di, j + dj) || grid.cell_probability(i + di, j + dj) >= kFreeProbability) return false;
+  return true;
+}
+
+// The fraction of `points_sensor` that, placed at `T_grid_sensor`, land in observed empty space
+// of `grid` (in_observed_empty_space): the scan sees something where the map saw through.
 double free_space_fraction(const ProbabilityGrid& grid, const std::vector<Eigen::Vector2d>& points_sensor,
                            const core::SE2& T_grid_sensor) {
   if (points_sensor.empty()) return 0.0;
-  const double r = grid.resolution();
   std::size_t in_free = 0;
-  for (const Eigen::Vector2d& p_sensor : points_sensor) {
-    const Eigen::Vector2d p = T_grid_sensor * p_sensor;
-    const double gi = std::floor(p.x() / r) - static_cast<double>(grid.offset_i());
-    const double gj = std::floor(p.y() / r) - static_cast<double>(grid.offset_j());
-    if (!(gi >= 1.0 && gj >= 1.0 && gi < grid.width() - 1 && gj < grid.height() - 1)) continue;
-    const int i = static_cast<int>(gi), j = static_cast<int>(gj);
-    bool free = true;
-    for (int dj = -1; dj <= 1 && free; ++dj)
-      for (int di = -1; di <= 1 && free; ++di)
-        free = grid.cell_known(i + di, j + dj) && grid.cell_probability(i + di, j + dj) < kFreeProbability;
-    if (free) ++in_free;
-  }
+  for (const Eigen::Vector2d& p_sensor : points_sensor)
+    if (in_observed_empty_space(grid, T_grid_sensor * p_sensor)) ++in_free;
   return static_cast<double>(in_free) / static_cast<double>(points_sensor.size());
 }
 
@@ -122,6 +124,9 @@ bool Localizer2dOptions::is_valid(std::string* error) const {
   if (!(confirmation_window_m >= 0.0)) problems << "confirmation_window_m must be >= 0; ";
   if (!(confirmation_window_rad >= 0.0)) problems << "confirmation_window_rad must be >= 0; ";
   if (max_hypotheses < 1) problems << "max_hypotheses must be >= 1; ";
+  if (!(look_alike_min_observed_fraction > 0.0 && look_alike_min_observed_fraction <= 1.0))
+    problems << "look_alike_min_observed_fraction must be in (0, 1]; ";
+  if (look_alike_places < 0) problems << "look_alike_places must be >= 0; ";
   if (!(hypothesis_drop_deficit > 0.0)) problems << "hypothesis_drop_deficit must be > 0; ";
   if (hypothesis_drop_window_scans < 1) problems << "hypothesis_drop_window_scans must be >= 1; ";
   const std::string text = problems.str();
@@ -169,6 +174,9 @@ struct Localizer2d::Impl {
     std::deque<double> deficits;     ///< best place's inlier fraction minus this one's, last scans
     int last_submap = -1;            ///< searchable-submap index of the last supporting match
     std::vector<LocalizationMatch> evidence;
+    /// A partly mapped place that explained what the map observed of the scans when this
+    /// hypothesis was last up for acceptance (partly_mapped_look_alike), as T_map_odom.
+    std::optional<core::SE2> look_alike_T_map_odom;
   };
 
   SavedMap2D map;
@@ -540,7 +548,7 @@ struct Localizer2d::Impl {
     global_searches(choose_submaps(points, options.global_searches_per_scan - options.round_robin_searches_per_scan,
                                    options.round_robin_searches_per_scan, search_order, next_search, summary),
                     points, odom, time, summary);
-    for (const Hypothesis& h : hypotheses) {
+    for (Hypothesis& h : hypotheses) {
       if (h.support < options.confirmations || h.last_support_scan != scan_index) continue;
       if (hypotheses.size() > 1) {
         ++summary.scans_ambiguous;
@@ -559,6 +567,17 @@ struct Localizer2d::Impl {
         rival.T_map_odom = *look_alike * odom.inverse();
         hypotheses.push_back(std::move(rival));
         ++summary.hypotheses;
+        return std::nullopt;
+      }
+      if (observed_fit(points, h.evidence.back().T_map_laser).empty_fraction > options.verification_max_free_fraction) {
+        // Scan points where another submap saw through (the matched one never looked there).
+        ++summary.scans_ambiguous;
+        ++summary.refused_empty_space_elsewhere;
+        return std::nullopt;
+      }
+      if (partly_mapped_look_alike(points, h, odom, summary)) {
+        ++summary.scans_ambiguous;
+        ++summary.partly_mapped_look_alikes;
         return std::nullopt;
       }
       Relocalisation relocalisation;
@@ -633,6 +652,127 @@ struct Localizer2d::Impl {
     }
     summary.times.confirmation_search_s += seconds_since(start);
     return found;
+  }
+
+  /// How a scan placed at a pose fits what the map observed there (the whole map, every submap).
+  struct ObservedFit {
+    double observed_fraction = 0.0;     ///< points near a map point or in a cell some submap observed
+    double explained_of_observed = 0.0; ///< of those, within the ICP inlier distance of a map point
+    double empty_fraction = 0.0;        ///< points in some submap's observed empty space, not near a map point
+  };
+  ObservedFit observed_fit(const std::vector<Eigen::Vector2d>& points, const core::SE2& T_map_scan) const {
+    ObservedFit fit;
+    if (points.empty()) return fit;
+    const double inlier_m = matching.icp.inlier_distance_m;
+    std::size_t observed = 0, explained = 0, empty = 0;
+    for (const Eigen::Vector2d& p_scan : points) {
+      const Eigen::Vector2d p = T_map_scan * p_scan;
+      const MapPoint* near = tracking_map.nearest(p, inlier_m);
+      if (near != nullptr && (near->position - p).norm() <= inlier_m) {
+        ++observed;
+        ++explained;
+        continue;
+      }
+      bool seen = false, seen_empty = false;
+      for (std::size_t s = 0; s < submaps.size() && !seen_empty; ++s) {
+        const Submap& submap = submaps[s];
+        const Eigen::Vector2d q = submap.T_world_submap.inverse() * p;
+        if (!(q.array() >= submap.lower_submap.array()).all() || !(q.array() <= submap.upper_submap.array()).all()) continue;
+        const ProbabilityGrid& grid = map.submaps[static_cast<std::size_t>(submap_index[s])].grid;
+        if (!grid.known(q)) continue;
+        seen = true;
+        seen_empty = in_observed_empty_space(grid, q);
+      }
+      observed += seen ? 1 : 0;
+      empty += seen_empty ? 1 : 0;
+    }
+    const double n = static_cast<double>(points.size());
+    fit.observed_fraction = static_cast<double>(observed) / n;
+    fit.explained_of_observed = observed > 0 ? static_cast<double>(explained) / static_cast<double>(observed) : 0.0;
+    fit.empty_fraction = static_cast<double>(empty) / n;
+    return fit;
+  }
+
+  // Whether some submap observed the cell of `p_map` (a ray of the map's scans crossed or ended
+  // in it).
+  bool position_observed(const Eigen::Vector2d& p_map) const {
+    for (std::size_t s = 0; s < submaps.size(); ++s) {
+      const Eigen::Vector2d q = submaps[s].T_world_submap.inverse() * p_map;
+      if (map.submaps[static_cast<std::size_t>(submap_index[s])].grid.known(q)) return true;
+    }
+    return false;
+  }
+
+  // Whether `fit` (ICP against the whole map without a prior) is a partly mapped place that
+  // explains the scan as far as the map observed it (Localizer2dOptions::look_alike_places), at
+  // least kPlaceSeparation_m from `T_map_accepted`.
+  bool explains_as_observed(const std::vector<Eigen::Vector2d>& points, const IcpResult& fit,
+                            const core::SE2& T_map_accepted) const {
+    if ((fit.T_map_sensor.translation() - T_map_accepted.translation()).norm() < kPlaceSeparation_m) return false;
+    // Explained points are observed, so a place that passes has at least this inlier fraction.
+    if (fit.inlier_fraction < options.look_alike_min_observed_fraction * options.verification_min_inlier_fraction)
+      return false;
+    if (!position_observed(fit.T_map_sensor.translation())) return false;
+    const ObservedFit observed = observed_fit(points, fit.T_map_sensor);
+    return observed.observed_fraction >= options.look_alike_min_observed_fraction &&
+           observed.explained_of_observed >= options.verification_min_inlier_fraction &&
+           observed.empty_fraction <= options.verification_max_free_fraction;
+  }
+
+  // The partly mapped look-alike test before `h` is accepted (Localizer2dOptions::
+  // look_alike_places): true when a place other than h's explains the scan as far as the map
+  // observed it. The look-alike found last time is checked first, from its odometry prediction.
+  bool partly_mapped_look_alike(const std::vector<Eigen::Vector2d>& points, Hypothesis& h, const core::SE2& odom,
+                                Localizer2dSummary& summary) {
+    if (options.look_alike_places == 0) return false;
+    const auto start = Clock::now();
+    const core::SE2 T_map_accepted = h.evidence.back().T_map_laser;
+    IcpOptions icp_options = matching.icp;
+    icp_options.prior_translation_sigma_m = 0.0;  // no prior: the fit decides
+    const auto found = [&](const IcpResult& fit) {
+      h.look_alike_T_map_odom = fit.T_map_sensor * odom.inverse();
+      summary.times.confirmation_search_s += seconds_since(start);
+      return true;
+    };
+    if (h.look_alike_T_map_odom) {
+      ++summary.uniqueness_tests;
+      const IcpResult fit = match_icp(tracking_map, points, *h.look_alike_T_map_odom * odom, nullptr, icp_options);
+      if (explains_as_observed(points, fit, T_map_accepted)) return found(fit);
+      h.look_alike_T_map_odom.reset();
+    }
+    // Candidates: the coarse ranking of the whole scan, then of two overlapping sectors (a
+    // partly mapped place scores low for the whole scan: its unobserved part scores as unknown).
+    std::vector<Ranked> places = rank_submaps(points, options.look_alike_places, summary);
+    std::vector<std::pair<double, Eigen::Vector2d>> by_bearing;
+    by_bearing.reserve(points.size());
+    for (const Eigen::Vector2d& p : points) by_bearing.emplace_back(std::atan2(p.y(), p.x()), p);
+    std::sort(by_bearing.begin(), by_bearing.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    const std::size_t n = by_bearing.size();
+    for (const auto& [begin, end] : {std::pair<std::size_t, std::size_t>{0, 2 * n / 3}, {n / 3, n}}) {
+      std::vector<Eigen::Vector2d> sector;
+      sector.reserve(end - begin);
+      for (std::size_t k = begin; k < end; ++k) sector.push_back(by_bearing[k].second);
+      const std::vector<Ranked> more = rank_submaps(sector, std::max(1, options.look_alike_places / 2), summary);
+      places.insert(places.end(), more.begin(), more.end());
+    }
+    std::vector<core::SE2> tried;
+    for (const Ranked& place : places) {
+      if ((place.T_map_laser.translation() - T_map_accepted.translation()).norm() < kPlaceSeparation_m) continue;
+      if (std::any_of(tried.begin(), tried.end(), [&](const core::SE2& t) { return agrees(t, place.T_map_laser); })) continue;
+      tried.push_back(place.T_map_laser);
+      const Submap& submap = submaps[static_cast<std::size_t>(place.submap)];
+      BranchAndBoundOptions window = matching.loop_search;
+      window.linear_search_window_m = coarse_options.cell_m;  // the coarse pose's cell
+      window.angular_search_window_rad = options.confirmation_window_rad;
+      const BranchAndBoundResult fine = match_branch_and_bound(
+          *submap.stack, points, submap.T_world_submap.inverse() * place.T_map_laser, 0.0, window);
+      ++summary.uniqueness_tests;
+      const core::SE2 refined = fine.found ? submap.T_world_submap * fine.T_map_sensor : place.T_map_laser;
+      const IcpResult fit = match_icp(tracking_map, points, refined, nullptr, icp_options);
+      if (explains_as_observed(points, fit, T_map_accepted)) return found(fit);
+    }
+    summary.times.confirmation_search_s += seconds_since(start);
+    return false;
   }
 
   // The tracking check (see the file comment). Returns the reason when tracking must end.
