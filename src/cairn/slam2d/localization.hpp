@@ -28,7 +28,9 @@
 ///    `confirmations` distinct scans support it, one of them the current scan, no other
 ///    hypothesis is alive, and no other place of the scan's coarse ranking fits as well (refined
 ///    and matched by ICP against the whole map: per-submap verification cannot see a look-alike
-///    in another submap). Zero wrong relocalisations matters more than speed: while two places
+///    in another submap), nor a partly mapped place as far as the map observed it, and the pose
+///    puts no more scan points in any submap's empty space than verification allows
+///    (`look_alike_*`). Zero wrong relocalisations matters more than speed: while two places
 ///    both explain the scans (a half-turn-symmetric building) the localiser stays `lost`.
 ///  - Tracking (health `ok` or `degraded`): prediction by odometry, point-to-line ICP (icp.hpp)
 ///    against one point map of every submap's points in the map frame, with the prediction as
