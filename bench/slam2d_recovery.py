@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Issue 20's simulated recovery study: `cairn simulate` + `cairn slam2d` on the failure scenarios,
-ten seeds each (kidnapping twice: in the plain office, and in the furnished one with two rounds of
-the ring after the drop), and a check of every accepted loop closure and merge against the ground
-truth.
+ten seeds each (kidnapping three times: in the plain office, and in the furnished one with two and
+with three rounds of the ring after the drop), and a check of every accepted loop closure and
+merge against the ground truth.
 
     python3 bench/slam2d_recovery.py build/src/cairn/cli/cairn [--out /tmp/slam2d-recovery]
 
@@ -65,7 +65,8 @@ def wrap(a):
 
 
 def study(cairn, scenario, seed, sets, out):
-    sim = os.path.join(out, f"{scenario}-{seed}" + ("-furnished" if "office.furnished=true" in sets else ""))
+    suffix = "".join("-rings" + x.split("=")[1] for x in sets if x.startswith("kidnap.rings_after="))
+    sim = os.path.join(out, f"{scenario}-{seed}" + ("-furnished" if "office.furnished=true" in sets else "") + suffix)
     res = sim + "-slam"
     if not os.path.isdir(sim):
         run([cairn, "simulate", scenario, "--seed", str(seed), "--out", sim, "-q"] + sum((["--set", s] for s in sets), []))
@@ -104,11 +105,13 @@ def main():
         sets = [f"kidnap.drop_place={KIDNAP_PLACES[seed - 1]}", f"kidnap.drop_heading_rad={0.6 * seed:.1f}"]
         print(study(args.cairn, "kidnapping", seed, sets, args.out), flush=True)
     # The same drops in the furnished office (its half-turn symmetry broken), driving the ring
-    # twice after the drop: a merge away from the odometry link needs 40 m of supported path.
-    for seed in range(1, 11):
-        sets = [f"kidnap.drop_place={KIDNAP_PLACES[seed - 1]}", f"kidnap.drop_heading_rad={0.6 * seed:.1f}",
-                "office.furnished=true", "kidnap.rings_after=2"]
-        print(study(args.cairn, "kidnapping", seed, sets, args.out), flush=True)
+    # twice, then three times after the drop: a merge away from the odometry link needs 40 m of
+    # supported path.
+    for rings in (2, 3):
+        for seed in range(1, 11):
+            sets = [f"kidnap.drop_place={KIDNAP_PLACES[seed - 1]}", f"kidnap.drop_heading_rad={0.6 * seed:.1f}",
+                    "office.furnished=true", f"kidnap.rings_after={rings}"]
+            print(study(args.cairn, "kidnapping", seed, sets, args.out), flush=True)
     for scenario in ["building-yard", "outdoor-stretch", "long-absence"]:
         for seed in range(1, 11):
             print(study(args.cairn, scenario, seed, [], args.out), flush=True)

@@ -749,6 +749,7 @@ struct Localizer2d::Impl {
     std::sort(by_bearing.begin(), by_bearing.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     const std::size_t n = by_bearing.size();
     for (const auto& [begin, end] : {std::pair<std::size_t, std::size_t>{0, 2 * n / 3}, {n / 3, n}}) {
+      if (end - begin < static_cast<std::size_t>(std::max(1, matching.min_matching_points))) continue;
       std::vector<Eigen::Vector2d> sector;
       sector.reserve(end - begin);
       for (std::size_t k = begin; k < end; ++k) sector.push_back(by_bearing[k].second);
