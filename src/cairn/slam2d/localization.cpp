@@ -593,6 +593,22 @@ struct Localizer2d::Impl {
     return std::nullopt;
   }
 
+  // Branch and bound in searchable submap `s` within the coarse cell around `T_map_guess` and the
+  // confirmation angle window: the full-resolution pose of a place the coarse ranking found (a
+  // uniqueness test). The result's pose is in the map frame.
+  BranchAndBoundResult refine_place(int s, const std::vector<Eigen::Vector2d>& points, const core::SE2& T_map_guess,
+                                    double min_score, Localizer2dSummary& summary) const {
+    const Submap& submap = submaps[static_cast<std::size_t>(s)];
+    BranchAndBoundOptions window = matching.loop_search;
+    window.linear_search_window_m = coarse_options.cell_m;
+    window.angular_search_window_rad = options.confirmation_window_rad;
+    BranchAndBoundResult fine =
+        match_branch_and_bound(*submap.stack, points, submap.T_world_submap.inverse() * T_map_guess, min_score, window);
+    ++summary.uniqueness_tests;
+    if (fine.found) fine.T_map_sensor = submap.T_world_submap * fine.T_map_sensor;
+    return fine;
+  }
+
   // The uniqueness test before a pose is accepted: each other place of this scan's coarse
   // ranking (farther than kPlaceSeparation_m from `T_map_accepted`) is refined by branch and
   // bound in a small window of its submap and then by ICP against the whole map without a prior;
@@ -607,16 +623,9 @@ struct Localizer2d::Impl {
     icp_options.prior_translation_sigma_m = 0.0;  // no prior: the fit decides
     for (const Ranked& place : ranking) {
       if ((place.T_map_laser.translation() - T_map_accepted.translation()).norm() < kPlaceSeparation_m) continue;
-      const Submap& submap = submaps[static_cast<std::size_t>(place.submap)];
-      BranchAndBoundOptions window = matching.loop_search;
-      window.linear_search_window_m = coarse_options.cell_m;  // the coarse pose's cell
-      window.angular_search_window_rad = options.confirmation_window_rad;
-      const BranchAndBoundResult fine = match_branch_and_bound(
-          *submap.stack, points, submap.T_world_submap.inverse() * place.T_map_laser, matching.loop_min_score, window);
-      ++summary.uniqueness_tests;
+      const BranchAndBoundResult fine = refine_place(place.submap, points, place.T_map_laser, matching.loop_min_score, summary);
       if (!fine.found) continue;
-      const IcpResult fit =
-          match_icp(tracking_map, points, submap.T_world_submap * fine.T_map_sensor, nullptr, icp_options);
+      const IcpResult fit = match_icp(tracking_map, points, fine.T_map_sensor, nullptr, icp_options);
       if (fit.inlier_fraction >= options.verification_min_inlier_fraction && fit.rms_m <= matching.loop_max_rms_m &&
           fit.degeneracy >= options.verification_min_degeneracy &&
           (fit.T_map_sensor.translation() - T_map_accepted.translation()).norm() >= kPlaceSeparation_m) {
@@ -631,18 +640,11 @@ struct Localizer2d::Impl {
     const int holding = found ? -1 : submap_holding(T_map_accepted.translation());
     for (const double turn : {std::numbers::pi, 0.5 * std::numbers::pi, -0.5 * std::numbers::pi}) {
       if (holding < 0) break;
-      const Submap& submap = submaps[static_cast<std::size_t>(holding)];
-      BranchAndBoundOptions window = matching.loop_search;
-      window.linear_search_window_m = coarse_options.cell_m;
-      window.angular_search_window_rad = options.confirmation_window_rad;
       const core::SE2 guess(T_map_accepted.x(), T_map_accepted.y(), T_map_accepted.angle() + turn);
-      const BranchAndBoundResult fine = match_branch_and_bound(*submap.stack, points, submap.T_world_submap.inverse() * guess,
-                                                               matching.loop_min_score, window);
-      ++summary.uniqueness_tests;
+      const BranchAndBoundResult fine = refine_place(holding, points, guess, matching.loop_min_score, summary);
       // The submap's grid may hold the turned view too poorly for its score: then ICP against
       // the whole map from the turned pose itself decides.
-      const IcpResult fit = match_icp(tracking_map, points, fine.found ? submap.T_world_submap * fine.T_map_sensor : guess,
-                                      nullptr, icp_options);
+      const IcpResult fit = match_icp(tracking_map, points, fine.found ? fine.T_map_sensor : guess, nullptr, icp_options);
       if (fit.inlier_fraction >= options.verification_min_inlier_fraction && fit.rms_m <= matching.loop_max_rms_m &&
           fit.degeneracy >= options.verification_min_degeneracy &&
           std::abs(core::wrap_angle(fit.T_map_sensor.angle() - T_map_accepted.angle())) > 0.25 * std::numbers::pi) {
@@ -761,15 +763,9 @@ struct Localizer2d::Impl {
       if ((place.T_map_laser.translation() - T_map_accepted.translation()).norm() < kPlaceSeparation_m) continue;
       if (std::any_of(tried.begin(), tried.end(), [&](const core::SE2& t) { return agrees(t, place.T_map_laser); })) continue;
       tried.push_back(place.T_map_laser);
-      const Submap& submap = submaps[static_cast<std::size_t>(place.submap)];
-      BranchAndBoundOptions window = matching.loop_search;
-      window.linear_search_window_m = coarse_options.cell_m;  // the coarse pose's cell
-      window.angular_search_window_rad = options.confirmation_window_rad;
-      const BranchAndBoundResult fine = match_branch_and_bound(
-          *submap.stack, points, submap.T_world_submap.inverse() * place.T_map_laser, 0.0, window);
-      ++summary.uniqueness_tests;
-      const core::SE2 refined = fine.found ? submap.T_world_submap * fine.T_map_sensor : place.T_map_laser;
-      const IcpResult fit = match_icp(tracking_map, points, refined, nullptr, icp_options);
+      const BranchAndBoundResult fine = refine_place(place.submap, points, place.T_map_laser, 0.0, summary);
+      const IcpResult fit =
+          match_icp(tracking_map, points, fine.found ? fine.T_map_sensor : place.T_map_laser, nullptr, icp_options);
       if (explains_as_observed(points, fit, T_map_accepted)) return found(fit);
     }
     summary.times.confirmation_search_s += seconds_since(start);
