@@ -569,13 +569,15 @@ struct Localizer2d::Impl {
         ++summary.hypotheses;
         return std::nullopt;
       }
-      if (observed_fit(points, h.evidence.back().T_map_laser).empty_fraction > options.verification_max_free_fraction) {
-        // Scan points where another submap saw through (the matched one never looked there).
-        ++summary.scans_ambiguous;
+      // Scan points where another submap of the matched one's segment saw through (the matched
+      // one never looked there). Other segments are left out: an unmerged segment is placed by
+      // odometry alone, and its empty space may lie over the true place.
+      const int segment = map.submaps[static_cast<std::size_t>(h.evidence.back().submap)].segment;
+      if (observed_fit(points, h.evidence.back().T_map_laser, segment).empty_fraction > options.verification_max_free_fraction) {
         ++summary.refused_empty_space_elsewhere;
         return std::nullopt;
       }
-      if (partly_mapped_look_alike(points, h, odom, summary)) {
+      if (partly_mapped_look_alike(points, h, odom, summary)) {  // another place fits too
         ++summary.scans_ambiguous;
         ++summary.partly_mapped_look_alikes;
         return std::nullopt;
@@ -656,13 +658,15 @@ struct Localizer2d::Impl {
     return found;
   }
 
-  /// How a scan placed at a pose fits what the map observed there (the whole map, every submap).
+  /// How a scan placed at a pose fits what the map observed there.
   struct ObservedFit {
     double observed_fraction = 0.0;     ///< points near a map point or in a cell some submap observed
     double explained_of_observed = 0.0; ///< of those, within the ICP inlier distance of a map point
     double empty_fraction = 0.0;        ///< points in some submap's observed empty space, not near a map point
   };
-  ObservedFit observed_fit(const std::vector<Eigen::Vector2d>& points, const core::SE2& T_map_scan) const {
+  // The observed cells and empty space are those of every submap, or of map segment `segment`'s
+  // when it is >= 0; the map points are the whole map's.
+  ObservedFit observed_fit(const std::vector<Eigen::Vector2d>& points, const core::SE2& T_map_scan, int segment = -1) const {
     ObservedFit fit;
     if (points.empty()) return fit;
     const double inlier_m = matching.icp.inlier_distance_m;
@@ -678,9 +682,11 @@ struct Localizer2d::Impl {
       bool seen = false, seen_empty = false;
       for (std::size_t s = 0; s < submaps.size() && !seen_empty; ++s) {
         const Submap& submap = submaps[s];
+        const SavedSubmap& saved = map.submaps[static_cast<std::size_t>(submap_index[s])];
+        if (segment >= 0 && saved.segment != segment) continue;
         const Eigen::Vector2d q = submap.T_world_submap.inverse() * p;
         if (!(q.array() >= submap.lower_submap.array()).all() || !(q.array() <= submap.upper_submap.array()).all()) continue;
-        const ProbabilityGrid& grid = map.submaps[static_cast<std::size_t>(submap_index[s])].grid;
+        const ProbabilityGrid& grid = saved.grid;
         if (!grid.known(q)) continue;
         seen = true;
         seen_empty = in_observed_empty_space(grid, q);

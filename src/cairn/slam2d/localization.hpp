@@ -120,27 +120,32 @@ struct Localizer2dOptions {
   /// Acceptance against the whole map, when a pose is about to be accepted (after the
   /// look-alike test of the coarse ranking):
   ///  1. the scan at the pose may put at most verification_max_free_fraction of its points
-  ///     where *any* submap saw empty space (verification checks only the matched submap);
+  ///     where any submap of the matched submap's segment saw empty space (verification checks
+  ///     only the matched submap; an unmerged segment is placed by odometry alone, so other
+  ///     segments are left out);
   ///  2. no partly mapped place may explain the scan as far as the map observed it: a place
-  ///     whose sensor position lies in a cell some submap observed and where at least `look_alike_min_observed_fraction` of the scan's points land in observed
-  ///     cells (or near a map point), at least verification_min_inlier_fraction of those lie
-  ///     within the ICP inlier distance of a map point, and at most
-  ///     verification_max_free_fraction of all of them in observed empty space. Unobserved
-  ///     space is no evidence against a place: a robot in a room the map saw only through its
-  ///     door sees what it would see in a twin room the map holds whole, and the map's partial
-  ///     view of the true room fits it too. Candidates: the `look_alike_places` best places of
-  ///     the coarse ranking of the whole scan, and half as many for each of two overlapping
-  ///     sectors (the first and the last two thirds of the scan by bearing), since a partly
-  ///     mapped place scores low for the whole scan (its unobserved part scores as unknown);
-  ///     each is refined (branch and bound in its coarse cell, ICP against the whole map without
-  ///     a prior). A look-alike found is followed (re-checked from its odometry prediction on
-  ///     the next attempts) and nothing is accepted while it fits. Measured in simulation
+  ///     whose sensor position lies in a cell some submap observed, where at least
+  ///     `look_alike_min_observed_fraction` of the scan's points land in observed cells (or near
+  ///     a map point), at least verification_min_inlier_fraction of those lie within the ICP
+  ///     inlier distance of a map point, and at most verification_max_free_fraction of all of
+  ///     them in observed empty space. Unobserved space is no evidence against a place: a robot
+  ///     in a room the map saw only through its door sees what it would see in a twin room the
+  ///     map holds whole, and the map's partial view of the true room fits it too. The sensor's
+  ///     cell must be observed, or a corridor is refused for a place outside the building's
+  ///     outer wall, where the map holds only that wall (measured: up to 30 scans' delay).
+  ///     Candidates: the `look_alike_places` best places of the coarse ranking of the whole
+  ///     scan, and half as many for each of two overlapping sectors (the first and the last two
+  ///     thirds of the scan by bearing), since a partly mapped place scores low for the whole
+  ///     scan (its unobserved part scores as unknown); each is refined (branch and bound in its
+  ///     coarse cell, ICP against the whole map without a prior). A look-alike found is
+  ///     followed (re-checked from its odometry prediction on the next attempts) and nothing is
+  ///     accepted while it fits. Measured in simulation
   ///     (LocalizationSimulation.KidnappedIntoRoomsTenSeeds: a robot put down in a room the map
-  ///     saw through its door): 6 of 10 seeds relocalised 7-21 m away without these tests,
-  ///     1 with them but ranking the whole scan only (the true room, half observed, was not
-  ///     among the ranked places), 0 with the sectors. The true place fitted at 50-92 %
-  ///     observed, 86-100 % of that explained. `look_alike_min_observed_fraction` in (0, 1];
-  ///     `look_alike_places` >= 0, 0 disables test 2.
+  ///     saw through its door): 6 of 10 seeds relocalised 7-21 m away without these tests, 1
+  ///     with them but ranking the whole scan only (the true room, half observed, was not among
+  ///     the ranked places), 0 with the sectors. At the true place 50-92 % of the points lay in
+  ///     observed cells, none in observed empty space. `look_alike_min_observed_fraction` in
+  ///     (0, 1]; `look_alike_places` >= 0, 0 disables test 2.
   double look_alike_min_observed_fraction = 0.5;
   int look_alike_places = 40;
 
@@ -274,10 +279,11 @@ struct Localizer2dSummary {
   std::size_t scans_ambiguous = 0;        ///< a hypothesis was confirmed but another place fits too
   std::size_t uniqueness_tests = 0;       ///< other places tested before accepting a pose
   std::size_t look_alikes = 0;            ///< ... that fitted as well (then followed as rivals)
-  /// Acceptances refused because the pose put scan points where another submap saw empty space.
+  /// Acceptances refused because the pose put scan points where another submap saw empty space
+  /// (Localizer2dOptions::look_alike_places, test 1).
   std::size_t refused_empty_space_elsewhere = 0;
   /// Acceptances refused because a partly mapped place explained what the map observed of the
-  /// scan there (Localizer2dOptions::look_alike_places).
+  /// scan there (Localizer2dOptions::look_alike_places, test 2; counted in scans_ambiguous too).
   std::size_t partly_mapped_look_alikes = 0;
   std::size_t tracking_failures = 0;      ///< tracking matches below tracking_min_inlier_fraction
   std::size_t tracking_checks = 0;        ///< whole-submap searches while tracking
