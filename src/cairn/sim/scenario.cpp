@@ -857,9 +857,10 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
         generate_trajectory(result.world.route, trajectory, result.world.closed_route);
     TrajectoryOptions after_options = trajectory;
     after_options.laps = 1;
+    const std::vector<Vector2> route =
+        route_after_drop(OfficeFloor(scenario.office), scenario.kidnap.drop_place, scenario.kidnap.rings_after);
     const std::vector<TrajectorySample> after =
-        generate_trajectory(route_after_drop(OfficeFloor(scenario.office), scenario.kidnap.drop_place, scenario.kidnap.rings_after), after_options,
-                            false, scenario.kidnap.drop_heading_rad);
+        generate_trajectory(route, after_options, false, scenario.kidnap.drop_heading_rad);
     std::size_t first_after = 0;
     result.truth = splice_kidnap(before, after, scenario.kidnap.time_s, &first_after);
     result.carried_samples = {first_after};

@@ -907,7 +907,8 @@ struct Slam2d::Impl {
       // fit says nothing either way (a corridor seen along its axis).
       const std::optional<LoopCandidate>& found = job.found[i];
       const core::SE2& T_world_tested = keyframes[static_cast<std::size_t>(job.searches[i].header.keyframe)].T_world_laser;
-      if (!found && !near_odometry(it->delta, T_world_tested) && !covered_by_group(group_of(it->group_a), it->delta * T_world_tested))
+      if (!found && !near_odometry(it->delta, T_world_tested) &&
+          !covered_by_group(group_of(it->group_a), it->delta * T_world_tested))
         continue;
       const bool against =
           !found || (found->accepted &&

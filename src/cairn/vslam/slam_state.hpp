@@ -12,8 +12,8 @@
 #include <chrono>
 #include <cmath>
 #include <map>
-#include <optional>
 #include <numeric>
+#include <optional>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <set>
