@@ -155,8 +155,11 @@ TEST(Slam3dCli, AShortGroundTruthAndBadOptionsAreRefused) {
   r = run(q(scans) + " --preset nope --out " + q(scratch() / "o9"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("preset"), std::string::npos) << r.err;
+  // A flag value out of its range is refused while the flags are parsed (status 2, as every
+  // usage error), before any scan is read.
   r = run(q(scans) + " --map-voxel 0 --out " + q(scratch() / "o10"));
-  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--map-voxel"), std::string::npos) << r.err;
   r = run(q(scans) + " --metric nearest --out " + q(scratch() / "o11"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("--metric"), std::string::npos) << r.err;

@@ -420,7 +420,7 @@ TEST(ImageFile, HostileFilesGiveClearErrorsNamingTheFile) {
   expect_file_error("text.png", "this is not a PNG\n", "not a PNG or JPEG");
   expect_error([] { read_image_file((scratch() / "missing.png").string(), ImageMode::kGray8); }, (scratch() / "missing.png").string(),
                "cannot open");
-  expect_error([] { read_image_file(scratch().string(), ImageMode::kGray8); }, scratch().string(), "is a folder");
+  expect_error([] { read_image_file(scratch().string(), ImageMode::kGray8); }, scratch().string(), "is a directory, expected an image file");
 
   // Declared sizes over 2^28 pixels are refused before any allocation (60000 x 60000 grey 8-bit:
   // 3.6 GB; within libpng's own limit of 1e6 per side).

@@ -30,6 +30,7 @@
 
 #include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/core/assert.hpp"
+#include "cairn/core/threads.hpp"
 
 namespace cairn::backend {
 
@@ -504,7 +505,7 @@ class Engine final : public TrustRegionModel {
   Engine(LeastSquaresProblem& problem, const LeastSquaresOptions& options)
       : problem_(problem.impl()),
         options_(options),
-        arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {}
+        arena_(core::arena_concurrency(options.threads)) {}
 
   LeastSquaresSummary run();
   MarginalCovariances covariances(const std::vector<int>& variables);
@@ -1688,7 +1689,7 @@ LeastSquaresSummary Engine::run() {
   summary_ = &summary;
   summary.linear_solver = options_.linear_solver;
   summary.algorithm = options_.algorithm;
-  summary.threads = options_.threads > 0 ? options_.threads : arena_.max_concurrency();
+  summary.threads = arena_.max_concurrency();
   // CHOLMOD's BLAS gets the solve's threads, not one per core spinning beside TBB's workers;
   // the caller's setting is restored when the solve ends.
   const ScopedBlasThreads blas(summary.threads);

@@ -17,6 +17,7 @@
 #include "cairn/backend/factors.hpp"
 #include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/core/assert.hpp"
+#include "cairn/core/threads.hpp"
 
 namespace cairn::backend {
 
@@ -84,7 +85,7 @@ class PoseGraphSystem {
          const std::vector<char>& in_pattern, BlockPattern& pattern)
       : problem_(problem),
         options_(options),
-        arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic),
+        arena_(core::arena_concurrency(options.threads)),
         variable_(variable),
         in_pattern_(in_pattern),
         free_poses_(pattern.matrix().size / D),
@@ -622,11 +623,26 @@ double evaluate_cost(const PoseGraphProblem<Group>& problem, const OptimizerOpti
   return sum;
 }
 
+template <class Group>
+long long first_nonfinite_edge(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options) {
+  for (std::size_t e = 0; e < problem.edges.size(); ++e) {
+    const auto& edge = problem.edges[e];
+    const double s = squared_residual(problem.T_world_pose[static_cast<std::size_t>(edge.i)],
+                                      problem.T_world_pose[static_cast<std::size_t>(edge.j)], edge, options.objective);
+    if (!std::isfinite(edge_weight(options, e) * evaluate_kernel(options.kernel, options.kernel_scale, s).rho)) {
+      return static_cast<long long>(e);
+    }
+  }
+  return -1;
+}
+
 template OptimizerSummary optimize(Problem2D&, const OptimizerOptions&);
 template OptimizerSummary optimize(Problem3D&, const OptimizerOptions&);
 template OptimizerSummary optimize(Problem2D&, const OptimizerOptions&, OptimizerWorkspace*);
 template OptimizerSummary optimize(Problem3D&, const OptimizerOptions&, OptimizerWorkspace*);
 template double evaluate_cost(const Problem2D&, const OptimizerOptions&);
 template double evaluate_cost(const Problem3D&, const OptimizerOptions&);
+template long long first_nonfinite_edge(const Problem2D&, const OptimizerOptions&);
+template long long first_nonfinite_edge(const Problem3D&, const OptimizerOptions&);
 
 }  // namespace cairn::backend

@@ -173,4 +173,10 @@ OptimizerSummary optimize(PoseGraphProblem<Group>& problem, const OptimizerOptio
 template <class Group>
 double evaluate_cost(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options);
 
+/// The index of the first edge whose cost under `options` is not finite at the current poses
+/// (a pose or measurement so large that the residual overflows), or -1: names the culprit of a
+/// non-finite evaluate_cost().
+template <class Group>
+long long first_nonfinite_edge(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options);
+
 }  // namespace cairn::backend

@@ -4,8 +4,10 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
-#include "cairn/core/assert.hpp"
 
 namespace cairn::backend {
 namespace {
@@ -14,12 +16,9 @@ namespace {
 // std::uniform_real_distribution whose algorithm the standard leaves open.
 double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
-}  // namespace
-
+// The distinct pose ids of the graph, sorted: its vertices, or the ids its edges name.
 template <class Group>
-void add_false_loop_closures(io::PoseGraphT<Group>& graph, const OutlierOptions& options) {
-  CAIRN_ASSERT(options.count >= 0 && options.translation_extent_m > 0.0, "invalid OutlierOptions");
-  if (options.count == 0) return;
+std::vector<std::int64_t> pose_ids(const io::PoseGraphT<Group>& graph) {
   std::vector<std::int64_t> ids;
   if (!graph.vertices.empty()) {
     for (const auto& v : graph.vertices) ids.push_back(v.id);
@@ -31,7 +30,43 @@ void add_false_loop_closures(io::PoseGraphT<Group>& graph, const OutlierOptions&
   }
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  CAIRN_ASSERT(ids.size() >= 3 && !graph.edges.empty(), "need at least 3 poses and one edge");
+  return ids;
+}
+
+}  // namespace
+
+template <class Group>
+std::string outlier_request_problems(const io::PoseGraphT<Group>& graph, const OutlierOptions& options) {
+  std::string problems;
+  auto add = [&](const std::string& p) { problems += (problems.empty() ? "" : "\n") + p; };
+  if (options.count < 0) add("the number of false loop closures must be >= 0, got " + std::to_string(options.count));
+  if (!std::isfinite(options.translation_extent_m) || options.translation_extent_m <= 0.0) {
+    add("the translation extent must be a finite number > 0");
+  }
+  if (options.count <= 0) return problems;
+  const std::vector<std::int64_t> ids = pose_ids(graph);
+  if (ids.size() < 3) add("false loop closures need at least 3 poses, and the graph has " + std::to_string(ids.size()));
+  if (graph.edges.empty()) add("false loop closures copy the information matrix of an existing edge, and the graph has none");
+  if (ids.size() >= 3) {
+    // Ordered pairs (from, to) of distinct poses whose ids are not consecutive.
+    std::size_t consecutive = 0;
+    for (std::size_t k = 1; k < ids.size(); ++k) consecutive += ids[k] - ids[k - 1] == 1;
+    const double pairs = static_cast<double>(ids.size()) * static_cast<double>(ids.size() - 1) - 2.0 * static_cast<double>(consecutive);
+    if (static_cast<double>(options.count) > pairs) {
+      add("asked for " + std::to_string(options.count) + " false loop closures, but the graph has only " +
+          std::to_string(static_cast<long long>(pairs)) + " distinct ordered pairs of non-consecutive poses");
+    }
+  }
+  return problems;
+}
+
+template <class Group>
+void add_false_loop_closures(io::PoseGraphT<Group>& graph, const OutlierOptions& options) {
+  if (const std::string problems = outlier_request_problems(graph, options); !problems.empty()) {
+    throw std::invalid_argument(problems);
+  }
+  if (options.count == 0) return;
+  const std::vector<std::int64_t> ids = pose_ids(graph);
   std::mt19937_64 rng(options.seed);
   auto pick = [&](std::size_t n) { return std::min(n - 1, static_cast<std::size_t>(uniform01(rng) * static_cast<double>(n))); };
   const std::size_t original_edges = graph.edges.size();
@@ -62,6 +97,8 @@ void add_false_loop_closures(io::PoseGraphT<Group>& graph, const OutlierOptions&
   }
 }
 
+template std::string outlier_request_problems(const io::PoseGraph2D&, const OutlierOptions&);
+template std::string outlier_request_problems(const io::PoseGraph3D&, const OutlierOptions&);
 template void add_false_loop_closures(io::PoseGraph2D&, const OutlierOptions&);
 template void add_false_loop_closures(io::PoseGraph3D&, const OutlierOptions&);
 

@@ -7,6 +7,7 @@
 /// as a real measurement.
 
 #include <cstdint>
+#include <string>
 
 #include "cairn/io/pose_graph.hpp"
 
@@ -20,7 +21,16 @@ struct OutlierOptions {
   double translation_extent_m = 10.0;
 };
 
-/// Adds false loop closures; rotations are uniform on SO(2) / SO(3) (Shoemake 1992 for SO(3)).
+/// Every reason `options` cannot be honoured on `graph`, one per line ("" = none): a count below
+/// 0, an extent that is not a finite number > 0, fewer than 3 poses or no edge to copy an
+/// information matrix from, or more false loop closures than the graph has distinct ordered pairs
+/// of non-consecutive poses (beyond that every one would repeat another). Checked before any
+/// allocation.
+template <class Group>
+std::string outlier_request_problems(const io::PoseGraphT<Group>& graph, const OutlierOptions& options);
+
+/// Adds false loop closures (throws std::invalid_argument with outlier_request_problems() when
+/// the request cannot be honoured); rotations are uniform on SO(2) / SO(3) (Shoemake 1992 for SO(3)).
 /// Deterministic for a given seed (own uniform generator, no std distributions).
 template <class Group>
 void add_false_loop_closures(io::PoseGraphT<Group>& graph, const OutlierOptions& options);

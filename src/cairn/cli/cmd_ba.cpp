@@ -8,8 +8,10 @@
 
 #include "cairn/backend/bundle_adjustment.hpp"
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/io/bal.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
@@ -90,6 +92,7 @@ int ba_command(const BaFlags& flags) {
       io::is_standard_output(flags.report)) {
     throw io::ParseError(flags.report, 0, "the problem already goes to standard output: give --report a file");
   }
+  io::check_distinct_outputs({{"--output", flags.output}, {"--report", flags.report}});
   claim_standard_output(flags.output);
   claim_standard_output(flags.report);
   io::BalProblem problem = io::read_bal(flags.input);
@@ -131,13 +134,12 @@ int ba_command(const BaFlags& flags) {
               summary.jacobian_s, summary.residual_s, summary.linear_system_s, summary.linear_solve_s, summary.total_s,
               summary.threads);
   const bool interrupted = summary.termination == backend::LeastSquaresTermination::kInterrupted;
-  if (summary.is_solution_usable() && !flags.output.empty()) {
-    io::write_output(flags.output, [&](std::ostream& out) { io::write_bal(out, problem); });
-  }
-  if (!flags.report.empty()) {
-    const nlohmann::json j = summary_json(summary, problem, behind);
-    io::write_output(flags.report, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
-  }
+  // The refined problem and the report are one result: both are produced before either
+  // replaces a file.
+  const nlohmann::json j = flags.report.empty() ? nlohmann::json() : summary_json(summary, problem, behind);
+  io::write_outputs({{summary.is_solution_usable() ? flags.output : std::string(),
+                      [&](std::ostream& out) { io::write_bal(out, problem); }},
+                     {flags.report, [&](std::ostream& out) { out << io::json_text(j); }}});
   if (!flags.output.empty() || !flags.report.empty()) {
     std::string written;
     for (const std::string* path : {&flags.output, &flags.report}) {
@@ -171,16 +173,16 @@ Runner register_ba(CLI::App& app) {
       ->check(CLI::IsMember({"none", "huber", "cauchy"}))
       ->capture_default_str();
   app.add_option("--loss-scale", flags->loss_scale_px, "Kernel scale in pixels")
-      ->check(CLI::PositiveNumber)
+      ->check(checks::positive())
       ->capture_default_str();
   app.add_option("--max-iterations", flags->max_iterations, "LM iterations (Ceres' max_num_iterations)")
-      ->check(CLI::PositiveNumber)
+      ->check(checks::count())
       ->capture_default_str();
   app.add_option("--function-tolerance", flags->function_tolerance,
                  "Stop when |cost change| / cost falls below this (Ceres' default)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(checks::non_negative())
       ->capture_default_str();
-  app.add_option("--threads", flags->threads, "Threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  app.add_option("--threads", flags->threads, "Threads (0 = all cores; more than the machine has are clamped)")->transform(checks::threads())->capture_default_str();
   app.add_flag("-q,--quiet", flags->quiet, "No per-iteration lines");
   return [flags]() { return ba_command(*flags); };
 }

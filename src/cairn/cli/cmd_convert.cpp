@@ -27,6 +27,7 @@ int convert(const ConvertFlags& flags) {
   if (!flags.out_times.empty() && io::is_standard_output(flags.output) && io::is_standard_output(flags.out_times)) {
     throw io::ParseError(flags.out_times, 0, "the poses already go to standard output: give --out-times a file");
   }
+  io::check_distinct_outputs({{"OUT", flags.output}, {"--out-times", flags.out_times}});
   const io::FileFormat from = resolve_format(flags.input, flags.from, "--from");
   io::FileFormat to{};
   if (!flags.to.empty()) {

@@ -22,12 +22,14 @@
 #include <vector>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/trajectory_files.hpp"
 #include "cairn/eval/ape.hpp"
 #include "cairn/eval/kitti_metric.hpp"
 #include "cairn/eval/relations.hpp"
 #include "cairn/eval/rpe.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/carmen_log.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -179,10 +181,26 @@ nlohmann::json alignment_json(const eval::Alignment& a) {
           {"scale", a.scale}};
 }
 
+// The files of one evaluation (--json and every --plot) form one result: each is produced in
+// memory as the run goes and all are written at its end, after the last was produced
+// (io::write_outputs), so a run that fails half way replaces none of them.
+std::vector<io::PlannedOutput> g_pending_outputs;
+
+void queue_output(const std::string& path, std::string bytes) {
+  g_pending_outputs.push_back({path, [bytes = std::move(bytes)](std::ostream& out) { out << bytes; }});
+}
+
+void write_queued_outputs() {
+  io::write_outputs(g_pending_outputs);
+  for (const io::PlannedOutput& o : g_pending_outputs) {
+    if (!io::is_standard_output(o.path)) std::cout << "wrote " << o.path << '\n';
+  }
+  g_pending_outputs.clear();
+}
+
 void emit_json(const std::string& destination, const nlohmann::json& j) {
   if (destination.empty()) return;
-  io::write_output(destination, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
-  if (!io::is_standard_output(destination)) std::cout << "wrote " << destination << '\n';
+  queue_output(destination, io::json_text(j));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -209,8 +227,7 @@ void save_plot(const PlotTarget& target, const std::string& name, const viz::Fig
   const std::string path = target.prefix + "_" + name + std::string(viz::extension(target.format));
   const viz::RenderResult image = viz::render(figure, target.format);
   if (!image.ok) throw io::ParseError(path, 0, "cannot draw the plot: " + image.message);
-  io::write_output(path, [&](std::ostream& out) { out << image.bytes; });
-  std::cout << "wrote " << path << '\n';
+  queue_output(path, image.bytes);
 }
 
 /// The two axes of the top view: given by --plot-plane, or (auto) the two along which the
@@ -665,9 +682,10 @@ void add_common(CLI::App& command, EvalFlags& f, bool relations) {
   command.add_option("--max-diff", f.max_diff_s,
                      relations ? "Largest time difference to the nearest estimated pose, s (default 0.1)"
                                : "Largest time difference of an associated pair, s (default 0.01, as evo)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(checks::non_negative());
   if (!relations) {
-    command.add_option("--offset", f.offset_s, "Added to every EST time stamp before association, s (default 0)");
+    command.add_option("--offset", f.offset_s, "Added to every EST time stamp before association, s (default 0)")
+        ->check(checks::finite());
   }
   command.add_option("--json", f.json, "Also write the results as JSON to this file ('-' for stdout)");
   command.add_option("--plot", f.plot,
@@ -697,7 +715,7 @@ Runner register_eval(CLI::App& app) {
   CLI::App* rpe = app.add_subcommand("rpe", "Relative pose error over a delta in frames or metres, as evo_rpe");
   add_common(*rpe, *flags, false);
   add_align_and_relation(*rpe, *flags);
-  rpe->add_option("--delta", flags->delta, "Pair distance in --unit (default 1)")->check(CLI::PositiveNumber);
+  rpe->add_option("--delta", flags->delta, "Pair distance in --unit (default 1)")->check(checks::positive());
   rpe->add_option("--unit", flags->unit, "Unit of --delta: frames or m (default frames)")
       ->check(CLI::IsMember({"frames", "f", "m", "meters", "metres"}));
   rpe->add_flag("--all-pairs", flags->all_pairs, "All overlapping pairs instead of consecutive ones");
@@ -715,11 +733,13 @@ Runner register_eval(CLI::App& app) {
     if (!flags->plot.empty() && (flags->plot == "-" || io::is_standard_output(flags->plot))) {
       throw io::ParseError(flags->plot, 0, "--plot writes several files (PREFIX_<name>.png): give a prefix, not standard output");
     }
-    if (ape->parsed()) return run_ape(*flags);
-    if (rpe->parsed()) return run_rpe(*flags);
-    if (kitti->parsed()) return run_kitti(*flags);
-    if (relations->parsed()) return run_relations(*flags);
-    return 2;
+    int status = 2;
+    if (ape->parsed()) status = run_ape(*flags);
+    if (rpe->parsed()) status = run_rpe(*flags);
+    if (kitti->parsed()) status = run_kitti(*flags);
+    if (relations->parsed()) status = run_relations(*flags);
+    write_queued_outputs();
+    return status;
   };
 }
 

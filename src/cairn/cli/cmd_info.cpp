@@ -12,6 +12,7 @@
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/trajectory_files.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/carmen_log.hpp"
 #include "cairn/io/graph_statistics.hpp"
@@ -29,7 +30,7 @@ struct InfoFlags {
 
 void emit_json(const std::string& destination, const nlohmann::json& j) {
   if (destination.empty()) return;
-  io::write_output(destination, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+  io::write_output(destination, [&](std::ostream& out) { out << io::json_text(j); });
 }
 
 int info_graph(const InfoFlags& flags, io::FileFormat format) {

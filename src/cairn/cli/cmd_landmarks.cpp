@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/landmarks/clutter.hpp"
@@ -117,17 +118,23 @@ Runner register_landmarks(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--spurious-fraction", flags->spurious_fraction,
                  "Inject this share of spurious observations (uniform clutter, 0..0.9) before running")
+      ->check(checks::in_range(0.0, 0.9))
       ->capture_default_str();
   app.add_option("--clutter-seed", flags->clutter_seed, "Seed of the injected clutter")->capture_default_str();
   app.add_option("--odometry-inflation", flags->odometry_inflation,
-                 "Multiply the odometry noise model's variances (the simulator's odometry has biases it does not model)")
+                 "Multiply the odometry noise model's variances (the simulator's odometry has biases it does not model), in (0, 1e6]")
+      ->check(checks::above(0.0, 1e6))
       ->capture_default_str();
-  app.add_option("--gate-probability", flags->gate_probability, "chi^2 gate probability for nn/jcbb")->capture_default_str();
+  app.add_option("--gate-probability", flags->gate_probability, "chi^2 gate probability for nn/jcbb, in (0, 1)")
+      ->check(checks::above(0.0, 0.999999))
+      ->capture_default_str();
   app.add_option("--nees-checkpoints", flags->nees_checkpoints,
                  "Steps (evenly spaced) where NEES is reported; graph SLAM solves the prefix at each")
+      ->check(checks::count(1000000))
       ->capture_default_str();
   app.add_option("--graph-solve-every", flags->graph_solve_every,
                  "Graph SLAM: also solve the growing graph every N steps between checkpoints (0 = only at checkpoints)")
+      ->check(checks::count_or_zero())
       ->capture_default_str();
   app.add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
   return [flags]() { return landmarks_command(*flags); };

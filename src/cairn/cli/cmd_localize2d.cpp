@@ -9,12 +9,15 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/io/carmen_log.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/trajectory.hpp"
@@ -213,7 +216,7 @@ int localize2d_command(const Localize2dFlags& flags) {
   report["wall_time_s"] = total_s;
   report["scans_per_second"] = summary.total_s > 0 ? static_cast<double>(used) / summary.total_s : 0.0;
   if (!flags.ground_truth.empty()) report["ground_truth"] = ground_truth_errors(flags.ground_truth, results, flags.quiet);
-  io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
+  io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
   if (!flags.quiet) {
     std::printf("%zu scans in %.1f s (%.1f s localising, slowest scan %.3f s); map: %zu submaps, %zu tracking points\n", used,
@@ -251,10 +254,13 @@ Runner register_localize2d(CLI::App& app) {
   app.add_option("--config", flags->config, "slam2d YAML configuration: its matching and verification keys apply");
   app.add_option("--set", flags->set, "Override one slam2d key: section.key=value (repeatable)");
   app.add_option("--global-searches-per-scan", flags->global_searches_per_scan,
-                 "Whole-submap searches per scan while searching (default 3)");
+                 "Whole-submap searches per scan while searching (default 3)")
+      ->check(checks::count());
   app.add_option("--confirmations", flags->confirmations,
-                 "Scans whose verified matches must agree before a pose is accepted (default 2)");
-  app.add_option("--first-scan", flags->first_scan, "Start at this scan of the log (0-based)");
+                 "Scans whose verified matches must agree before a pose is accepted (default 2)")
+      ->check(checks::count());
+  app.add_option("--first-scan", flags->first_scan, "Start at this scan of the log (0-based)")
+      ->check(checks::count_or_zero(std::numeric_limits<long>::max()));
   flags->LogReplayFlags::add_to(app);
   return [flags]() { return localize2d_command(*flags); };
 }

@@ -16,7 +16,9 @@
 #include "cairn/backend/optimizer.hpp"
 #include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/file_format.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -49,7 +51,33 @@ struct OptimizeFlags {
   std::string report;
   bool quiet = false;
   GraphReadFlags graph;
+  const CLI::App* command = nullptr;  // which flags were given
 };
+
+// Flags that would do nothing with the others given are refused before any work.
+void check_combinations(const OptimizeFlags& f) {
+  auto given = [&](const std::string& name) { return f.command != nullptr && f.command->count(name) > 0; };
+  if (!f.covariance_ids.empty() && f.report.empty()) {
+    throw UsageError("--covariance writes marginal covariances into the report: add --report FILE");
+  }
+  if (f.robust != "gnc") {
+    for (const std::string name : {"--gnc-threshold", "--gnc-mu-factor", "--gnc-final-factor", "--gnc-inner-iterations"}) {
+      if (given(name)) throw UsageError(name + " tunes --robust gnc, and this run uses --robust " + f.robust);
+    }
+  }
+  if ((f.robust == "none" || f.robust == "gnc") && given("--robust-scale")) {
+    throw UsageError("--robust-scale is the scale of a kernel (huber, cauchy, geman-mcclure), and --robust " + f.robust +
+                     " has none");
+  }
+  if (f.exact_steps && f.solver != "lm") {
+    throw UsageError("--exact-steps concerns Levenberg-Marquardt's steps on an earlier factorisation, and --solver " +
+                     f.solver + " factorises every step already");
+  }
+  if (f.gauss_newton_hessian && f.objective != "chordal") {
+    throw UsageError("--gauss-newton-hessian concerns --objective chordal only (the geodesic objective always uses J^T J)");
+  }
+  if (given("--certify-tolerance") && !f.certify) throw UsageError("--certify-tolerance needs --certify");
+}
 
 nlohmann::json summary_json(const backend::OptimizerSummary& s) {
   nlohmann::json j;
@@ -141,6 +169,22 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     };
   }
   const double initial_cost = backend::evaluate_cost(problem, options);
+  if (!std::isfinite(initial_cost)) {
+    const long long e = backend::first_nonfinite_edge(problem, options);
+    if (e >= 0) {
+      const auto& edge = problem.edges[static_cast<std::size_t>(e)];
+      throw io::ParseError(flags.input, edge.line,
+                           "the cost of the edge from pose " + std::to_string(problem.ids[static_cast<std::size_t>(edge.i)]) +
+                               " to pose " + std::to_string(problem.ids[static_cast<std::size_t>(edge.j)]) +
+                               " is not finite at the starting poses (" + std::string(backend::to_string(init)) +
+                               " initialisation): a measurement or pose too large to evaluate; nothing was written");
+    }
+    throw io::ParseError(flags.input, 0, "the starting cost is not finite; nothing was written");
+  }
+  // --covariance names poses of this graph: checked before the solve, not after it.
+  for (const auto id : flags.covariance_ids) {
+    if (problem.index_of(id) < 0) throw io::ParseError(flags.input, 0, "--covariance: pose " + std::to_string(id) + " is not in the graph");
+  }
   backend::OptimizerSummary summary;
   backend::GncSummary gnc;
   const bool use_gnc = flags.robust == "gnc";
@@ -235,6 +279,11 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
   // A signal during the certificate, the staircase or the polish: the poses are those of the
   // last accepted step.
   const bool stopped_after = stopped || interrupted();
+  // A failed solve is a failed command: nothing is written and no existing output is replaced.
+  if (!summary.is_solution_usable() && !stopped_after) {
+    std::printf("%s\n", summary.brief_report().c_str());
+    throw io::ParseError(flags.input, 0, "the solve failed (" + summary.message + "); nothing was written");
+  }
   const auto optimized = backend::to_graph(problem, graph);
   // The graph and the report form one set: both are produced before either replaces a file.
   io::OutputFile graph_file(flags.output);
@@ -314,11 +363,7 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
     if (stopped_after) j["interruption"] = {{"signal", interrupt_signal_name()}};
     if (!flags.covariance_ids.empty()) {
       std::vector<int> poses;
-      for (const auto id : flags.covariance_ids) {
-        const int p = problem.index_of(id);
-        if (p < 0) throw io::ParseError(flags.input, 0, "--covariance: pose " + std::to_string(id) + " is not in the graph");
-        poses.push_back(p);
-      }
+      for (const auto id : flags.covariance_ids) poses.push_back(problem.index_of(id));
       const auto marginals = backend::marginal_covariances(problem, poses);
       if (!marginals) {
         warn("marginal covariances unavailable: J^T J is not positive definite at the solution");
@@ -370,7 +415,7 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
                   {"rejected", rejected}};
     }
     report_file.emplace(flags.report);
-    report_file->write([&](std::ostream& out) { out << j.dump(2) << '\n'; });
+    report_file->write([&](std::ostream& out) { out << io::json_text(j); });
   }
   graph_file.commit();
   if (report_file) report_file->commit();
@@ -378,10 +423,12 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
               flags.report.empty() ? "" : (" and " + io::output_display_name(flags.report)).c_str(),
               stopped_after ? " (interrupted: the estimate so far)" : "");
   if (stopped_after) return interrupted_exit_status();
-  return summary.is_solution_usable() ? 0 : 1;
+  return 0;
 }
 
 int optimize_command(const OptimizeFlags& flags) {
+  check_combinations(flags);
+  io::check_distinct_outputs({{"--output", flags.output}, {"--report", flags.report}});
   if (io::is_standard_output(flags.output) && !flags.report.empty() && io::is_standard_output(flags.report)) {
     throw io::ParseError(flags.report, 0, "the graph already goes to standard output: give --report a file");
   }
@@ -425,6 +472,8 @@ int corrupt_command(const CorruptFlags& flags) {
   options.seed = flags.seed;
   options.translation_extent_m = flags.extent_m;
   io::PoseGraph graph = file.graph;
+  const std::string problems = std::visit([&](const auto& g) { return backend::outlier_request_problems(g, options); }, graph);
+  if (!problems.empty()) throw io::ParseError(flags.input, 0, problems);
   std::visit([&](auto& g) { backend::add_false_loop_closures(g, options); }, graph);
   const auto out_format = io::format_from_extension(flags.output) == io::FileFormat::kToro ? io::GraphFormat::kToro
                                                                                               : io::GraphFormat::kG2o;
@@ -442,10 +491,10 @@ Runner register_corrupt(CLI::App& app) {
   app.add_option("-o,--output", flags->output, "Corrupted graph")->required();
   app.add_option("--outliers", flags->outliers, "Number of false loop closures to append")
       ->required()
-      ->check(CLI::NonNegativeNumber);
+      ->check(checks::count_or_zero(2000000000));
   app.add_option("--seed", flags->seed, "Random seed")->capture_default_str();
   app.add_option("--extent", flags->extent_m, "False translations uniform in [-extent, extent] m per axis")
-      ->check(CLI::PositiveNumber)
+      ->check(checks::positive())
       ->capture_default_str();
   flags->graph.add_to(app);
   return [flags]() { return corrupt_command(*flags); };
@@ -475,37 +524,37 @@ Runner register_optimize(CLI::App& app) {
       ->check(CLI::IsMember({"none", "huber", "cauchy", "geman-mcclure", "gnc"}))
       ->capture_default_str();
   app.add_option("--robust-scale", flags->robust_scale, "Kernel scale in standard deviations")
-      ->check(CLI::PositiveNumber)
+      ->check(checks::positive())
       ->capture_default_str();
   app.add_option("--gnc-threshold", flags->gnc_threshold,
                  "GNC inlier threshold on the whitened squared residual, fixed; 0 = adaptive (chi-square 0.99 quantile "
                  "first, then 4x that quantile in the noise variance estimated from the accepted edges)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(checks::non_negative())
       ->capture_default_str();
   app.add_option("--gnc-mu-factor", flags->gnc_mu_factor,
                  "GNC: growth of the non-convexity parameter mu per outer iteration (> 1; smaller is slower and "
                  "follows the minimiser more closely)")
-      ->check(CLI::Range(1.0 + 1e-9, 1e9));
+      ->check(checks::above(1.0, 1e9));
   app.add_option("--gnc-final-factor", flags->gnc_final_factor,
                  "GNC, adaptive threshold: the stages after the graduation use this many times its threshold; smaller "
                  "misses more true loop closures and keeps fewer false ones (1.5 kept none in the seeds tried, but "
                  "rejects true ones on clean graphs; docs/backend.md)")
-      ->check(CLI::Range(1.0, 1e9))
+      ->check(checks::in_range(1.0, 1e9))
       ->capture_default_str();
   app.add_option("--gnc-inner-iterations", flags->gnc_inner_iterations,
                  "GNC: solver iterations between two weight updates")
-      ->check(CLI::PositiveNumber)
+      ->check(checks::count())
       ->capture_default_str();
   app.add_option("--threads", flags->threads, "Threads for linearisation (0 = all cores)")
-      ->check(CLI::NonNegativeNumber)
+      ->transform(checks::threads())
       ->capture_default_str();
   app.add_option("--max-iterations", flags->max_iterations, "Iteration limit")
-      ->check(CLI::PositiveNumber)
+      ->check(checks::count())
       ->capture_default_str();
   app.add_option("--initial-radius", flags->initial_radius,
                  "Initial trust-region radius (LM: damping 1/radius; default 1e16 = an undamped, Gauss-Newton "
                  "first step; Ceres' default is 1e4)")
-      ->check(CLI::PositiveNumber)
+      ->check(checks::positive())
       ->capture_default_str();
   app.add_flag("--exact-steps", flags->exact_steps,
                "LM: factorise every iteration instead of solving by PCG on the last factorisation");
@@ -521,7 +570,7 @@ Runner register_optimize(CLI::App& app) {
                "reported as a polish ('geodesic_polish' in the report): the certificate is that of the chordal point");
   app.add_option("--certify-tolerance", flags->certify_tolerance,
                  "Certified when lambda_min(S) >= -this (absolute; SE-Sync's min_eig_num_tol)")
-      ->check(CLI::PositiveNumber)
+      ->check(checks::positive())
       ->capture_default_str();
   app.add_option("--report", flags->report, "Write a JSON report (summary, per-iteration log, timings)");
   app.add_option("--covariance", flags->covariance_ids,
@@ -529,6 +578,7 @@ Runner register_optimize(CLI::App& app) {
       ->delimiter(',');
   app.add_flag("-q,--quiet", flags->quiet, "No per-iteration progress");
   flags->graph.add_to(app);
+  flags->command = &app;
   return [flags]() { return optimize_command(*flags); };
 }
 

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/sim/scenario.hpp"
@@ -341,7 +342,7 @@ int simulate_command(const SimulateFlags& flags) {
   }
   if (result.mission) manifest["ground_truth"] = mission_json(*result.mission);
   manifest["files"] = file_list;
-  io::write_output(out.staging_path("manifest.json"), [&](std::ostream& o) { o << manifest.dump(2) << '\n'; });
+  io::write_output(out.staging_path("manifest.json"), [&](std::ostream& o) { o << io::json_text(manifest); });
   out.commit();
 
   if (result.min_clearance_m < 0.2) {

@@ -16,6 +16,7 @@
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/eval/relations.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/carmen_log.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -63,6 +64,12 @@ int slam2d_command(const Slam2dFlags& flags) {
 
   if (!flags.save_map.empty() && io::is_standard_output(flags.save_map))
     throw std::invalid_argument("--save-map needs a file: the map is binary and standard output carries the messages");
+  if (!flags.save_map.empty()) {
+    io::resolve_output(flags.save_map);  // a directory, a link loop: refused before the work
+    io::check_file_outside_directory("--save-map", flags.save_map, "--out", flags.out,
+                                     {"map.pgm", "map.yaml", "map.png", "trajectory.tum", "scans.csv", "graph.g2o",
+                                      "corrected.clf", "report.json"});
+  }
   // Refuse a directory of another run before the work, not after it.
   io::OutputDirectory out(flags.out, flags.overwrite);
   options.should_stop = stop_on_signal();
@@ -151,7 +158,7 @@ int slam2d_command(const Slam2dFlags& flags) {
     map_file = std::make_unique<io::OutputFile>(flags.save_map);
     map_file->write([&](std::ostream& o) { o.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
   }
-  io::write_output(files.report, [&](std::ostream& o) { o << report.dump(2) << '\n'; });
+  io::write_output(files.report, [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
   if (map_file) map_file->commit();
   if (!flags.quiet) {

@@ -7,15 +7,18 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <unistd.h>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/spread.hpp"
 #include "cairn/cli/trajectory_files.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/point_cloud.hpp"
@@ -324,7 +327,7 @@ int slam3d_command(const Slam3dFlags& flags) {
     report["ground_truth"] = e;
   }
   report["scans"] = scans;
-  io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
+  io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
 
   if (!flags.quiet) {
@@ -375,7 +378,7 @@ Runner register_slam3d(CLI::App& app) {
                  "Starting configuration: default, or kitti (KITTI HDL-64E scans: 0.205 deg vertical-angle correction, no deskew)")
       ->capture_default_str();
   app.add_option("--times", flags->times, "Table with one row per scan holding its time in seconds (e.g. KITTI times.txt)");
-  app.add_option("--times-column", flags->times_column, "Column of --times holding the time (1-based)")->capture_default_str();
+  app.add_option("--times-column", flags->times_column, "Column of --times holding the time (1-based)")->check(checks::count(10000))->capture_default_str();
   app.add_option("--ground-truth", flags->ground_truth,
                  "Ground-truth poses of the same scans (KITTI 3x4 per line, or TUM): print and report drift, RPE, ATE");
   app.add_option("--ground-truth-format", flags->ground_truth_format, "kitti or tum (default: from the file)");
@@ -384,10 +387,10 @@ Runner register_slam3d(CLI::App& app) {
                  "auto (default: loam when the scans carry rings, dense otherwise; the kitti preset: dense), dense (every "
                  "point, KISS-ICP's way) or loam (edge and planar features per ring, Zhang & Singh 2014)");
   app.add_option("--deskew", flags->deskew, "off, point-times (default: with the files' per-point times) or azimuth");
-  app.add_option("--threads", flags->threads, "Threads (0 = all)")->capture_default_str();
-  app.add_option("--map-voxel", flags->map_voxel_m, "Voxel of the written map, metres")->capture_default_str();
-  app.add_option("--picture-size", flags->picture_px, "Longer side of map.png, pixels")->capture_default_str()->check(CLI::Range(200, 20000));
-  app.add_option("--max-scans", flags->max_scans, "Process only the first N scans");
+  app.add_option("--threads", flags->threads, "Threads (0 = all; more than the machine has are clamped)")->transform(checks::threads())->capture_default_str();
+  app.add_option("--map-voxel", flags->map_voxel_m, "Voxel of the written map, metres")->check(checks::in_range(0.001, 1000.0))->capture_default_str();
+  app.add_option("--picture-size", flags->picture_px, "Longer side of map.png, pixels")->capture_default_str()->check(checks::whole_range(200, 20000));
+  app.add_option("--max-scans", flags->max_scans, "Process only the first N scans")->check(checks::count(std::numeric_limits<long>::max()));
   app.add_flag("--remap-degenerate", flags->remap_degenerate,
                "Dense front end: solve degenerate directions from the motion prediction only (Zhang et al. 2016's "
                "remapping; the loam front end always does)");

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/vision/features.hpp"
@@ -100,10 +101,11 @@ Runner register_vocabulary(CLI::App& app) {
   CLI::App* train = app.add_subcommand("train", "Train a vocabulary on images (folders or files): hierarchical k-means++ on ORB descriptors, tf-idf");
   train->add_option("images", flags->inputs, "Image folders or files; never the images the vocabulary will be evaluated on")->required();
   train->add_option("--out", flags->out, "Vocabulary file to write (cairn's format, docs/formats.md)");
-  train->add_option("-k,--branching", flags->branching, "Children per node (default 10, as ORB-SLAM's vocabulary)");
-  train->add_option("-L,--levels", flags->levels, "Levels below the root (default 5)");
-  train->add_option("--features", flags->features, "ORB features per image (default 1000)");
-  train->add_option("--every", flags->every, "Take every Nth image (default 1)");
+  train->add_option("-k,--branching", flags->branching, "Children per node, 2 to 64 (default 10, as ORB-SLAM's vocabulary)")
+      ->check(checks::whole_range(2, 64));
+  train->add_option("-L,--levels", flags->levels, "Levels below the root, 1 to 12 (default 5)")->check(checks::whole_range(1, 12));
+  train->add_option("--features", flags->features, "ORB features per image (default 1000)")->check(checks::whole_range(10, 100000));
+  train->add_option("--every", flags->every, "Take every Nth image (default 1)")->check(checks::count());
   train->add_option("--seed", flags->seed, "k-means++ seed (default 1)");
   train->add_flag("-q,--quiet", flags->quiet, "No progress or summary");
   CLI::App* info = app.add_subcommand("info", "Describe a vocabulary file (cairn's, or DBoW2's .txt / .yml)");

@@ -10,14 +10,16 @@
 #include <numeric>
 #include <optional>
 #include <unistd.h>
-#include <yaml-cpp/yaml.h>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/spread.hpp"
 #include "cairn/eval/ape.hpp"
 #include "cairn/eval/rpe.hpp"
+#include "cairn/io/calibration_yaml.hpp"
 #include "cairn/io/image_sequence.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/point_cloud.hpp"
@@ -46,65 +48,6 @@ struct VslamFlags {
   bool overwrite = false;
 };
 
-// The published calibrations of TUM's three Kinects (vision.in.tum.de "Intrinsic Camera
-// Calibration of the Kinect"; the same numbers as ORB-SLAM2's TUM1/2/3.yaml), colour camera,
-// depth 5000 units per metre, ORB-SLAM2's bf = 40 for the virtual baseline.
-io::CameraCalibration tum_preset(const std::string& name) {
-  io::CameraCalibration c;
-  if (name == "tum-fr1") {
-    c = {517.306408, 516.469215, 318.643040, 255.313989, 0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
-  } else if (name == "tum-fr2") {
-    c = {520.908620, 521.007327, 325.141442, 249.701764, 0.231222, -0.784899, -0.003257, -0.000105, 0.917205};
-  } else if (name == "tum-fr3") {
-    c = {535.4, 539.2, 320.1, 247.6};
-  } else {
-    throw std::invalid_argument("--camera must be tum-fr1, tum-fr2 or tum-fr3 (or give --calib FILE)");
-  }
-  c.width = 640;
-  c.height = 480;
-  c.depth_units_per_m = 5000.0;
-  c.virtual_baseline_m = 40.0 / c.fx;
-  return c;
-}
-
-// A calibration YAML: fx, fy, cx, cy required; k1 k2 p1 p2 k3, width, height, baseline_m,
-// depth_units_per_m, virtual_baseline_m optional. Unknown keys are errors (a typo must not
-// silently leave a zero).
-io::CameraCalibration read_calibration_yaml(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw io::ParseError(path, 0, "cannot open the calibration file");
-  } catch (const YAML::Exception& e) {
-    throw io::ParseError(path, static_cast<std::size_t>(e.mark.line + 1), "not valid YAML: " + e.msg);
-  }
-  if (!root.IsMap()) throw io::ParseError(path, 0, "expected a YAML map of calibration keys (fx, fy, cx, cy, ...)");
-  io::CameraCalibration c;
-  const std::vector<std::pair<const char*, double*>> keys{
-      {"fx", &c.fx}, {"fy", &c.fy}, {"cx", &c.cx}, {"cy", &c.cy}, {"k1", &c.k1}, {"k2", &c.k2}, {"p1", &c.p1}, {"p2", &c.p2},
-      {"k3", &c.k3}, {"baseline_m", &c.baseline_m}, {"depth_units_per_m", &c.depth_units_per_m},
-      {"virtual_baseline_m", &c.virtual_baseline_m}};
-  for (const auto& entry : root) {
-    const std::string key = entry.first.as<std::string>();
-    const std::size_t line = static_cast<std::size_t>(entry.first.Mark().line + 1);
-    auto it = std::find_if(keys.begin(), keys.end(), [&](const auto& k) { return key == k.first; });
-    try {
-      if (it != keys.end()) *it->second = entry.second.as<double>();
-      else if (key == "width") c.width = entry.second.as<int>();
-      else if (key == "height") c.height = entry.second.as<int>();
-      else throw io::ParseError(path, line, "unknown key \"" + key + "\" (expected fx, fy, cx, cy, k1, k2, p1, p2, k3, width, height, baseline_m, depth_units_per_m, virtual_baseline_m)");
-    } catch (const YAML::Exception&) {
-      throw io::ParseError(path, line, "\"" + key + "\" must be a number");
-    }
-  }
-  for (const char* required : {"fx", "fy", "cx", "cy"}) {
-    if (!root[required]) throw io::ParseError(path, 0, std::string("missing required key \"") + required + "\"");
-  }
-  if (const std::string p = c.problems(); !p.empty()) throw io::ParseError(path, 0, p);
-  return c;
-}
-
 nlohmann::json stats_json(const eval::Statistics& s) {
   return {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median}, {"max", s.max}, {"count", s.count}};
 }
@@ -132,11 +75,11 @@ int vslam_command(const VslamFlags& flags) {
   }
   if (!flags.calib.empty() && !flags.camera.empty()) throw std::invalid_argument("give --camera or --calib, not both");
   if (!flags.calib.empty()) {
-    io::CameraCalibration c = read_calibration_yaml(flags.calib);
+    io::CameraCalibration c = io::read_calibration_yaml(flags.calib);
     if (seq.kind == io::SequenceKind::kStereo && !(c.baseline_m > 0.0)) c.baseline_m = seq.calibration.baseline_m;
     seq.calibration = c;
   } else if (!flags.camera.empty()) {
-    seq.calibration = tum_preset(flags.camera);
+    seq.calibration = io::tum_calibration_preset(flags.camera);
   } else if (!seq.calibration_from_dataset) {
     if (seq.layout == "folder") {
       throw std::invalid_argument("a plain image folder has no calibration: give --calib FILE (fx, fy, cx, cy, distortion; stereo also baseline_m)");
@@ -164,6 +107,25 @@ int vslam_command(const VslamFlags& flags) {
     }
   }
 
+  // A calibration that no real camera has (fx in other units, a baseline of 0.05 mm) would be
+  // tracked "ok" while measuring nothing: refused before any work, against the first image's size.
+  if (n > 0) {
+    int first_width = seq.calibration.width, first_height = seq.calibration.height;
+    if (first_width == 0 || first_height == 0) {
+      const cv::Mat first = vision::read_gray_image(seq.frames[0].image);
+      first_width = first.cols;
+      first_height = first.rows;
+    }
+    const bool stereo = seq.kind == io::SequenceKind::kStereo && !flags.mono;
+    if (const std::string implausible = seq.calibration.implausibilities(first_width, first_height, stereo); !implausible.empty()) {
+      const std::string source = !flags.calib.empty()    ? flags.calib
+                                 : !flags.camera.empty() ? "--camera " + flags.camera
+                                                         : seq.layout == "kitti" ? seq.folder + "/calib.txt"
+                                                         : seq.folder + " (its calibration)";
+      throw io::ParseError(source, 0, "implausible calibration: " + implausible);
+    }
+  }
+
   vslam::VisualSlamOptions options;
   // ORB-SLAM2's settings: 2000 for KITTI (stereo and monocular), 1000 for TUM.
   options.orb.features = flags.features > 0 ? flags.features : (seq.layout == "kitti" ? 2000 : 1000);
@@ -176,7 +138,7 @@ int vslam_command(const VslamFlags& flags) {
     std::fprintf(stderr, "cairn vslam: no --vocabulary: no loop closure; relocalisation tries the 8 most recent keyframes only\n");
   }
   if (!flags.quiet) {
-    std::fprintf(stderr, "cairn vslam: %s %s%s, %zu frames, fx %.2f, %s %.4f m%s\n", seq.layout.c_str(),
+    std::fprintf(stderr, "cairn vslam: %s %s%s, %zu frames, fx %.6g, %s %.6g m%s\n", seq.layout.c_str(),
                  std::string(io::to_string(kind)).c_str(), flags.mono ? " (the left / colour images only; scale unobservable)" : "", n,
                  seq.calibration.fx,
                  seq.kind == io::SequenceKind::kStereo ? "baseline" : "virtual baseline",
@@ -192,6 +154,10 @@ int vslam_command(const VslamFlags& flags) {
   const bool tty = !flags.quiet && !flags.progress && isatty(fileno(stderr));
   const auto start = std::chrono::steady_clock::now();
   const std::size_t feature_frame = flags.feature_frame >= 0 ? static_cast<std::size_t>(flags.feature_frame) : n / 2;
+  if (flags.feature_frame >= 0 && feature_frame >= n) {
+    throw UsageError("--feature-frame " + std::to_string(flags.feature_frame) + ": this run has " + std::to_string(n) +
+                     " frames (0 to " + std::to_string(n - 1) + ")");
+  }
   cv::Mat feature_image;
   std::vector<cv::KeyPoint> feature_keypoints;
   std::vector<signed char> feature_states;
@@ -492,7 +458,7 @@ int vslam_command(const VslamFlags& flags) {
                                                          {"scale", l.scale}});
   }
   report["not_implemented"] = {"local mapping in its own thread"};
-  io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << report.dump(2) << '\n'; });
+  io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
 
   if (!flags.quiet) {
@@ -532,9 +498,11 @@ Runner register_vslam(CLI::App& app) {
   cmd->add_option("--calib", flags->calib, "Calibration YAML (fx, fy, cx, cy, k1..k3, p1, p2, baseline_m, depth_units_per_m, virtual_baseline_m)");
   cmd->add_option("--ground-truth", flags->ground_truth, "TUM-format ground truth (default: the dataset's poses.txt / groundtruth.txt)");
   cmd->add_option("--vocabulary", flags->vocabulary, "Bag-of-words vocabulary (cairn vocabulary train, or DBoW2 .txt/.yml): loop closure and relocalisation");
-  cmd->add_option("--features", flags->features, "ORB features per image (default 2000 stereo, 1000 RGB-D, as ORB-SLAM2)");
-  cmd->add_option("--max-frames", flags->max_frames, "Process at most N frames");
-  cmd->add_option("--feature-frame", flags->feature_frame, "Frame drawn in features.png (default: the middle one)");
+  cmd->add_option("--features", flags->features, "ORB features per image (default 2000 stereo, 1000 RGB-D, as ORB-SLAM2)")
+      ->check(checks::whole_range(10, 100000));
+  cmd->add_option("--max-frames", flags->max_frames, "Process at most N frames")->check(checks::count(std::numeric_limits<long>::max()));
+  cmd->add_option("--feature-frame", flags->feature_frame, "Frame drawn in features.png, 0-based (default: the middle one)")
+      ->check(checks::count_or_zero(std::numeric_limits<long>::max()));
   cmd->add_flag("--mono", flags->mono, "Monocular: the left (stereo) or colour (TUM) images only; the scale is not observable (a plain folder of images is monocular anyway)");
   cmd->add_flag("--no-local-ba", flags->no_local_ba, "Skip local bundle adjustment (visual odometry only)");
   cmd->add_flag("-q,--quiet", flags->quiet, "No progress or summary");

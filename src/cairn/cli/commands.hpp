@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "cairn/io/graph_io.hpp"
@@ -49,6 +50,13 @@ struct LogReplayFlags {
   bool overwrite = false;
 
   void add_to(CLI::App& command);
+};
+
+/// A flag combination that does nothing, or a flag value the input cannot honour, found before
+/// any work: printed as "cairn: error: <text>", exit status 2 (as CLI11's usage errors).
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 /// Prints "cairn: warning: <text>" to stderr.

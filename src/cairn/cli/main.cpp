@@ -123,6 +123,9 @@ int main(int argc, char** argv) {
         break;
       }
     }
+  } catch (const cairn::cli::UsageError& e) {
+    std::cerr << "cairn: error: " << e.what() << '\n';
+    status = 2;
   } catch (const cairn::io::ParseError& e) {
     std::cerr << "cairn: error: " << e.what() << '\n';
     status = 1;

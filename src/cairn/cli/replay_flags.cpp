@@ -1,9 +1,13 @@
 #include "cairn/cli/commands.hpp"
 
+#include <limits>
+
+#include "cairn/cli/flag_checks.hpp"
+
 namespace cairn::cli {
 
 void LogReplayFlags::add_to(CLI::App& command) {
-  command.add_option("--max-scans", max_scans, "Process only N scans");
+  command.add_option("--max-scans", max_scans, "Process only the first N scans")->check(checks::count(std::numeric_limits<long>::max()));
   command.add_flag("--lenient", lenient, "Skip malformed log records (counted) instead of stopping");
   command.add_flag("-q,--quiet", quiet, "Print nothing on success");
   command.add_flag("--progress", progress, "Progress as a line every 200 scans on stderr, also when stderr is not a terminal");

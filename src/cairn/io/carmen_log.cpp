@@ -209,7 +209,9 @@ CarmenLog read_carmen_log(const std::string& path, CarmenReadReport* report, con
       ++out.malformed_records;
     }
   }
-  return parser.finish();
+  CarmenLog log = parser.finish();
+  if (reader.last_line_unterminated()) out.warnings.push_back(reader.unterminated_last_line_warning());
+  return log;
 }
 
 }  // namespace cairn::io

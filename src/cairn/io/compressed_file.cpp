@@ -11,19 +11,25 @@
 #include <fstream>
 #include <memory>
 
+#include "cairn/io/input_file.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::io {
 namespace {
 
-std::string read_raw(const std::string& path) {
+// Stops as soon as the file holds more than `max_bytes` (a device or a huge file is never read
+// whole before the limit is checked).
+std::string read_raw(const std::string& path, std::size_t max_bytes) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw ParseError(path, 0, std::string("cannot open file: ") + std::strerror(errno));
   std::string out;
   char buffer[1 << 16];
   std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) out.append(buffer, n);
+  while ((n = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) {
+    out.append(buffer, n);
+    if (out.size() > max_bytes) throw ParseError(path, 0, "is larger than " + std::to_string(max_bytes) + " bytes: refusing to read it");
+  }
   if (std::ferror(file.get())) throw ParseError(path, 0, "read error");
   return out;
 }
@@ -159,6 +165,7 @@ std::string read_maybe_compressed(const std::string& path, std::size_t max_bytes
     }
     return in;
   }
+  check_input_file(path);
   char magic[6] = {0, 0, 0, 0, 0, 0};
   {
     std::ifstream in(path, std::ios::binary);
@@ -168,9 +175,7 @@ std::string read_maybe_compressed(const std::string& path, std::size_t max_bytes
   if (static_cast<unsigned char>(magic[0]) == 0x1f && static_cast<unsigned char>(magic[1]) == 0x8b) return gunzip(path, max_bytes);
   if (std::memcmp(magic, "BZh", 3) == 0) return bunzip2(path, max_bytes);
   if (is_xz(magic, sizeof magic)) return unxz(path, max_bytes);
-  std::string raw = read_raw(path);
-  check_size(path, raw.size(), max_bytes);
-  return raw;
+  return read_raw(path, max_bytes);
 }
 
 }  // namespace cairn::io

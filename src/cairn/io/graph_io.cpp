@@ -428,6 +428,7 @@ GraphFile read_graph(const std::string& path, const GraphReadOptions& options) {
   }
   report.lines = reader.line_number();
   file.graph = builder.finish();
+  if (reader.last_line_unterminated()) report.warnings.push_back(reader.unterminated_last_line_warning());
   return file;
 }
 

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <optional>
 #include <set>
+#include <tuple>
 
 #include "cairn/io/file_names.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -73,6 +75,34 @@ std::string CameraCalibration::problems() const {
   }
   if (width < 0 || height < 0) add("width and height must not be negative");
   if (baseline_m < 0.0 || depth_units_per_m < 0.0 || virtual_baseline_m < 0.0) add("baselines and depth scale must not be negative");
+  return out;
+}
+
+std::string CameraCalibration::implausibilities(int image_width, int image_height, bool stereo) const {
+  std::string out;
+  auto add = [&](const std::string& p) { out += (out.empty() ? "" : "; ") + p; };
+  auto g = [](double v) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.6g", v);
+    return std::string(buffer);
+  };
+  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+  for (const auto& [axis, f, pixels] : {std::tuple{"horizontal", fx, image_width}, {"vertical", fy, image_height}}) {
+    if (!(f > 0.0) || pixels <= 0) continue;
+    const double fov_deg = 2.0 * std::atan(0.5 * static_cast<double>(pixels) / f) * kDegPerRad;
+    if (!(fov_deg >= 1.0 && fov_deg <= 170.0)) {
+      add(std::string(axis) + " field of view " + g(fov_deg) + " deg (" + (axis[0] == 'h' ? "fx " : "fy ") + g(f) +
+          " px over " + std::to_string(pixels) + " px): expected 1 to 170 deg of a pinhole camera; are the focal lengths in pixels?");
+    }
+  }
+  if (image_width > 0 && image_height > 0 &&
+      !(cx >= 0.0 && cx <= static_cast<double>(image_width) && cy >= 0.0 && cy <= static_cast<double>(image_height))) {
+    add("principal point (" + g(cx) + ", " + g(cy) + ") lies outside the " + std::to_string(image_width) + " x " +
+        std::to_string(image_height) + " image");
+  }
+  if (stereo && !(baseline_m >= 1e-3 && baseline_m <= 10.0)) {
+    add("stereo baseline " + g(baseline_m) + " m: expected 1 mm to 10 m of a real stereo camera");
+  }
   return out;
 }
 

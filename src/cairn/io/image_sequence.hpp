@@ -42,6 +42,12 @@ struct CameraCalibration {
   bool has_distortion() const { return k1 != 0.0 || k2 != 0.0 || p1 != 0.0 || p2 != 0.0 || k3 != 0.0; }
   /// Empty when usable, else what is wrong (every problem, "; "-separated).
   std::string problems() const;
+  /// Empty when the calibration is plausible for a real camera taking `width` x `height` images,
+  /// else every implausibility ("; "-separated): a field of view outside 1-170 degrees on
+  /// either axis (fx = 1e7 on a 1241-pixel image is 0.007 degrees: a calibration in other units,
+  /// or a typo), a principal point outside the image, and for `stereo` a baseline outside
+  /// 1 mm-10 m. A run on such a calibration would track nothing real while reporting `ok`.
+  std::string implausibilities(int width, int height, bool stereo) const;
 };
 
 enum class SequenceKind { kStereo, kRgbd, kMonocular };

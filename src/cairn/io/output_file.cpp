@@ -8,6 +8,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
@@ -379,6 +380,71 @@ void write_output(const std::string& path, const std::function<void(std::ostream
   OutputFile file(path);
   file.write(emit);
   file.commit();
+}
+
+void write_outputs(const std::vector<PlannedOutput>& outputs) {
+  std::vector<std::unique_ptr<OutputFile>> files;
+  for (const PlannedOutput& o : outputs) {
+    if (o.path.empty()) continue;
+    files.push_back(std::make_unique<OutputFile>(o.path));
+    files.back()->write(o.emit);
+  }
+  for (auto& file : files) file->commit();
+}
+
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
+  struct Seen {
+    const std::string* flag;
+    const std::string* path;
+    std::string key;
+  };
+  std::vector<Seen> seen;
+  for (const auto& [flag, path] : outputs) {
+    if (path.empty()) continue;
+    std::string key;
+    if (is_standard_output(path)) {
+      key = "standard output";
+    } else {
+      const OutputTarget target = resolve_output(path);
+      if (target.kind == OutputKind::kDirect) continue;
+      struct stat st {};
+      if (::stat(target.resolved.c_str(), &st) == 0) {
+        key = "inode " + std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+      } else {  // a new file: its directory's identity and its name
+        struct stat dir {};
+        const std::string parent = parent_of(target.resolved);
+        key = ::stat(parent.c_str(), &dir) == 0
+                  ? "new " + std::to_string(dir.st_dev) + ":" + std::to_string(dir.st_ino) + "/" + base_of(target.resolved)
+                  : "path " + target.resolved;
+      }
+    }
+    for (const Seen& s : seen) {
+      if (s.key == key) {
+        const std::string which = *s.path == path ? output_display_name(path)
+                                                  : output_display_name(*s.path) + " and " + output_display_name(path);
+        throw ParseError(path, 0, *s.flag + " and " + flag + " name the same file (" + which + "): give each output its own path");
+      }
+    }
+    seen.push_back({&flag, &path, key});
+  }
+}
+
+void check_file_outside_directory(const std::string& file_flag, const std::string& file, const std::string& dir_flag,
+                                  const std::string& dir, const std::vector<std::string>& names) {
+  if (file.empty() || dir.empty() || is_standard_output(file)) return;
+  std::error_code ec;
+  const fs::path file_path = fs::weakly_canonical(fs::absolute(file, ec), ec);
+  const fs::path dir_path = fs::weakly_canonical(fs::absolute(dir, ec), ec);
+  if (ec) return;  // the writes themselves report what is wrong with the paths
+  if (file_path == dir_path) {
+    throw ParseError(file, 0, file_flag + " names the " + dir_flag + " directory itself: give it a file name (e.g. " +
+                                  (fs::path(dir) / "map.cmap").string() + ")");
+  }
+  if (file_path.parent_path() == dir_path &&
+      std::find(names.begin(), names.end(), file_path.filename().string()) != names.end()) {
+    throw ParseError(file, 0, file_flag + " names " + file_path.filename().string() + ", which this run writes into " +
+                                  dir_flag + " " + dir + ": give it another name");
+  }
 }
 
 // -----------------------------------------------------------------------------------------------

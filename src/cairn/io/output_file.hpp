@@ -22,6 +22,8 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace cairn::io {
 
@@ -90,6 +92,29 @@ class OutputFile {
 
 /// One OutputFile, written and committed.
 void write_output(const std::string& path, const std::function<void(std::ostream&)>& emit);
+
+/// One output of a set: its path (empty = not asked for) and what it holds.
+struct PlannedOutput {
+  std::string path;
+  std::function<void(std::ostream&)> emit;
+};
+
+/// Several files that form one result (a graph and its `--report`, poses and `--out-times`):
+/// every one is produced (into its temporary file, or into memory) before any replaces a path,
+/// so a failure while producing any of them leaves every path as it was. Empty paths are skipped.
+void write_outputs(const std::vector<PlannedOutput>& outputs);
+
+/// Refuses, before any work, two outputs of one command that lead to the same file (the same
+/// name, a symlink to it, another hard link of it, or standard output twice): ParseError naming
+/// both flags. `outputs` holds (flag, path) pairs; empty paths are skipped. Devices other than
+/// standard output (/dev/null) may be named twice.
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs);
+
+/// Refuses, before any work, a file output (`file_flag` `file`) that is the output directory
+/// (`dir_flag` `dir`) itself or one of the files the run writes into it (`names`): ParseError
+/// naming both flags.
+void check_file_outside_directory(const std::string& file_flag, const std::string& file, const std::string& dir_flag,
+                                  const std::string& dir, const std::vector<std::string>& names);
 
 /// A directory of outputs (`--out DIR`) that appears whole or not at all. The constructor
 /// checks the rule: DIR may be missing or empty; a DIR that already holds entries is refused

@@ -1,3 +1,4 @@
+#include "cairn/io/input_file.hpp"
 #include "cairn/io/text_reader.hpp"
 
 #include <charconv>
@@ -17,6 +18,7 @@ TextReader::TextReader(std::string path) : path_(std::move(path)) {
     path_ = "standard input";
     stream_ = std::make_unique<std::istringstream>(standard_input());
   } else {
+    check_input_file(path_);
     auto file = std::make_unique<std::ifstream>(path_, std::ios::binary);
     if (!*file) throw ParseError(path_, 0, std::string("cannot open file: ") + std::strerror(errno));
     stream_ = std::move(file);
@@ -37,15 +39,26 @@ TextReader::TextReader(std::string path) : path_(std::move(path)) {
   in_->seekg(0);
 }
 
+std::string TextReader::unterminated_last_line_warning() const {
+  if (!unterminated_) return {};
+  return path_ + ":" + std::to_string(line_number_) +
+         ": the last line does not end with a newline: if the file was cut short, its last record may be incomplete "
+         "(a number cut in the middle still parses)";
+}
+
 bool TextReader::next_line() {
   line_.clear();
   if (!in_->good()) return false;
   // Read by chunks so a file without newlines cannot make us allocate without bound.
   bool read_any = false;
+  bool terminated = false;
   char c = 0;
   while (in_->get(c)) {
     read_any = true;
-    if (c == '\n') break;
+    if (c == '\n') {
+      terminated = true;
+      break;
+    }
     line_.push_back(c);
     if (line_.size() > kMaxLineBytes) {
       ++line_number_;
@@ -55,6 +68,7 @@ bool TextReader::next_line() {
   }
   if (!read_any) return false;
   ++line_number_;
+  unterminated_ = !terminated;
   if (!line_.empty() && line_.back() == '\r') line_.pop_back();
   for (std::size_t i = 0; i < line_.size(); ++i) {
     const auto byte = static_cast<unsigned char>(line_[i]);

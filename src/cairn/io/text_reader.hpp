@@ -38,12 +38,21 @@ class TextReader {
   /// Throws ParseError at the current line.
   [[noreturn]] void fail(const std::string& detail) const;
 
+  /// True once the last line of the file was read and it had no '\n': a file cut short (a copy
+  /// that stopped, a disk that filled) ends so, and its last number may be incomplete, yet
+  /// parses. Hand-written files end so too, so readers warn rather than refuse:
+  /// unterminated_last_line_warning().
+  bool last_line_unterminated() const { return unterminated_; }
+  /// "line N, the last, does not end with a newline: ..." when last_line_unterminated(), else "".
+  std::string unterminated_last_line_warning() const;
+
  private:
   std::string path_;
   std::unique_ptr<std::istream> stream_;
   std::istream* in_ = nullptr;
   std::string line_;
   std::size_t line_number_ = 0;
+  bool unterminated_ = false;
 };
 
 /// Whitespace-separated tokens of a text held in memory, for formats whose line breaks carry no

@@ -212,6 +212,7 @@ std::vector<Timestamp> read_kitti_times(const std::string& times_path, const std
     order.check(reader, stamp, tokens[0]);
     stamps.push_back(stamp);
   }
+  if (reader.last_line_unterminated()) report.warnings.push_back(reader.unterminated_last_line_warning());
   if (stamps.size() != pose_count) {
     throw ParseError(times_path, 0,
                      "times file has " + std::to_string(stamps.size()) + " times but pose file " +
@@ -362,6 +363,7 @@ Trajectory read_stamped(const std::string& path, TrajectoryReadReport* report, c
     trajectory.stamps.push_back(row.stamp);
     trajectory.poses.emplace_back(norms.checked(reader, row.q), row.t);
   }
+  if (reader.last_line_unterminated()) out.warnings.push_back(reader.unterminated_last_line_warning());
   if (trajectory.poses.empty()) fail_no_poses(path, layout);
   out.poses = trajectory.size();
   order.report(path, out);
@@ -425,6 +427,7 @@ Trajectory read_kitti(const std::string& path, const std::string& times_path,
     out.max_rotation_orthonormality_error = std::max(out.max_rotation_orthonormality_error, error);
     trajectory.poses.push_back(SE3::from_matrix3x4(T));
   }
+  if (reader.last_line_unterminated()) out.warnings.push_back(reader.unterminated_last_line_warning());
   if (trajectory.poses.empty()) fail_no_poses(path, kKittiLayout);
   if (!times_path.empty()) {
     trajectory.stamps = read_kitti_times(times_path, path, trajectory.size(), out);

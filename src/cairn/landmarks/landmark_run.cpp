@@ -138,6 +138,13 @@ LandmarkRun read_landmark_run(const std::string& directory) {
   if (run.odometry.empty()) throw io::ParseError(log_path, 0, "expected ODOM records, found none");
 
   run.observations = read_landmark_observations(observations_path, run.true_landmarks.empty() ? nullptr : &run.true_landmarks);
+  // Steps are made at observation times: without observations the run would be one pose that
+  // ignores every odometry record, and its error would read 0.
+  if (run.observations.empty()) {
+    throw io::ParseError(observations_path, 0,
+                         "holds no observation (" + std::to_string(run.odometry.size()) +
+                             " odometry records in log.clf): a landmark SLAM run needs observations");
+  }
   for (const Observation& o : run.observations) {
     if (o.time < run.odometry.front().time || run.odometry.back().time < o.time) {
       throw io::ParseError(observations_path, o.line, "observation time is outside the odometry's time span in " + log_path);

@@ -528,7 +528,9 @@ bool OdometryNoiseModel::is_valid(std::string* why) const {
       break;
     }
   }
-  if (!(inflation > 0.0 && std::isfinite(inflation))) add("odometry inflation must be > 0");
+  // Beyond 1e6 the predicted covariance overflows within a few steps (a filter that knows
+  // nothing of its motion is no filter).
+  if (!(inflation > 0.0 && inflation <= 1e6)) add("odometry inflation must be in (0, 1e6]");
   if (!(floor_sigma > 0.0 && std::isfinite(floor_sigma))) add("odometry floor_sigma must be > 0");
   if (why != nullptr) *why = problems;
   return problems.empty();

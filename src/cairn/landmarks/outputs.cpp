@@ -1,4 +1,5 @@
 #include "cairn/viz/cairo_image.hpp"
+#include "cairn/core/utf8.hpp"
 #include "cairn/landmarks/outputs.hpp"
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include "cairn/core/se3.hpp"
 #include "cairn/core/so3.hpp"
 #include "cairn/filter/chi_square.hpp"
+#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/trajectory.hpp"
@@ -124,7 +126,7 @@ std::string report_json(const LandmarkSlamReport& r) {
                    {"ekf_max_step", r.ekf_max_step_s},
                    {"graph_all_solves", r.graph_time_s},
                    {"graph_last_solve_and_marginals", r.graph_final_solve_s}};
-  return j.dump(2) + "\n";
+  return io::json_text(j);
 }
 
 void write_report_json(const std::string& path, const LandmarkSlamReport& report) {
@@ -226,7 +228,7 @@ void write_landmarks_png(const std::string& path, const LandmarkRun& run, const 
   cairo_move_to(cr, margin, y0);
   const std::string line1 = "cairn landmarks --method " + result.report.method + " --association " +
                             result.report.association + ": red estimate, blue ground truth, orange dead reckoning";
-  cairo_show_text(cr, line1.c_str());
+  cairo_show_text(cr, core::valid_utf8(line1).c_str());
   cairo_move_to(cr, margin, y0 + 18);
   cairo_show_text(cr, "black x true landmarks, green estimates with 95% ellipses magnified 10x; 1 m scale bar:");
   cairo_set_line_width(cr, 2.0);

@@ -1,4 +1,5 @@
 #include "cairn/lidar3d/odometry.hpp"
+#include "cairn/core/threads.hpp"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -28,7 +29,7 @@ double model_error(const core::SE3& deviation, double max_range_m) {
 }  // namespace
 
 struct LidarOdometry::Arena {
-  explicit Arena(int threads) : arena(threads > 0 ? threads : tbb::task_arena::automatic) {}
+  explicit Arena(int threads) : arena(core::arena_concurrency(threads)) {}
   tbb::task_arena arena;
 };
 
@@ -56,6 +57,10 @@ bool LidarOdometryOptions::is_valid(std::string* error) const {
   if (min_scan_points < 0) return fail("min_scan_points must be >= 0");
   if (!(lost_min_correspondence_fraction >= 0.0 && lost_min_correspondence_fraction <= 1.0)) {
     return fail("lost_min_correspondence_fraction must be in [0, 1]");
+  }
+  if (!(lost_max_rms_voxels > 0.0 && std::isfinite(lost_max_rms_voxels))) return fail("lost_max_rms_voxels must be a finite number > 0");
+  if (!(lost_rms_max_correspondence_fraction >= 0.0 && lost_rms_max_correspondence_fraction <= 1.0)) {
+    return fail("lost_rms_max_correspondence_fraction must be in [0, 1]");
   }
   if (!(degraded_min_correspondence_fraction >= lost_min_correspondence_fraction &&
         degraded_min_correspondence_fraction <= 1.0)) {
@@ -261,7 +266,11 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
     const RegistrationResult& reg = result.registration;
     const double fraction =
         reg.source_points > 0 ? static_cast<double>(reg.correspondences) / static_cast<double>(reg.source_points) : 0.0;
-    lost = fraction < options_.lost_min_correspondence_fraction || reg.correspondences < 6;
+    // A fit that explains few points badly is a wrong pose (e.g. the same street seen from the
+    // other direction), not a weak one.
+    const bool untrustworthy_fit = !loam && fraction < options_.lost_rms_max_correspondence_fraction &&
+                                   reg.rms_m > options_.lost_max_rms_voxels * options_.voxel_size_m;
+    lost = fraction < options_.lost_min_correspondence_fraction || reg.correspondences < 6 || untrustworthy_fit;
     if (!lost) {
       T_world_sensor = reg.T_map_sensor;
       if (reg.degenerate_directions > 0) {

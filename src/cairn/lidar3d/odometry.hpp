@@ -36,8 +36,11 @@
 ///     along a straight tunnel; the prediction carries it), fewer than
 ///     `degraded_min_correspondence_fraction` of the points found a map neighbour, or the
 ///     registration reached its iteration limit; `lost` when registration fails (fewer than
-///     `lost_min_correspondence_fraction` matched) or the scan has fewer than `min_scan_points`
-///     points in range. A lost scan
+///     `lost_min_correspondence_fraction` matched), when its fit says the pose is not trustworthy
+///     (dense front end: inlier RMS above `lost_max_rms_voxels` voxels while fewer than
+///     `lost_rms_max_correspondence_fraction` of the points matched -- a scan registered the
+///     wrong way round, as after a gap in the recording), or the scan has fewer than
+///     `min_scan_points` points in range. A lost scan
 ///     takes the predicted pose and * starts a new map segment: the local map is cleared and
 ///     rebuilt from that scan (or, if it had too few points, from the next one), so the next scans match again instead of
 ///     staying lost (the segments are joined only by the motion prediction until loop closure can
@@ -122,6 +125,13 @@ struct LidarOdometryOptions {
   int min_scan_points = 100;
   double degraded_min_correspondence_fraction = 0.5;
   double lost_min_correspondence_fraction = 0.2;
+  /// Dense front end: a registration whose inlier residual RMS exceeds this many voxel sizes
+  /// while fewer than `lost_rms_max_correspondence_fraction` of its points matched is `lost`, not
+  /// `degraded` (> 0). Measured (docs/lidar3d.md, "Health"): on the 109 real KITTI key-frame
+  /// registrations RMS <= 0.49 voxel with >= 88 % matched; four scans of the same street
+  /// registered about 180 deg wrong gave RMS 0.94-1.05 voxel with 30-67 % matched.
+  double lost_max_rms_voxels = 0.75;
+  double lost_rms_max_correspondence_fraction = 0.8;  ///< in [0, 1]; 0 = the RMS test is off
 
   /// False with the reason when an option is out of range.
   bool is_valid(std::string* error) const;

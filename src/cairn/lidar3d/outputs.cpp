@@ -1,4 +1,5 @@
 #include "cairn/viz/cairo_image.hpp"
+#include "cairn/core/utf8.hpp"
 #include "cairn/lidar3d/outputs.hpp"
 
 #include <cairo.h>
@@ -193,7 +194,7 @@ std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& m
     cairo_fill(cr);
     cairo_set_source_rgb(cr, 0, 0, 0);
     cairo_move_to(cr, x + 22.0, y - 3.0);
-    cairo_show_text(cr, text);
+    cairo_show_text(cr, core::valid_utf8(text).c_str());
     cairo_text_extents_t extents;
     cairo_text_extents(cr, text, &extents);
     x += 22.0 + extents.x_advance + 14.0;

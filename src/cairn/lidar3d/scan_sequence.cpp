@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "cairn/io/file_names.hpp"
+#include "cairn/io/input_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::lidar3d {
@@ -64,6 +65,7 @@ std::vector<std::string> list_scans(const std::vector<std::string>& paths) {
 
 std::vector<double> read_scan_times(const std::string& times_path, int column, std::size_t count) {
   if (column < 1) throw io::ParseError(times_path, 0, "the time column must be >= 1, got " + std::to_string(column));
+  io::check_input_file(times_path);
   std::ifstream in(times_path, std::ios::binary);
   if (!in) throw io::ParseError(times_path, 0, "cannot open");
   std::vector<double> times;

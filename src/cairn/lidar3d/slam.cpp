@@ -10,6 +10,7 @@
 #include "cairn/backend/gnc.hpp"
 #include "cairn/backend/optimizer.hpp"
 #include "cairn/backend/problem.hpp"
+#include "cairn/core/threads.hpp"
 #include "cairn/io/pose_graph.hpp"
 #include "cairn/lidar3d/registration.hpp"
 #include "cairn/lidar3d/voxel_hash_map.hpp"
@@ -101,7 +102,7 @@ struct LidarSlam::Impl {
       : options(o),
         odometry(o.odometry),
         database(o.scan_context),
-        arena(o.odometry.threads > 0 ? o.odometry.threads : tbb::task_arena::automatic) {}
+        arena(core::arena_concurrency(o.odometry.threads)) {}
 
   LidarSlamOptions options;
   LidarOdometry odometry;

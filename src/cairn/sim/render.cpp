@@ -1,4 +1,5 @@
 #include "cairn/viz/cairo_image.hpp"
+#include "cairn/core/utf8.hpp"
 #include "cairn/sim/render.hpp"
 
 #include <cairo.h>
@@ -126,7 +127,7 @@ void render_png(const std::string& path, const World& world, const std::vector<V
   cairo_set_font_size(cr, 13);
   cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_move_to(cr, margin, y0 + 12);
-  cairo_show_text(cr, options.title.c_str());
+  cairo_show_text(cr, core::valid_utf8(options.title).c_str());
   auto legend_entry = [&](double x, double r, double g, double b, const char* text) {
     cairo_set_source_rgb(cr, r, g, b);
     cairo_set_line_width(cr, 3);

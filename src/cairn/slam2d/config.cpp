@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <variant>
 
+#include "cairn/io/input_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/parse_error.hpp"
 
@@ -173,6 +174,7 @@ void apply_setting(const std::string& assignment, Slam2dOptions& options) {
 }
 
 void load_config(const std::string& path, Slam2dOptions& options) {
+  io::check_input_file(path, "a YAML configuration file");
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "cairn/core/assert.hpp"
+#include "cairn/io/input_file.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
@@ -480,8 +481,7 @@ SavedMap2D read_saved_map(const std::string& path) {
   if (path == "-") {
     bytes = io::standard_input(kMaxFileBytes);
   } else {
-    std::error_code error;
-    if (std::filesystem::is_directory(path, error)) throw io::ParseError(path, 0, "is a directory, expected a map file");
+    io::check_input_file(path, "a map file");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw io::ParseError(path, 0, std::string("cannot open: ") + std::strerror(errno));
     // Read in chunks (works for pipes and devices too), never past the largest map file.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "cairn/core/utf8.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
@@ -62,7 +63,7 @@ void MapPicture::legend_text(const char* text) {
   cairo_set_font_size(c, 12.0);
   cairo_set_source_rgb(c, 0, 0, 0);
   cairo_move_to(c, legend_x_ + 22.0, legend_y() - 3.0);
-  cairo_show_text(c, text);
+  cairo_show_text(c, core::valid_utf8(text).c_str());
   cairo_text_extents_t extents;
   cairo_text_extents(c, text, &extents);
   legend_x_ += 22.0 + extents.x_advance + 14.0;

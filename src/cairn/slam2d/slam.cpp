@@ -164,6 +164,32 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (!(grid.resolution_m > 0.0)) problems << "grid resolution must be > 0; ";
   if (!(map_points.cell_size_m >= icp.max_correspondence_m))
     problems << "map_points.cell_size_m must be >= icp.max_correspondence_m; ";
+  // The scan filter (the bounds a saved map's reader checks too, map_file.cpp).
+  if (!(filter.min_range_m >= 0.0)) problems << "scan.min_range_m must be >= 0; ";
+  if (!(filter.max_range_m > filter.min_range_m)) problems << "scan.max_range_m must be > scan.min_range_m; ";
+  if (!(filter.missing_ray_length_m >= 0.0)) problems << "scan.missing_ray_length_m must be >= 0 (0 = none); ";
+  if (!(filter.voxel_size_m >= 0.0 && filter.voxel_size_m <= 100.0)) problems << "scan.voxel_size_m must be in [0, 100]; ";
+  if (!(filter.adaptive_max_voxel_size_m >= 0.0 && filter.adaptive_max_voxel_size_m <= 100.0))
+    problems << "scan.adaptive_max_voxel_size_m must be in [0, 100]; ";
+  if (filter.adaptive_min_points < 0) problems << "scan.adaptive_min_points must be >= 0; ";
+  if (!(map_points.normal_radius_m > 0.0)) problems << "front_end.normal_radius_m must be > 0; ";
+  if (!(icp.max_correspondence_m > 0.0 && icp.final_correspondence_m > 0.0 && icp.huber_threshold_m > 0.0 &&
+        icp.inlier_distance_m > 0.0))
+    problems << "icp: max_correspondence_m, final_correspondence_m, huber_threshold_m and inlier_distance_m must be > 0; ";
+  if (!(icp.point_to_point_weight >= 0.0 && icp.degenerate_threshold >= 0.0))
+    problems << "icp: point_to_point_weight and degenerate_threshold must be >= 0; ";
+  if (!(grid.hit_probability > 0.5 && grid.hit_probability < 1.0 && grid.miss_probability > 0.0 && grid.miss_probability < 0.5))
+    problems << "grid.hit_probability must be in (0.5, 1) and grid.miss_probability in (0, 0.5); ";
+  if (!(loop_search.unknown_probability >= 0.0 && loop_search.unknown_probability <= 1.0))
+    problems << "loop_closure.unknown_probability must be in [0, 1]; ";
+  if (!(loop_max_distance_m >= 0.0 && loop_search.linear_search_window_m >= 0.0 && loop_search.angular_search_window_rad >= 0.0 &&
+        loop_window_base_m >= 0.0 && loop_window_drift_per_m >= 0.0 && loop_angle_window_base_rad >= 0.0 &&
+        loop_angle_window_drift_per_m >= 0.0))
+    problems << "loop_closure: distances and search windows must be >= 0; ";
+  if (!(loop_min_inlier_fraction >= 0.0 && loop_min_inlier_fraction <= 1.0 && degraded_min_inlier_fraction >= 0.0 &&
+        degraded_min_inlier_fraction <= 1.0 && lost_inlier_fraction >= 0.0 && lost_inlier_fraction <= 1.0))
+    problems << "inlier fractions (loop_closure.min_inlier_fraction, health.*_inlier_fraction) must be in [0, 1]; ";
+  if (!(loop_max_rms_m > 0.0)) problems << "loop_closure.max_rms_m must be > 0; ";
   const std::string text = problems.str();
   if (error != nullptr) *error = text;
   return text.empty();

@@ -443,7 +443,7 @@ cv::Mat decode_image(const unsigned char* data, std::size_t size, ImageMode mode
 
 cv::Mat read_image_file(const std::string& path, ImageMode mode) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw ImageFileError(path, "is a folder, not an image file");
+  if (std::filesystem::is_directory(path, ec)) throw ImageFileError(path, "is a directory, expected an image file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ImageFileError(path, "cannot open the file");
   const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

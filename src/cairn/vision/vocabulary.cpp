@@ -16,6 +16,7 @@
 #include <unordered_set>
 
 #include "cairn/core/assert.hpp"
+#include "cairn/core/threads.hpp"
 #include "cairn/io/compressed_file.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -563,7 +564,7 @@ Vocabulary VocabularyBuilder::train(const std::vector<cv::Mat>& images, const Vo
 Vocabulary Vocabulary::train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularyOptions& options) {
   if (const std::string p = options.problems(); !p.empty()) throw std::invalid_argument("vocabulary options: " + p);
   if (options.max_threads > 0) {
-    tbb::task_arena arena(options.max_threads);
+    tbb::task_arena arena(core::arena_concurrency(options.max_threads));
     return arena.execute([&] { return VocabularyBuilder::train(descriptors_per_image, options); });
   }
   return VocabularyBuilder::train(descriptors_per_image, options);

@@ -1,5 +1,6 @@
 #include "cairn/viz/render.hpp"
 
+#include "cairn/core/utf8.hpp"
 #include "cairn/viz/cairo_image.hpp"
 
 #include <cairo-svg.h>
@@ -69,7 +70,8 @@ double text_width(cairo_t* cr, const std::string& text) {
 
 /// Draws `text` with its anchor at (x, y): ax, ay in {0, 0.5, 1} = left/centre/right,
 /// top/middle/baseline-ish bottom.
-void draw_text(cairo_t* cr, const std::string& text, double x, double y, double ax, double ay) {
+void draw_text(cairo_t* cr, const std::string& raw_text, double x, double y, double ax, double ay) {
+  const std::string text = core::valid_utf8(raw_text);  // titles hold file names, which are bytes
   cairo_text_extents_t e;
   cairo_text_extents(cr, text.c_str(), &e);
   cairo_font_extents_t f;
