@@ -412,6 +412,100 @@ TEST_F(HostileCases, Slam2dSettingsThatContradictEachOtherAreRefused) {
   EXPECT_FALSE(fs::exists(scratch() / "bad_set"));
 }
 
+TEST_F(HostileCases, EveryInputFlagGivenADirectorySaysSo) {
+  CAIRN_REQUIRE_DATA("lidar3d/kitti00_keyframes/key_frames");
+  CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/calib.txt");
+  CAIRN_REQUIRE_DATA("laser2d/intel/intel.clf.bz2");
+  const std::string dir = q(f("empty_folder"));
+  const std::string kitti = q(cairn::test::data_path("lidar3d/kitti00_keyframes/key_frames"));
+  const std::string stereo = q(cairn::test::data_path("visual/kitti_extract_seq2"));
+  const std::string out = q(scratch() / "dir_flag_out");
+  for (const std::string& args :
+       {"slam2d " + q(f("log.clf")) + " --out " + out + " --config " + dir,
+        "slam2d " + q(f("log.clf")) + " --out " + out + " --relations " + dir,
+        "localize2d " + q(f("log.clf")) + " --out " + out + " --map " + dir,
+        "localize2d " + q(f("log.clf")) + " --out " + out + " --map " + q(f("map.cmap")) + " --config " + dir,
+        "localize2d " + q(f("log.clf")) + " --out " + out + " --map " + q(f("map.cmap")) + " --ground-truth " + dir,
+        "slam3d " + kitti + " --max-scans 2 --out " + out + " --times " + dir,
+        "slam3d " + kitti + " --max-scans 2 --out " + out + " --ground-truth " + dir,
+        "vslam " + stereo + " --max-frames 2 --out " + out + " --ground-truth " + dir,
+        "vslam " + stereo + " --max-frames 2 --out " + out + " --vocabulary " + dir,
+        "vslam " + stereo + " --max-frames 2 --out " + out + " --calib " + dir,
+        "eval ape " + dir + " " + q(f("est.tum")), "eval ape " + q(f("gt.tum")) + " " + dir,
+        "eval relations " + dir + " " + q(f("gt.tum")), "info " + dir, "optimize " + dir + " -o " + out,
+        "ba " + dir, "vocabulary info " + dir}) {
+    const CliResult r = run(args);
+    expect_clean_end(r, args);
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("empty_folder: is a directory, expected "), std::string::npos) << args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(scratch() / "dir_flag_out")) << args;
+  }
+}
+
+TEST_F(HostileCases, ATimesFileWhereNoneIsReadIsRefused) {
+  const fs::path out = scratch() / "times_out.tum";
+  for (const std::string& args :
+       {"info " + q(f("graph.g2o")) + " --times " + q(f("gt.tum")), "convert " + q(f("gt.tum")) + " " + q(out) + " --times " + q(f("gt.tum")),
+        "convert " + q(f("gt.tum")) + " " + q(out) + " --out-times " + q(scratch() / "times.txt")}) {
+    const CliResult r = run(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("times goes with"), std::string::npos) << args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(scratch() / "times.txt"));
+}
+
+// Inputs that reached a CAIRN_ASSERT (an abort) before: each is now a located error, status 1.
+TEST_F(HostileCases, InputsThatReachedAssertionsAreErrors) {
+  const fs::path d = scratch() / "asserts";
+  fs::remove_all(d);
+  fs::create_directories(d);
+  // Poses in UTM-sized coordinates: 6e6 m is 1.2e8 cells of 5 cm.
+  {
+    std::ofstream log(d / "utm.clf");
+    for (int k = 0; k < 3; ++k) {
+      log << "FLASER 3 1 1 1 " << 6000000 + 0.1 * k << " 0 0 " << 6000000 + 0.1 * k << " 0 0 " << k << " h " << k << "\n";
+    }
+  }
+  // A chordal system singular in double precision: information 1e20 beside 1e-20.
+  std::ofstream(d / "singular.g2o") << "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_SE2 2 2 0 0\n"
+                                       "EDGE_SE2 1 2 1 0 0 1e20 0 0 1e20 0 1e20\nEDGE_SE2 0 2 2 0 0 1e-20 0 0 1e-20 0 1e-20\n";
+  // A quaternion whose every number is finite and whose norm is not.
+  std::ofstream(d / "big_quaternion.g2o") << "VERTEX_SE3:QUAT 0 0 0 0 1e200 0 0 1\nVERTEX_SE3:QUAT 1 1 0 0 0 0 0 1\n"
+                                             "EDGE_SE3:QUAT 0 1 1 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n";
+  // Odometry whose motion between two records is infinite.
+  fs::create_directories(d / "infinite_odometry");
+  std::ofstream(d / "infinite_odometry" / "log.clf") << "ODOM -1e308 0 0 0 0 0 1.0 h 1.0\nODOM 1e308 0 0 0 0 0 2.0 h 2.0\n";
+  std::ofstream(d / "infinite_odometry" / "landmark_observations.csv") << "time_s,landmark_id,range_m,bearing_rad\n2.0,0,1.0,0.0\n";
+  const std::string out = q(d / "out");  // no run that fails writes it; the one that succeeds writes a file last
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"slam2d " + q(d / "utm.clf") + " --out " + out, "lies more than 1e8 cells"},
+           {"slam2d " + q(f("log.clf")) + " --out " + out + " --set grid.resolution_m=1e-9", "grid.resolution_m must be in"},
+           {"slam2d " + q(f("log.clf")) + " --out " + out + " --set output.map_resolution_m=1e-9", "output.map_resolution_m must be in"},
+           {"optimize " + q(d / "singular.g2o") + " -o " + out + " --init chordal", "not positive definite in double precision"},
+           {"info " + q(d / "big_quaternion.g2o"), ""},
+           {"landmarks " + q(d / "infinite_odometry") + " --out " + out + " --method graph", "log.clf:2: the motion from the previous ODOM"},
+           {"landmarks " + q(d / "infinite_odometry") + " --out " + out, "log.clf:2: the motion from the previous ODOM"},
+           {"simulate corridor-aliasing --set corridor.door_width_m=5 --set corridor.door_pitch_m=6 --out " + out,
+            "corridor.door_width_m must be at most 3"},
+           {"simulate outdoor-stretch --set office.width_m=1e308 --out " + out, ""},
+           {"simulate building-yard --set office.room_depth_m=1e308 --out " + out, "office.room_depth_m must be in"},
+           {"simulate landmarks --set landmark_field.landmarks=0 --out " + out, "landmark_field.landmarks must be in [1"},
+           {"simulate open-hall --set open_hall.route_width_m=1e-10 --set open_hall.route_depth_m=1e-10 --out " + out,
+            "open_hall.route_width_m must be in"},
+           {"optimize " + q(d / "big_quaternion.g2o") + " -o " + out, ""}}) {
+    const CliResult r = run(args);
+    expect_clean_end(r, args);
+    if (r.status == 0) {
+      // Only the quaternion may be read: (1e200, 0, 0, 1) is a rotation, normalised and counted.
+      EXPECT_NE(args.find("big_quaternion"), std::string::npos) << args << " succeeded\n" << r.out;
+      EXPECT_NE(r.err.find("1 quaternions had a norm differing from 1"), std::string::npos) << args << "\n" << r.err;
+    } else {
+      EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
+    }
+  }
+}
+
 TEST_F(HostileCases, ATruncatedLastLineIsSaidOutLoud) {
   const fs::path cut = scratch() / "cut.tum";
   // Cut inside the last number ("1.5" of a longer file): it still parses, so it must be said.

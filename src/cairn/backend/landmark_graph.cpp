@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
@@ -259,7 +260,9 @@ void copy_engine_summary(const LeastSquaresSummary& result, LandmarkGraphSummary
 }
 
 LandmarkGraphSummary optimize(LandmarkGraph2D& graph, const LandmarkGraphOptions& options) {
-  CAIRN_ASSERT(graph.check().empty(), "optimize(LandmarkGraph2D): graph.check() must be empty");
+  // The graph holds the input's numbers (odometry of 1e308 m makes an infinite motion): an error
+  // naming the problem, not an assertion.
+  if (const std::string problem = graph.check(); !problem.empty()) throw std::invalid_argument("landmark graph: " + problem);
   CAIRN_ASSERT(options.is_valid(nullptr), "optimize(LandmarkGraph2D): invalid options");
   LandmarkGraphSummary summary;
   const Layout layout{graph.poses.size(), graph.landmarks.size()};

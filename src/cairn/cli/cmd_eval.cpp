@@ -738,7 +738,7 @@ Runner register_eval(CLI::App& app) {
     if (rpe->parsed()) status = run_rpe(*flags);
     if (kitti->parsed()) status = run_kitti(*flags);
     if (relations->parsed()) status = run_relations(*flags);
-    write_queued_outputs();
+    if (status == 0) write_queued_outputs();  // a failed evaluation writes nothing
     return status;
   };
 }

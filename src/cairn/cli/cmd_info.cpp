@@ -261,6 +261,9 @@ Runner register_info(CLI::App& app) {
   return [flags]() {
     claim_standard_output(flags->json);
     const io::FileFormat format = resolve_format(flags->path, flags->format, "--format");
+    if (!flags->times.empty() && format != io::FileFormat::kKitti) {
+      throw UsageError("--times goes with a KITTI trajectory, and " + flags->path + " is " + std::string(io::to_string(format)));
+    }
     if (io::kind_of(format) == io::FileKind::kPoseGraph) return info_graph(*flags, format);
     if (io::kind_of(format) == io::FileKind::kSensorLog) return info_carmen(*flags);
     return info_trajectory(*flags, format);

@@ -1,11 +1,15 @@
 #include "cairn/cli/trajectory_files.hpp"
 
+#include "cairn/cli/commands.hpp"
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::cli {
 
 io::Trajectory read_trajectory(const std::string& path, io::FileFormat format, const std::string& times_path,
                                io::TrajectoryReadReport* report) {
+  if (!times_path.empty() && format != io::FileFormat::kKitti) {
+    throw UsageError("--times goes with a KITTI trajectory, and " + path + " is " + std::string(io::to_string(format)));
+  }
   switch (format) {
     case io::FileFormat::kTum: return io::read_tum(path, report);
     case io::FileFormat::kKitti: return io::read_kitti(path, times_path, report);
@@ -17,6 +21,10 @@ io::Trajectory read_trajectory(const std::string& path, io::FileFormat format, c
 
 void write_trajectory(const std::string& path, const io::Trajectory& trajectory, io::FileFormat format,
                       const std::string& times_path) {
+  if (!times_path.empty() && format != io::FileFormat::kKitti) {
+    throw UsageError("--out-times goes with KITTI output (poses without times), and " + path + " is written as " +
+                     std::string(io::to_string(format)) + ", whose lines hold their times");
+  }
   switch (format) {
     case io::FileFormat::kTum: return io::write_tum(path, trajectory);
     case io::FileFormat::kKitti: return io::write_kitti(path, trajectory, times_path);

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// Camera calibrations a user hands `cairn vslam`: a small YAML file (docs/formats.md,
-/// "Calibration YAML") and the published presets of TUM RGB-D's three Kinects.
+/// Camera calibrations a user hands `cairn vslam`: a small YAML file (docs/vslam.md, "Your own
+/// images: a plain folder") and the published presets of TUM RGB-D's three Kinects.
 
 #include <string>
 

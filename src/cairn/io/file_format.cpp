@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "cairn/io/input_file.hpp"
 #include "cairn/io/text_reader.hpp"
 
 namespace cairn::io {
@@ -47,8 +48,9 @@ std::optional<FileFormat> format_from_extension(const std::string& path) {
 
 std::optional<FileFormat> detect_file_format(const std::string& path) {
   if (auto by_extension = format_from_extension(path)) return by_extension;
+  if (path != "-") check_input_file(path);  // a directory or a missing file is said so, not "unknown format"
   std::error_code ec;
-  if (path != "-" && !std::filesystem::is_regular_file(path, ec)) return std::nullopt;  // "-": standard input
+  if (path != "-" && !std::filesystem::is_regular_file(path, ec)) return std::nullopt;  // a FIFO is read once, by its reader
   TextReader reader(path);
   while (reader.next_line()) {
     if (is_blank_or_comment(reader.line())) continue;

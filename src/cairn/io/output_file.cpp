@@ -437,8 +437,7 @@ void check_file_outside_directory(const std::string& file_flag, const std::strin
   const fs::path dir_path = fs::weakly_canonical(fs::absolute(dir, ec), ec);
   if (ec) return;  // the writes themselves report what is wrong with the paths
   if (file_path == dir_path) {
-    throw ParseError(file, 0, file_flag + " names the " + dir_flag + " directory itself: give it a file name (e.g. " +
-                                  (fs::path(dir) / "map.cmap").string() + ")");
+    throw ParseError(file, 0, file_flag + " names the " + dir_flag + " directory itself: give it a file name of its own");
   }
   if (file_path.parent_path() == dir_path &&
       std::find(names.begin(), names.end(), file_path.filename().string()) != names.end()) {

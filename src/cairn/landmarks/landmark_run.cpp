@@ -134,6 +134,11 @@ LandmarkRun read_landmark_run(const std::string& directory) {
       throw io::ParseError(log_path, record.line, "ODOM times must increase strictly");
     }
     run.odometry.push_back(to_timed_pose(record.time, record.T_odom_robot));
+    // Finite numbers can still make an infinite motion (-1e308 then 1e308): every filter and
+    // graph downstream would carry NaN into "ok"-looking results.
+    if (run.odometry.size() >= 2 && !(run.odometry.back().pose - run.odometry[run.odometry.size() - 2].pose).allFinite()) {
+      throw io::ParseError(log_path, record.line, "the motion from the previous ODOM record is not a finite number of metres");
+    }
   }
   if (run.odometry.empty()) throw io::ParseError(log_path, 0, "expected ODOM records, found none");
 

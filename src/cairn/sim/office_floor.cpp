@@ -69,14 +69,15 @@ void add_furniture(World& world, const OfficeFloor& floor, const OuterDoors& doo
 }  // namespace
 
 void check_office_options(const OfficeOptions& o, const std::string& prefix, std::vector<std::string>& problems) {
-  // `value` must be finite and > `low`; the message names the field and what was found.
+  // `value` must be > `low` and at most 10 km (a world beyond that collapses its walls to points
+  // in double precision, 1e308 overflows them); the message names the field and what was found.
   auto above = [&](double value, double low, const std::string& field) {
-    if (!(value > low) || !std::isfinite(value)) {
+    if (!(value > low && value <= 1e4)) {
       std::string found;
       io::append_number(found, value);
       std::string bound;
       io::append_number(bound, low);
-      problems.push_back(field + " must be > " + bound + " (found " + found + ")");
+      problems.push_back(field + " must be in (" + bound + ", 10000] (found " + found + ")");
     }
   };
   if (o.rooms_per_row < 2 || o.rooms_per_row > 20) problems.push_back(prefix + ".rooms_per_row must be in [2, 20]");

@@ -232,14 +232,15 @@ bool Scenario::is_valid(std::string* why) const {
     }
   }
   if (!(image_pixels_per_m > 0.0 && image_pixels_per_m <= 200.0)) problems.push_back("image_pixels_per_m must be in (0, 200]");
-  // `value` must be finite and > `low`; the message names the field and what was found.
+  // `value` must be > `low` and at most 10 km (a world beyond that collapses its walls to points
+  // in double precision, 1e308 overflows them); the message names the field and what was found.
   auto above = [&](double value, double low, const std::string& field) {
-    if (!(value > low) || !std::isfinite(value)) {
+    if (!(value > low && value <= 1e4)) {
       std::string found;
       io::append_number(found, value);
       std::string bound;
       io::append_number(bound, low);
-      problems.push_back(field + " must be > " + bound + " (found " + found + ")");
+      problems.push_back(field + " must be in (" + bound + ", 10000] (found " + found + ")");
     }
   };
   switch (world) {
@@ -251,12 +252,14 @@ bool Scenario::is_valid(std::string* why) const {
       above(corridor.length_m, 4.0 * corridor.width_m + 4.0, "corridor.length_m");
       above(corridor.block_depth_m, 1.0, "corridor.block_depth_m");
       above(corridor.door_width_m, 0.0, "corridor.door_width_m");
+      // A door wider than this opens before the corridor's inner wall begins (sim/world.cpp).
+      if (corridor.door_width_m > 3.0) problems.push_back("corridor.door_width_m must be at most 3");
       above(corridor.door_pitch_m, corridor.door_width_m + 0.1, "corridor.door_pitch_m");
       above(corridor.door_recess_m, 0.0, "corridor.door_recess_m");
       break;
     case WorldKind::kOpenHall:
-      above(open_hall.route_width_m, 0.0, "open_hall.route_width_m");
-      above(open_hall.route_depth_m, 0.0, "open_hall.route_depth_m");
+      above(open_hall.route_width_m, 1.0, "open_hall.route_width_m");
+      above(open_hall.route_depth_m, 1.0, "open_hall.route_depth_m");
       above(open_hall.width_m, open_hall.route_width_m + 2.0, "open_hall.width_m");
       above(open_hall.depth_m, open_hall.route_depth_m + 2.0, "open_hall.depth_m");
       above(open_hall.pillar_radius_m, 0.0, "open_hall.pillar_radius_m");
@@ -269,10 +272,10 @@ bool Scenario::is_valid(std::string* why) const {
       if (!(building.trees_per_m >= 0.0 && building.trees_per_m <= 2.0)) problems.push_back("building.trees_per_m must be in [0, 2]");
       break;
     case WorldKind::kLandmarkField:
-      above(landmark_field.route_width_m, 0.0, "landmark_field.route_width_m");
-      above(landmark_field.route_depth_m, 0.0, "landmark_field.route_depth_m");
-      if (landmark_field.landmarks < 0 || landmark_field.landmarks > 100000) {
-        problems.push_back("landmark_field.landmarks must be in [0, 100000]");
+      above(landmark_field.route_width_m, 1.0, "landmark_field.route_width_m");
+      above(landmark_field.route_depth_m, 1.0, "landmark_field.route_depth_m");
+      if (landmark_field.landmarks < 1 || landmark_field.landmarks > 100000) {
+        problems.push_back("landmark_field.landmarks must be in [1, 100000]");
       }
       if (!(landmark_field.min_distance_from_route_m >= 0.3 &&
             landmark_field.max_distance_from_route_m > landmark_field.min_distance_from_route_m + 0.1)) {

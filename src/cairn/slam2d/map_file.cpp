@@ -30,7 +30,7 @@ constexpr std::uint64_t kMaxPayloadBytes = std::uint64_t{16} << 30;
 constexpr std::uint32_t kMaxSourceBytes = 65536;
 constexpr std::uint32_t kMaxGridSide = 65536;             // cells; 3.3 km at 5 cm
 constexpr std::uint64_t kMaxGridCells = std::uint64_t{1} << 28;
-constexpr std::int64_t kMaxGridOffset = 100000000;       // ProbabilityGrid's own bound
+constexpr std::int64_t kMaxGridOffset = 100000000;       // ProbabilityGrid's own bound (|offset| < this)
 static_assert(std::endian::native == std::endian::little || std::endian::native == std::endian::big);
 
 // ---------------------------------------------------------------------------------------------
@@ -300,9 +300,9 @@ SavedMap2D decode_payload(const std::string& payload, const std::string& name) {
     submap.first_keyframe = static_cast<int>(r.integer32(field + " first_keyframe", 0, std::max<std::int64_t>(last_keyframe, 0)));
     submap.keyframe_count = static_cast<int>(r.integer32(field + " keyframe_count", 0, static_cast<std::int64_t>(keyframes)));
     const std::int64_t offset_i = r.i64(field + " grid offset_i");
-    r.check_range(field + " grid offset_i", offset_i, -kMaxGridOffset, kMaxGridOffset);
+    r.check_range(field + " grid offset_i", offset_i, -kMaxGridOffset + 1, kMaxGridOffset - 1);
     const std::int64_t offset_j = r.i64(field + " grid offset_j");
-    r.check_range(field + " grid offset_j", offset_j, -kMaxGridOffset, kMaxGridOffset);
+    r.check_range(field + " grid offset_j", offset_j, -kMaxGridOffset + 1, kMaxGridOffset - 1);
     const std::uint32_t width = r.u32(field + " grid width");
     r.check_range(field + " grid width", width, 0, kMaxGridSide);
     const std::uint32_t height = r.u32(field + " grid height");

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 
 #include "cairn/core/assert.hpp"
 
@@ -32,11 +34,22 @@ bool ProbabilityGrid::cell_of(const Eigen::Vector2d& p, int& i, int& j) const {
   return true;
 }
 
+// Coordinates come from the log (a pose in UTM metres) or a saved map: out of the grid's reach
+// is the input's fault, said as an error, not an assertion.
+void ProbabilityGrid::throw_too_far(const Eigen::Vector2d& p) const {
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "a map point at (%.6g, %.6g) m lies more than 1e8 cells of %.6g m from the origin: the grid cannot "
+                "hold it (poses in UTM-sized coordinates, or a resolution far too fine)",
+                p.x(), p.y(), options_.resolution_m);
+  throw std::out_of_range(text);
+}
+
 void ProbabilityGrid::grow_to_contain(const Eigen::Vector2d& p) {
   const double r = options_.resolution_m;
   const double gi = std::floor(p.x() / r);
   const double gj = std::floor(p.y() / r);
-  CAIRN_ASSERT(std::abs(gi) < 1e8 && std::abs(gj) < 1e8, "point too far from the origin for the grid");
+  if (!(std::abs(gi) < 1e8 && std::abs(gj) < 1e8)) throw_too_far(p);
   if (width_ == 0) {
     offset_i_ = static_cast<long>(gi) - 16;
     offset_j_ = static_cast<long>(gj) - 16;
@@ -137,8 +150,8 @@ void ProbabilityGrid::reserve(const Eigen::Vector2d& lower, const Eigen::Vector2
   const double r = options_.resolution_m;
   const double i0 = std::floor(lower.x() / r), j0 = std::floor(lower.y() / r);
   const double i1 = std::floor(upper.x() / r), j1 = std::floor(upper.y() / r);
-  CAIRN_ASSERT(std::abs(i0) < 1e8 && std::abs(j0) < 1e8 && std::abs(i1) < 1e8 && std::abs(j1) < 1e8,
-               "point too far from the origin for the grid");
+  if (!(std::abs(i0) < 1e8 && std::abs(j0) < 1e8)) throw_too_far(lower);
+  if (!(std::abs(i1) < 1e8 && std::abs(j1) < 1e8)) throw_too_far(upper);
   offset_i_ = static_cast<long>(i0);
   offset_j_ = static_cast<long>(j0);
   width_ = static_cast<int>(i1 - i0) + 1;

@@ -85,6 +85,8 @@ class ProbabilityGrid {
                                     int height, std::vector<float> log_odds, std::vector<std::uint8_t> known);
 
  private:
+  /// Throws std::out_of_range: a point more than 1e8 cells from the origin.
+  [[noreturn]] void throw_too_far(const Eigen::Vector2d& point_map) const;
   void grow_to_contain(const Eigen::Vector2d& point_map);
   bool cell_of(const Eigen::Vector2d& point_map, int& i, int& j) const;
   void update(int i, int j, double log_odds_change);

@@ -160,8 +160,10 @@ bool Slam2dOptions::is_valid(std::string* error) const {
       global_search_every_n_keyframes < 1)
     problems << "search_budget: per_keyframe > 0, burst >= 1, global_search_max_range_m > 0, global_search_every_n_keyframes >= 1; ";
   if (!(icp.point_sigma_m > 0.0) || icp.max_iterations < 1) problems << "icp: point_sigma_m > 0, max_iterations >= 1; ";
-  if (!(output_map_resolution_m > 0.0)) problems << "output map resolution must be > 0; ";
-  if (!(grid.resolution_m > 0.0)) problems << "grid resolution must be > 0; ";
+  // The bounds a saved map's reader checks too (map_file.cpp): finer than 1 mm, a building's
+  // grid outgrows memory and the grid's 1e8-cell reach.
+  if (!(output_map_resolution_m >= 1e-3 && output_map_resolution_m <= 10.0)) problems << "output.map_resolution_m must be in [0.001, 10]; ";
+  if (!(grid.resolution_m >= 1e-3 && grid.resolution_m <= 10.0)) problems << "grid.resolution_m must be in [0.001, 10]; ";
   if (!(map_points.cell_size_m >= icp.max_correspondence_m))
     problems << "map_points.cell_size_m must be >= icp.max_correspondence_m; ";
   // The scan filter (the bounds a saved map's reader checks too, map_file.cpp).
@@ -942,8 +944,9 @@ struct Slam2d::Impl {
       const auto [entry, fresh] = contradicted.emplace(id, against);
       if (!fresh) entry->second = entry->second && against;
     }
-    for (const auto& [id, against] : contradicted) {
+    for (const auto& [merge_id, against] : contradicted) {
       if (!against) continue;
+      const auto id = merge_id;  // clang 14 cannot capture a structured binding in a lambda (C++20, P1381)
       const auto it = std::find_if(pending_merges.begin(), pending_merges.end(), [&](const PendingMerge& p) { return p.id == id; });
       if (it == pending_merges.end()) continue;
       ++it->misses;
