@@ -8,10 +8,22 @@
 
 #include <algorithm>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 #include "cairn/core/assert.hpp"
 
 namespace cairn::backend {
+namespace {
+
+// CHOLMOD and AMD fail only for want of memory or when a factor outgrows their 32-bit indices (a
+// problem too large for this machine, which a user's file can be): an error, not an assertion.
+[[noreturn]] void resources_exhausted(const std::string& what, int status) {
+  throw std::runtime_error(what + " failed (status " + std::to_string(status) +
+                           "): out of memory, or the problem is too large for 32-bit sparse indices");
+}
+
+}  // namespace
 
 BlockPattern::BlockPattern(int blocks, int block_size, const std::vector<std::pair<int, int>>& pairs)
     : blocks_(blocks), block_size_(block_size), column_block_rows_(static_cast<std::size_t>(blocks)) {
@@ -91,7 +103,7 @@ std::vector<int> BlockPattern::block_amd_ordering() const {
   }
   std::vector<int> block_order(static_cast<std::size_t>(blocks_));
   const int status = amd_order(blocks_, start.data(), rows.data(), block_order.data(), nullptr, nullptr);
-  CAIRN_ASSERT(status == AMD_OK || status == AMD_OK_BUT_JUMBLED, "AMD ordering failed");
+  if (status != AMD_OK && status != AMD_OK_BUT_JUMBLED) resources_exhausted("AMD ordering", status);
   std::vector<int> order;
   order.reserve(static_cast<std::size_t>(blocks_ * block_size_));
   for (const int b : block_order) {
@@ -279,7 +291,7 @@ void SparseCholesky::analyze(const UpperCsc& A, const std::vector<int>* ordering
   }
   impl_->size = A.size;
   impl_->factorized = false;
-  CAIRN_ASSERT(impl_->factor != nullptr, "CHOLMOD analysis failed (out of memory?)");
+  if (impl_->factor == nullptr) resources_exhausted("CHOLMOD analysis", impl_->common.status);
   impl_->flops = impl_->common.fl;
 }
 
@@ -296,7 +308,7 @@ void SparseCholesky::analyze_in_stored_order(const UpperCsc& A) {
   impl_->common.postorder = 1;
   impl_->size = A.size;
   impl_->factorized = false;
-  CAIRN_ASSERT(impl_->factor != nullptr, "CHOLMOD analysis failed (out of memory?)");
+  if (impl_->factor == nullptr) resources_exhausted("CHOLMOD analysis", impl_->common.status);
   impl_->flops = impl_->common.fl;
 }
 
@@ -323,9 +335,10 @@ Eigen::MatrixXd SparseCholesky::solve(const Eigen::MatrixXd& B) {
   const SerialOpenMpRegions serial;
   cholmod_dense* rhs = cholmod_allocate_dense(static_cast<std::size_t>(B.rows()), static_cast<std::size_t>(B.cols()),
                                               static_cast<std::size_t>(B.rows()), CHOLMOD_REAL, &impl_->common);
+  if (rhs == nullptr) resources_exhausted("CHOLMOD's right-hand side", impl_->common.status);
   std::memcpy(rhs->x, B.data(), sizeof(double) * static_cast<std::size_t>(B.size()));
   cholmod_dense* x = cholmod_solve(CHOLMOD_A, impl_->factor, rhs, &impl_->common);
-  CAIRN_ASSERT(x != nullptr, "CHOLMOD solve failed");
+  if (x == nullptr) resources_exhausted("CHOLMOD solve", impl_->common.status);
   Eigen::MatrixXd X(B.rows(), B.cols());
   std::memcpy(X.data(), x->x, sizeof(double) * static_cast<std::size_t>(X.size()));
   cholmod_free_dense(&x, &impl_->common);
@@ -350,7 +363,7 @@ void SparseCholesky::solve_in_place(const Eigen::VectorXd& b, Eigen::VectorXd& x
   cholmod_dense B = Impl::view(b);
   const int ok = cholmod_solve2(CHOLMOD_A, impl_->factor, &B, nullptr, &impl_->solve_x, nullptr, &impl_->solve_y,
                                 &impl_->solve_e, &impl_->common);
-  CAIRN_ASSERT(ok != 0 && impl_->solve_x != nullptr, "CHOLMOD solve failed");
+  if (ok == 0 || impl_->solve_x == nullptr) resources_exhausted("CHOLMOD solve", impl_->common.status);
   x.resize(b.size());
   std::memcpy(x.data(), impl_->solve_x->x, sizeof(double) * static_cast<std::size_t>(b.size()));
 }
@@ -366,7 +379,7 @@ const double* SparseCholesky::solve_lower_sparse(const std::vector<int>& rows, c
     // Bset solves run on a simplicial factor; LL^T so that L^-1 b needs no D.
     const int changed = cholmod_change_factor(CHOLMOD_REAL, /*to_ll=*/1, /*to_super=*/0, /*to_packed=*/1,
                                               /*to_monotonic=*/1, L, &impl_->common);
-    CAIRN_ASSERT(changed != 0, "CHOLMOD could not convert the factor to a simplicial LL^T");
+    if (changed == 0) resources_exhausted("CHOLMOD's conversion to a simplicial LL^T factor", impl_->common.status);
   }
   int set_start[2] = {0, static_cast<int>(rows.size())};
   cholmod_sparse Bset{};
@@ -384,7 +397,9 @@ const double* SparseCholesky::solve_lower_sparse(const std::vector<int>& rows, c
   cholmod_dense B = Impl::view(b);
   const int ok = cholmod_solve2(CHOLMOD_L, L, &B, &Bset, &impl_->solve_x, &impl_->solve_xset, &impl_->solve_y,
                                 &impl_->solve_e, &impl_->common);
-  CAIRN_ASSERT(ok != 0 && impl_->solve_x != nullptr && impl_->solve_xset != nullptr, "CHOLMOD sparse solve failed");
+  if (ok == 0 || impl_->solve_x == nullptr || impl_->solve_xset == nullptr) {
+    resources_exhausted("CHOLMOD sparse solve", impl_->common.status);
+  }
   const cholmod_sparse* X_set = impl_->solve_xset;
   const int* set_rows = static_cast<const int*>(X_set->i);
   y_rows.assign(set_rows, set_rows + static_cast<const int*>(X_set->p)[1]);
