@@ -134,26 +134,25 @@ int ba_command(const BaFlags& flags) {
               summary.jacobian_s, summary.residual_s, summary.linear_system_s, summary.linear_solve_s, summary.total_s,
               summary.threads);
   const bool interrupted = summary.termination == backend::LeastSquaresTermination::kInterrupted;
+  // A failed solve is a failed command: nothing is written and no existing output is replaced.
+  if (!summary.is_solution_usable() && !interrupted) {
+    std::fprintf(stderr, "cairn: error: %s: bundle adjustment failed: %s; nothing was written\n", input_name.c_str(),
+                 summary.message.c_str());
+    return 1;
+  }
   // The refined problem and the report are one result: both are produced before either
   // replaces a file.
   const nlohmann::json j = flags.report.empty() ? nlohmann::json() : summary_json(summary, problem, behind);
-  io::write_outputs({{summary.is_solution_usable() ? flags.output : std::string(),
-                      [&](std::ostream& out) { io::write_bal(out, problem); }},
+  io::write_outputs({{flags.output, [&](std::ostream& out) { io::write_bal(out, problem); }},
                      {flags.report, [&](std::ostream& out) { out << io::json_text(j); }}});
   if (!flags.output.empty() || !flags.report.empty()) {
     std::string written;
     for (const std::string* path : {&flags.output, &flags.report}) {
-      if (path->empty() || (path == &flags.output && !summary.is_solution_usable())) continue;
-      written += (written.empty() ? "" : " and ") + io::output_display_name(*path);
+      if (!path->empty()) written += (written.empty() ? "" : " and ") + io::output_display_name(*path);
     }
-    if (!written.empty()) std::printf("wrote %s%s\n", written.c_str(), interrupted ? " (interrupted: the estimate so far)" : "");
+    std::printf("wrote %s%s\n", written.c_str(), interrupted ? " (interrupted: the estimate so far)" : "");
   }
   if (interrupted) return interrupted_exit_status();
-  if (!summary.is_solution_usable()) {
-    std::fprintf(stderr, "cairn: error: %s: bundle adjustment failed: %s\n", input_name.c_str(),
-                 summary.message.c_str());
-    return 1;
-  }
   return 0;
 }
 
