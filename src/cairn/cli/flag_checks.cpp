@@ -15,11 +15,10 @@ namespace {
 // the terminal.
 std::string shown(const std::string& text) { return text.size() <= 40 ? "'" + text + "'" : "'" + text.substr(0, 40) + "...'"; }
 
-// The whole text as a double, or nullopt. strtod accepts what CLI11 converts ("1e3", "0x10",
-// " 5" is refused since CLI11 trims before validating).
+// The whole text as a double, or nullopt: strtod reads what CLI11 converts afterwards ("1e3",
+// "0x10"); "nan", "inf" and an overflowing "1e999" parse here and are refused by the caller.
 std::optional<double> parse_number(const std::string& text) {
   if (text.empty()) return std::nullopt;
-  errno = 0;
   char* end = nullptr;
   const double value = std::strtod(text.c_str(), &end);
   if (end != text.c_str() + text.size()) return std::nullopt;

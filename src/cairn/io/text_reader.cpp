@@ -1,10 +1,10 @@
-#include "cairn/io/input_file.hpp"
 #include "cairn/io/text_reader.hpp"
 
 #include <charconv>
 #include <cmath>
 #include <cstring>
 
+#include "cairn/io/input_file.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 

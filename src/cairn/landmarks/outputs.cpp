@@ -1,5 +1,4 @@
 #include "cairn/viz/cairo_image.hpp"
-#include "cairn/core/utf8.hpp"
 #include "cairn/landmarks/outputs.hpp"
 
 #include <algorithm>
@@ -14,6 +13,7 @@
 
 #include "cairn/core/se3.hpp"
 #include "cairn/core/so3.hpp"
+#include "cairn/core/utf8.hpp"
 #include "cairn/filter/chi_square.hpp"
 #include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"

@@ -1,5 +1,4 @@
 #include "cairn/lidar3d/odometry.hpp"
-#include "cairn/core/threads.hpp"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -10,6 +9,8 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+
+#include "cairn/core/threads.hpp"
 
 namespace cairn::lidar3d {
 namespace {

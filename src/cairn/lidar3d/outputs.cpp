@@ -1,5 +1,4 @@
 #include "cairn/viz/cairo_image.hpp"
-#include "cairn/core/utf8.hpp"
 #include "cairn/lidar3d/outputs.hpp"
 
 #include <cairo.h>
@@ -10,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cairn/core/utf8.hpp"
 #include "cairn/eval/alignment.hpp"
 #include "cairn/eval/ape.hpp"
 #include "cairn/eval/kitti_metric.hpp"

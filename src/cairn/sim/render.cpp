@@ -1,5 +1,4 @@
 #include "cairn/viz/cairo_image.hpp"
-#include "cairn/core/utf8.hpp"
 #include "cairn/sim/render.hpp"
 
 #include <cairo.h>
@@ -10,6 +9,7 @@
 #include <numbers>
 #include <ostream>
 
+#include "cairn/core/utf8.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
 
