@@ -13,6 +13,8 @@
 
 #include "cairn/backend/bundle_adjustment.hpp"
 #include "cairn/backend/least_squares.hpp"
+// Included together on purpose: both once declared backend::MarginalCovariances (issue 36).
+#include "cairn/backend/covariance.hpp"
 #include "cairn/backend/reprojection_factors.hpp"
 #include "cairn/io/bal.hpp"
 #include "../test_data.hpp"
@@ -331,7 +333,7 @@ TEST(LeastSquaresCovariance, TwoPriorsCombineAsInverseVariances) {
   problem.add_factor(std::make_unique<PointPrior2>(0.0, 0.0, 1.0), {vp});
   problem.add_factor(std::make_unique<PointPrior2>(1.0, 1.0, 2.0), {vp});
   problem.add_factor(std::make_unique<PointPrior2>(5.0, 5.0, 1.0), {vq});
-  const MarginalCovariances covariance = marginal_covariances(problem, {vp, vq});
+  const VariableCovariances covariance = marginal_covariances(problem, {vp, vq});
   ASSERT_TRUE(covariance.ok) << covariance.message;
   ASSERT_EQ(covariance.blocks.size(), 2u);
   EXPECT_TRUE(covariance.blocks[0].isApprox(0.8 * Eigen::Matrix2d::Identity(), 1e-12)) << covariance.blocks[0];
@@ -344,7 +346,7 @@ TEST(LeastSquaresCovariance, AGaugeFreedomIsReportedNotInverted) {
   const int va = problem.add_variable(a, euclidean_manifold(3));
   const int vb = problem.add_variable(b, euclidean_manifold(3));
   problem.add_factor(std::make_unique<PointDistance>(), {va, vb});
-  MarginalCovariances covariance = marginal_covariances(problem, {va});
+  VariableCovariances covariance = marginal_covariances(problem, {va});
   EXPECT_FALSE(covariance.ok);
   EXPECT_NE(covariance.message.find("singular"), std::string::npos) << covariance.message;
   // Holding a fixes the gauge: b - a has unit information, so Sigma_b = I.

@@ -508,7 +508,7 @@ class Engine final : public TrustRegionModel {
         arena_(core::arena_concurrency(options.threads)) {}
 
   LeastSquaresSummary run();
-  MarginalCovariances covariances(const std::vector<int>& variables);
+  VariableCovariances covariances(const std::vector<int>& variables);
 
  private:
   // Setup
@@ -1806,8 +1806,8 @@ void Engine::accept_trial(double /*old_cost*/, double /*new_cost*/, bool final, 
 
 void Engine::reject_trial(StepQuality /*quality*/) { restore_values(); }
 
-MarginalCovariances Engine::covariances(const std::vector<int>& variables) {
-  MarginalCovariances result;
+VariableCovariances Engine::covariances(const std::vector<int>& variables) {
+  VariableCovariances result;
   LeastSquaresSummary summary;
   summary_ = &summary;
   std::string error;
@@ -1861,7 +1861,7 @@ MarginalCovariances Engine::covariances(const std::vector<int>& variables) {
 
 }  // namespace
 
-MarginalCovariances marginal_covariances(LeastSquaresProblem& problem, const std::vector<int>& variables, int threads) {
+VariableCovariances marginal_covariances(LeastSquaresProblem& problem, const std::vector<int>& variables, int threads) {
   LeastSquaresOptions options;
   options.linear_solver = LinearSolverType::kSparseNormalCholesky;
   options.reuse_factorization = false;

@@ -211,7 +211,9 @@ struct LeastSquaresSummary : TrustRegionResult {
 LeastSquaresSummary solve(LeastSquaresProblem& problem, const LeastSquaresOptions& options);
 
 /// Marginal covariances of a least-squares problem at its current values (Laplace approximation).
-struct MarginalCovariances {
+/// Named apart from the pose graph's MarginalCovariances<Group> (covariance.hpp): both headers
+/// once declared `backend::MarginalCovariances`, and a program including both did not compile.
+struct VariableCovariances {
   bool ok = false;
   std::string message;  ///< why not, when !ok
   /// Per requested variable, in its tangent space (tangent_size x tangent_size); zero for a
@@ -224,7 +226,7 @@ struct MarginalCovariances {
 /// the inverse of the Gauss-Newton Hessian). J^T J over every free variable, factorised by
 /// CHOLMOD; the columns are solved for the requested blocks only. Not ok when J^T J is singular
 /// (a gauge freedom: hold a variable constant).
-MarginalCovariances marginal_covariances(LeastSquaresProblem& problem, const std::vector<int>& variables,
+VariableCovariances marginal_covariances(LeastSquaresProblem& problem, const std::vector<int>& variables,
                                          int threads = 1);
 
 /// S with S^T S = information, S = Lambda^1/2 V^T from information = V Lambda V^T (eigenvalues

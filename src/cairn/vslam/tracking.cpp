@@ -394,7 +394,7 @@ int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m) {
                                                      &points[static_cast<std::size_t>(f.map_point[i])].p_world),
                       {cv});
       }
-      const backend::MarginalCovariances c = backend::marginal_covariances(cp, {cv}, 1);
+      const backend::VariableCovariances c = backend::marginal_covariances(cp, {cv}, 1);
       if (c.ok) {
         // Tangent (rho, phi) on the right: the position block in the camera frame; its
         // largest eigenvalue is frame-independent. Pixel noise of 1 px at level 0 assumed.
