@@ -103,10 +103,14 @@ struct Command {
 // gtest prints a parameter by this, not as a dump of its bytes.
 void PrintTo(const Command& c, std::ostream* os) { *os << "cairn " << c.prefix; }
 
-// The shared fixtures, made once.
+// The shared fixtures: small files made once per test process, and the fixtures that cost a run
+// of cairn each (a CARMEN log with its map, a simulated landmark run) made only by the tests
+// that name them (ensure_fixtures), since ctest runs every test in a process of its own.
 struct Fixtures {
   fs::path dir;
   bool ready = false;
+  bool carmen_ready = false;
+  bool landmarks_ready = false;
 };
 
 Fixtures& fixtures() {
@@ -136,7 +140,16 @@ Fixtures& fixtures() {
   std::ofstream(d / "binary.bin", std::ios::binary) << std::string("\x7f\x45\x4c\x46\x00\x01\xff\xfe\x00\x00\x13\x37", 12);
   std::ofstream(d / "empty.txt");
   fs::create_directories(d / "empty_folder");
-  if (fs::exists(cairn::test::data_path("laser2d/intel/intel.clf.bz2"))) {
+  f.ready = true;
+  return f;
+}
+
+// Makes the costly fixtures `text` (command-line arguments or a path) names.
+void ensure_fixtures(const std::string& text) {
+  Fixtures& f = fixtures();
+  const fs::path& d = f.dir;
+  const bool carmen = text.find("log.clf") != std::string::npos || text.find("map.cmap") != std::string::npos;
+  if (carmen && !f.carmen_ready && fs::exists(cairn::test::data_path("laser2d/intel/intel.clf.bz2"))) {
     // The first 400 lines (133 scans) of the real Intel log, and a map of them.
     // python3 is one of the packages scripts/install_deps.sh installs; bzip2's tools need not be.
     const std::string cut = "python3 -c 'import bz2, itertools, sys; sys.stdout.buffer.writelines(itertools.islice(bz2.open(sys.argv[1]), 400))' " +
@@ -144,11 +157,13 @@ Fixtures& fixtures() {
     EXPECT_EQ(std::system(cut.c_str()), 0);
     const CliResult map = run("slam2d " + q(d / "log.clf") + " --out " + q(d / "map_run") + " --save-map " + q(d / "map.cmap") + " -q");
     EXPECT_EQ(map.status, 0) << map.err;
+    f.carmen_ready = true;
   }
-  const CliResult sim = run("simulate landmarks --out " + q(d / "landmarks_run") + " -q");
-  EXPECT_EQ(sim.status, 0) << sim.err;
-  f.ready = true;
-  return f;
+  if (text.find("landmarks_run") != std::string::npos && !f.landmarks_ready) {
+    const CliResult sim = run("simulate landmarks --out " + q(d / "landmarks_run") + " -q");
+    EXPECT_EQ(sim.status, 0) << sim.err;
+    f.landmarks_ready = true;
+  }
 }
 
 std::vector<Command> commands() {
@@ -192,7 +207,7 @@ class HostileCli : public ::testing::TestWithParam<Command> {
  protected:
   void SetUp() override {
     if (!GetParam().data.empty()) CAIRN_REQUIRE_DATA(GetParam().data);
-    fixtures();
+    ensure_fixtures(GetParam().args + " " + GetParam().input);
     dir_ = scratch() / GetParam().name;
     fs::remove_all(dir_);
     fs::create_directories(dir_);
@@ -319,7 +334,10 @@ INSTANTIATE_TEST_SUITE_P(EveryCommand, HostileCli, ::testing::ValuesIn(commands(
 class HostileCases : public ::testing::Test {
  protected:
   void SetUp() override { fixtures(); }
-  fs::path f(const std::string& name) const { return scratch() / "fixtures" / name; }
+  fs::path f(const std::string& name) const {
+    ensure_fixtures(name);
+    return fixtures().dir / name;
+  }
 };
 
 TEST_F(HostileCases, TwoOutputsThatAreOneFileAreRefusedBeforeAnyWrite) {

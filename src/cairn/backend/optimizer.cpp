@@ -611,27 +611,30 @@ OptimizerSummary optimize(PoseGraphProblem<Group>& problem, const OptimizerOptio
   return optimize(problem, options, nullptr);
 }
 
+namespace {
+
+// One edge's term of evaluate_cost: its weight times the kernel of its squared residual.
+template <class Group>
+double edge_cost(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options, std::size_t e) {
+  const auto& edge = problem.edges[e];
+  const double s = squared_residual(problem.T_world_pose[static_cast<std::size_t>(edge.i)],
+                                    problem.T_world_pose[static_cast<std::size_t>(edge.j)], edge, options.objective);
+  return edge_weight(options, e) * evaluate_kernel(options.kernel, options.kernel_scale, s).rho;
+}
+
+}  // namespace
+
 template <class Group>
 double evaluate_cost(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options) {
   double sum = 0.0;
-  for (std::size_t e = 0; e < problem.edges.size(); ++e) {
-    const auto& edge = problem.edges[e];
-    const double s = squared_residual(problem.T_world_pose[static_cast<std::size_t>(edge.i)],
-                                      problem.T_world_pose[static_cast<std::size_t>(edge.j)], edge, options.objective);
-    sum += edge_weight(options, e) * evaluate_kernel(options.kernel, options.kernel_scale, s).rho;
-  }
+  for (std::size_t e = 0; e < problem.edges.size(); ++e) sum += edge_cost(problem, options, e);
   return sum;
 }
 
 template <class Group>
 long long first_nonfinite_edge(const PoseGraphProblem<Group>& problem, const OptimizerOptions& options) {
   for (std::size_t e = 0; e < problem.edges.size(); ++e) {
-    const auto& edge = problem.edges[e];
-    const double s = squared_residual(problem.T_world_pose[static_cast<std::size_t>(edge.i)],
-                                      problem.T_world_pose[static_cast<std::size_t>(edge.j)], edge, options.objective);
-    if (!std::isfinite(edge_weight(options, e) * evaluate_kernel(options.kernel, options.kernel_scale, s).rho)) {
-      return static_cast<long long>(e);
-    }
+    if (!std::isfinite(edge_cost(problem, options, e))) return static_cast<long long>(e);
   }
   return -1;
 }

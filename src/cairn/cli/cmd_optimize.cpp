@@ -428,10 +428,10 @@ int run_optimize(const OptimizeFlags& flags, const io::GraphFile& file, const io
 
 int optimize_command(const OptimizeFlags& flags) {
   check_combinations(flags);
-  io::check_distinct_outputs({{"--output", flags.output}, {"--report", flags.report}});
   if (io::is_standard_output(flags.output) && !flags.report.empty() && io::is_standard_output(flags.report)) {
     throw io::ParseError(flags.report, 0, "the graph already goes to standard output: give --report a file");
   }
+  io::check_distinct_outputs({{"--output", flags.output}, {"--report", flags.report}});
   claim_standard_output(flags.output);
   claim_standard_output(flags.report);
   io::GraphReadOptions options = flags.graph.options();

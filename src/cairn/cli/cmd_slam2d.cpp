@@ -66,9 +66,9 @@ int slam2d_command(const Slam2dFlags& flags) {
     throw std::invalid_argument("--save-map needs a file: the map is binary and standard output carries the messages");
   if (!flags.save_map.empty()) {
     io::resolve_output(flags.save_map);  // a directory, a link loop: refused before the work
-    io::check_file_outside_directory("--save-map", flags.save_map, "--out", flags.out,
-                                     {"map.pgm", "map.yaml", "map.png", "trajectory.tum", "scans.csv", "graph.g2o",
-                                      "corrected.clf", "report.json"});
+    std::vector<std::string> names;
+    for (const std::string& path : slam2d::output_files("").all()) names.push_back(std::filesystem::path(path).filename().string());
+    io::check_file_outside_directory("--save-map", flags.save_map, "--out", flags.out, names);
   }
   // Refuse a directory of another run before the work, not after it.
   io::OutputDirectory out(flags.out, flags.overwrite);

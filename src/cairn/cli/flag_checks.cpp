@@ -8,6 +8,8 @@
 #include <optional>
 #include <thread>
 
+#include "cairn/io/number_format.hpp"
+
 namespace cairn::cli::checks {
 namespace {
 
@@ -69,10 +71,9 @@ std::string bounds(double lo, const char* lo_sign, double hi) {
 }  // namespace
 
 std::string format_number(double value) {
-  char buffer[64];
-  const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, value);
-  if (error != std::errc{}) return std::to_string(value);
-  return std::string(buffer, end);
+  std::string text;
+  io::append_number(text, value);
+  return text;
 }
 
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }

@@ -1,7 +1,6 @@
 #include "cairn/io/graph_io.hpp"
 
 #include <array>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -11,6 +10,7 @@
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/parse_error.hpp"
+#include "cairn/io/quaternion_input.hpp"
 #include "cairn/io/text_reader.hpp"
 
 namespace cairn::io {
@@ -161,12 +161,7 @@ class GraphBuilder {
 
   core::SO3 quaternion(std::string_view qx, std::string_view qy, std::string_view qz, std::string_view qw) {
     Eigen::Quaterniond q(number(qw, "qw"), number(qx, "qx"), number(qy, "qy"), number(qz, "qz"));
-    double norm = q.norm();
-    if (!std::isfinite(norm)) {  // each number is finite, their squares need not be (1e200)
-      const double largest = q.coeffs().cwiseAbs().maxCoeff();
-      q.coeffs() /= largest;
-      norm = largest * q.norm();  // infinite: counted as not unit below
-    }
+    const double norm = make_normalisable(q);  // each number is finite, their squares need not be (1e200)
     if (!(norm > 1e-12)) fail("quaternion (qx qy qz qw) has zero norm: expected a rotation");
     if (std::abs(norm - 1.0) > 1e-6) ++report_.quaternions_not_unit;
     return core::SO3(q);

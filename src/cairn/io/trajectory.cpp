@@ -17,6 +17,7 @@
 
 #include "cairn/core/assert.hpp"
 #include "cairn/io/parse_error.hpp"
+#include "cairn/io/quaternion_input.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/text_reader.hpp"
@@ -111,22 +112,11 @@ class IncreasingStamps {
 // Counts quaternions far from unit norm; one warning summarises them all.
 class QuaternionNorms {
  public:
-  // Returns a quaternion SO3 can normalise without overflow or underflow. Files hold
-  // any finite numbers, and SO3's constructor asserts on a non-finite or zero squared norm, so
-  // components whose squares overflow (1e200) or vanish (1e-170) are first scaled by the
-  // largest one. Ordinary quaternions pass unchanged, which keeps normalisation bit-exact.
+  // Returns a quaternion SO3 can normalise without overflow or underflow (io/quaternion_input.hpp).
   Quaternion checked(const TextReader& reader, Quaternion q) {
-    const double largest = q.coeffs().cwiseAbs().maxCoeff();
-    if (largest == 0.0) {
+    const double norm = make_normalisable(q);  // may be inf; only reported
+    if (norm == 0.0) {
       reader.fail("quaternion has zero norm: expected a rotation quaternion, found (0, 0, 0, 0)");
-    }
-    const double squared_norm = q.squaredNorm();
-    double norm = 0.0;
-    if (std::isfinite(squared_norm) && squared_norm >= std::numeric_limits<double>::min()) {
-      norm = std::sqrt(squared_norm);
-    } else {
-      q.coeffs() /= largest;
-      norm = largest * q.norm();  // may overflow to inf; only reported
     }
     if (!(std::abs(norm - 1.0) <= kQuaternionNormTolerance)) {
       if (count_ == 0) {

@@ -183,8 +183,7 @@ nlohmann::json health_events_json(const std::vector<HealthEvent>& events) {
   return out;
 }
 
-OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::size_t scans_used,
-                          const std::string& directory, const Slam2dOptions& options) {
+OutputFiles output_files(const std::string& directory) {
   OutputFiles files;
   const fs::path dir(directory);
   files.map_pgm = (dir / "map.pgm").string();
@@ -195,6 +194,12 @@ OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::siz
   files.graph = (dir / "graph.g2o").string();
   files.corrected_log = (dir / "corrected.clf").string();
   files.report = (dir / "report.json").string();
+  return files;
+}
+
+OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::size_t scans_used,
+                          const std::string& directory, const Slam2dOptions& options) {
+  const OutputFiles files = output_files(directory);
 
   ProbabilityGridOptions map_options = options.grid;
   map_options.resolution_m = options.output_map_resolution_m;

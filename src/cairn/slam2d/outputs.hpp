@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "cairn/eval/matrix_trajectory.hpp"
 #include "cairn/io/carmen_log.hpp"
@@ -29,7 +30,12 @@ namespace cairn::slam2d {
 
 struct OutputFiles {
   std::string map_pgm, map_yaml, map_png, trajectory, scans, graph, corrected_log, report;
+  /// Every path above.
+  std::vector<std::string> all() const { return {map_pgm, map_yaml, map_png, trajectory, scans, graph, corrected_log, report}; }
 };
+
+/// The files of a run in `directory` (write_outputs writes all but the report).
+OutputFiles output_files(const std::string& directory);
 
 /// The scans' poses sorted by time, repeated stamps dropped (the first kept).
 io::Trajectory to_trajectory(const Slam2d& slam);
