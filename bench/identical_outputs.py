@@ -62,6 +62,15 @@ def jobs(data, out):
     jobs = []
     for log in ("aces", "intel", "mit-csail"):
         jobs.append((f"slam2d-{log}", ["slam2d", f"{laser}/{log}/{log}.clf.bz2", "--out", f"{out}/slam2d-{log}"]))
+    jobs.append(("slam2d-intel-map", ["slam2d", f"{laser}/intel/intel.clf.bz2", "--max-scans", "900",
+                                      "--out", f"{out}/slam2d-intel-map", "--save-map", f"{out}/slam2d-intel-map.map"]))
+    jobs.append(("localize2d-intel", ["localize2d", f"{laser}/intel/intel.clf.bz2", "--map", f"{out}/slam2d-intel-map.map",
+                                      "--first-scan", "1200", "--max-scans", "400", "--out", f"{out}/localize2d-intel"]))
+    jobs.append(("landmarks-sim", ["simulate", "landmarks", "--seed", "3", "--out", f"{out}/landmarks-sim", "-q"]))
+    jobs.append(("landmarks-ekf", ["landmarks", f"{out}/landmarks-sim", "--association", "jcbb",
+                                   "--spurious-fraction", "0.1", "--out", f"{out}/landmarks-ekf", "-q"]))
+    jobs.append(("landmarks-graph", ["landmarks", f"{out}/landmarks-sim", "--method", "graph", "--association", "nn",
+                                     "--out", f"{out}/landmarks-graph", "-q"]))
     kitti3d = os.path.join(data, "lidar3d", "kitti00_keyframes")
     jobs.append(("slam3d-kitti00", ["slam3d", f"{kitti3d}/key_frames", "--preset", "kitti",
                                     "--times", f"{kitti3d}/keyframes.txt", "--times-column", "4",
@@ -124,10 +133,14 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     only = set(args.only.split(",")) if args.only else None
     for name, command in jobs(data, args.out):
-        if only and name not in only and name != "vocabulary":
+        if only and name not in only and name not in ("vocabulary", "landmarks-sim", "slam2d-intel-map"):
             continue
-        for stale in (os.path.join(args.out, name), os.path.join(args.out, name.replace("-gnc", "") + ".g2o")):
-            shutil.rmtree(stale, ignore_errors=True) if os.path.isdir(stale) else None
+        for stale in (os.path.join(args.out, name), os.path.join(args.out, name.replace("-gnc", "") + ".g2o"),
+                      os.path.join(args.out, name + ".map")):
+            if os.path.isdir(stale):
+                shutil.rmtree(stale)
+            elif os.path.exists(stale):
+                os.remove(stale)
         start = time.monotonic()
         result = subprocess.run([args.cairn] + command, capture_output=True, text=True)
         print(f"{name:22s} exit {result.returncode}  {time.monotonic() - start:7.1f} s", flush=True)
