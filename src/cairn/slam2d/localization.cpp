@@ -815,6 +815,205 @@ struct Localizer2d::Impl {
     return std::nullopt;
   }
 
+  /// The health a scan leaves and why (HealthEvent's reason).
+  struct Verdict {
+    Health next = Health::kLost;
+    std::string reason;
+  };
+
+  /// 1. Tracking: odometry prediction, ICP against the map with the prediction as prior, then the
+  /// tracking check; the pose is given while still tracking.
+  void track(const ScanPoints& points, const io::LaserScan& scan, bool enough_points, LocalizationResult& result,
+             Verdict& verdict, Localizer2dSummary& summary) {
+    const core::SE2& odom = scan.T_odom_laser;
+    const auto track_start = Clock::now();
+    const core::SE2 predicted = T_map_laser * (previous_odom.inverse() * odom);
+    T_map_laser = predicted;
+    IcpResult tracked_match;
+    if (!enough_points) {
+      verdict.next = Health::kDegraded;
+      result.dead_reckoning = true;
+      verdict.reason = "too few returns to match (" + std::to_string(points.matching.size()) + "); following odometry";
+    } else {
+      tracked_match = match_tracked(points.matching, predicted, odom, result, verdict, summary);
+    }
+    summary.times.tracking_s += seconds_since(track_start);
+    // The tracking check: a confirmed match elsewhere that the tracked pose cannot match.
+    if (state == LocalizationState::kTracking && enough_points)
+      check_for_rival(points.matching, scan, tracked_match, result, verdict, summary);
+    if (state == LocalizationState::kTracking) {
+      result.localised = true;
+      result.T_map_laser = T_map_laser;
+    } else {
+      result.confidence = 0.0;
+      result.dead_reckoning = false;
+      result.covariance.setZero();
+    }
+  }
+
+  /// The tracking match from `predicted`: accepted (tracked_match_accepted) or a failure
+  /// (tracked_match_failed). Returns the ICP result.
+  IcpResult match_tracked(const std::vector<Eigen::Vector2d>& points, const core::SE2& predicted, const core::SE2& odom,
+                          LocalizationResult& result, Verdict& verdict, Localizer2dSummary& summary) {
+    // Unlike Slam2d, no retry from rotated guesses without the prior when few points match:
+    // against a whole building's map such a retry found another corridor (Intel's second
+    // half: a 1.1 m jump, then 30 scans 2 m off). A slipped odometry makes the match fail
+    // instead, and the search finds the robot again.
+    const IcpResult icp = match_icp(tracking_map, points, predicted, &predicted, matching.icp);
+    result.confidence = icp.inlier_fraction;
+    result.degeneracy = icp.degeneracy;
+    result.rms_m = icp.rms_m;
+    if (icp.inlier_fraction >= options.tracking_min_inlier_fraction) {
+      tracked_match_accepted(points, icp, result, verdict);
+    } else {
+      tracked_match_failed(icp, odom, result, verdict, summary);
+    }
+    return icp;
+  }
+
+  /// A tracking match good enough to follow: the pose and covariance are taken, free space is
+  /// checked and the health graded.
+  void tracked_match_accepted(const std::vector<Eigen::Vector2d>& points, const IcpResult& icp, LocalizationResult& result,
+                              Verdict& verdict) {
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(icp.hessian);
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive() && icp.hessian.determinant() > 0.0)
+      result.covariance = icp.hessian.inverse();
+    T_map_laser = icp.T_map_sensor;
+    failures_in_a_row = 0;
+    // What the scan sees where the map saw through (the submap holding the pose): a robot
+    // carried to a place whose scans still half fit where it was puts points there.
+    const int holding = submap_holding(icp.T_map_sensor.translation());
+    if (holding >= 0) {
+      const Submap& submap = submaps[static_cast<std::size_t>(holding)];
+      result.free_space_fraction = free_space_fraction(
+          map.submaps[static_cast<std::size_t>(submap_index[static_cast<std::size_t>(holding)])].grid, points,
+          submap.T_world_submap.inverse() * icp.T_map_sensor);
+    }
+    // Once contradicted, the pose stays suspect until a scan verifies it (the verification
+    // thresholds, free space included): the unexplained points of a wrong pose can move
+    // into space the map never saw while the robot turns (simulated kidnapping: 10 % in
+    // empty space for 14 scans, then none, at 0.70-0.72 inliers, 9 m off).
+    if (result.free_space_fraction > options.verification_max_free_fraction) {
+      contradicted = true;
+    } else if (icp.inlier_fraction >= options.verification_min_inlier_fraction && icp.rms_m <= matching.loop_max_rms_m &&
+               icp.degeneracy >= options.verification_min_degeneracy) {
+      contradicted = false;
+    }
+    if (icp.inlier_fraction < options.ok_min_inlier_fraction) {
+      verdict.next = Health::kDegraded;
+      verdict.reason = "few scan points agree with the map (inlier fraction " + fixed(icp.inlier_fraction, 3) + ")";
+    } else if (contradicted) {
+      verdict.next = Health::kDegraded;
+      verdict.reason = "scan points where the map saw empty space (" + fixed(100.0 * result.free_space_fraction, 1) +
+                       " % now); degraded until a scan verifies the pose";
+    } else if (icp.degeneracy < matching.degraded_min_degeneracy) {
+      verdict.next = Health::kDegraded;
+      verdict.reason = "degenerate geometry (degeneracy " + fixed(icp.degeneracy, 4) +
+                       "); odometry carries the unconstrained direction";
+    } else {
+      verdict.next = Health::kOk;
+      verdict.reason = "matching the map";
+    }
+  }
+
+  /// A failed tracking match: the pose follows odometry; `matching.lost_after_scans` failures in
+  /// a row start the search.
+  void tracked_match_failed(const IcpResult& icp, const core::SE2& odom, LocalizationResult& result, Verdict& verdict,
+                            Localizer2dSummary& summary) {
+    ++summary.tracking_failures;
+    ++failures_in_a_row;
+    verdict.next = Health::kDegraded;
+    result.dead_reckoning = true;
+    verdict.reason = "scan does not match the map (inlier fraction " + fixed(icp.inlier_fraction, 3) + ", " +
+                     std::to_string(failures_in_a_row) + " in a row); following odometry";
+    if (failures_in_a_row >= matching.lost_after_scans) {
+      // The prior for the search: where odometry says the robot is, from the last good match.
+      start_searching(T_map_laser * odom.inverse());
+      hypotheses.clear();
+      verdict.next = Health::kLost;
+      verdict.reason = "lost: the scan did not match the map " + std::to_string(failures_in_a_row) +
+                       " times in a row; searching the whole map";
+      failures_in_a_row = 0;
+    }
+  }
+
+  /// The tracking check (check_tracking); a confirmed rival the tracked pose cannot match ends
+  /// tracking, the tracked pose kept as a hypothesis.
+  void check_for_rival(const std::vector<Eigen::Vector2d>& points, const io::LaserScan& scan, const IcpResult& tracked_match,
+                       LocalizationResult& result, Verdict& verdict, Localizer2dSummary& summary) {
+    const core::SE2& odom = scan.T_odom_laser;
+    if (const auto contradiction = check_tracking(points, odom, scan.time, tracked_match, summary)) {
+      ++summary.tracking_contradicted;
+      start_searching(T_map_laser * odom.inverse());
+      Hypothesis tracked;
+      tracked.T_map_odom = T_map_laser * odom.inverse();
+      tracked.created_scan = scan_index;
+      hypotheses.insert(hypotheses.begin(), tracked);
+      verdict.next = Health::kLost;
+      verdict.reason = *contradiction;
+      result.covariance.setZero();
+    }
+  }
+
+  /// 2. Searching: hypotheses followed, global searches; no pose until one is accepted.
+  void search_while_lost(const std::vector<Eigen::Vector2d>& points, const io::LaserScan& scan, bool enough_points,
+                         LocalizationResult& result, Verdict& verdict, Localizer2dSummary& summary) {
+    verdict.next = Health::kLost;
+    verdict.reason =
+        summary.first_localised_scan ? "lost: searching the whole map" : "not localised yet: searching the whole map";
+    if (!enough_points) return;
+    if (const auto relocalisation = search_scan(points, scan.T_odom_laser, scan.time, summary))
+      accept_relocalisation(*relocalisation, result, verdict, summary);
+  }
+
+  /// An accepted relocalisation: tracking starts from its last match.
+  void accept_relocalisation(const Relocalisation& relocalisation, LocalizationResult& result, Verdict& verdict,
+                             Localizer2dSummary& summary) {
+    const LocalizationMatch& match = relocalisation.evidence.back();
+    state = LocalizationState::kTracking;
+    T_map_laser = match.T_map_laser;
+    failures_in_a_row = 0;
+    hypotheses.clear();
+    result.localised = true;
+    result.relocalised = true;
+    result.T_map_laser = match.T_map_laser;
+    result.confidence = match.inlier_fraction;
+    result.degeneracy = match.degeneracy;
+    result.rms_m = match.rms_m;
+    verdict.next = Health::kOk;
+    std::vector<std::size_t> scans;
+    for (const auto& e : relocalisation.evidence)
+      if (scans.empty() || scans.back() != e.scan) scans.push_back(e.scan);
+    verdict.reason = std::string(summary.first_localised_scan ? "relocalised" : "localised") + " after " +
+                     std::to_string(scan_index - searching_since + 1) + " scans of search: " +
+                     std::to_string(relocalisation.evidence.size()) + " agreeing verified matches on " +
+                     std::to_string(scans.size()) + " scans (last: submap " + std::to_string(match.submap) + ", score " +
+                     fixed(match.score, 3) + ", inlier fraction " + fixed(match.inlier_fraction, 3) + ")";
+    summary.relocalisations.push_back(relocalisation);
+  }
+
+  /// 3. Records the scan: a health event when the health changed (or a relocalisation was
+  /// accepted), the result's state and health, the counts; moves on to the next scan.
+  void record_scan(const io::LaserScan& scan, const Verdict& verdict, LocalizationResult& result, Localizer2dSummary& summary) {
+    const Health next = verdict.next;
+    if (next != health || result.relocalised) {
+      summary.health_events.push_back({scan.time, scan_index, health, next, verdict.reason});
+      health = next;
+    }
+    result.state = state;
+    result.health = next;
+    if (result.localised) {
+      ++summary.scans_localised;
+      if (!summary.first_localised_scan) summary.first_localised_scan = scan_index;
+    }
+    if (next == Health::kOk) ++summary.scans_ok;
+    if (next == Health::kDegraded) ++summary.scans_degraded;
+    if (next == Health::kLost) ++summary.scans_lost;
+    previous_odom = scan.T_odom_laser;
+    ++scan_index;
+    ++summary.scans;
+  }
+
   void start_searching(std::optional<core::SE2> prior) {
     state = LocalizationState::kSearching;
     contradicted = false;
@@ -883,166 +1082,20 @@ void Localizer2d::set_prior(const core::SE2& T_map_laser_guess, const core::SE2&
 
 LocalizationResult Localizer2d::add_scan(const io::LaserScan& scan) {
   Impl& m = *impl_;
-  const Slam2dOptions& o = m.matching;
   const auto start = Clock::now();
-  const ScanPoints points = preprocess_scan(scan, o.filter);
+  const ScanPoints points = preprocess_scan(scan, m.matching.filter);
   summary_.times.preprocess_s += seconds_since(start);
-  const core::SE2& odom = scan.T_odom_laser;
   LocalizationResult result;
   result.time = scan.time;
   result.matching_points = static_cast<int>(points.matching.size());
-  const bool enough_points = static_cast<int>(points.matching.size()) >= o.min_matching_points;
-  Health next = m.health;
-  std::string reason;
-
+  const bool enough_points = static_cast<int>(points.matching.size()) >= m.matching.min_matching_points;
+  Impl::Verdict verdict{m.health, {}};
   if (m.state == LocalizationState::kTracking) {
-    // 1. Tracking: odometry prediction, ICP against the map with the prediction as prior.
-    const auto track_start = Clock::now();
-    const core::SE2 predicted = m.T_map_laser * (m.previous_odom.inverse() * odom);
-    m.T_map_laser = predicted;
-    IcpResult tracked_match;
-    if (!enough_points) {
-      next = Health::kDegraded;
-      result.dead_reckoning = true;
-      reason = "too few returns to match (" + std::to_string(points.matching.size()) + "); following odometry";
-    } else {
-      // Unlike Slam2d, no retry from rotated guesses without the prior when few points match:
-      // against a whole building's map such a retry found another corridor (Intel's second
-      // half: a 1.1 m jump, then 30 scans 2 m off). A slipped odometry makes the match fail
-      // instead, and the search finds the robot again.
-      const IcpResult icp = match_icp(m.tracking_map, points.matching, predicted, &predicted, o.icp);
-      tracked_match = icp;
-      result.confidence = icp.inlier_fraction;
-      result.degeneracy = icp.degeneracy;
-      result.rms_m = icp.rms_m;
-      if (icp.inlier_fraction >= m.options.tracking_min_inlier_fraction) {
-        const Eigen::LDLT<Eigen::Matrix3d> ldlt(icp.hessian);
-        if (ldlt.info() == Eigen::Success && ldlt.isPositive() && icp.hessian.determinant() > 0.0)
-          result.covariance = icp.hessian.inverse();
-        m.T_map_laser = icp.T_map_sensor;
-        m.failures_in_a_row = 0;
-        // What the scan sees where the map saw through (the submap holding the pose): a robot
-        // carried to a place whose scans still half fit where it was puts points there.
-        const int holding = m.submap_holding(icp.T_map_sensor.translation());
-        if (holding >= 0) {
-          const Impl::Submap& submap = m.submaps[static_cast<std::size_t>(holding)];
-          result.free_space_fraction = free_space_fraction(
-              m.map.submaps[static_cast<std::size_t>(m.submap_index[static_cast<std::size_t>(holding)])].grid,
-              points.matching, submap.T_world_submap.inverse() * icp.T_map_sensor);
-        }
-        // Once contradicted, the pose stays suspect until a scan verifies it (the verification
-        // thresholds, free space included): the unexplained points of a wrong pose can move
-        // into space the map never saw while the robot turns (simulated kidnapping: 10 % in
-        // empty space for 14 scans, then none, at 0.70-0.72 inliers, 9 m off).
-        if (result.free_space_fraction > m.options.verification_max_free_fraction) {
-          m.contradicted = true;
-        } else if (icp.inlier_fraction >= m.options.verification_min_inlier_fraction && icp.rms_m <= o.loop_max_rms_m &&
-                   icp.degeneracy >= m.options.verification_min_degeneracy) {
-          m.contradicted = false;
-        }
-        if (icp.inlier_fraction < m.options.ok_min_inlier_fraction) {
-          next = Health::kDegraded;
-          reason = "few scan points agree with the map (inlier fraction " + fixed(icp.inlier_fraction, 3) + ")";
-        } else if (m.contradicted) {
-          next = Health::kDegraded;
-          reason = "scan points where the map saw empty space (" + fixed(100.0 * result.free_space_fraction, 1) +
-                   " % now); degraded until a scan verifies the pose";
-        } else if (icp.degeneracy < o.degraded_min_degeneracy) {
-          next = Health::kDegraded;
-          reason = "degenerate geometry (degeneracy " + fixed(icp.degeneracy, 4) +
-                   "); odometry carries the unconstrained direction";
-        } else {
-          next = Health::kOk;
-          reason = "matching the map";
-        }
-      } else {
-        ++summary_.tracking_failures;
-        ++m.failures_in_a_row;
-        next = Health::kDegraded;
-        result.dead_reckoning = true;
-        reason = "scan does not match the map (inlier fraction " + fixed(icp.inlier_fraction, 3) + ", " +
-                 std::to_string(m.failures_in_a_row) + " in a row); following odometry";
-        if (m.failures_in_a_row >= o.lost_after_scans) {
-          // The prior for the search: where odometry says the robot is, from the last good match.
-          m.start_searching(m.T_map_laser * odom.inverse());
-          m.hypotheses.clear();
-          next = Health::kLost;
-          reason = "lost: the scan did not match the map " + std::to_string(m.failures_in_a_row) +
-                   " times in a row; searching the whole map";
-          m.failures_in_a_row = 0;
-        }
-      }
-    }
-    summary_.times.tracking_s += seconds_since(track_start);
-    // The tracking check: a confirmed match elsewhere that the tracked pose cannot match.
-    if (m.state == LocalizationState::kTracking && enough_points) {
-      if (const auto contradiction = m.check_tracking(points.matching, odom, scan.time, tracked_match, summary_)) {
-        ++summary_.tracking_contradicted;
-        m.start_searching(m.T_map_laser * odom.inverse());
-        Impl::Hypothesis tracked;
-        tracked.T_map_odom = m.T_map_laser * odom.inverse();
-        tracked.created_scan = m.scan_index;
-        m.hypotheses.insert(m.hypotheses.begin(), tracked);
-        next = Health::kLost;
-        reason = *contradiction;
-        result.covariance.setZero();
-      }
-    }
-    if (m.state == LocalizationState::kTracking) {
-      result.localised = true;
-      result.T_map_laser = m.T_map_laser;
-    } else {
-      result.confidence = 0.0;
-      result.dead_reckoning = false;
-      result.covariance.setZero();
-    }
+    m.track(points, scan, enough_points, result, verdict, summary_);
   } else {
-    // 2. Searching: hypotheses followed, global searches; no pose until one is accepted.
-    next = Health::kLost;
-    reason = summary_.first_localised_scan ? "lost: searching the whole map" : "not localised yet: searching the whole map";
-    if (enough_points) {
-      if (const auto relocalisation = m.search_scan(points.matching, odom, scan.time, summary_)) {
-        const LocalizationMatch& match = relocalisation->evidence.back();
-        m.state = LocalizationState::kTracking;
-        m.T_map_laser = match.T_map_laser;
-        m.failures_in_a_row = 0;
-        m.hypotheses.clear();
-        result.localised = true;
-        result.relocalised = true;
-        result.T_map_laser = match.T_map_laser;
-        result.confidence = match.inlier_fraction;
-        result.degeneracy = match.degeneracy;
-        result.rms_m = match.rms_m;
-        next = Health::kOk;
-        std::vector<std::size_t> scans;
-        for (const auto& e : relocalisation->evidence)
-          if (scans.empty() || scans.back() != e.scan) scans.push_back(e.scan);
-        reason = std::string(summary_.first_localised_scan ? "relocalised" : "localised") + " after " +
-                 std::to_string(m.scan_index - m.searching_since + 1) + " scans of search: " +
-                 std::to_string(relocalisation->evidence.size()) + " agreeing verified matches on " +
-                 std::to_string(scans.size()) + " scans (last: submap " + std::to_string(match.submap) + ", score " +
-                 fixed(match.score, 3) + ", inlier fraction " + fixed(match.inlier_fraction, 3) + ")";
-        summary_.relocalisations.push_back(*relocalisation);
-      }
-    }
+    m.search_while_lost(points.matching, scan, enough_points, result, verdict, summary_);
   }
-
-  if (next != m.health || result.relocalised) {
-    summary_.health_events.push_back({scan.time, m.scan_index, m.health, next, reason});
-    m.health = next;
-  }
-  result.state = m.state;
-  result.health = next;
-  if (result.localised) {
-    ++summary_.scans_localised;
-    if (!summary_.first_localised_scan) summary_.first_localised_scan = m.scan_index;
-  }
-  if (next == Health::kOk) ++summary_.scans_ok;
-  if (next == Health::kDegraded) ++summary_.scans_degraded;
-  if (next == Health::kLost) ++summary_.scans_lost;
-  m.previous_odom = odom;
-  ++m.scan_index;
-  ++summary_.scans;
+  m.record_scan(scan, verdict, result, summary_);
   const double scan_s = seconds_since(start);
   summary_.total_s += scan_s;
   summary_.max_scan_s = std::max(summary_.max_scan_s, scan_s);

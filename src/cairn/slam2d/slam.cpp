@@ -94,6 +94,33 @@ struct ScanRecord {
   int segment = 0;
 };
 
+/// What the stages of one Slam2d::add_scan share: the scan, its points, its front-end pose as it
+/// is worked out, the verdict on its health, and its record.
+struct ScanWork {
+  ScanWork(const io::LaserScan& laser_scan, ScanPoints scan_points, std::size_t scan_index)
+      : scan(laser_scan), points(std::move(scan_points)), index(scan_index), T_local_laser(laser_scan.T_odom_laser),
+        predicted(laser_scan.T_odom_laser) {
+    record.time = laser_scan.time;
+  }
+
+  const io::LaserScan& scan;
+  ScanPoints points;
+  std::size_t index = 0;  ///< of the scan (into Impl::scans)
+  ScanRecord record;
+  core::SE2 T_local_laser;  ///< front-end pose: the prediction, then the match
+  core::SE2 predicted;      ///< odometry prediction
+  Eigen::Matrix3d match_hessian = Eigen::Matrix3d::Zero();  ///< scan term of the accepted match
+  bool matched = false;
+  bool restarted = false;  ///< the accepted match came from an ICP restart away from the prediction
+  std::string relocalised_reason;  ///< set when the scan was relocalised in the recent map
+  bool too_few_returns = false;
+  Health next = Health::kOk;
+  std::string reason;
+  bool start_segment = false;  ///< this scan (re)seeds the current segment's map
+  SegmentInfo* segment_info = nullptr;  ///< the current segment's (after the health stages)
+  bool new_keyframe = false;
+};
+
 struct Edge {
   int from = 0;
   int to = 0;
@@ -196,6 +223,18 @@ bool Slam2dOptions::is_valid(std::string* error) const {
   if (error != nullptr) *error = text;
   return text.empty();
 }
+
+namespace {
+// Whether a match's scan term (Hessian in (x, y, theta), 1/sigma^2 units) holds the position to
+// within `sigma_m` in every direction: the largest eigenvalue of the position block of its inverse.
+bool pins_position(const Eigen::Matrix3d& hessian, double sigma_m) {
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(hessian);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(hessian.determinant() > 0.0)) return false;
+  const Eigen::Matrix2d position = hessian.inverse().topLeftCorner<2, 2>();
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(position, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+  return std::isfinite(largest) && largest <= sigma_m * sigma_m;
+}
+}  // namespace
 
 struct Slam2d::Impl {
   Slam2dOptions options;
@@ -685,82 +724,100 @@ struct Slam2d::Impl {
     // (3) loop searches within the group, all from the token budget; (4) the round-robin
     // whole-submap search (finds the place when the odometry link is wrong) at a fixed cadence.
     // Each windowed merge search goes to the nearest submap of the other group(s).
+    if (!others.empty()) plan_merge_searches(current, group, others, plan, summary);
+    if (k % options.loop_search_every_n_keyframes == 0) plan_loop_searches(k, group, plan, summary);
+    plan_global_search(current, others, plan, summary);
+    return plan;
+  }
+
+  // The submap of `others` (of `target_group`; -1: any) not `chosen` yet whose centre lies
+  // nearest `guess`, within merge_max_distance_m; -1 if none.
+  int nearest_submap(const core::SE2& guess, int target_group, const std::vector<int>& others,
+                     const std::vector<int>& chosen) const {
+    int best = -1;
+    double best_distance = options.merge_max_distance_m;
+    for (const int s : others) {
+      const Submap& submap = submaps[static_cast<std::size_t>(s)];
+      if (target_group >= 0 && group_of(submap.segment) != target_group) continue;
+      if (std::find(chosen.begin(), chosen.end(), s) != chosen.end()) continue;
+      const double distance = (submap_centre_world(submap) - guess.translation()).norm();
+      if (distance <= best_distance) {
+        best = s;
+        best_distance = distance;
+      }
+    }
+    return best;
+  }
+
+  // Priorities (1) and (2) of plan_searches: the windowed merge searches of keyframe `current`
+  // (of `group`) in the submaps of other groups (`others`).
+  void plan_merge_searches(const Keyframe& current, int group, const std::vector<int>& others, std::vector<PlannedSearch>& plan,
+                           Slam2dSummary& summary) {
     std::vector<int> chosen;
-    auto nearest = [&](const core::SE2& guess, int target_group) {
-      int best = -1;
-      double best_distance = options.merge_max_distance_m;
-      for (const int s : others) {
-        const Submap& submap = submaps[static_cast<std::size_t>(s)];
-        if (target_group >= 0 && group_of(submap.segment) != target_group) continue;
-        if (std::find(chosen.begin(), chosen.end(), s) != chosen.end()) continue;
-        const double distance = (submap_centre_world(submap) - guess.translation()).norm();
-        if (distance <= best_distance) {
-          best = s;
-          best_distance = distance;
-        }
-      }
-      return best;
-    };
-    if (!others.empty()) {
-      // (1) The pending merges of this group, best supported first, at most
-      // merge_searches_per_keyframe of them.
-      std::vector<const PendingMerge*> mine;
-      for (const PendingMerge& pending : pending_merges)
-        if (group_of(pending.group_b) == group && group_of(pending.group_a) != group) mine.push_back(&pending);
-      std::stable_sort(mine.begin(), mine.end(), [](const PendingMerge* a, const PendingMerge* b) {
-        return a->candidates.size() - static_cast<std::size_t>(a->misses) > b->candidates.size() - static_cast<std::size_t>(b->misses);
-      });
-      if (mine.size() > static_cast<std::size_t>(options.merge_searches_per_keyframe))
-        mine.resize(static_cast<std::size_t>(options.merge_searches_per_keyframe));
-      // Each in the two nearest submaps where it puts the keyframe (submaps overlap by half: the
-      // place may lie at the edge of the nearest).
-      for (const PendingMerge* hypothesis : mine) {
-        const PendingMerge& pending = *hypothesis;
-        const core::SE2 guess = pending.delta * current.T_world_laser;
-        for (int test = 0; test < 2; ++test) {
-          const int s = nearest(guess, group_of(pending.group_a));
-          if (s < 0 || !spend(1.0, summary)) break;
-          chosen.push_back(s);
-          plan.push_back({s, true, false, guess, pending.id});
-          ++summary.merge_searches;
-        }
-      }
-      // (2) Around the estimate (the odometry link), merge_searches_per_keyframe searches.
-      for (int estimate = 0; estimate < options.merge_searches_per_keyframe; ++estimate) {
-        const int s = nearest(current.T_world_laser, -1);
+    // (1) The pending merges of this group, best supported first, at most
+    // merge_searches_per_keyframe of them.
+    std::vector<const PendingMerge*> mine;
+    for (const PendingMerge& pending : pending_merges)
+      if (group_of(pending.group_b) == group && group_of(pending.group_a) != group) mine.push_back(&pending);
+    std::stable_sort(mine.begin(), mine.end(), [](const PendingMerge* a, const PendingMerge* b) {
+      return a->candidates.size() - static_cast<std::size_t>(a->misses) > b->candidates.size() - static_cast<std::size_t>(b->misses);
+    });
+    if (mine.size() > static_cast<std::size_t>(options.merge_searches_per_keyframe))
+      mine.resize(static_cast<std::size_t>(options.merge_searches_per_keyframe));
+    // Each in the two nearest submaps where it puts the keyframe (submaps overlap by half: the
+    // place may lie at the edge of the nearest).
+    for (const PendingMerge* hypothesis : mine) {
+      const PendingMerge& pending = *hypothesis;
+      const core::SE2 guess = pending.delta * current.T_world_laser;
+      for (int test = 0; test < 2; ++test) {
+        const int s = nearest_submap(guess, group_of(pending.group_a), others, chosen);
         if (s < 0 || !spend(1.0, summary)) break;
         chosen.push_back(s);
-        plan.push_back({s, true, false, current.T_world_laser, -1});
+        plan.push_back({s, true, false, guess, pending.id});
         ++summary.merge_searches;
       }
     }
-    // (3) Loop searches within the group, every n-th keyframe: the nearest finished submaps by
-    // the estimate. The nearest are usually the ones just built on the way here; keep the
-    // nearest of those and fill the rest with submaps from earlier visits.
-    if (k % options.loop_search_every_n_keyframes == 0) {
-      std::vector<std::pair<double, int>> nearby;
-      for (int s = 0; s < static_cast<int>(submaps.size()); ++s) {
-        const Submap& submap = submaps[static_cast<std::size_t>(s)];
-        if (!searchable(submap, k) || group_of(submap.segment) != group) continue;
-        const double distance = (submap_centre_world(submap) - current.T_world_laser.translation()).norm();
-        if (distance <= options.loop_max_distance_m) nearby.emplace_back(distance, s);
-      }
-      std::sort(nearby.begin(), nearby.end());
-      int taken = 0;
-      int recent = 0;
-      for (const auto& [distance, s] : nearby) {
-        if (taken >= options.loop_max_submaps_per_search) break;
-        const Keyframe& anchor = keyframes[static_cast<std::size_t>(submaps[static_cast<std::size_t>(s)].anchor)];
-        const bool is_recent = current.path_length_m - anchor.path_length_m < 2.0 * options.loop_max_distance_m;
-        if (is_recent && recent++ >= 1) continue;
-        if (!spend(1.0, summary)) break;
-        ++taken;
-        plan.push_back({s, false, false, current.T_world_laser, -1});
-        ++summary.loop_searches;
-      }
+    // (2) Around the estimate (the odometry link), merge_searches_per_keyframe searches.
+    for (int estimate = 0; estimate < options.merge_searches_per_keyframe; ++estimate) {
+      const int s = nearest_submap(current.T_world_laser, -1, others, chosen);
+      if (s < 0 || !spend(1.0, summary)) break;
+      chosen.push_back(s);
+      plan.push_back({s, true, false, current.T_world_laser, -1});
+      ++summary.merge_searches;
     }
-    // (4) One search over a whole submap of another group every global_search_every_n_keyframes
-    // keyframes, round-robin over them, outside the token budget (a fixed cadence bounds it).
+  }
+
+  // (3) Loop searches within the group, every n-th keyframe: the nearest finished submaps by
+  // the estimate. The nearest are usually the ones just built on the way here; keep the
+  // nearest of those and fill the rest with submaps from earlier visits.
+  void plan_loop_searches(int k, int group, std::vector<PlannedSearch>& plan, Slam2dSummary& summary) {
+    const Keyframe& current = keyframes[static_cast<std::size_t>(k)];
+    std::vector<std::pair<double, int>> nearby;
+    for (int s = 0; s < static_cast<int>(submaps.size()); ++s) {
+      const Submap& submap = submaps[static_cast<std::size_t>(s)];
+      if (!searchable(submap, k) || group_of(submap.segment) != group) continue;
+      const double distance = (submap_centre_world(submap) - current.T_world_laser.translation()).norm();
+      if (distance <= options.loop_max_distance_m) nearby.emplace_back(distance, s);
+    }
+    std::sort(nearby.begin(), nearby.end());
+    int taken = 0;
+    int recent = 0;
+    for (const auto& [distance, s] : nearby) {
+      if (taken >= options.loop_max_submaps_per_search) break;
+      const Keyframe& anchor = keyframes[static_cast<std::size_t>(submaps[static_cast<std::size_t>(s)].anchor)];
+      const bool is_recent = current.path_length_m - anchor.path_length_m < 2.0 * options.loop_max_distance_m;
+      if (is_recent && recent++ >= 1) continue;
+      if (!spend(1.0, summary)) break;
+      ++taken;
+      plan.push_back({s, false, false, current.T_world_laser, -1});
+      ++summary.loop_searches;
+    }
+  }
+
+  // (4) One search over a whole submap of another group every global_search_every_n_keyframes
+  // keyframes, round-robin over them, outside the token budget (a fixed cadence bounds it).
+  void plan_global_search(const Keyframe& current, const std::vector<int>& others, std::vector<PlannedSearch>& plan,
+                          Slam2dSummary& summary) {
     ++keyframes_since_global;
     if (!others.empty() && keyframes_since_global >= options.global_search_every_n_keyframes) {
       keyframes_since_global = 0;
@@ -768,7 +825,6 @@ struct Slam2d::Impl {
       plan.push_back({s, true, true, current.T_world_laser, -1});
       ++summary.global_searches;
     }
-    return plan;
   }
 
   void add_loop(int c, Slam2dSummary& summary) {
@@ -803,20 +859,8 @@ struct Slam2d::Impl {
     const core::SE2& T_world_keyframe = keyframes[static_cast<std::size_t>(candidate.keyframe)].T_world_laser;
     const core::SE2 delta = implied_pose(candidate) * T_world_keyframe.inverse();
     candidate.accepted = false;
-    std::size_t p = 0;
-    for (; p < pending_merges.size(); ++p) {
-      const PendingMerge& pending = pending_merges[p];
-      if (group_of(pending.group_a) == group_a && group_of(pending.group_b) == group_b &&
-          agree(pending.delta * T_world_keyframe, delta * T_world_keyframe))
-        break;
-    }
-    if (p == pending_merges.size()) pending_merges.push_back({next_hypothesis++, group_a, group_b, delta, {}, {}, 0, 0});
+    const std::size_t p = add_merge_support(c, candidate.keyframe, group_a, group_b, delta, T_world_keyframe);
     PendingMerge& pending = pending_merges[p];
-    if (std::find(pending.keyframes.begin(), pending.keyframes.end(), candidate.keyframe) == pending.keyframes.end()) {
-      pending.candidates.push_back(c);
-      pending.keyframes.push_back(candidate.keyframe);
-      pending.misses_in_a_row = 0;
-    }
     // Support: agreeing matches from distinct keyframes along a stretch of path long enough to
     // leave a room and see its surroundings (one room may have a twin the map holds and the true
     // one it does not). The path between consecutive supporting keyframes counts, each gap up to
@@ -839,16 +883,9 @@ struct Slam2d::Impl {
                          std::to_string(options.merge_confirmations) + " over " + std::to_string(needed_m) + " m)";
       return;
     }
-    // Competing placements: another live hypothesis of the same groups with support of its own.
-    // Odometry is evidence scans cannot give: a placement near the odometry link is not held up
-    // by one far from it (on a floor plan symmetric under a half turn the twin placement is
-    // supported by the scans as long as the true one), only by another near it.
-    for (const PendingMerge& other : pending_merges) {
-      if (&other == &pending || other.candidates.size() < 2) continue;
-      if (group_of(other.group_a) != group_a || group_of(other.group_b) != group_b) continue;
-      if (corroborated && !near_odometry(other.delta, T_world_keyframe)) continue;
+    if (const PendingMerge* other = competing_placement(pending, group_a, group_b, corroborated, T_world_keyframe)) {
       candidate.reason = "verified across segments and confirmed, but another placement of the same segments is also "
-                         "supported (hypothesis " + std::to_string(other.id) + "); waiting until one is refuted";
+                         "supported (hypothesis " + std::to_string(other->id) + "); waiting until one is refuted";
       return;
     }
     // The uniqueness test costs a search of every submap: after a refusal, the group waits for
@@ -873,6 +910,44 @@ struct Slam2d::Impl {
     candidate.reason = "verified across segments, but the place is ambiguous over the whole map: another submap scores "
                        "within the margin elsewhere (symmetric or repeated structure); not merged";
     ++summary.merges_refused_as_ambiguous;
+  }
+
+  // The pending merge of groups `group_a` and `group_b` whose placement agrees with `delta` at
+  // `T_world_keyframe` (a new one if none does) gains candidate `c` of `keyframe` as support,
+  // once per keyframe. Returns its index in pending_merges.
+  std::size_t add_merge_support(int c, int keyframe, int group_a, int group_b, const core::SE2& delta,
+                                const core::SE2& T_world_keyframe) {
+    std::size_t p = 0;
+    for (; p < pending_merges.size(); ++p) {
+      const PendingMerge& pending = pending_merges[p];
+      if (group_of(pending.group_a) == group_a && group_of(pending.group_b) == group_b &&
+          agree(pending.delta * T_world_keyframe, delta * T_world_keyframe))
+        break;
+    }
+    if (p == pending_merges.size()) pending_merges.push_back({next_hypothesis++, group_a, group_b, delta, {}, {}, 0, 0});
+    PendingMerge& pending = pending_merges[p];
+    if (std::find(pending.keyframes.begin(), pending.keyframes.end(), keyframe) == pending.keyframes.end()) {
+      pending.candidates.push_back(c);
+      pending.keyframes.push_back(keyframe);
+      pending.misses_in_a_row = 0;
+    }
+    return p;
+  }
+
+  // Competing placements: another live hypothesis of the same groups with support of its own.
+  // Odometry is evidence scans cannot give: a placement near the odometry link is not held up
+  // by one far from it (on a floor plan symmetric under a half turn the twin placement is
+  // supported by the scans as long as the true one), only by another near it. Returns the first
+  // such rival of `pending`, or nullptr.
+  const PendingMerge* competing_placement(const PendingMerge& pending, int group_a, int group_b, bool corroborated,
+                                          const core::SE2& T_world_keyframe) const {
+    for (const PendingMerge& other : pending_merges) {
+      if (&other == &pending || other.candidates.size() < 2) continue;
+      if (group_of(other.group_a) != group_a || group_of(other.group_b) != group_b) continue;
+      if (corroborated && !near_odometry(other.delta, T_world_keyframe)) continue;
+      return &other;
+    }
+    return nullptr;
   }
 
   // Whether every segment link on the odometry chain between segments `a` and `b` (the starts of
@@ -1085,24 +1160,401 @@ struct Slam2d::Impl {
     }
   }
 
+  // ---- The stages of Slam2d::add_scan, in order.
+
+  /// Whether the scan has enough matching points to be matched.
+  bool enough_points(const ScanWork& w) const {
+    return static_cast<int>(w.points.matching.size()) >= options.min_matching_points;
+  }
+
+  /// 1. Local pose: odometry prediction, then ICP against the local map. The first scan is the
+  /// map's origin.
+  void predict_and_match(ScanWork& w) {
+    if (have_previous) {
+      w.predicted = previous_local * (previous_odom.inverse() * w.scan.T_odom_laser);
+      w.T_local_laser = w.predicted;
+      if (!local_map.empty() && enough_points(w)) match_local_map(w);
+    } else {
+      w.matched = true;
+      w.record.inlier_fraction = 1.0;
+      w.record.degeneracy = 0.5;
+    }
+  }
+
+  /// ICP against the local map with the prediction as prior (restarted when it fits poorly); the
+  /// match is accepted above lost_inlier_fraction.
+  void match_local_map(ScanWork& w) {
+    IcpResult icp = match_icp(local_map, w.points.matching, w.predicted, &w.predicted, options.icp);
+    if (icp.inlier_fraction < options.degraded_min_inlier_fraction) restart_icp(w, icp);
+    w.record.inlier_fraction = icp.inlier_fraction;
+    w.record.degeneracy = icp.degeneracy;
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(icp.hessian);
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive() && icp.hessian.determinant() > 0.0)
+      w.record.covariance = icp.hessian.inverse();
+    if (icp.inlier_fraction >= options.lost_inlier_fraction) {
+      w.T_local_laser = icp.T_map_sensor;
+      w.match_hessian = icp.hessian;
+      w.matched = true;
+    }
+  }
+
+  /// ICP restarts from rotated guesses without the prior; a clearly better fit replaces `icp`.
+  void restart_icp(ScanWork& w, IcpResult& icp) const {
+    // The odometry prediction may be what is wrong (a stale, slipping or jumping odometry
+    // reading): restart ICP from rotated guesses, without the prior, and keep a clearly
+    // better fit. Without the prior nothing holds the pose along a direction the scan does
+    // not constrain: a fit that ended farther than ICP's first search radius from the
+    // prediction must pin the position (standard deviation from its Hessian within that
+    // radius) to be a place rather than a slide. Kidnapping seed 4 of
+    // bench/slam2d_recovery.py: a restart slid 6.2 m along the corridor (position sigma
+    // 0.71 m), into a look-alike room where the next scans matched at 98 %, and 9 false loop
+    // closures followed; MIT CSAIL's odometry jump at scan 1584 is a restart of 2.7 m pinned
+    // to 0.025 m, and is kept.
+    for (const double offset : {-0.35, -0.2, -0.1, 0.1, 0.2, 0.35}) {
+      const core::SE2 guess(w.predicted.so2() * core::SO2(offset), w.predicted.translation());
+      const IcpResult alternative = match_icp(local_map, w.points.matching, guess, nullptr, options.icp);
+      const bool near = (alternative.T_map_sensor.translation() - w.predicted.translation()).norm() <= options.icp.max_correspondence_m;
+      if (alternative.inlier_fraction > icp.inlier_fraction + 0.1 &&
+          (near || pins_position(alternative.hessian, options.icp.max_correspondence_m))) {
+        icp = alternative;
+        w.restarted = true;
+      }
+    }
+  }
+
+  /// A failed match may be a jump or slip of the odometry: search the recent map over the loop
+  /// window, verified like a loop closure (every failed scan until lost, then every 5th).
+  void relocalise_after_failure(ScanWork& w, Slam2dSummary& summary) const {
+    if (!(!w.matched && have_previous && enough_points(w) &&
+          (bad_matches_in_a_row < options.lost_after_scans || bad_matches_in_a_row % 5 == 0)))
+      return;
+    LoopCandidate candidate;
+    // A twin of the place farther than the window is excluded by the odometry (a slip of more
+    // than the window is not one); within it the verification's ambiguity search covers it.
+    const std::optional<core::SE2> T = relocalise_locally(w.points.matching, w.T_local_laser, candidate);
+    if (T) {
+      w.T_local_laser = *T;
+      w.matched = true;
+      w.record.inlier_fraction = candidate.inlier_fraction;
+      w.record.degeneracy = candidate.degeneracy;
+      ++summary.relocalisations;
+      w.relocalised_reason = "relocalised in the recent map (score " + std::to_string(candidate.score) + ", inlier fraction " +
+                             std::to_string(candidate.inlier_fraction) + ", moved " +
+                             std::to_string((T->translation() - previous_local.translation()).norm()) + " m from the last pose)";
+    }
+  }
+
+  /// Notes where a stretch of failed matches begins; when matching resumes after one, the
+  /// stretch is re-placed (replace_failed_stretch).
+  void track_failed_stretch(const ScanWork& w) {
+    if (have_previous && !w.matched && enough_points(w)) {
+      if (!failed_since_scan) {
+        failed_since_scan = w.index;
+        failed_since_keyframe = keyframes.size();
+      }
+    } else if (w.matched && failed_since_scan) {
+      replace_failed_stretch(w.T_local_laser * w.predicted.inverse());
+    }
+  }
+
+  /// 2. Health. A scan with too few returns to match (open space beyond the sensor's range)
+  /// is no evidence of being lost: the pose follows odometry and the state says degraded.
+  void assess_health(ScanWork& w) {
+    w.too_few_returns = have_previous && static_cast<int>(w.points.matching.size()) < options.min_matching_points;
+    if (w.too_few_returns) {
+      // leave the failed-match counter as it is
+    } else if (!w.matched) {
+      ++bad_matches_in_a_row;
+      failed_inlier_sum += w.record.inlier_fraction;
+    } else {
+      bad_matches_in_a_row = 0;
+      failed_inlier_sum = 0.0;
+    }
+    if (w.too_few_returns) {
+      w.next = Health::kDegraded;
+      w.reason = "too few returns to match (" + std::to_string(w.points.matching.size()) + "); following odometry";
+    } else if (!w.matched || w.record.inlier_fraction < options.degraded_min_inlier_fraction) {
+      w.next = Health::kDegraded;
+      w.reason = "few scan points agree with the local map (inlier fraction " + std::to_string(w.record.inlier_fraction) + ")";
+    } else if (w.record.degeneracy < options.degraded_min_degeneracy) {
+      w.next = Health::kDegraded;
+      w.reason = "degenerate geometry (degeneracy " + std::to_string(w.record.degeneracy) +
+                 "); odometry carries the unconstrained direction";
+    }
+    if (w.next == Health::kOk && health == Health::kLost) w.reason = "matching recovered in segment " + std::to_string(segment);
+    if (!w.relocalised_reason.empty()) {
+      w.next = Health::kDegraded;  // one scan: the next one matching normally brings it back to ok
+      w.reason = w.relocalised_reason;
+    }
+  }
+
+  /// Lost: map on from this scan, in a new segment (or the current one restarted when it holds
+  /// too little to keep). The segment is on probation until `segment_confirm_scans` scans in a
+  /// row match its map well: a seed that does not match its successors (a burst of garbage, a
+  /// scan of people crowding the sensor) is dropped from the map and the next scan seeds again.
+  void supervise_segment(ScanWork& w, Slam2dSummary& summary) {
+    const bool judged = have_previous && !w.too_few_returns;
+    const std::string segment_name = "map segment " + std::to_string(segment);
+    if (probation > 0 && judged) {
+      judge_probation(w, segment_name, summary);
+    } else if (bad_matches_in_a_row >= options.lost_after_scans) {
+      restart_after_loss(w, segment_name, summary);
+    }
+    if (w.start_segment) {
+      local_map_start = static_cast<int>(keyframes.size());
+      failed_since_scan.reset();  // the failed stretch keeps its odometry
+    }
+  }
+
+  /// A scan judged while the segment is on probation: a good match counts towards establishing
+  /// it; a poor one drops the seed, and this scan seeds the segment again.
+  void judge_probation(ScanWork& w, const std::string& segment_name, Slam2dSummary& summary) {
+    const bool good = w.matched && w.record.inlier_fraction >= options.degraded_min_inlier_fraction;
+    bad_matches_in_a_row = 0;
+    if (good && --probation == 0) {
+      if (w.next == Health::kOk)
+        w.reason = segment_name + " established: " + std::to_string(options.segment_confirm_scans) + " scans matched its map";
+    } else if (good) {
+      w.next = Health::kLost;
+      w.reason = segment_name + " on probation: " + std::to_string(probation) + " more matching scans needed";
+    } else {
+      for (std::size_t k = static_cast<std::size_t>(local_map_start); k < keyframes.size(); ++k) {
+        keyframes[k].hits.clear();
+        keyframes[k].misses.clear();
+      }
+      w.next = Health::kLost;
+      w.start_segment = true;
+      probation = options.segment_confirm_scans;
+      summary.segments[static_cast<std::size_t>(segment)].odometry_link_trusted = true;
+      w.reason = segment_name + " on probation: this scan does not match its seed; the seed is dropped and this scan seeds it";
+    }
+  }
+
+  /// Matching failed lost_after_scans times in a row: a new segment when the current one holds
+  /// enough to keep (start_new_segment), else the current one restarted; on probation either way.
+  void restart_after_loss(ScanWork& w, const std::string& segment_name, Slam2dSummary& summary) {
+    w.next = Health::kLost;
+    w.start_segment = true;
+    probation = options.segment_confirm_scans;
+    w.reason = "scan matching failed " + std::to_string(bad_matches_in_a_row) + " times in a row; ";
+    // The keyframes of the current segment that carry points since it (re)started.
+    int mapped = 0;
+    for (std::size_t k = static_cast<std::size_t>(local_map_start); k < keyframes.size(); ++k)
+      if (!keyframes[k].hits.empty()) ++mapped;
+    if (mapped >= options.min_segment_keyframes) {
+      start_new_segment(w, summary);
+    } else {
+      w.reason += segment_name + " restarted from this scan (it had " + std::to_string(mapped) + " mapped keyframes)";
+    }
+    bad_matches_in_a_row = 0;
+    failed_inlier_sum = 0.0;
+  }
+
+  /// Closes the current segment (its submaps are finished as they are, searchable from now) and
+  /// starts a new one from this scan.
+  void start_new_segment(ScanWork& w, Slam2dSummary& summary) {
+    const int k = static_cast<int>(keyframes.size());
+    join_job(summary);
+    for (auto& submap : submaps)
+      if (!submap.finished) finish_submap(submap);
+    segment = static_cast<int>(summary.segments.size());
+    segment_parent.push_back(segment);
+    segment_first_keyframe = k;
+    SegmentInfo info;
+    info.id = segment;
+    info.first_scan = w.index;
+    info.first_keyframe = k;
+    info.merged_with = segment;
+    info.started_because = w.reason + "lost at scan " + std::to_string(w.index);
+    // The failed matches still explained part of each scan at the odometry's prediction: the
+    // robot is about where odometry says and the map fits poorly there. Otherwise trusted only
+    // once a seed is dropped on probation (below).
+    info.odometry_link_trusted =
+        failed_inlier_sum / static_cast<double>(std::max(1, bad_matches_in_a_row)) >= options.segment_trusted_link_min_inlier_fraction;
+    summary.segments.push_back(info);
+    w.reason += "new map segment " + std::to_string(segment) + " started from this scan";
+  }
+
+  /// Records the scan's health (a health event when it changed) and counts the scan.
+  void record_health(ScanWork& w, Slam2dSummary& summary) {
+    set_health(w.next, w.index, w.scan.time, w.reason, summary);
+    w.record.health = w.next;
+    w.record.segment = segment;
+    if (!w.matched && !w.too_few_returns && have_previous) lost_since_keyframe = true;
+    if (w.next == Health::kOk) ++summary.scans_ok;
+    if (w.next == Health::kDegraded) ++summary.scans_degraded;
+    if (w.next == Health::kLost) ++summary.scans_lost;
+    w.segment_info = &summary.segments[static_cast<std::size_t>(segment)];
+    ++w.segment_info->scans;
+  }
+
+  /// Moves the front end on to this scan: the path travelled, the previous pose and odometry.
+  void advance(const ScanWork& w) {
+    if (have_previous) {
+      const double step = (w.T_local_laser.translation() - previous_local.translation()).norm();
+      path_length_m += step;
+      w.segment_info->path_length_m += step;
+    }
+    previous_local = w.T_local_laser;
+    previous_odom = w.scan.T_odom_laser;
+    have_previous = true;
+  }
+
+  /// 3. Keyframe? The first scan, a (re)seeded segment, or far enough from the last keyframe.
+  bool keyframe_due(const ScanWork& w) const {
+    bool new_keyframe = keyframes.empty() || w.start_segment;
+    if (!new_keyframe) {
+      const Keyframe& last = keyframes.back();
+      const core::SE2 delta = last.T_local_laser.inverse() * w.T_local_laser;
+      new_keyframe = delta.translation().norm() >= options.keyframe_distance_m || std::abs(delta.angle()) >= options.keyframe_angle_rad;
+    }
+    return new_keyframe;
+  }
+
+  /// A new keyframe: the local map, the submaps, the optimisation and the searches follow it.
+  void add_keyframe(ScanWork& w, Slam2dSummary& summary) {
+    const int k = make_keyframe(w, summary);
+    // The local map (front-end frame) is rebuilt first, while the previous keyframe's background
+    // job still runs on the other core: it reads only front-end poses and points, which the job's
+    // results (loop closures, merges: global poses) never change, so the order does not matter
+    // to the result. On MIT CSAIL (a keyframe per scan) the front end used to wait for the job
+    // first and rebuild the map afterwards, while the other core had nothing to do.
+    const auto map_start = Clock::now();
+    rebuild_local_map();
+    summary.times.local_map_s += seconds_since(map_start);
+    update_submaps(k, summary);
+    if (loops_since_optimization > 0 && keyframes_since_optimization >= options.optimize_every_n_keyframes) optimize(false, summary);
+    start_searches(k, w, summary);
+  }
+
+  /// Makes the scan a keyframe, chained to the previous one by an odometry edge. Returns its index.
+  int make_keyframe(ScanWork& w, Slam2dSummary& summary) {
+    Keyframe kf;
+    kf.time = w.scan.time;
+    kf.T_local_laser = w.T_local_laser;
+    // A scan that failed to match keeps its points out of the maps (it may be garbage, or
+    // placed wrong); the keyframe still carries the pose chain. The first scan of a (re)started
+    // segment is the segment's map. Its matching points are kept: relocalisation searches them.
+    // A poor match found only by restarting ICP away from the odometry prediction places the pose
+    // but not the points: half the scan disagreeing with the map after a jump is what a kidnapping
+    // into a look-alike room looks like.
+    const bool doubtful = w.restarted && w.record.inlier_fraction < options.degraded_min_inlier_fraction;
+    const bool placed = (w.matched && !doubtful) || w.too_few_returns || w.start_segment;
+    if (placed) {
+      kf.hits = std::move(w.points.hits);
+      kf.misses = std::move(w.points.misses);
+    }
+    kf.matching = std::move(w.points.matching);
+    kf.path_length_m = path_length_m;
+    kf.scan = w.index;
+    kf.segment = segment;
+    const int k = static_cast<int>(keyframes.size());
+    if (k == 0) {
+      kf.T_world_laser = w.T_local_laser;
+    } else {
+      chain_keyframe(kf, k, w.T_local_laser, w.match_hessian);
+    }
+    keyframes.push_back(std::move(kf));
+    ++summary.keyframes;
+    ++w.segment_info->keyframes;
+    ++keyframes_since_optimization;
+    return k;
+  }
+
+  /// Places keyframe `k` (not yet added) after the previous one by the front end's relative pose
+  /// and adds the odometry edge between them, with the match's covariance unless the edge is weak.
+  void chain_keyframe(Keyframe& kf, int k, const core::SE2& T_local_laser, const Eigen::Matrix3d& match_hessian) {
+    const Keyframe& previous = keyframes.back();
+    const core::SE2 T_prev_kf = previous.T_local_laser.inverse() * T_local_laser;
+    kf.T_world_laser = previous.T_world_laser * T_prev_kf;
+    Edge edge{k - 1, k, T_prev_kf, false, -1, lost_since_keyframe};
+    if (!edge.weak) {
+      // (H_scan + H_prior)^-1 in the local frame, rotated into the previous keyframe's frame.
+      Eigen::Matrix3d H = match_hessian;
+      if (options.icp.prior_translation_sigma_m > 0.0) {
+        H(0, 0) += 1.0 / (options.icp.prior_translation_sigma_m * options.icp.prior_translation_sigma_m);
+        H(1, 1) += 1.0 / (options.icp.prior_translation_sigma_m * options.icp.prior_translation_sigma_m);
+        H(2, 2) += 1.0 / (options.icp.prior_rotation_sigma_rad * options.icp.prior_rotation_sigma_rad);
+      }
+      const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
+      if (ldlt.info() == Eigen::Success && ldlt.isPositive() && H.determinant() > 0.0) {
+        Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
+        J.topLeftCorner<2, 2>() = previous.T_local_laser.so2().matrix().transpose();
+        edge.match_covariance = J * H.inverse() * J.transpose();
+      }
+    }
+    edges.push_back(edge);
+    lost_since_keyframe = false;
+  }
+
+  /// Submaps: start one every half submap (counted from the segment's start); take the previous
+  /// keyframe's background job; add keyframe `k` to the active submaps, queueing the full ones to
+  /// be built.
+  void update_submaps(int k, Slam2dSummary& summary) {
+    const int half = std::max(1, options.submap_keyframes / 2);
+    if ((k - segment_first_keyframe) % half == 0) {
+      Submap submap;
+      submap.anchor = k;
+      submap.segment = segment;
+      submaps.push_back(std::move(submap));
+      ++summary.submaps;
+    }
+    // The previous keyframe's background job: its submaps become searchable, its loop closures
+    // and merges are taken now, before this keyframe plans its own.
+    join_job(summary);
+    for (int s = 0; s < static_cast<int>(submaps.size()); ++s) {
+      Submap& submap = submaps[static_cast<std::size_t>(s)];
+      if (submap.finished || k < submap.anchor) continue;
+      submap.keyframes.push_back(k);
+      if (static_cast<int>(submap.keyframes.size()) >= options.submap_keyframes) job.sources.push_back(submap_source(submap, s));
+    }
+  }
+
+  /// Loop closure and merge searches, within the budget, planned for keyframe `k` and started in
+  /// the background with the queued submap builds. A submap this keyframe finishes holds it, so
+  /// it is not searched now anyway.
+  void start_searches(int k, const ScanWork& w, Slam2dSummary& summary) {
+    const auto plan_start = Clock::now();
+    search_tokens = std::min(options.search_budget_burst, search_tokens + options.search_budget_per_keyframe);
+    const std::vector<PlannedSearch> plan = plan_searches(k, summary);
+    const auto matching = std::make_shared<const std::vector<Eigen::Vector2d>>(keyframes.back().matching);
+    for (const PlannedSearch& search : plan) job.searches.push_back(make_search(k, search, matching));
+    job.scan = w.index;
+    job.time = w.scan.time;
+    summary.times.loop_search_s += seconds_since(plan_start);
+    start_job();
+  }
+
+  /// Records the scan relative to its keyframe (trajectory() and export read these records).
+  void record_scan(ScanWork& w, Slam2dSummary& summary) {
+    w.record.keyframe = static_cast<int>(keyframes.size()) - 1;
+    w.record.keyframe_itself = w.new_keyframe;
+    w.record.T_keyframe_laser = keyframes.back().T_local_laser.inverse() * w.T_local_laser;
+    scans.push_back(w.record);
+    ++summary.scans;
+  }
+
+  /// The scan's result, from its record.
+  ScanResult scan_result(const ScanWork& w) const {
+    const ScanRecord& record = w.record;
+    ScanResult result;
+    result.time = record.time;
+    result.T_world_laser = keyframes.back().T_world_laser * record.T_keyframe_laser;
+    result.health = record.health;
+    result.inlier_fraction = record.inlier_fraction;
+    result.degeneracy = record.degeneracy;
+    result.covariance = record.covariance;
+    result.keyframe = w.new_keyframe;
+    result.segment = record.segment;
+    return result;
+  }
+
   void set_health(Health next, std::size_t scan, core::Timestamp time, const std::string& reason, Slam2dSummary& summary) {
     if (next == health) return;
     summary.health_events.push_back({time, scan, health, next, reason});
     health = next;
   }
 };
-
-namespace {
-// Whether a match's scan term (Hessian in (x, y, theta), 1/sigma^2 units) holds the position to
-// within `sigma_m` in every direction: the largest eigenvalue of the position block of its inverse.
-bool pins_position(const Eigen::Matrix3d& hessian, double sigma_m) {
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(hessian);
-  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(hessian.determinant() > 0.0)) return false;
-  const Eigen::Matrix2d position = hessian.inverse().topLeftCorner<2, 2>();
-  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(position, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
-  return std::isfinite(largest) && largest <= sigma_m * sigma_m;
-}
-}  // namespace
 
 Slam2d::Slam2d(const Slam2dOptions& options) {
   std::string error;
@@ -1117,323 +1569,26 @@ Health Slam2d::health() const { return impl_->health; }
 
 ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   Impl& m = *impl_;
-  const Slam2dOptions& o = m.options;
   const auto start = Clock::now();
-  ScanPoints points = preprocess_scan(scan, o.filter);
+  ScanWork w(scan, preprocess_scan(scan, m.options.filter), m.scans.size());
   summary_.times.preprocess_s += seconds_since(start);
-  const std::size_t scan_index = m.scans.size();
-  ScanRecord record;
-  record.time = scan.time;
-
-  // 1. Local pose: odometry prediction, then ICP against the local map.
-  core::SE2 T_local_laser = scan.T_odom_laser;
+  // 1. Local pose: predict from odometry, match against the local map, recover a failed match.
   const auto match_start = Clock::now();
-  bool matched = false;
-  core::SE2 predicted = T_local_laser;
-  Eigen::Matrix3d match_hessian = Eigen::Matrix3d::Zero();  // scan term of the accepted match
-  bool restarted = false;  // the accepted match came from an ICP restart away from the prediction
-  if (m.have_previous) {
-    predicted = m.previous_local * (m.previous_odom.inverse() * scan.T_odom_laser);
-    T_local_laser = predicted;
-    if (!m.local_map.empty() && static_cast<int>(points.matching.size()) >= o.min_matching_points) {
-      IcpResult icp = match_icp(m.local_map, points.matching, predicted, &predicted, o.icp);
-      if (icp.inlier_fraction < o.degraded_min_inlier_fraction) {
-        // The odometry prediction may be what is wrong (a stale, slipping or jumping odometry
-        // reading): restart ICP from rotated guesses, without the prior, and keep a clearly
-        // better fit. Without the prior nothing holds the pose along a direction the scan does
-        // not constrain: a fit that ended farther than ICP's first search radius from the
-        // prediction must pin the position (standard deviation from its Hessian within that
-        // radius) to be a place rather than a slide. Kidnapping seed 4 of
-        // bench/slam2d_recovery.py: a restart slid 6.2 m along the corridor (position sigma
-        // 0.71 m), into a look-alike room where the next scans matched at 98 %, and 9 false loop
-        // closures followed; MIT CSAIL's odometry jump at scan 1584 is a restart of 2.7 m pinned
-        // to 0.025 m, and is kept.
-        for (const double offset : {-0.35, -0.2, -0.1, 0.1, 0.2, 0.35}) {
-          const core::SE2 guess(predicted.so2() * core::SO2(offset), predicted.translation());
-          const IcpResult alternative = match_icp(m.local_map, points.matching, guess, nullptr, o.icp);
-          const bool near = (alternative.T_map_sensor.translation() - predicted.translation()).norm() <= o.icp.max_correspondence_m;
-          if (alternative.inlier_fraction > icp.inlier_fraction + 0.1 && (near || pins_position(alternative.hessian, o.icp.max_correspondence_m))) {
-            icp = alternative;
-            restarted = true;
-          }
-        }
-      }
-      record.inlier_fraction = icp.inlier_fraction;
-      record.degeneracy = icp.degeneracy;
-      const Eigen::LDLT<Eigen::Matrix3d> ldlt(icp.hessian);
-      if (ldlt.info() == Eigen::Success && ldlt.isPositive() && icp.hessian.determinant() > 0.0)
-        record.covariance = icp.hessian.inverse();
-      if (icp.inlier_fraction >= o.lost_inlier_fraction) {
-        T_local_laser = icp.T_map_sensor;
-        match_hessian = icp.hessian;
-        matched = true;
-      }
-    }
-  } else {
-    matched = true;
-    record.inlier_fraction = 1.0;
-    record.degeneracy = 0.5;
-  }
-  // A failed match may be a jump or slip of the odometry: search the recent map over the loop
-  // window, verified like a loop closure (every failed scan until lost, then every 5th).
-  std::string relocalised_reason;
-  if (!matched && m.have_previous && static_cast<int>(points.matching.size()) >= o.min_matching_points &&
-      (m.bad_matches_in_a_row < o.lost_after_scans || m.bad_matches_in_a_row % 5 == 0)) {
-    LoopCandidate candidate;
-    // A twin of the place farther than the window is excluded by the odometry (a slip of more
-    // than the window is not one); within it the verification's ambiguity search covers it.
-    const std::optional<core::SE2> T = m.relocalise_locally(points.matching, T_local_laser, candidate);
-    if (T) {
-      T_local_laser = *T;
-      matched = true;
-      record.inlier_fraction = candidate.inlier_fraction;
-      record.degeneracy = candidate.degeneracy;
-      ++summary_.relocalisations;
-      relocalised_reason = "relocalised in the recent map (score " + std::to_string(candidate.score) + ", inlier fraction " +
-                           std::to_string(candidate.inlier_fraction) + ", moved " +
-                           std::to_string((T->translation() - m.previous_local.translation()).norm()) + " m from the last pose)";
-    }
-  }
-  if (m.have_previous && !matched && static_cast<int>(points.matching.size()) >= o.min_matching_points) {
-    if (!m.failed_since_scan) {
-      m.failed_since_scan = scan_index;
-      m.failed_since_keyframe = m.keyframes.size();
-    }
-  } else if (matched && m.failed_since_scan) {
-    m.replace_failed_stretch(T_local_laser * predicted.inverse());
-  }
+  m.predict_and_match(w);
+  m.relocalise_after_failure(w, summary_);
+  m.track_failed_stretch(w);
   summary_.times.local_match_s += seconds_since(match_start);
-
-  // 2. Health. A scan with too few returns to match (open space beyond the sensor's range)
-  // is no evidence of being lost: the pose follows odometry and the state says degraded.
-  const bool too_few_returns = m.have_previous && static_cast<int>(points.matching.size()) < o.min_matching_points;
-  if (too_few_returns) {
-    // leave the failed-match counter as it is
-  } else if (!matched) {
-    ++m.bad_matches_in_a_row;
-    m.failed_inlier_sum += record.inlier_fraction;
-  } else {
-    m.bad_matches_in_a_row = 0;
-    m.failed_inlier_sum = 0.0;
-  }
-  Health next = Health::kOk;
-  std::string reason;
-  if (too_few_returns) {
-    next = Health::kDegraded;
-    reason = "too few returns to match (" + std::to_string(points.matching.size()) + "); following odometry";
-  } else if (!matched || record.inlier_fraction < o.degraded_min_inlier_fraction) {
-    next = Health::kDegraded;
-    reason = "few scan points agree with the local map (inlier fraction " + std::to_string(record.inlier_fraction) + ")";
-  } else if (record.degeneracy < o.degraded_min_degeneracy) {
-    next = Health::kDegraded;
-    reason = "degenerate geometry (degeneracy " + std::to_string(record.degeneracy) + "); odometry carries the unconstrained direction";
-  }
-  if (next == Health::kOk && m.health == Health::kLost) reason = "matching recovered in segment " + std::to_string(m.segment);
-  if (!relocalised_reason.empty()) {
-    next = Health::kDegraded;  // one scan: the next one matching normally brings it back to ok
-    reason = relocalised_reason;
-  }
-  // Lost: map on from this scan, in a new segment (or the current one restarted when it holds
-  // too little to keep). The segment is on probation until `segment_confirm_scans` scans in a
-  // row match its map well: a seed that does not match its successors (a burst of garbage, a
-  // scan of people crowding the sensor) is dropped from the map and the next scan seeds again.
-  bool start_segment = false;  // this scan (re)seeds the current segment's map
-  const bool judged = m.have_previous && !too_few_returns;
-  const std::string segment_name = "map segment " + std::to_string(m.segment);
-  if (m.probation > 0 && judged) {
-    const bool good = matched && record.inlier_fraction >= o.degraded_min_inlier_fraction;
-    m.bad_matches_in_a_row = 0;
-    if (good && --m.probation == 0) {
-      if (next == Health::kOk) reason = segment_name + " established: " + std::to_string(o.segment_confirm_scans) + " scans matched its map";
-    } else if (good) {
-      next = Health::kLost;
-      reason = segment_name + " on probation: " + std::to_string(m.probation) + " more matching scans needed";
-    } else {
-      for (std::size_t k = static_cast<std::size_t>(m.local_map_start); k < m.keyframes.size(); ++k) {
-        m.keyframes[k].hits.clear();
-        m.keyframes[k].misses.clear();
-      }
-      next = Health::kLost;
-      start_segment = true;
-      m.probation = o.segment_confirm_scans;
-      summary_.segments[static_cast<std::size_t>(m.segment)].odometry_link_trusted = true;
-      reason = segment_name + " on probation: this scan does not match its seed; the seed is dropped and this scan seeds it";
-    }
-  } else if (m.bad_matches_in_a_row >= o.lost_after_scans) {
-    next = Health::kLost;
-    start_segment = true;
-    m.probation = o.segment_confirm_scans;
-    reason = "scan matching failed " + std::to_string(m.bad_matches_in_a_row) + " times in a row; ";
-    // The keyframes of the current segment that carry points since it (re)started.
-    int mapped = 0;
-    for (std::size_t k = static_cast<std::size_t>(m.local_map_start); k < m.keyframes.size(); ++k)
-      if (!m.keyframes[k].hits.empty()) ++mapped;
-    const int k = static_cast<int>(m.keyframes.size());
-    if (mapped >= o.min_segment_keyframes) {
-      // Close the current segment: its submaps are finished as they are (searchable from now).
-      m.join_job(summary_);
-      for (auto& submap : m.submaps)
-        if (!submap.finished) m.finish_submap(submap);
-      m.segment = static_cast<int>(summary_.segments.size());
-      m.segment_parent.push_back(m.segment);
-      m.segment_first_keyframe = k;
-      SegmentInfo info;
-      info.id = m.segment;
-      info.first_scan = scan_index;
-      info.first_keyframe = k;
-      info.merged_with = m.segment;
-      info.started_because = reason + "lost at scan " + std::to_string(scan_index);
-      // The failed matches still explained part of each scan at the odometry's prediction: the
-      // robot is about where odometry says and the map fits poorly there. Otherwise trusted only
-      // once a seed is dropped on probation (below).
-      info.odometry_link_trusted =
-          m.failed_inlier_sum / static_cast<double>(std::max(1, m.bad_matches_in_a_row)) >= o.segment_trusted_link_min_inlier_fraction;
-      summary_.segments.push_back(info);
-      reason += "new map segment " + std::to_string(m.segment) + " started from this scan";
-    } else {
-      reason += segment_name + " restarted from this scan (it had " + std::to_string(mapped) + " mapped keyframes)";
-    }
-    m.bad_matches_in_a_row = 0;
-    m.failed_inlier_sum = 0.0;
-  }
-  if (start_segment) {
-    m.local_map_start = static_cast<int>(m.keyframes.size());
-    m.failed_since_scan.reset();  // the failed stretch keeps its odometry
-  }
-  m.set_health(next, scan_index, scan.time, reason, summary_);
-  record.health = next;
-  record.segment = m.segment;
-  if (!matched && !too_few_returns && m.have_previous) m.lost_since_keyframe = true;
-  if (next == Health::kOk) ++summary_.scans_ok;
-  if (next == Health::kDegraded) ++summary_.scans_degraded;
-  if (next == Health::kLost) ++summary_.scans_lost;
-  SegmentInfo& segment_info = summary_.segments[static_cast<std::size_t>(m.segment)];
-  ++segment_info.scans;
-
-  if (m.have_previous) {
-    const double step = (T_local_laser.translation() - m.previous_local.translation()).norm();
-    m.path_length_m += step;
-    segment_info.path_length_m += step;
-  }
-  m.previous_local = T_local_laser;
-  m.previous_odom = scan.T_odom_laser;
-  m.have_previous = true;
-
-  // 3. Keyframe?
-  bool new_keyframe = m.keyframes.empty() || start_segment;
-  if (!new_keyframe) {
-    const Keyframe& last = m.keyframes.back();
-    const core::SE2 delta = last.T_local_laser.inverse() * T_local_laser;
-    new_keyframe = delta.translation().norm() >= o.keyframe_distance_m || std::abs(delta.angle()) >= o.keyframe_angle_rad;
-  }
-  if (new_keyframe) {
-    Keyframe kf;
-    kf.time = scan.time;
-    kf.T_local_laser = T_local_laser;
-    // A scan that failed to match keeps its points out of the maps (it may be garbage, or
-    // placed wrong); the keyframe still carries the pose chain. The first scan of a (re)started
-    // segment is the segment's map. Its matching points are kept: relocalisation searches them.
-    // A poor match found only by restarting ICP away from the odometry prediction places the pose
-    // but not the points: half the scan disagreeing with the map after a jump is what a kidnapping
-    // into a look-alike room looks like.
-    const bool doubtful = restarted && record.inlier_fraction < o.degraded_min_inlier_fraction;
-    const bool placed = (matched && !doubtful) || too_few_returns || start_segment;
-    if (placed) {
-      kf.hits = std::move(points.hits);
-      kf.misses = std::move(points.misses);
-    }
-    kf.matching = std::move(points.matching);
-    kf.path_length_m = m.path_length_m;
-    kf.scan = scan_index;
-    kf.segment = m.segment;
-    const int k = static_cast<int>(m.keyframes.size());
-    if (k == 0) {
-      kf.T_world_laser = T_local_laser;
-    } else {
-      const Keyframe& previous = m.keyframes.back();
-      const core::SE2 T_prev_kf = previous.T_local_laser.inverse() * T_local_laser;
-      kf.T_world_laser = previous.T_world_laser * T_prev_kf;
-      Edge edge{k - 1, k, T_prev_kf, false, -1, m.lost_since_keyframe};
-      if (!edge.weak) {
-        // (H_scan + H_prior)^-1 in the local frame, rotated into the previous keyframe's frame.
-        Eigen::Matrix3d H = match_hessian;
-        if (o.icp.prior_translation_sigma_m > 0.0) {
-          H(0, 0) += 1.0 / (o.icp.prior_translation_sigma_m * o.icp.prior_translation_sigma_m);
-          H(1, 1) += 1.0 / (o.icp.prior_translation_sigma_m * o.icp.prior_translation_sigma_m);
-          H(2, 2) += 1.0 / (o.icp.prior_rotation_sigma_rad * o.icp.prior_rotation_sigma_rad);
-        }
-        const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
-        if (ldlt.info() == Eigen::Success && ldlt.isPositive() && H.determinant() > 0.0) {
-          Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
-          J.topLeftCorner<2, 2>() = previous.T_local_laser.so2().matrix().transpose();
-          edge.match_covariance = J * H.inverse() * J.transpose();
-        }
-      }
-      m.edges.push_back(edge);
-      m.lost_since_keyframe = false;
-    }
-    m.keyframes.push_back(std::move(kf));
-    ++summary_.keyframes;
-    ++segment_info.keyframes;
-    ++m.keyframes_since_optimization;
-    // The local map (front-end frame) is rebuilt first, while the previous keyframe's background
-    // job still runs on the other core: it reads only front-end poses and points, which the job's
-    // results (loop closures, merges: global poses) never change, so the order does not matter
-    // to the result. On MIT CSAIL (a keyframe per scan) the front end used to wait for the job
-    // first and rebuild the map afterwards, while the other core had nothing to do.
-    const auto map_start = Clock::now();
-    m.rebuild_local_map();
-    summary_.times.local_map_s += seconds_since(map_start);
-    // Submaps: start one every half submap (counted from the segment's start); add the keyframe
-    // to the active ones.
-    const int half = std::max(1, o.submap_keyframes / 2);
-    if ((k - m.segment_first_keyframe) % half == 0) {
-      Submap submap;
-      submap.anchor = k;
-      submap.segment = m.segment;
-      m.submaps.push_back(std::move(submap));
-      ++summary_.submaps;
-    }
-    // The previous keyframe's background job: its submaps become searchable, its loop closures
-    // and merges are taken now, before this keyframe plans its own.
-    m.join_job(summary_);
-    for (int s = 0; s < static_cast<int>(m.submaps.size()); ++s) {
-      Submap& submap = m.submaps[static_cast<std::size_t>(s)];
-      if (submap.finished || k < submap.anchor) continue;
-      submap.keyframes.push_back(k);
-      if (static_cast<int>(submap.keyframes.size()) >= o.submap_keyframes) m.job.sources.push_back(m.submap_source(submap, s));
-    }
-    if (m.loops_since_optimization > 0 && m.keyframes_since_optimization >= o.optimize_every_n_keyframes) m.optimize(false, summary_);
-    // Loop closure and merge searches, within the budget. A submap this keyframe finishes holds
-    // it, so it is not searched now anyway.
-    const auto plan_start = Clock::now();
-    m.search_tokens = std::min(o.search_budget_burst, m.search_tokens + o.search_budget_per_keyframe);
-    const std::vector<PlannedSearch> plan = m.plan_searches(k, summary_);
-    const auto matching = std::make_shared<const std::vector<Eigen::Vector2d>>(m.keyframes.back().matching);
-    for (const PlannedSearch& search : plan) m.job.searches.push_back(m.make_search(k, search, matching));
-    m.job.scan = scan_index;
-    m.job.time = scan.time;
-    summary_.times.loop_search_s += seconds_since(plan_start);
-    m.start_job();
-  }
-
-  record.keyframe = static_cast<int>(m.keyframes.size()) - 1;
-  record.keyframe_itself = new_keyframe;
-  record.T_keyframe_laser = m.keyframes.back().T_local_laser.inverse() * T_local_laser;
-  m.scans.push_back(record);
-  ++summary_.scans;
+  // 2. Health: of the match, then of the map segment.
+  m.assess_health(w);
+  m.supervise_segment(w, summary_);
+  m.record_health(w, summary_);
+  m.advance(w);
+  // 3. Keyframe: local map, submaps, optimisation, loop and merge searches.
+  w.new_keyframe = m.keyframe_due(w);
+  if (w.new_keyframe) m.add_keyframe(w, summary_);
+  m.record_scan(w, summary_);
   summary_.total_s += seconds_since(start);
-
-  ScanResult result;
-  result.time = record.time;
-  result.T_world_laser = m.keyframes.back().T_world_laser * record.T_keyframe_laser;
-  result.health = record.health;
-  result.inlier_fraction = record.inlier_fraction;
-  result.degeneracy = record.degeneracy;
-  result.covariance = record.covariance;
-  result.keyframe = new_keyframe;
-  result.segment = record.segment;
-  return result;
+  return m.scan_result(w);
 }
 
 void Slam2d::finish() {
