@@ -27,22 +27,22 @@ std::vector<std::pair<int, int>> VisualSlam::Impl::match_for_initialisation(cons
   return out;
 }
 
-// Two-view reconstruction: the homography and the essential matrix (RANSAC, OpenCV), scored
-// as ORB-SLAM2 scores them (sum of chi^2 margins below 5.991 of the symmetric transfer errors
-// for H, of the distances to the epipolar lines below 3.841 for F); H when
-// S_H / (S_H + S_F) > 0.40, else E; the pose from cv::recoverPose / the homography's
-// decompositions (the one with most points in front); points triangulated, kept in front of
-// both cameras within 2 px; success with >= 50 points seen at >= 1 degree of parallax.
-// `note` says which model and why it failed.
-bool VisualSlam::Impl::reconstruct_two_views(const FrameData& a, const FrameData& b, const std::vector<std::pair<int, int>>& matches, core::SE3& T_b_a,
-                           std::vector<std::pair<int, Eigen::Vector3d>>& points_a, std::string& note) const {
-  std::vector<cv::Point2d> pa, pb;
+namespace {
+
+// The matches' undistorted pixel coordinates in the two views.
+void matched_pixels(const FrameData& a, const FrameData& b, const std::vector<std::pair<int, int>>& matches, std::vector<cv::Point2d>& pa,
+                    std::vector<cv::Point2d>& pb) {
   for (const auto& [i, j] : matches) {
     pa.emplace_back(a.undistorted[static_cast<std::size_t>(i)].x(), a.undistorted[static_cast<std::size_t>(i)].y());
     pb.emplace_back(b.undistorted[static_cast<std::size_t>(j)].x(), b.undistorted[static_cast<std::size_t>(j)].y());
   }
-  const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-  cv::Mat H, E, mask_h, mask_e;
+}
+
+// The homography and the essential matrix by RANSAC (OpenCV); false, with `note`, when either
+// fails.
+bool estimate_two_view_models(const std::vector<cv::Point2d>& pa, const std::vector<cv::Point2d>& pb, const cv::Matx33d& K, cv::Mat& H, cv::Mat& E,
+                              cv::Mat& mask_e, std::string& note) {
+  cv::Mat mask_h;
   try {
     H = cv::findHomography(pa, pb, cv::RANSAC, 2.0, mask_h, 200, 0.99);
     E = cv::findEssentialMat(pa, pb, K, cv::RANSAC, 0.999, 1.0, mask_e);
@@ -54,7 +54,14 @@ bool VisualSlam::Impl::reconstruct_two_views(const FrameData& a, const FrameData
     note = "no homography or essential matrix";
     return false;
   }
-  const Eigen::Matrix3d K_e = (Eigen::Matrix3d() << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).finished();
+  return true;
+}
+
+// ORB-SLAM2's scores of the two models (Initializer::CheckHomography / CheckFundamental): the sum
+// of chi^2 margins below 5.991 of the symmetric transfer errors for H, of the distances to the
+// epipolar lines below 3.841 for F = K^-T E K^-1.
+void score_two_view_models(const std::vector<cv::Point2d>& pa, const std::vector<cv::Point2d>& pb, const cv::Mat& H, const cv::Mat& E,
+                           const Eigen::Matrix3d& K_e, double& score_h, double& score_f) {
   Eigen::Matrix3d He, Ee;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
@@ -64,7 +71,8 @@ bool VisualSlam::Impl::reconstruct_two_views(const FrameData& a, const FrameData
   }
   const Eigen::Matrix3d H_inv = He.inverse();
   const Eigen::Matrix3d F = K_e.inverse().transpose() * Ee * K_e.inverse();
-  double score_h = 0.0, score_f = 0.0;
+  score_h = 0.0;
+  score_f = 0.0;
   for (std::size_t k = 0; k < pa.size(); ++k) {
     const Eigen::Vector3d x1(pa[k].x, pa[k].y, 1.0), x2(pb[k].x, pb[k].y, 1.0);
     const Eigen::Vector3d h21 = He * x1, h12 = H_inv * x2;
@@ -77,7 +85,12 @@ bool VisualSlam::Impl::reconstruct_two_views(const FrameData& a, const FrameData
     if (d2 < 3.841) score_f += 5.991 - d2;
     if (d1 < 3.841) score_f += 5.991 - d1;
   }
-  const bool use_h = score_h / (score_h + score_f) > 0.40;
+}
+
+// The pose hypotheses of the chosen model: the homography's decompositions, or the essential
+// matrix's pose from cv::recoverPose.
+std::vector<std::pair<cv::Matx33d, cv::Vec3d>> two_view_pose_hypotheses(bool use_h, const cv::Mat& H, const cv::Mat& E, const std::vector<cv::Point2d>& pa,
+                                                                        const std::vector<cv::Point2d>& pb, const cv::Matx33d& K, cv::Mat& mask_e) {
   std::vector<std::pair<cv::Matx33d, cv::Vec3d>> poses;
   if (use_h) {
     std::vector<cv::Mat> Rs, ts, normals;
@@ -88,6 +101,69 @@ bool VisualSlam::Impl::reconstruct_two_views(const FrameData& a, const FrameData
     cv::recoverPose(E, pa, pb, K, R, t, mask_e);
     poses.emplace_back(cv::Matx33d(R), cv::Vec3d(t));
   }
+  return poses;
+}
+
+// The matches triangulated (linear, Hartley & Zisserman 12.2) with one pose hypothesis (Rc, tc),
+// its translation normalised (R, t get it); `good` keeps the points in front of both cameras
+// within 2 px, `parallax` their parallax in degrees. False for a hypothesis without translation.
+bool triangulate_two_view_hypothesis(const io::CameraCalibration& camera, const Eigen::Matrix3d& K_e, const cv::Matx33d& Rc, const cv::Vec3d& tc,
+                                     const std::vector<cv::Point2d>& pa, const std::vector<cv::Point2d>& pb,
+                                     const std::vector<std::pair<int, int>>& matches, Eigen::Matrix3d& R, Eigen::Vector3d& t,
+                                     std::vector<std::pair<int, Eigen::Vector3d>>& good, std::vector<double>& parallax) {
+  t = Eigen::Vector3d(tc[0], tc[1], tc[2]);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R(r, c) = Rc(r, c);
+  }
+  if (t.norm() < 1e-12) return false;
+  t.normalize();
+  const Eigen::Vector3d O2 = -R.transpose() * t;
+  for (std::size_t k = 0; k < pa.size(); ++k) {
+    const Eigen::Vector3d xn1 = K_e.inverse() * Eigen::Vector3d(pa[k].x, pa[k].y, 1.0);
+    const Eigen::Vector3d xn2 = K_e.inverse() * Eigen::Vector3d(pb[k].x, pb[k].y, 1.0);
+    Eigen::Matrix4d A;
+    Eigen::Matrix<double, 3, 4> P2;
+    P2 << R, t;
+    A.row(0) << -1.0, 0.0, xn1.x(), 0.0;
+    A.row(1) << 0.0, -1.0, xn1.y(), 0.0;
+    A.row(2) = xn2.x() * P2.row(2) - P2.row(0);
+    A.row(3) = xn2.y() * P2.row(2) - P2.row(1);
+    const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(A, Eigen::ComputeFullV).matrixV().col(3);
+    if (std::abs(h(3)) < 1e-12) continue;
+    const Eigen::Vector3d X = h.head<3>() / h(3);
+    const Eigen::Vector3d X2 = R * X + t;
+    if (!(X.z() > 0.0) || !(X2.z() > 0.0) || !X.allFinite()) continue;
+    const Eigen::Vector2d u1(camera.fx * X.x() / X.z() + camera.cx, camera.fy * X.y() / X.z() + camera.cy);
+    const Eigen::Vector2d u2(camera.fx * X2.x() / X2.z() + camera.cx, camera.fy * X2.y() / X2.z() + camera.cy);
+    if ((u1 - Eigen::Vector2d(pa[k].x, pa[k].y)).squaredNorm() > 4.0 || (u2 - Eigen::Vector2d(pb[k].x, pb[k].y)).squaredNorm() > 4.0) continue;
+    const double cos_parallax = X.normalized().dot((X - O2).normalized());
+    parallax.push_back(std::acos(std::clamp(cos_parallax, -1.0, 1.0)) * 180.0 / 3.14159265358979323846);
+    good.emplace_back(matches[k].first, X);
+  }
+  return true;
+}
+
+}  // namespace
+
+// Two-view reconstruction: the homography and the essential matrix (RANSAC, OpenCV), scored
+// as ORB-SLAM2 scores them (sum of chi^2 margins below 5.991 of the symmetric transfer errors
+// for H, of the distances to the epipolar lines below 3.841 for F); H when
+// S_H / (S_H + S_F) > 0.40, else E; the pose from cv::recoverPose / the homography's
+// decompositions (the one with most points in front); points triangulated, kept in front of
+// both cameras within 2 px; success with >= 50 points seen at >= 1 degree of parallax.
+// `note` says which model and why it failed.
+bool VisualSlam::Impl::reconstruct_two_views(const FrameData& a, const FrameData& b, const std::vector<std::pair<int, int>>& matches, core::SE3& T_b_a,
+                           std::vector<std::pair<int, Eigen::Vector3d>>& points_a, std::string& note) const {
+  std::vector<cv::Point2d> pa, pb;
+  matched_pixels(a, b, matches, pa, pb);
+  const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  cv::Mat H, E, mask_e;
+  if (!estimate_two_view_models(pa, pb, K, H, E, mask_e, note)) return false;
+  const Eigen::Matrix3d K_e = (Eigen::Matrix3d() << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).finished();
+  double score_h = 0.0, score_f = 0.0;
+  score_two_view_models(pa, pb, H, E, K_e, score_h, score_f);
+  const bool use_h = score_h / (score_h + score_f) > 0.40;
+  const std::vector<std::pair<cv::Matx33d, cv::Vec3d>> poses = two_view_pose_hypotheses(use_h, H, E, pa, pb, K, mask_e);
   // Triangulate with every pose; keep the one with most good points.
   std::size_t best_good = 0, second_good = 0;
   std::vector<std::pair<int, Eigen::Vector3d>> best_points;
@@ -96,37 +172,10 @@ bool VisualSlam::Impl::reconstruct_two_views(const FrameData& a, const FrameData
   double best_parallax_deg = 0.0;
   for (const auto& [Rc, tc] : poses) {
     Eigen::Matrix3d R;
-    Eigen::Vector3d t(tc[0], tc[1], tc[2]);
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) R(r, c) = Rc(r, c);
-    }
-    if (t.norm() < 1e-12) continue;
-    t.normalize();
-    const Eigen::Vector3d O2 = -R.transpose() * t;
+    Eigen::Vector3d t;
     std::vector<std::pair<int, Eigen::Vector3d>> good;
     std::vector<double> parallax;
-    for (std::size_t k = 0; k < pa.size(); ++k) {
-      const Eigen::Vector3d xn1 = K_e.inverse() * Eigen::Vector3d(pa[k].x, pa[k].y, 1.0);
-      const Eigen::Vector3d xn2 = K_e.inverse() * Eigen::Vector3d(pb[k].x, pb[k].y, 1.0);
-      Eigen::Matrix4d A;
-      Eigen::Matrix<double, 3, 4> P2;
-      P2 << R, t;
-      A.row(0) << -1.0, 0.0, xn1.x(), 0.0;
-      A.row(1) << 0.0, -1.0, xn1.y(), 0.0;
-      A.row(2) = xn2.x() * P2.row(2) - P2.row(0);
-      A.row(3) = xn2.y() * P2.row(2) - P2.row(1);
-      const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(A, Eigen::ComputeFullV).matrixV().col(3);
-      if (std::abs(h(3)) < 1e-12) continue;
-      const Eigen::Vector3d X = h.head<3>() / h(3);
-      const Eigen::Vector3d X2 = R * X + t;
-      if (!(X.z() > 0.0) || !(X2.z() > 0.0) || !X.allFinite()) continue;
-      const Eigen::Vector2d u1(camera.fx * X.x() / X.z() + camera.cx, camera.fy * X.y() / X.z() + camera.cy);
-      const Eigen::Vector2d u2(camera.fx * X2.x() / X2.z() + camera.cx, camera.fy * X2.y() / X2.z() + camera.cy);
-      if ((u1 - Eigen::Vector2d(pa[k].x, pa[k].y)).squaredNorm() > 4.0 || (u2 - Eigen::Vector2d(pb[k].x, pb[k].y)).squaredNorm() > 4.0) continue;
-      const double cos_parallax = X.normalized().dot((X - O2).normalized());
-      parallax.push_back(std::acos(std::clamp(cos_parallax, -1.0, 1.0)) * 180.0 / 3.14159265358979323846);
-      good.emplace_back(matches[k].first, X);
-    }
+    if (!triangulate_two_view_hypothesis(camera, K_e, Rc, tc, pa, pb, matches, R, t, good, parallax)) continue;
     if (good.size() > best_good) {
       second_good = best_good;
       best_good = good.size();

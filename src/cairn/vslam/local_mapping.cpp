@@ -101,122 +101,166 @@ void VisualSlam::Impl::insert_keyframe(FrameData& f, bool starts_segment) {
 int VisualSlam::Impl::triangulate_new_points(int current, int count) {
   std::vector<std::pair<int, int>> neighbours = covisible(current, 1);
   if (neighbours.size() > static_cast<std::size_t>(count)) neighbours.resize(static_cast<std::size_t>(count));
-  const double stereo_baseline = bf / camera.fx;
-  const double ratio_factor = 1.5 * options.orb.scale_factor;
   const Eigen::Matrix3d K = (Eigen::Matrix3d() << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).finished();
   const Eigen::Matrix3d K_inv = K.inverse();
   int created = 0;
-  for (const auto& [shared, k2_id] : neighbours) {
-    const KeyFrame& k2 = keyframes[static_cast<std::size_t>(k2_id)];
-    const FrameData& f1 = keyframes[static_cast<std::size_t>(current)].frame;
-    const FrameData& f2 = k2.frame;
-    const Eigen::Vector3d O1 = f1.T_world_camera.translation(), O2 = f2.T_world_camera.translation();
-    const core::SE3 T1_cw = f1.T_world_camera.inverse(), T2_cw = f2.T_world_camera.inverse();
-    if (kind == io::SequenceKind::kMonocular) {
-      // ORB-SLAM2: baseline / the neighbour's median scene depth at least 0.01.
-      const std::optional<double> depth = median_point_depth(k2_id);
-      if (!depth || (O2 - O1).norm() / *depth < 0.01) continue;
-    } else if ((O2 - O1).norm() < stereo_baseline) {
-      continue;  // ORB-SLAM2: no triangulation below the stereo baseline
-    }
-    // The epipole of camera 1 in image 2 (monocular matches next to it are ill-conditioned).
-    const Eigen::Vector3d c1_in_2 = T2_cw * O1;
-    const bool epipole_valid = c1_in_2.z() > 1e-9;
-    const double ex = epipole_valid ? camera.fx * c1_in_2.x() / c1_in_2.z() + camera.cx : 0.0;
-    const double ey = epipole_valid ? camera.fy * c1_in_2.y() / c1_in_2.z() + camera.cy : 0.0;
-    // Fundamental matrix of x1^T F12 x2 = 0: F12 = K^-T [t12]x R12 K^-1, T12 = T1_cw T2_wc.
-    const core::SE3 T12 = T1_cw * f2.T_world_camera;
-    const Eigen::Vector3d t = T12.translation();
-    Eigen::Matrix3d tx;
-    tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
-    const Eigen::Matrix3d F12 = K_inv.transpose() * tx * T12.rotation_matrix() * K_inv;
-    std::vector<int> taken_by(f2.size(), -1);
-    std::vector<int> taken_distance(f2.size(), 256);
-    for (std::size_t i1 = 0; i1 < f1.size(); ++i1) {
-      if (f1.map_point[i1] >= 0) continue;
-      const Eigen::Vector3d x1(f1.undistorted[i1].x(), f1.undistorted[i1].y(), 1.0);
-      const Eigen::Vector3d line = F12.transpose() * x1;  // epipolar line in image 2: x2^T (F12^T x1) = 0
-      const double line_norm2 = line.x() * line.x() + line.y() * line.y();
-      if (!(line_norm2 > 0.0)) continue;
-      BestTwo m;
-      for (std::size_t i2 = 0; i2 < f2.size(); ++i2) {
-        if (f2.map_point[i2] >= 0) continue;
-        const int level2 = f2.keypoints[i2].octave;
-        if (std::abs(level2 - f1.keypoints[i1].octave) > 1) continue;
-        if (epipole_valid && f1.depth[i1] <= 0 && f2.depth[i2] <= 0) {
-          const double dx = ex - f2.undistorted[i2].x(), dy = ey - f2.undistorted[i2].y();
-          if (dx * dx + dy * dy < 100.0 * scales[static_cast<std::size_t>(level2)]) continue;
-        }
-        const double d = line.x() * f2.undistorted[i2].x() + line.y() * f2.undistorted[i2].y() + line.z();
-        if (d * d / line_norm2 >= 3.84 * scales[static_cast<std::size_t>(level2)] * scales[static_cast<std::size_t>(level2)]) continue;
-        m.offer(vision::descriptor_distance(f1.descriptors.ptr(static_cast<int>(i1)), f2.descriptors.ptr(static_cast<int>(i2))),
-                static_cast<int>(i2));
-      }
-      // TH_LOW, and a ratio test along the epipolar band: without ORB-SLAM2's bag-of-words
-      // nodes the band holds many look-alikes (repeated texture, forward motion).
-      if (m.index < 0 || m.best > options.max_descriptor_distance / 2 || m.best > options.triangulation_match_ratio * m.second) continue;
-      const int best = m.best, best_i2 = m.index;
-      if (best >= taken_distance[static_cast<std::size_t>(best_i2)]) continue;
-      taken_by[static_cast<std::size_t>(best_i2)] = static_cast<int>(i1);
-      taken_distance[static_cast<std::size_t>(best_i2)] = best;
-    }
-    for (std::size_t i2 = 0; i2 < f2.size(); ++i2) {
-      const int signed_i1 = taken_by[i2];
-      if (signed_i1 < 0) continue;
-      const auto i1 = static_cast<std::size_t>(signed_i1);
-      const Eigen::Vector3d xn1 = K_inv * Eigen::Vector3d(f1.undistorted[i1].x(), f1.undistorted[i1].y(), 1.0);
-      const Eigen::Vector3d xn2 = K_inv * Eigen::Vector3d(f2.undistorted[i2].x(), f2.undistorted[i2].y(), 1.0);
-      const Eigen::Vector3d ray1 = f1.T_world_camera.rotation_matrix() * xn1, ray2 = f2.T_world_camera.rotation_matrix() * xn2;
-      const double cos_rays = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
-      const bool stereo1 = f1.depth[i1] > 0, stereo2 = f2.depth[i2] > 0;
-      const double cos_stereo1 = stereo1 ? std::cos(2.0 * std::atan2(stereo_baseline / 2.0, f1.depth[i1])) : 2.0;
-      const double cos_stereo2 = stereo2 ? std::cos(2.0 * std::atan2(stereo_baseline / 2.0, f2.depth[i2])) : 2.0;
-      const double cos_stereo = std::min(cos_stereo1, cos_stereo2);
-      Eigen::Vector3d X;
-      if (cos_rays < cos_stereo && cos_rays > 0.0 && (stereo1 || stereo2 || cos_rays < 0.9998)) {
-        // Linear triangulation: A X = 0 from x cross (P X) = 0 in both views.
-        const Eigen::Matrix<double, 3, 4> P1 = T1_cw.matrix3x4(), P2 = T2_cw.matrix3x4();
-        Eigen::Matrix4d A;
-        A.row(0) = xn1.x() * P1.row(2) - P1.row(0);
-        A.row(1) = xn1.y() * P1.row(2) - P1.row(1);
-        A.row(2) = xn2.x() * P2.row(2) - P2.row(0);
-        A.row(3) = xn2.y() * P2.row(2) - P2.row(1);
-        const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(A, Eigen::ComputeFullV).matrixV().col(3);
-        if (std::abs(h(3)) < 1e-12) continue;
-        X = h.head<3>() / h(3);
-      } else if (stereo1 && cos_stereo1 < cos_stereo2) {
-        X = unproject(f1, i1);
-      } else if (stereo2 && cos_stereo2 < cos_stereo1) {
-        X = unproject(f2, i2);
-      } else {
-        continue;  // too little parallax either way
-      }
-      if (!((T1_cw * X).z() > 0.0) || !((T2_cw * X).z() > 0.0)) continue;
-      if (chi2(f1, i1, T1_cw, X) > (stereo1 ? options.chi2_stereo : options.chi2_mono)) continue;
-      if (chi2(f2, i2, T2_cw, X) > (stereo2 ? options.chi2_stereo : options.chi2_mono)) continue;
-      const double dist1 = (X - O1).norm(), dist2 = (X - O2).norm();
-      if (dist1 <= 0.0 || dist2 <= 0.0) continue;
-      const double ratio_dist = dist2 / dist1;
-      const double ratio_octave = scales[static_cast<std::size_t>(f1.keypoints[i1].octave)] / scales[static_cast<std::size_t>(f2.keypoints[i2].octave)];
-      if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor) continue;
-      MapPoint mp;
-      mp.p_world = X;
-      mp.descriptor = f1.descriptors.row(static_cast<int>(i1)).clone();
-      mp.first_keyframe = mp.reference_keyframe = current;
-      mp.observations[current] = static_cast<int>(i1);
-      mp.observations[k2_id] = static_cast<int>(i2);
-      points.push_back(std::move(mp));
-      const int id = static_cast<int>(points.size()) - 1;
-      keyframes[static_cast<std::size_t>(current)].frame.map_point[i1] = id;
-      keyframes[static_cast<std::size_t>(k2_id)].frame.map_point[i2] = id;
-      update_normal_and_depth(points.back());
-      update_descriptor(points.back());
-      recent_points.push_back(id);
-      ++summary->map_points;
-      ++created;
-    }
+  for (const auto& [shared, k2_id] : neighbours) created += triangulate_with_neighbour(current, k2_id, K_inv);
+  return created;
+}
+
+// One neighbour of triangulate_new_points: skipped below the stereo baseline (monocular: a
+// baseline below 0.01 x its median scene depth); else the two keyframes' unmatched keypoints
+// matched along the epipolar lines, triangulated, checked and made map points. Returns the points.
+int VisualSlam::Impl::triangulate_with_neighbour(int current, int k2_id, const Eigen::Matrix3d& K_inv) {
+  const double stereo_baseline = bf / camera.fx;
+  const KeyFrame& k2 = keyframes[static_cast<std::size_t>(k2_id)];
+  const FrameData& f1 = keyframes[static_cast<std::size_t>(current)].frame;
+  const FrameData& f2 = k2.frame;
+  const Eigen::Vector3d O1 = f1.T_world_camera.translation(), O2 = f2.T_world_camera.translation();
+  const core::SE3 T1_cw = f1.T_world_camera.inverse(), T2_cw = f2.T_world_camera.inverse();
+  if (kind == io::SequenceKind::kMonocular) {
+    // ORB-SLAM2: baseline / the neighbour's median scene depth at least 0.01.
+    const std::optional<double> depth = median_point_depth(k2_id);
+    if (!depth || (O2 - O1).norm() / *depth < 0.01) return 0;
+  } else if ((O2 - O1).norm() < stereo_baseline) {
+    return 0;  // ORB-SLAM2: no triangulation below the stereo baseline
+  }
+  // The epipole of camera 1 in image 2 (monocular matches next to it are ill-conditioned).
+  const Eigen::Vector3d c1_in_2 = T2_cw * O1;
+  const bool epipole_valid = c1_in_2.z() > 1e-9;
+  const double ex = epipole_valid ? camera.fx * c1_in_2.x() / c1_in_2.z() + camera.cx : 0.0;
+  const double ey = epipole_valid ? camera.fy * c1_in_2.y() / c1_in_2.z() + camera.cy : 0.0;
+  // Fundamental matrix of x1^T F12 x2 = 0: F12 = K^-T [t12]x R12 K^-1, T12 = T1_cw T2_wc.
+  const core::SE3 T12 = T1_cw * f2.T_world_camera;
+  const Eigen::Vector3d t = T12.translation();
+  Eigen::Matrix3d tx;
+  tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+  const Eigen::Matrix3d F12 = K_inv.transpose() * tx * T12.rotation_matrix() * K_inv;
+  const std::vector<int> taken_by = match_along_epipolar_lines(f1, f2, F12, epipole_valid, ex, ey);
+  int created = 0;
+  for (std::size_t i2 = 0; i2 < f2.size(); ++i2) {
+    const int signed_i1 = taken_by[i2];
+    if (signed_i1 < 0) continue;
+    const auto i1 = static_cast<std::size_t>(signed_i1);
+    Eigen::Vector3d X;
+    if (!triangulate_match(f1, i1, f2, i2, T1_cw, T2_cw, K_inv, X)) continue;
+    if (!consistent_new_point(f1, i1, f2, i2, T1_cw, T2_cw, X)) continue;
+    add_triangulated_point(current, i1, k2_id, i2, X);
+    ++created;
   }
   return created;
+}
+
+// Each unmatched keypoint of f1 against f2's unmatched keypoints at its level +- 1, away from the
+// epipole when neither has depth, within 3.84 sigma^2 of its epipolar line (F12); the best
+// descriptor within TH_LOW and the ratio test; one-to-one, the closer descriptor winning.
+// Returns, per keypoint of f2, the keypoint of f1 matched to it (-1: none).
+std::vector<int> VisualSlam::Impl::match_along_epipolar_lines(const FrameData& f1, const FrameData& f2, const Eigen::Matrix3d& F12, bool epipole_valid,
+                                                              double ex, double ey) const {
+  std::vector<int> taken_by(f2.size(), -1);
+  std::vector<int> taken_distance(f2.size(), 256);
+  for (std::size_t i1 = 0; i1 < f1.size(); ++i1) {
+    if (f1.map_point[i1] >= 0) continue;
+    const Eigen::Vector3d x1(f1.undistorted[i1].x(), f1.undistorted[i1].y(), 1.0);
+    const Eigen::Vector3d line = F12.transpose() * x1;  // epipolar line in image 2: x2^T (F12^T x1) = 0
+    const double line_norm2 = line.x() * line.x() + line.y() * line.y();
+    if (!(line_norm2 > 0.0)) continue;
+    BestTwo m;
+    for (std::size_t i2 = 0; i2 < f2.size(); ++i2) {
+      if (f2.map_point[i2] >= 0) continue;
+      const int level2 = f2.keypoints[i2].octave;
+      if (std::abs(level2 - f1.keypoints[i1].octave) > 1) continue;
+      if (epipole_valid && f1.depth[i1] <= 0 && f2.depth[i2] <= 0) {
+        const double dx = ex - f2.undistorted[i2].x(), dy = ey - f2.undistorted[i2].y();
+        if (dx * dx + dy * dy < 100.0 * scales[static_cast<std::size_t>(level2)]) continue;
+      }
+      const double d = line.x() * f2.undistorted[i2].x() + line.y() * f2.undistorted[i2].y() + line.z();
+      if (d * d / line_norm2 >= 3.84 * scales[static_cast<std::size_t>(level2)] * scales[static_cast<std::size_t>(level2)]) continue;
+      m.offer(vision::descriptor_distance(f1.descriptors.ptr(static_cast<int>(i1)), f2.descriptors.ptr(static_cast<int>(i2))),
+              static_cast<int>(i2));
+    }
+    // TH_LOW, and a ratio test along the epipolar band: without ORB-SLAM2's bag-of-words
+    // nodes the band holds many look-alikes (repeated texture, forward motion).
+    if (m.index < 0 || m.best > options.max_descriptor_distance / 2 || m.best > options.triangulation_match_ratio * m.second) continue;
+    const int best = m.best, best_i2 = m.index;
+    if (best >= taken_distance[static_cast<std::size_t>(best_i2)]) continue;
+    taken_by[static_cast<std::size_t>(best_i2)] = static_cast<int>(i1);
+    taken_distance[static_cast<std::size_t>(best_i2)] = best;
+  }
+  return taken_by;
+}
+
+// The point of the match (i1 of f1, i2 of f2): triangulated (linear, Hartley & Zisserman 12.2)
+// when the rays' parallax beats the stereo parallax, else the view with the better stereo depth
+// unprojected; false with too little parallax either way or a degenerate solution.
+bool VisualSlam::Impl::triangulate_match(const FrameData& f1, std::size_t i1, const FrameData& f2, std::size_t i2, const core::SE3& T1_cw,
+                                         const core::SE3& T2_cw, const Eigen::Matrix3d& K_inv, Eigen::Vector3d& X) const {
+  const double stereo_baseline = bf / camera.fx;
+  const Eigen::Vector3d xn1 = K_inv * Eigen::Vector3d(f1.undistorted[i1].x(), f1.undistorted[i1].y(), 1.0);
+  const Eigen::Vector3d xn2 = K_inv * Eigen::Vector3d(f2.undistorted[i2].x(), f2.undistorted[i2].y(), 1.0);
+  const Eigen::Vector3d ray1 = f1.T_world_camera.rotation_matrix() * xn1, ray2 = f2.T_world_camera.rotation_matrix() * xn2;
+  const double cos_rays = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
+  const bool stereo1 = f1.depth[i1] > 0, stereo2 = f2.depth[i2] > 0;
+  const double cos_stereo1 = stereo1 ? std::cos(2.0 * std::atan2(stereo_baseline / 2.0, f1.depth[i1])) : 2.0;
+  const double cos_stereo2 = stereo2 ? std::cos(2.0 * std::atan2(stereo_baseline / 2.0, f2.depth[i2])) : 2.0;
+  const double cos_stereo = std::min(cos_stereo1, cos_stereo2);
+  if (cos_rays < cos_stereo && cos_rays > 0.0 && (stereo1 || stereo2 || cos_rays < 0.9998)) {
+    // Linear triangulation: A X = 0 from x cross (P X) = 0 in both views.
+    const Eigen::Matrix<double, 3, 4> P1 = T1_cw.matrix3x4(), P2 = T2_cw.matrix3x4();
+    Eigen::Matrix4d A;
+    A.row(0) = xn1.x() * P1.row(2) - P1.row(0);
+    A.row(1) = xn1.y() * P1.row(2) - P1.row(1);
+    A.row(2) = xn2.x() * P2.row(2) - P2.row(0);
+    A.row(3) = xn2.y() * P2.row(2) - P2.row(1);
+    const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(A, Eigen::ComputeFullV).matrixV().col(3);
+    if (std::abs(h(3)) < 1e-12) return false;
+    X = h.head<3>() / h(3);
+  } else if (stereo1 && cos_stereo1 < cos_stereo2) {
+    X = unproject(f1, i1);
+  } else if (stereo2 && cos_stereo2 < cos_stereo1) {
+    X = unproject(f2, i2);
+  } else {
+    return false;  // too little parallax either way
+  }
+  return true;
+}
+
+// A new point X of the match (i1 of f1, i2 of f2) is kept when in front of both cameras, within
+// the chi^2 thresholds in both, and at consistent scales (distance ratio within 1.5 x scale
+// factor of the octave ratio).
+bool VisualSlam::Impl::consistent_new_point(const FrameData& f1, std::size_t i1, const FrameData& f2, std::size_t i2, const core::SE3& T1_cw,
+                                            const core::SE3& T2_cw, const Eigen::Vector3d& X) const {
+  const double ratio_factor = 1.5 * options.orb.scale_factor;
+  const Eigen::Vector3d O1 = f1.T_world_camera.translation(), O2 = f2.T_world_camera.translation();
+  const bool stereo1 = f1.depth[i1] > 0, stereo2 = f2.depth[i2] > 0;
+  if (!((T1_cw * X).z() > 0.0) || !((T2_cw * X).z() > 0.0)) return false;
+  if (chi2(f1, i1, T1_cw, X) > (stereo1 ? options.chi2_stereo : options.chi2_mono)) return false;
+  if (chi2(f2, i2, T2_cw, X) > (stereo2 ? options.chi2_stereo : options.chi2_mono)) return false;
+  const double dist1 = (X - O1).norm(), dist2 = (X - O2).norm();
+  if (dist1 <= 0.0 || dist2 <= 0.0) return false;
+  const double ratio_dist = dist2 / dist1;
+  const double ratio_octave = scales[static_cast<std::size_t>(f1.keypoints[i1].octave)] / scales[static_cast<std::size_t>(f2.keypoints[i2].octave)];
+  if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor) return false;
+  return true;
+}
+
+// A map point at X seen by keypoint i1 of keyframe `current` (its first and reference
+// keyframe, whose descriptor it takes) and keypoint i2 of keyframe k2_id.
+void VisualSlam::Impl::add_triangulated_point(int current, std::size_t i1, int k2_id, std::size_t i2, const Eigen::Vector3d& X) {
+  MapPoint mp;
+  mp.p_world = X;
+  mp.descriptor = keyframes[static_cast<std::size_t>(current)].frame.descriptors.row(static_cast<int>(i1)).clone();
+  mp.first_keyframe = mp.reference_keyframe = current;
+  mp.observations[current] = static_cast<int>(i1);
+  mp.observations[k2_id] = static_cast<int>(i2);
+  points.push_back(std::move(mp));
+  const int id = static_cast<int>(points.size()) - 1;
+  keyframes[static_cast<std::size_t>(current)].frame.map_point[i1] = id;
+  keyframes[static_cast<std::size_t>(k2_id)].frame.map_point[i2] = id;
+  update_normal_and_depth(points.back());
+  update_descriptor(points.back());
+  recent_points.push_back(id);
+  ++summary->map_points;
 }
 
 // ORB-SLAM2 LocalMapping::MapPointCulling (stereo: 3 observations, a stereo one counting 2).
@@ -436,22 +480,46 @@ void VisualSlam::Impl::local_bundle_adjustment() {
 // point they see, the other keyframes that see those points fixed; `first` LM iterations with
 // Huber, chi^2 outliers removed, `second` more without the kernel, outlier observations erased.
 void VisualSlam::Impl::bundle_adjustment(const std::set<int>& local, int first, int second_iterations) {
-  std::set<int> local_points;
+  BundleAdjustmentState ba;
+  collect_bundle_adjustment_scope(local, ba);
+  if (local.size() < 2 && ba.fixed.empty()) return;
+  backend::LeastSquaresProblem problem;
+  add_bundle_adjustment_variables(local, ba, problem);
+  ba.is_outlier.assign(ba.edges.size(), 0);
+  add_bundle_adjustment_factors(ba, problem, true);
+  backend::LeastSquaresOptions lso;
+  lso.linear_solver = backend::LinearSolverType::kSparseSchur;
+  lso.max_iterations = first;
+  lso.threads = 1;
+  backend::solve(problem, lso);
+  classify_bundle_adjustment_edges(ba);
+  bundle_adjustment_second_pass(ba, lso, second_iterations);
+  classify_bundle_adjustment_edges(ba);
+  apply_bundle_adjustment(local, ba);
+}
+
+// The bundle adjustment's scope: every good point the keyframes `local` see, and the other
+// keyframes that see those points (held fixed).
+void VisualSlam::Impl::collect_bundle_adjustment_scope(const std::set<int>& local, BundleAdjustmentState& ba) const {
+  std::set<int>& local_points = ba.local_points;
   for (const int kf : local) {
     for (const int id : keyframes[static_cast<std::size_t>(kf)].frame.map_point) {
       if (id >= 0 && !points[static_cast<std::size_t>(id)].bad) local_points.insert(id);
     }
   }
-  std::set<int> fixed;
+  std::set<int>& fixed = ba.fixed;
   for (const int id : local_points) {
     for (const auto& [kf, idx] : points[static_cast<std::size_t>(id)].observations) {
       if (!local.count(kf)) fixed.insert(kf);
     }
   }
-  if (local.size() < 2 && fixed.empty()) return;
-  std::map<int, std::array<double, 7>> pose_values;
-  std::map<int, int> pose_var;
-  backend::LeastSquaresProblem problem;
+}
+
+// The first pass's variables: the local keyframes' poses (free but anchors_segment's), the fixed
+// keyframes' poses, then each point (eliminated by the Schur complement) with its observations.
+void VisualSlam::Impl::add_bundle_adjustment_variables(const std::set<int>& local, BundleAdjustmentState& ba, backend::LeastSquaresProblem& problem) const {
+  std::map<int, std::array<double, 7>>& pose_values = ba.pose_values;
+  std::map<int, int>& pose_var = ba.pose_var;
   auto add_pose = [&](int kf, bool constant) {
     auto& v = pose_values[kf];
     backend::se3_to_values(keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera, v.data());
@@ -459,81 +527,80 @@ void VisualSlam::Impl::bundle_adjustment(const std::set<int>& local, int first, 
     if (constant || anchors_segment(kf)) problem.set_constant(pose_var[kf]);
   };
   for (const int kf : local) add_pose(kf, false);
-  for (const int kf : fixed) add_pose(kf, true);
-  std::unordered_map<int, Eigen::Vector3d> point_values;
-  point_values.reserve(local_points.size());
-  struct Edge {
-    int point, kf, idx;
-  };
-  std::vector<Edge> edges;
-  std::unordered_map<int, int> point_var;
-  for (const int id : local_points) {
-    point_values[id] = points[static_cast<std::size_t>(id)].p_world;
+  for (const int kf : ba.fixed) add_pose(kf, true);
+  ba.point_values.reserve(ba.local_points.size());
+  for (const int id : ba.local_points) {
+    ba.point_values[id] = points[static_cast<std::size_t>(id)].p_world;
   }
-  for (const int id : local_points) {
-    point_var[id] = problem.add_variable(point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
-    for (const auto& [kf, idx] : points[static_cast<std::size_t>(id)].observations) edges.push_back({id, kf, idx});
+  for (const int id : ba.local_points) {
+    ba.point_var[id] = problem.add_variable(ba.point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
+    for (const auto& [kf, idx] : points[static_cast<std::size_t>(id)].observations) ba.edges.push_back({id, kf, idx});
   }
-  auto build = [&](backend::LeastSquaresProblem& p, const std::vector<char>& is_outlier, bool robust) {
-    for (std::size_t e = 0; e < edges.size(); ++e) {
-      if (is_outlier[e]) continue;
-      const Edge& edge = edges[e];
-      const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
-      const auto i = static_cast<std::size_t>(edge.idx);
-      const bool stereo = f.u_right[i] >= 0;
-      backend::FactorLoss loss;
-      if (robust) loss = {backend::RobustKernel::kHuber, std::sqrt(stereo ? options.chi2_stereo : options.chi2_mono)};
-      p.add_factor(std::make_unique<ScaledFactor>(observation_factor(f, i), 1.0 / scales[static_cast<std::size_t>(f.keypoints[i].octave)]),
-                   {pose_var[edge.kf], point_var[edge.point]}, loss);
-    }
-  };
-  std::vector<char> is_outlier(edges.size(), 0);
-  build(problem, is_outlier, true);
-  backend::LeastSquaresOptions lso;
-  lso.linear_solver = backend::LinearSolverType::kSparseSchur;
-  lso.max_iterations = first;
-  lso.threads = 1;
-  backend::solve(problem, lso);
+}
+
+// One reprojection factor per observation not marked an outlier, scaled by its level's
+// information, with Huber at the chi^2 threshold when `robust`.
+void VisualSlam::Impl::add_bundle_adjustment_factors(BundleAdjustmentState& ba, backend::LeastSquaresProblem& p, bool robust) const {
+  const std::vector<char>& is_outlier = ba.is_outlier;
+  for (std::size_t e = 0; e < ba.edges.size(); ++e) {
+    if (is_outlier[e]) continue;
+    const BundleAdjustmentState::Edge& edge = ba.edges[e];
+    const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
+    const auto i = static_cast<std::size_t>(edge.idx);
+    const bool stereo = f.u_right[i] >= 0;
+    backend::FactorLoss loss;
+    if (robust) loss = {backend::RobustKernel::kHuber, std::sqrt(stereo ? options.chi2_stereo : options.chi2_mono)};
+    p.add_factor(std::make_unique<ScaledFactor>(observation_factor(f, i), 1.0 / scales[static_cast<std::size_t>(f.keypoints[i].octave)]),
+                 {ba.pose_var[edge.kf], ba.point_var[edge.point]}, loss);
+  }
+}
+
+// Each observation marked an outlier when its chi^2 at the current estimate exceeds the
+// threshold (stereo or monocular).
+void VisualSlam::Impl::classify_bundle_adjustment_edges(BundleAdjustmentState& ba) const {
+  using Edge = BundleAdjustmentState::Edge;
   auto edge_chi2 = [&](const Edge& edge, const core::SE3& T_wc, const Eigen::Vector3d& p_world) {
     return chi2(keyframes[static_cast<std::size_t>(edge.kf)].frame, static_cast<std::size_t>(edge.idx), T_wc.inverse(), p_world);
   };
-  auto classify = [&]() {
-    for (std::size_t e = 0; e < edges.size(); ++e) {
-      const Edge& edge = edges[e];
-      const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
-      const double threshold = f.u_right[static_cast<std::size_t>(edge.idx)] >= 0 ? options.chi2_stereo : options.chi2_mono;
-      is_outlier[e] = edge_chi2(edge, backend::se3_from_values(pose_values[edge.kf].data()), point_values[edge.point]) > threshold ? 1 : 0;
-    }
-  };
-  classify();
-  {
-    // The second pass without the outliers and without the robust kernel, from where the first
-    // ended (ORB-SLAM2 sets the outliers' level to 1 and removes the kernels).
-    backend::LeastSquaresProblem second;
-    std::map<int, int> second_pose;
-    for (auto& [kf, v] : pose_values) {
-      second_pose[kf] = second.add_variable(v.data(), backend::se3_manifold());
-      if (fixed.count(kf) || anchors_segment(kf)) second.set_constant(second_pose[kf]);
-    }
-    std::swap(pose_var, second_pose);
-    for (const int id : local_points) {
-      point_var[id] = second.add_variable(point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
-    }
-    build(second, is_outlier, false);
-    lso.max_iterations = std::max(1, second_iterations);
-    if (second_iterations > 0) backend::solve(second, lso);
+  for (std::size_t e = 0; e < ba.edges.size(); ++e) {
+    const Edge& edge = ba.edges[e];
+    const FrameData& f = keyframes[static_cast<std::size_t>(edge.kf)].frame;
+    const double threshold = f.u_right[static_cast<std::size_t>(edge.idx)] >= 0 ? options.chi2_stereo : options.chi2_mono;
+    ba.is_outlier[e] = edge_chi2(edge, backend::se3_from_values(ba.pose_values[edge.kf].data()), ba.point_values[edge.point]) > threshold ? 1 : 0;
   }
-  classify();
-  for (std::size_t e = 0; e < edges.size(); ++e) {
-    if (is_outlier[e]) erase_observation(edges[e].point, edges[e].kf);
+}
+
+// The second pass without the outliers and without the robust kernel, from where the first
+// ended (ORB-SLAM2 sets the outliers' level to 1 and removes the kernels).
+void VisualSlam::Impl::bundle_adjustment_second_pass(BundleAdjustmentState& ba, backend::LeastSquaresOptions& lso, int second_iterations) const {
+  backend::LeastSquaresProblem second;
+  std::map<int, int> second_pose;
+  for (auto& [kf, v] : ba.pose_values) {
+    second_pose[kf] = second.add_variable(v.data(), backend::se3_manifold());
+    if (ba.fixed.count(kf) || anchors_segment(kf)) second.set_constant(second_pose[kf]);
+  }
+  std::swap(ba.pose_var, second_pose);
+  for (const int id : ba.local_points) {
+    ba.point_var[id] = second.add_variable(ba.point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
+  }
+  add_bundle_adjustment_factors(ba, second, false);
+  lso.max_iterations = std::max(1, second_iterations);
+  if (second_iterations > 0) backend::solve(second, lso);
+}
+
+// The outlier observations erased; the local keyframes (but anchors_segment's) and the points
+// that are still good take the estimate.
+void VisualSlam::Impl::apply_bundle_adjustment(const std::set<int>& local, BundleAdjustmentState& ba) {
+  for (std::size_t e = 0; e < ba.edges.size(); ++e) {
+    if (ba.is_outlier[e]) erase_observation(ba.edges[e].point, ba.edges[e].kf);
   }
   for (const int kf : local) {
-    if (!anchors_segment(kf)) keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera = backend::se3_from_values(pose_values[kf].data());
+    if (!anchors_segment(kf)) keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera = backend::se3_from_values(ba.pose_values[kf].data());
   }
-  for (const int id : local_points) {
+  for (const int id : ba.local_points) {
     MapPoint& mp = points[static_cast<std::size_t>(id)];
     if (mp.bad) continue;
-    mp.p_world = point_values[id];
+    mp.p_world = ba.point_values[id];
     update_normal_and_depth(mp);
   }
 }

@@ -110,47 +110,38 @@ bool VisualSlam::Impl::verify_loop(int current, int candidate, LoopRecord& recor
   return true;
 }
 
-// Monocular verification: Sim(3), the scale having drifted (ORB-SLAM2 LoopClosing::ComputeSim3
-// and Sim3Solver; Mur-Artal & Tardos, T-RO 2015, Sec. VII-B). The keyframe's keypoints are
-// matched to the candidate's points by descriptor; where the keypoint holds a point of its own,
-// the pair gives two 3D points, one in each camera's frame. RANSAC (300 iterations, 3 pairs,
-// Horn's closed form with scale as Umeyama 1991 writes it) finds S_12 with x1 = S_12 x2; a pair
-// is an inlier when both projections (x2 into image 1 by S_12, x1 into image 2 by S_12^-1)
-// fall within chi^2 9.21 of the keypoints (ORB-SLAM2's threshold). The best set is refitted.
-// Then the candidate's neighbourhood is projected at the similarity's rigid equivalent (R,
-// t / s) and the motion-only BA run as for SE(3). The drift guard bounds the rotation only: the
-// map's unit drifts, so a distance bound would mean nothing.
-bool VisualSlam::Impl::verify_loop_sim3(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard) {
-  const KeyFrame& query = keyframes[static_cast<std::size_t>(current)];
-  const KeyFrame& other = keyframes[static_cast<std::size_t>(candidate)];
-  probe = query.frame;
-  std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
-  std::fill(probe.outlier.begin(), probe.outlier.end(), 0);
-  const int matches = match_to_keyframe(probe, query.nodes.size() == probe.size() ? &query.nodes : nullptr, other);
-  if (matches < options.loop_min_pnp_inliers) {
-    record.reason = std::to_string(matches) + " descriptor matches to the candidate's points (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
-    return false;
-  }
-  struct Pair {
-    std::size_t i, j;  // keypoint in the keyframe, keypoint of the point in the candidate
-    int point;         // the candidate's point
-    Eigen::Vector3d x1, x2;
-  };
-  const core::SE3 T1_cw = query.frame.T_world_camera.inverse(), T2_cw = other.frame.T_world_camera.inverse();
-  std::vector<Pair> pairs;
+namespace {
+
+// A match of the Sim(3) verification with a point on both sides: the keypoint in the keyframe,
+// the keypoint of the point in the candidate, the candidate's point, and the two points in
+// their cameras' frames (x1 = S_12 x2 when the similarity holds).
+struct Sim3Pair {
+  std::size_t i, j;  // keypoint in the keyframe, keypoint of the point in the candidate
+  int point;         // the candidate's point
+  Eigen::Vector3d x1, x2;
+};
+
+// The probe's matches to the candidate's points where the keyframe's keypoint holds a good point
+// of its own (another than the match's), with both points in their cameras' frames.
+std::vector<Sim3Pair> sim3_pairs(const std::vector<MapPoint>& points, int candidate, const FrameData& probe, const FrameData& query_frame,
+                                 const core::SE3& T1_cw, const core::SE3& T2_cw) {
+  std::vector<Sim3Pair> pairs;
   for (std::size_t i = 0; i < probe.size(); ++i) {
-    const int theirs = probe.map_point[i], own = query.frame.map_point[i];
+    const int theirs = probe.map_point[i], own = query_frame.map_point[i];
     if (theirs < 0 || own < 0 || own == theirs || points[static_cast<std::size_t>(own)].bad) continue;
     const auto it = points[static_cast<std::size_t>(theirs)].observations.find(candidate);
     if (it == points[static_cast<std::size_t>(theirs)].observations.end()) continue;
     pairs.push_back({i, static_cast<std::size_t>(it->second), theirs, T1_cw * points[static_cast<std::size_t>(own)].p_world,
                      T2_cw * points[static_cast<std::size_t>(theirs)].p_world});
   }
-  const auto pair_count = static_cast<int>(pairs.size());
-  if (pair_count < options.loop_min_pnp_inliers) {
-    record.reason = std::to_string(pair_count) + " matches with a point on both sides (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
-    return false;
-  }
+  return pairs;
+}
+
+// RANSAC over the pairs (300 iterations of 3, seeded by the two keyframes), Horn's closed form
+// with scale as Umeyama 1991 writes it; an inlier's projections both within chi^2 9.21 of their
+// keypoints; the best set refitted. best gets S_12, best_in the inliers; returns their count.
+int sim3_ransac(const io::CameraCalibration& camera, const std::vector<double>& inv_sigma2, const FrameData& query_frame, const FrameData& other_frame,
+                const std::vector<Sim3Pair>& pairs, int current, int candidate, core::Sim3& best, std::vector<char>& best_in) {
   const auto pixel_error2 = [&](const FrameData& f, std::size_t k, const Eigen::Vector3d& x) {
     if (!(x.z() > 1e-9)) return std::numeric_limits<double>::infinity();
     const double du = camera.fx * x.x() / x.z() + camera.cx - f.undistorted[k].x();
@@ -161,7 +152,7 @@ bool VisualSlam::Impl::verify_loop_sim3(int current, int candidate, LoopRecord& 
     const core::Sim3 S21 = S12.inverse();
     int n = 0;
     for (std::size_t k = 0; k < pairs.size(); ++k) {
-      in[k] = pixel_error2(query.frame, pairs[k].i, S12 * pairs[k].x2) < 9.21 && pixel_error2(other.frame, pairs[k].j, S21 * pairs[k].x1) < 9.21;
+      in[k] = pixel_error2(query_frame, pairs[k].i, S12 * pairs[k].x2) < 9.21 && pixel_error2(other_frame, pairs[k].j, S21 * pairs[k].x1) < 9.21;
       n += in[k] ? 1 : 0;
     }
     return n;
@@ -179,8 +170,7 @@ bool VisualSlam::Impl::verify_loop_sim3(int current, int candidate, LoopRecord& 
   };
   std::mt19937 rng(static_cast<std::uint32_t>(current) * 7919u + static_cast<std::uint32_t>(candidate));
   std::uniform_int_distribution<std::size_t> pick(0, pairs.size() - 1);
-  std::vector<char> in(pairs.size()), best_in;
-  core::Sim3 best;
+  std::vector<char> in(pairs.size());
   int best_count = 0;
   for (int iteration = 0; iteration < 300; ++iteration) {
     std::vector<std::size_t> sample{pick(rng), pick(rng), pick(rng)};
@@ -209,6 +199,42 @@ bool VisualSlam::Impl::verify_loop_sim3(int current, int candidate, LoopRecord& 
       }
     }
   }
+  return best_count;
+}
+
+}  // namespace
+
+// Monocular verification: Sim(3), the scale having drifted (ORB-SLAM2 LoopClosing::ComputeSim3
+// and Sim3Solver; Mur-Artal & Tardos, T-RO 2015, Sec. VII-B). The keyframe's keypoints are
+// matched to the candidate's points by descriptor; where the keypoint holds a point of its own,
+// the pair gives two 3D points, one in each camera's frame. RANSAC (300 iterations, 3 pairs,
+// Horn's closed form with scale as Umeyama 1991 writes it) finds S_12 with x1 = S_12 x2; a pair
+// is an inlier when both projections (x2 into image 1 by S_12, x1 into image 2 by S_12^-1)
+// fall within chi^2 9.21 of the keypoints (ORB-SLAM2's threshold). The best set is refitted.
+// Then the candidate's neighbourhood is projected at the similarity's rigid equivalent (R,
+// t / s) and the motion-only BA run as for SE(3). The drift guard bounds the rotation only: the
+// map's unit drifts, so a distance bound would mean nothing.
+bool VisualSlam::Impl::verify_loop_sim3(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard) {
+  const KeyFrame& query = keyframes[static_cast<std::size_t>(current)];
+  const KeyFrame& other = keyframes[static_cast<std::size_t>(candidate)];
+  probe = query.frame;
+  std::fill(probe.map_point.begin(), probe.map_point.end(), -1);
+  std::fill(probe.outlier.begin(), probe.outlier.end(), 0);
+  const int matches = match_to_keyframe(probe, query.nodes.size() == probe.size() ? &query.nodes : nullptr, other);
+  if (matches < options.loop_min_pnp_inliers) {
+    record.reason = std::to_string(matches) + " descriptor matches to the candidate's points (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
+    return false;
+  }
+  const core::SE3 T1_cw = query.frame.T_world_camera.inverse(), T2_cw = other.frame.T_world_camera.inverse();
+  const std::vector<Sim3Pair> pairs = sim3_pairs(points, candidate, probe, query.frame, T1_cw, T2_cw);
+  const auto pair_count = static_cast<int>(pairs.size());
+  if (pair_count < options.loop_min_pnp_inliers) {
+    record.reason = std::to_string(pair_count) + " matches with a point on both sides (< " + std::to_string(options.loop_min_pnp_inliers) + ")";
+    return false;
+  }
+  std::vector<char> best_in;
+  core::Sim3 best;
+  const int best_count = sim3_ransac(camera, inv_sigma2, query.frame, other.frame, pairs, current, candidate, best, best_in);
   record.pnp_inliers = best_count;
   if (best_count < options.loop_min_pnp_inliers) {
     record.reason = "Sim(3) RANSAC: " + std::to_string(best_count) + " inliers of " + std::to_string(pair_count) + " (< " +
@@ -225,6 +251,14 @@ bool VisualSlam::Impl::verify_loop_sim3(int current, int candidate, LoopRecord& 
     if (best_in[k]) probe.map_point[pairs[k].i] = pairs[k].point;
   }
   if (!match_candidate_neighbourhood(candidate, probe, record)) return false;
+  return sim3_within_drift(current, candidate, record, probe, drift_guard);
+}
+
+// The Sim(3) verification's correction (in the map's drifting unit) and, with drift_guard within
+// one segment, its rotation against the drift the keyframes between could have gathered; false
+// (with record.reason) beyond it: a look-alike place.
+bool VisualSlam::Impl::sim3_within_drift(int current, int candidate, LoopRecord& record, const FrameData& probe, bool drift_guard) const {
+  const KeyFrame& query = keyframes[static_cast<std::size_t>(current)];
   const core::SE3 change = query.frame.T_world_camera.inverse() * probe.T_world_camera;
   record.correction_m = change.translation().norm();  // in the map's (drifting) unit
   record.correction_deg = Eigen::AngleAxisd(change.rotation_matrix()).angle() * 180.0 / 3.14159265358979323846;
@@ -369,6 +403,17 @@ void VisualSlam::Impl::correct_poses_se3(int current, int candidate, const Frame
   }
 }
 
+// What the stages of correct_poses_sim3 share.
+struct VisualSlam::Impl::Sim3Correction {
+  std::vector<core::SE3> old_poses;  // every keyframe's pose before the correction
+  core::Sim3 S_cw_corrected;         // the keyframe's corrected similarity
+  std::vector<core::Sim3> before;    // S_world_keyframe the graph starts from
+  std::vector<core::Sim3> after;     // S_world_keyframe the graph ends at
+  std::vector<int> connected;        // keyframes given a corrected similarity before the graph
+  int held = 0;                      // the graph's fixed keyframe
+  std::vector<int> corrected_by;     // per point, the keyframe that moved it before the graph (-1: none)
+};
+
 // Monocular loop correction over Sim(3) (ORB-SLAM2 LoopClosing::CorrectLoop and
 // Optimizer::OptimizeEssentialGraph; Strasdat, Montiel & Davison, RSS 2010). The keyframe's
 // corrected similarity S_cw = (s R', s t'), with (R', t') the rigid pose the verification found
@@ -383,16 +428,30 @@ void VisualSlam::Impl::correct_poses_se3(int current, int candidate, const Frame
 // corrected it or its reference: X' = S_after S_before^-1 X, and each frame's pose relative to
 // its reference keyframe is scaled with it.
 void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const FrameData& probe, double scale) {
+  Sim3Correction c;
   const std::size_t n = keyframes.size();
-  std::vector<core::SE3> old_poses(n);
-  for (std::size_t k = 0; k < n; ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
+  c.old_poses.resize(n);
+  for (std::size_t k = 0; k < n; ++k) c.old_poses[k] = keyframes[k].frame.T_world_camera;
   const core::SE3 T_cw_found = probe.T_world_camera.inverse();
-  const core::Sim3 S_cw_corrected(T_cw_found.so3(), scale * T_cw_found.translation(), scale);
-  std::vector<core::Sim3> before(n);  // S_world_keyframe the graph starts from
-  for (std::size_t k = 0; k < n; ++k) before[k] = core::Sim3(old_poses[k]);
+  c.S_cw_corrected = core::Sim3(T_cw_found.so3(), scale * T_cw_found.translation(), scale);
+  c.before.resize(n);
+  for (std::size_t k = 0; k < n; ++k) c.before[k] = core::Sim3(c.old_poses[k]);
+  c.held = candidate;
+  spread_loop_similarity(current, candidate, c);
+  move_points_before_graph(c);
+  optimise_sim3_essential_graph(current, candidate, c);
+  apply_sim3_correction(c);
+}
+
+// The corrected similarity given, before the graph, to the keyframes around the loop: in a merge
+// the younger segment's keyframes, moved whole; else the keyframe and its covisible keyframes.
+void VisualSlam::Impl::spread_loop_similarity(int current, int candidate, Sim3Correction& c) const {
+  const std::size_t n = keyframes.size();
+  const std::vector<core::SE3>& old_poses = c.old_poses;
+  const core::Sim3& S_cw_corrected = c.S_cw_corrected;
+  std::vector<core::Sim3>& before = c.before;
+  std::vector<int>& connected = c.connected;
   const core::SE3& T_wc = old_poses[static_cast<std::size_t>(current)];
-  std::vector<int> connected;  // keyframes given a corrected similarity before the graph
-  int held = candidate;        // the graph's fixed keyframe
   if (segment_of(candidate) != segment_of(current)) {
     // A merge (ORB-SLAM3 LoopClosing::MergeLocal): the younger segment (the larger id; the older
     // holds keyframe 0 or was there first), in its own frame and unit, is moved whole by the
@@ -401,7 +460,7 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
     const bool move_current = segment_of(current) > segment_of(candidate);
     const int moved = move_current ? segment_of(current) : segment_of(candidate);
     const core::Sim3 M = move_current ? S_cw_corrected.inverse() * core::Sim3(T_wc.inverse()) : core::Sim3(T_wc) * S_cw_corrected;
-    if (!move_current) held = current;
+    if (!move_current) c.held = current;
     for (std::size_t k = 0; k < n; ++k) {
       if (keyframes[k].bad || segment_of(static_cast<int>(k)) != moved) continue;
       connected.push_back(static_cast<int>(k));
@@ -417,15 +476,30 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
       before[static_cast<std::size_t>(k)] = S_kw.inverse();
     }
   }
-  std::vector<int> corrected_by(points.size(), -1);
-  for (const int k : connected) {
+}
+
+// The points of the connected keyframes follow them (X' = S_kw^-1 T_kw X), each with the first
+// connected keyframe that sees it.
+void VisualSlam::Impl::move_points_before_graph(Sim3Correction& c) {
+  std::vector<int>& corrected_by = c.corrected_by;
+  corrected_by.assign(points.size(), -1);
+  for (const int k : c.connected) {
     for (const int id : keyframes[static_cast<std::size_t>(k)].frame.map_point) {
       if (id < 0 || points[static_cast<std::size_t>(id)].bad || corrected_by[static_cast<std::size_t>(id)] >= 0) continue;
       MapPoint& mp = points[static_cast<std::size_t>(id)];
-      mp.p_world = before[static_cast<std::size_t>(k)] * (old_poses[static_cast<std::size_t>(k)].inverse() * mp.p_world);
+      mp.p_world = c.before[static_cast<std::size_t>(k)] * (c.old_poses[static_cast<std::size_t>(k)].inverse() * mp.p_world);
       corrected_by[static_cast<std::size_t>(id)] = k;
     }
   }
+}
+
+// The essential graph over Sim(3) (backend/sim3_factors.hpp): its edges with the uncorrected
+// relative poses, the loop edge candidate -> keyframe with the corrected ones, unit information,
+// c.held fixed; each good keyframe takes the rigid part of its optimised similarity (c.after).
+void VisualSlam::Impl::optimise_sim3_essential_graph(int current, int candidate, Sim3Correction& c) {
+  const std::size_t n = keyframes.size();
+  const std::vector<core::SE3>& old_poses = c.old_poses;
+  const std::vector<core::Sim3>& before = c.before;
   std::vector<int> good;
   for (std::size_t k = 0; k < n; ++k) {
     if (!keyframes[k].bad) good.push_back(static_cast<int>(k));
@@ -437,7 +511,7 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
     backend::sim3_to_values(before[static_cast<std::size_t>(k)], values[static_cast<std::size_t>(k)].data());
     var[static_cast<std::size_t>(k)] = problem.add_variable(values[static_cast<std::size_t>(k)].data(), backend::sim3_manifold());
   }
-  problem.set_constant(var[static_cast<std::size_t>(held)]);
+  problem.set_constant(var[static_cast<std::size_t>(c.held)]);
   const auto add_edge = [&](int a, int b, const core::Sim3& S_a_b, double weight) {
     const backend::Sim3SquareRootInformation L = std::sqrt(weight) * backend::Sim3SquareRootInformation::Identity();
     problem.add_factor(std::make_unique<backend::Sim3RelativeFactor>(S_a_b, L), {var[static_cast<std::size_t>(a)], var[static_cast<std::size_t>(b)]});
@@ -451,15 +525,24 @@ void VisualSlam::Impl::correct_poses_sim3(int current, int candidate, const Fram
   lso.max_iterations = 20;
   lso.threads = 1;
   backend::solve(problem, lso);
-  std::vector<core::Sim3> after = before;
+  c.after = before;
   for (const int k : good) {
-    after[static_cast<std::size_t>(k)] = backend::sim3_from_values(values[static_cast<std::size_t>(k)].data());
-    keyframes[static_cast<std::size_t>(k)].frame.T_world_camera = after[static_cast<std::size_t>(k)].to_se3();
+    c.after[static_cast<std::size_t>(k)] = backend::sim3_from_values(values[static_cast<std::size_t>(k)].data());
+    keyframes[static_cast<std::size_t>(k)].frame.T_world_camera = c.after[static_cast<std::size_t>(k)].to_se3();
   }
+}
+
+// After the graph: each point moves with the keyframe that corrected it or its reference
+// (X' = S_after S_before^-1 X), frames' poses relative to their reference keyframes are scaled,
+// and the last frame moves with its reference keyframe.
+void VisualSlam::Impl::apply_sim3_correction(const Sim3Correction& c) {
+  const std::vector<core::SE3>& old_poses = c.old_poses;
+  const std::vector<core::Sim3>& before = c.before;
+  const std::vector<core::Sim3>& after = c.after;
   for (std::size_t id = 0; id < points.size(); ++id) {
     MapPoint& mp = points[id];
     if (mp.bad) continue;
-    const auto r = static_cast<std::size_t>(corrected_by[id] >= 0 ? corrected_by[id] : mp.reference_keyframe);
+    const auto r = static_cast<std::size_t>(c.corrected_by[id] >= 0 ? c.corrected_by[id] : mp.reference_keyframe);
     if (keyframes[r].bad) continue;
     mp.p_world = after[r] * (before[r].inverse() * mp.p_world);
     update_normal_and_depth(mp);
@@ -547,6 +630,40 @@ VisualSlam::Impl::LoopOutcome VisualSlam::Impl::try_loop(int current, LoopRecord
   return LoopOutcome::kAccepted;
 }
 
+// DetectLoop's candidates and their consistency: the database's results scoring at least
+// min_score and sharing at least 80 % of the best one's words (not of the querying keyframe's
+// segment when too_early), each with its covisibility group, consistent when the group shares a
+// keyframe with a group of the previous query (consistent_groups, which it replaces, as it does
+// pending_loop_candidates). Returns (score, candidate, consistency) of those consistent for
+// loop_consistency keyframes, best score first.
+std::vector<std::tuple<double, int, int>> VisualSlam::Impl::consistent_loop_candidates(int current, const std::vector<vision::BowDatabase::Result>& results,
+                                                                                      double min_score, bool too_early) {
+  int max_common = 0;
+  for (const auto& r : results) max_common = std::max(max_common, r.common_words);
+  std::vector<std::pair<std::set<int>, int>> groups;
+  std::set<int> candidates_seen;
+  std::vector<std::tuple<double, int, int>> consistent;  // score, candidate, consistency
+  for (const auto& r : results) {
+    if (r.score < min_score || r.common_words < 0.8 * max_common) continue;
+    const int candidate = static_cast<int>(r.id);
+    if (too_early && segment_of(candidate) == segment_of(current)) continue;
+    candidates_seen.insert(candidate);
+    std::set<int> group{candidate};
+    for (const auto& [shared, k] : covisible(candidate, options.min_covisible_points)) group.insert(k);
+    int consistency = 0;
+    for (const auto& [previous, count] : consistent_groups) {
+      const bool shares = std::any_of(group.begin(), group.end(), [&](int k) { return previous.count(k) > 0; });
+      if (shares) consistency = std::max(consistency, count + 1);
+    }
+    groups.emplace_back(group, consistency);
+    if (consistency + 1 >= options.loop_consistency) consistent.emplace_back(r.score, candidate, consistency + 1);
+  }
+  consistent_groups = std::move(groups);
+  pending_loop_candidates = std::move(candidates_seen);
+  std::sort(consistent.begin(), consistent.end(), std::greater<>());
+  return consistent;
+}
+
 // ORB-SLAM2 LoopClosing::DetectLoop: candidates from the database scoring at least as well as
 // the keyframe's worst covisible neighbour and sharing at least 80 % of the best candidate's
 // words, kept only when their covisibility group was also a candidate group for the previous
@@ -578,31 +695,9 @@ void VisualSlam::Impl::detect_and_close_loop(FrameResult& result) {
   for (int k = std::max(0, current - options.loop_min_keyframes_apart); k < current; ++k) exclude.push_back(static_cast<std::uint32_t>(k));
   const std::vector<vision::BowDatabase::Result> results = database.query(kf.bow, 20, exclude);
   database.add(static_cast<std::uint32_t>(current), kf.bow);
-  int max_common = 0;
-  for (const auto& r : results) max_common = std::max(max_common, r.common_words);
-  std::vector<std::pair<std::set<int>, int>> groups;
-  std::set<int> candidates_seen;
-  std::vector<std::tuple<double, int, int>> consistent;  // score, candidate, consistency
   std::vector<int> proposed;  // every keyframe the database returned: the rivals of the uniqueness test
   for (const auto& r : results) proposed.push_back(static_cast<int>(r.id));
-  for (const auto& r : results) {
-    if (r.score < min_score || r.common_words < 0.8 * max_common) continue;
-    const int candidate = static_cast<int>(r.id);
-    if (too_early && segment_of(candidate) == segment_of(current)) continue;
-    candidates_seen.insert(candidate);
-    std::set<int> group{candidate};
-    for (const auto& [shared, k] : covisible(candidate, options.min_covisible_points)) group.insert(k);
-    int consistency = 0;
-    for (const auto& [previous, count] : consistent_groups) {
-      const bool shares = std::any_of(group.begin(), group.end(), [&](int k) { return previous.count(k) > 0; });
-      if (shares) consistency = std::max(consistency, count + 1);
-    }
-    groups.emplace_back(group, consistency);
-    if (consistency + 1 >= options.loop_consistency) consistent.emplace_back(r.score, candidate, consistency + 1);
-  }
-  consistent_groups = std::move(groups);
-  pending_loop_candidates = std::move(candidates_seen);
-  std::sort(consistent.begin(), consistent.end(), std::greater<>());
+  const std::vector<std::tuple<double, int, int>> consistent = consistent_loop_candidates(current, results, min_score, too_early);
   for (const auto& [score, candidate, consistency] : consistent) {
     LoopRecord record;
     record.keyframe = static_cast<std::size_t>(current);

@@ -9,6 +9,7 @@
 
 #include <tbb/parallel_invoke.h>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -22,6 +23,7 @@
 #include "cairn/backend/least_squares.hpp"
 #include "cairn/backend/optimizer.hpp"
 #include "cairn/backend/problem.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/io/pose_graph.hpp"
 #include "cairn/backend/reprojection_factors.hpp"
 #include "cairn/vision/image_alignment.hpp"
@@ -31,8 +33,8 @@ namespace cairn::vslam {
 namespace internal {
 
 
-using Clock = std::chrono::steady_clock;
-inline double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+using core::Clock;
+using core::seconds_since;
 
 // A factor whose residual and Jacobians are scaled by sqrt(information) = 1 / sigma of the
 // keypoint's level (ORB-SLAM2's invLevelSigma2 information), optionally with the point held
@@ -339,6 +341,16 @@ struct VisualSlam::Impl {
   // thresholds in both, and at consistent scales (distance ratio within 1.5 x scale factor of
   // the octave ratio). Returns the points created.
   int triangulate_new_points(int current, int count);
+  // Its stages (local_mapping.cpp): one covisible keyframe; the epipolar matching; one match
+  // triangulated; the new point's checks; the point made.
+  int triangulate_with_neighbour(int current, int k2_id, const Eigen::Matrix3d& K_inv);
+  std::vector<int> match_along_epipolar_lines(const FrameData& f1, const FrameData& f2, const Eigen::Matrix3d& F12, bool epipole_valid, double ex,
+                                              double ey) const;
+  bool triangulate_match(const FrameData& f1, std::size_t i1, const FrameData& f2, std::size_t i2, const core::SE3& T1_cw, const core::SE3& T2_cw,
+                         const Eigen::Matrix3d& K_inv, Eigen::Vector3d& X) const;
+  bool consistent_new_point(const FrameData& f1, std::size_t i1, const FrameData& f2, std::size_t i2, const core::SE3& T1_cw, const core::SE3& T2_cw,
+                            const Eigen::Vector3d& X) const;
+  void add_triangulated_point(int current, std::size_t i1, int k2_id, std::size_t i2, const Eigen::Vector3d& X);
   // ORB-SLAM2 LocalMapping::MapPointCulling (stereo: 3 observations, a stereo one counting 2).
   void cull_points();
   // ORB-SLAM2 LocalMapping::SearchInNeighbors: duplicates between the newest keyframe and its
@@ -368,6 +380,28 @@ struct VisualSlam::Impl {
   // point they see, the other keyframes that see those points fixed; `first` LM iterations with
   // Huber, chi^2 outliers removed, `second` more without the kernel, outlier observations erased.
   void bundle_adjustment(const std::set<int>& local, int first, int second_iterations);
+  // What the stages of bundle_adjustment share: its scope, the engine's values and variable
+  // indices of poses and points, the observations (edges) and their outlier flags.
+  struct BundleAdjustmentState {
+    struct Edge {
+      int point, kf, idx;
+    };
+    std::set<int> local_points;  // every good point the local keyframes see
+    std::set<int> fixed;         // the other keyframes that see them
+    std::map<int, std::array<double, 7>> pose_values;
+    std::map<int, int> pose_var;
+    std::unordered_map<int, Eigen::Vector3d> point_values;
+    std::unordered_map<int, int> point_var;
+    std::vector<Edge> edges;
+    std::vector<char> is_outlier;
+  };
+  // Its stages, in order (local_mapping.cpp).
+  void collect_bundle_adjustment_scope(const std::set<int>& local, BundleAdjustmentState& ba) const;
+  void add_bundle_adjustment_variables(const std::set<int>& local, BundleAdjustmentState& ba, backend::LeastSquaresProblem& problem) const;
+  void add_bundle_adjustment_factors(BundleAdjustmentState& ba, backend::LeastSquaresProblem& p, bool robust) const;
+  void classify_bundle_adjustment_edges(BundleAdjustmentState& ba) const;
+  void bundle_adjustment_second_pass(BundleAdjustmentState& ba, backend::LeastSquaresOptions& lso, int second_iterations) const;
+  void apply_bundle_adjustment(const std::set<int>& local, BundleAdjustmentState& ba);
 
   // --- Place recognition: loop closure (ORB-SLAM2 LoopClosing) (loop_closing.cpp) ---
   // Replaces point `old_id` by `new_id` everywhere (ORB-SLAM2 MapPoint::Replace): its
@@ -385,6 +419,8 @@ struct VisualSlam::Impl {
   bool match_candidate_neighbourhood(int candidate, FrameData& probe, LoopRecord& record);
   // Monocular: Sim(3) (ORB-SLAM2 ComputeSim3 / Sim3Solver); record.scale gets the scale.
   bool verify_loop_sim3(int current, int candidate, LoopRecord& record, FrameData& probe, bool drift_guard);
+  // Its last stage: the correction recorded and, with drift_guard, its rotation bounded by the drift.
+  bool sim3_within_drift(int current, int candidate, LoopRecord& record, const FrameData& probe, bool drift_guard) const;
   // The uniqueness test of a verified loop or merge (current -> candidate, `record`, `probe`):
   // each of `rivals` (but those of the querying keyframe's own segment when the candidate lies
   // in another) is verified as a loop (no drift bound); one that verifies at another place
@@ -399,12 +435,21 @@ struct VisualSlam::Impl {
   std::vector<std::tuple<int, int, double>> essential_graph_edges(const std::vector<int>& good) const;
   void correct_poses_se3(int current, int candidate, const FrameData& probe);
   void correct_poses_sim3(int current, int candidate, const FrameData& probe, double scale);
+  // Its stages, in order, and what they share (loop_closing.cpp, where Sim3Correction is defined).
+  struct Sim3Correction;
+  void spread_loop_similarity(int current, int candidate, Sim3Correction& c) const;
+  void move_points_before_graph(Sim3Correction& c);
+  void optimise_sim3_essential_graph(int current, int candidate, Sim3Correction& c);
+  void apply_sim3_correction(const Sim3Correction& c);
   void fuse_loop_and_adjust(int current, const FrameData& probe);
   // ORB-SLAM2 LoopClosing::DetectLoop: candidates from the database scoring at least as well as
   // the keyframe's worst covisible neighbour and sharing at least 80 % of the best candidate's
   // words, kept only when their covisibility group was also a candidate group for the previous
   // loop_consistency - 1 keyframes; then verified, best score first.
   void detect_and_close_loop(FrameResult& result);
+  // Its candidates that pass the consistency test, (score, candidate, consistency), best first.
+  std::vector<std::tuple<double, int, int>> consistent_loop_candidates(int current, const std::vector<vision::BowDatabase::Result>& results,
+                                                                       double min_score, bool too_early);
   enum class LoopOutcome { kRejected, kAmbiguous, kAccepted };
   // One loop or merge candidate verified, tested for uniqueness and, when it stands, closed
   // (loop_closing.cpp try_loop).
@@ -448,6 +493,52 @@ struct VisualSlam::Impl {
   // --- One frame (tracking.cpp) ---
   FrameResult track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, vision::SmallBlurryImage sbi, FrameTimes times,
                     Clock::time_point start);
+  // What the stages of track share about the frame being tracked: the frame, its report, and
+  // what one stage tells the next.
+  struct TrackingFrame {
+    FrameData f;
+    FrameResult result;
+    FrameTimes times;
+    Clock::time_point start, tracking_start;
+    bool was_lost = false;           // lost before this frame
+    double motion_radius_px = 0.0;   // the motion model's search radius
+    int matches = 0;                 // first-stage map-point matches
+    int inliers = 0;                 // inliers of the frame's current pose
+    int given = 0;                   // the local map's matches behind the inliers
+    bool prediction_failed = false;  // the motion model explained too little: the fallbacks' trigger
+    int accepted_keyframe = -1;      // the keyframe whose matches gave the first stage's pose (fallback / relocalisation)
+    std::vector<int> relocalisation_candidates;
+    std::vector<std::uint32_t> relocalisation_nodes;
+    bool jumped = false;  // the fallback's pose jumped: verified as a relocalisation
+    double jump_m = 0.0;
+    bool relocalising = false;      // after being lost, or a jump
+    bool unverified_start = false;  // neither the prediction nor the reference keyframe explained the frame
+  };
+  // The reference-keyframe fallback's candidates and the frame's words.
+  struct FallbackCandidates {
+    std::vector<int> candidates;       // tried in order, the reference keyframe first
+    std::vector<int> rival_keyframes;  // the uniqueness test's further rivals
+    std::vector<std::uint32_t> frame_nodes;
+    vision::BowVector frame_bow;
+    bool use_nodes = false;  // node-restricted matching (bow_restricted_matching with a vocabulary)
+  };
+  // The stages of track, in order (tracking.cpp, where each is described).
+  bool start_first_map(TrackingFrame& w);
+  int search_around_last(FrameData& frame, double motion_radius_px);
+  void track_motion_model(TrackingFrame& w);
+  void align_small_images(TrackingFrame& w);
+  void track_reference_fallback(TrackingFrame& w);
+  FallbackCandidates fallback_candidates(const FrameData& f) const;
+  void try_fallback_candidates(TrackingFrame& w, const FallbackCandidates& c);
+  void check_fallback_jump(TrackingFrame& w, FallbackCandidates& c);
+  void assess_first_stage(TrackingFrame& w);
+  void refine_with_local_map(TrackingFrame& w);
+  void verify_relocalisation(TrackingFrame& w);
+  void handle_lost_frame(TrackingFrame& w);
+  void start_stereo_segment(TrackingFrame& w);
+  void accept_tracked_frame(TrackingFrame& w);
+  void map_keyframe(TrackingFrame& w);
+  FrameResult record_frame(TrackingFrame& w);
 };
 
 }  // namespace cairn::vslam

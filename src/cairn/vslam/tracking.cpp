@@ -595,320 +595,434 @@ std::string VisualSlam::Impl::relocalisation_rival(const FrameData& f, int inlie
   return "";
 }
 
+// One frame (ORB-SLAM2 Tracking::Track for stereo / RGB-D; monocular frames before the first map
+// go to initialise_monocular): the motion model, the image-alignment and reference-keyframe
+// fallbacks (with relocalisation when lost), the local map, the checks a relocalisation must
+// pass, then either the lost frame's handling or the tracked frame's keyframe decision, and the
+// frame's record.
 FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left, const vision::StereoMatches& stereo, vision::SmallBlurryImage sbi,
                                     FrameTimes times, Clock::time_point start) {
-  FrameResult result;
-  result.frame = frames;
-  result.time = time;
-  result.features = static_cast<int>(left.keypoints.size());
-  result.stereo_points = static_cast<int>(stereo.matched);
-  const auto tracking_start = Clock::now();
-  FrameData f = make_frame(time, left, stereo);
-  f.sbi = std::move(sbi);
-  bool mapped = false;
-  if (keyframes.empty() && kind == io::SequenceKind::kMonocular) return initialise_monocular(std::move(f), result, times, start, tracking_start);
+  TrackingFrame w;
+  w.result.frame = frames;
+  w.result.time = time;
+  w.result.features = static_cast<int>(left.keypoints.size());
+  w.result.stereo_points = static_cast<int>(stereo.matched);
+  w.times = times;
+  w.start = start;
+  w.tracking_start = Clock::now();
+  w.f = make_frame(time, left, stereo);
+  w.f.sbi = std::move(sbi);
+  if (keyframes.empty() && kind == io::SequenceKind::kMonocular) return initialise_monocular(std::move(w.f), w.result, w.times, w.start, w.tracking_start);
   if (keyframes.empty()) {
-    if (result.stereo_points < options.min_new_points) {
-      result.note = "too few stereo/depth points to start a map (" + std::to_string(result.stereo_points) + ")";
-      result.health = TrackingHealth::kLost;
-      times.tracking_s = seconds_since(tracking_start);
-    } else {
-      f.T_world_camera = core::SE3();
-      times.tracking_s = seconds_since(tracking_start);
-      const auto mapping_start = Clock::now();
-      insert_keyframe(f);
-      detect_and_close_loop(result);
-      times.mapping_s = seconds_since(mapping_start);
-      result.tracked = true;
-      result.health = TrackingHealth::kOk;
-      result.keyframe = true;
-      result.inliers = static_cast<int>(std::count_if(f.map_point.begin(), f.map_point.end(), [](int id) { return id >= 0; }));
-      result.inlier_ratio = 1.0;
-      mapped = true;
-    }
-    if (!mapped) {
-      relative.emplace_back(-1, core::SE3());
-      result.times = times;
-      result.times.total_s = seconds_since(start);
-      ++frames;
-      return result;
-    }
+    if (!start_first_map(w)) return std::move(w.result);
+    return record_frame(w);
+  }
+  track_motion_model(w);
+  align_small_images(w);
+  if (w.prediction_failed) track_reference_fallback(w);
+  assess_first_stage(w);
+  refine_with_local_map(w);
+  verify_relocalisation(w);
+  if (w.inliers < options.lost_below_inliers) {
+    handle_lost_frame(w);
   } else {
-    // Stage 1: the previous frame's points at the constant-velocity prediction.
-    f.T_world_camera = have_velocity && !lost ? last.T_world_camera * velocity : last.T_world_camera;
-    int matches = 0;
-    const bool was_lost = lost;
-    // ORB-SLAM2 TrackWithMotionModel: th 7 for stereo, 15 for RGB-D (cairn: 7, see the option).
-    const double motion_radius = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px
-                                 : kind == io::SequenceKind::kRgbd ? options.motion_search_radius_rgbd_px
-                                                                   : options.motion_search_radius_mono_px;
-    // The last frame's points around f's pose, the radius doubled when too few match.
-    const auto search_around = [&](FrameData& frame) {
-      int n = search_from_last(frame, last, motion_radius);
-      if (n < options.min_motion_matches) {
-        std::fill(frame.map_point.begin(), frame.map_point.end(), -1);
-        n = search_from_last(frame, last, 2.0 * motion_radius);
-      }
-      return n;
-    };
-    if (have_last && have_velocity && !lost) matches = search_around(f);
-    int inliers = 0;
-    int accepted_keyframe = -1;  // the keyframe whose matches gave the first stage's pose (fallback / relocalisation)
-    std::vector<int> relocalisation_candidates;
-    std::vector<std::uint32_t> relocalisation_nodes;
-    bool jumped = false;  // the fallback's pose jumped: verified as a relocalisation
-    double jump_m = 0.0;
-    if (matches >= options.min_motion_matches) {
-      inliers = optimize_pose(f);
-      drop_outliers(f);
-    }
-    // Stage 1b: the prediction explains too little, or there was none (lost). PTAM's answer to
-    // fast turns and motion blur (Klein & Murray, ECCV 2008, Sec. 4): the rotation since the last
-    // tracked frame from the two small blurry images (vision/image_alignment.hpp), then the last
-    // frame's points searched around it as in stage 1. The images' "rotation" also absorbs the
-    // shift a translation makes at the scene's depth, so it is tried with no translation and,
-    // when there is a velocity, with the velocity's; the most inliers win. A local search from
-    // the last tracked pose: it cannot jump to a look-alike place, so no uniqueness test; after
-    // being lost the relocalisation's inlier count still applies (below).
-    const bool prediction_failed = inliers < std::max(30, matches / 2);
-    if (options.image_alignment && prediction_failed && have_last && !last.sbi.empty() && !f.sbi.empty()) {
-      const bool predicted = have_velocity && !lost;
-      const Eigen::Matrix3d R_guess = predicted ? Eigen::Matrix3d(velocity.rotation_matrix().transpose()) : Eigen::Matrix3d::Identity();
-      vision::RotationAlignmentOptions ao;
-      ao.min_correlation = options.image_alignment_min_correlation;
-      const vision::RotationAlignment a = vision::align_rotation(last.sbi, f.sbi, camera, R_guess, ao);
-      if (a.ok) {
-        std::vector<Eigen::Vector3d> shifts{Eigen::Vector3d::Zero()};
-        if (predicted) shifts.push_back(velocity.translation());
-        for (const Eigen::Vector3d& t_last_current : shifts) {
-          FrameData trial = f;
-          std::fill(trial.map_point.begin(), trial.map_point.end(), -1);
-          std::fill(trial.outlier.begin(), trial.outlier.end(), 0);
-          trial.T_world_camera = T_world_last_tracked * core::SE3(core::SO3::from_matrix(a.R_current_previous.transpose()), t_last_current);
-          const int trial_matches = search_around(trial);
-          if (trial_matches < options.min_motion_matches) continue;
-          const int trial_inliers = optimize_pose(trial);
-          drop_outliers(trial);
-          if (trial_inliers > inliers) {
-            f = std::move(trial);
-            inliers = trial_inliers;
-            matches = trial_matches;
-            result.used_image_alignment = true;
-          }
+    accept_tracked_frame(w);
+  }
+  return record_frame(w);
+}
+
+// Stereo / RGB-D, no map yet: the frame starts one at the origin (its stereo/depth points) when
+// it has min_new_points of them. False when it did not: the frame is then recorded as lost and
+// track returns w.result as it stands.
+bool VisualSlam::Impl::start_first_map(TrackingFrame& w) {
+  FrameData& f = w.f;
+  FrameResult& result = w.result;
+  FrameTimes& times = w.times;
+  bool mapped = false;
+  if (result.stereo_points < options.min_new_points) {
+    result.note = "too few stereo/depth points to start a map (" + std::to_string(result.stereo_points) + ")";
+    result.health = TrackingHealth::kLost;
+    times.tracking_s = seconds_since(w.tracking_start);
+  } else {
+    f.T_world_camera = core::SE3();
+    times.tracking_s = seconds_since(w.tracking_start);
+    const auto mapping_start = Clock::now();
+    insert_keyframe(f);
+    detect_and_close_loop(result);
+    times.mapping_s = seconds_since(mapping_start);
+    result.tracked = true;
+    result.health = TrackingHealth::kOk;
+    result.keyframe = true;
+    result.inliers = static_cast<int>(std::count_if(f.map_point.begin(), f.map_point.end(), [](int id) { return id >= 0; }));
+    result.inlier_ratio = 1.0;
+    mapped = true;
+  }
+  if (!mapped) {
+    relative.emplace_back(-1, core::SE3());
+    result.times = times;
+    result.times.total_s = seconds_since(w.start);
+    ++frames;
+    return false;
+  }
+  return true;
+}
+
+// The last frame's points around `frame`'s pose (ORB-SLAM2 TrackWithMotionModel's search), the
+// radius doubled when fewer than min_motion_matches match.
+int VisualSlam::Impl::search_around_last(FrameData& frame, double motion_radius_px) {
+  int n = search_from_last(frame, last, motion_radius_px);
+  if (n < options.min_motion_matches) {
+    std::fill(frame.map_point.begin(), frame.map_point.end(), -1);
+    n = search_from_last(frame, last, 2.0 * motion_radius_px);
+  }
+  return n;
+}
+
+// Stage 1: the previous frame's points at the constant-velocity prediction, then the motion-only
+// BA when enough match; sets whether the prediction failed (the fallbacks' trigger).
+void VisualSlam::Impl::track_motion_model(TrackingFrame& w) {
+  FrameData& f = w.f;
+  f.T_world_camera = have_velocity && !lost ? last.T_world_camera * velocity : last.T_world_camera;
+  w.matches = 0;
+  w.was_lost = lost;
+  // ORB-SLAM2 TrackWithMotionModel: th 7 for stereo, 15 for RGB-D (cairn: 7, see the option).
+  w.motion_radius_px = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px
+                       : kind == io::SequenceKind::kRgbd ? options.motion_search_radius_rgbd_px
+                                                         : options.motion_search_radius_mono_px;
+  if (have_last && have_velocity && !lost) w.matches = search_around_last(f, w.motion_radius_px);
+  w.inliers = 0;
+  if (w.matches >= options.min_motion_matches) {
+    w.inliers = optimize_pose(f);
+    drop_outliers(f);
+  }
+  w.prediction_failed = w.inliers < std::max(30, w.matches / 2);
+}
+
+// Stage 1b: the prediction explains too little, or there was none (lost). PTAM's answer to
+// fast turns and motion blur (Klein & Murray, ECCV 2008, Sec. 4): the rotation since the last
+// tracked frame from the two small blurry images (vision/image_alignment.hpp), then the last
+// frame's points searched around it as in stage 1. The images' "rotation" also absorbs the
+// shift a translation makes at the scene's depth, so it is tried with no translation and,
+// when there is a velocity, with the velocity's; the most inliers win. A local search from
+// the last tracked pose: it cannot jump to a look-alike place, so no uniqueness test; after
+// being lost the relocalisation's inlier count still applies (verify_relocalisation).
+void VisualSlam::Impl::align_small_images(TrackingFrame& w) {
+  FrameData& f = w.f;
+  if (options.image_alignment && w.prediction_failed && have_last && !last.sbi.empty() && !f.sbi.empty()) {
+    const bool predicted = have_velocity && !lost;
+    const Eigen::Matrix3d R_guess = predicted ? Eigen::Matrix3d(velocity.rotation_matrix().transpose()) : Eigen::Matrix3d::Identity();
+    vision::RotationAlignmentOptions ao;
+    ao.min_correlation = options.image_alignment_min_correlation;
+    const vision::RotationAlignment a = vision::align_rotation(last.sbi, f.sbi, camera, R_guess, ao);
+    if (a.ok) {
+      std::vector<Eigen::Vector3d> shifts{Eigen::Vector3d::Zero()};
+      if (predicted) shifts.push_back(velocity.translation());
+      for (const Eigen::Vector3d& t_last_current : shifts) {
+        FrameData trial = f;
+        std::fill(trial.map_point.begin(), trial.map_point.end(), -1);
+        std::fill(trial.outlier.begin(), trial.outlier.end(), 0);
+        trial.T_world_camera = T_world_last_tracked * core::SE3(core::SO3::from_matrix(a.R_current_previous.transpose()), t_last_current);
+        const int trial_matches = search_around_last(trial, w.motion_radius_px);
+        if (trial_matches < options.min_motion_matches) continue;
+        const int trial_inliers = optimize_pose(trial);
+        drop_outliers(trial);
+        if (trial_inliers > w.inliers) {
+          f = std::move(trial);
+          w.inliers = trial_inliers;
+          w.matches = trial_matches;
+          w.result.used_image_alignment = true;
         }
-      }
-    }
-    if (prediction_failed) {
-      // The prediction explains too little (fast motion, or no prediction): the reference
-      // keyframe's points by descriptor, a PnP RANSAC pose, then the same optimisation; the
-      // best of the three (prediction, images' rotation, reference keyframe) is kept.
-      // When lost, the most recent keyframes are tried too (a bounded stand-in for ORB-SLAM2's
-      // bag-of-words relocalisation over the whole map).
-      std::vector<int> candidates{reference_keyframe >= 0 ? reference_keyframe : static_cast<int>(keyframes.size()) - 1};
-      std::vector<int> rival_keyframes;
-      // The frame's words: for the database query when lost, and for node-restricted matching.
-      std::vector<std::uint32_t> frame_nodes;
-      vision::BowVector frame_bow;
-      const bool use_nodes = options.vocabulary && options.bow_restricted_matching;
-      if (options.vocabulary && (lost || use_nodes)) {
-        frame_bow = options.vocabulary->transform(f.descriptors, nullptr, use_nodes ? &frame_nodes : nullptr, bow_levels_up());
-      }
-      if (lost && options.vocabulary && database.size() > 0) {
-        // Relocalisation (ORB-SLAM2 Tracking::Relocalization): the keyframes the database
-        // ranks best for this frame's words.
-        // The uniqueness test's rivals: every keyframe scoring at least 0.75 x the best, as
-        // ORB-SLAM2's KeyFrameDatabase::DetectRelocalizationCandidates keeps (minScoreToRetain),
-        // up to 40; the 8 best are the candidates tried first.
-        const std::vector<vision::BowDatabase::Result> ranked = database.query(frame_bow, 40);
-        for (std::size_t k = 0; k < ranked.size(); ++k) {
-          const int id = static_cast<int>(ranked[k].id);
-          if (k < 8 && id != candidates.front()) candidates.push_back(id);
-          if (ranked[k].score >= 0.75 * ranked.front().score) rival_keyframes.push_back(id);
-        }
-      } else if (lost) {
-        for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && candidates.size() < 9; --kf) {
-          if (kf != candidates.front() && !keyframes[static_cast<std::size_t>(kf)].bad) candidates.push_back(kf);
-        }
-      }
-      for (const int kf : candidates) {
-        FrameData alternative = f;
-        int alternative_matches = 0;
-        const int alternative_inliers = match_pose_to_keyframe(alternative, kf, use_nodes ? &frame_nodes : nullptr, &alternative_matches);
-        ++summary->reference_fallbacks;
-        if (alternative_inliers > inliers) {
-          f = std::move(alternative);
-          inliers = alternative_inliers;
-          matches = alternative_matches;
-          result.used_reference = true;
-          result.used_image_alignment = false;
-          accepted_keyframe = kf;
-        }
-        if (inliers >= 30) break;
-      }
-      // A fallback pose farther from the last frame than twice its last step plus
-      // loop_drift_floor_m is no tracking step but a jump (a kidnap, a dropped stretch of
-      // frames): PnP against the reference keyframe can land anywhere that keyframe's points
-      // explain, e.g. in its look-alike. ORB-SLAM2's TrackReferenceKeyFrame cannot jump (it
-      // optimises from the last pose); here such a pose is treated as a relocalisation: the
-      // relocalisation's inlier count and uniqueness test, against the database's candidates.
-      // Not without a velocity (the first frames of a map segment: no step to compare with) and
-      // not in monocular runs (metres have no scale there).
-      if (!was_lost && accepted_keyframe >= 0 && have_last && have_velocity && kind != io::SequenceKind::kMonocular) {
-        const double step = velocity.translation().norm();
-        jump_m = (f.T_world_camera.translation() - last.T_world_camera.translation()).norm();
-        if (jump_m > options.loop_drift_floor_m + 2.0 * step) {
-          jumped = true;
-          if (options.vocabulary && database.size() > 0) {
-            if (frame_bow.empty()) frame_bow = options.vocabulary->transform(f.descriptors, nullptr, nullptr, bow_levels_up());
-            const std::vector<vision::BowDatabase::Result> ranked = database.query(frame_bow, 40);
-            for (std::size_t k = 0; k < ranked.size(); ++k) {
-              if (k < 8 || ranked[k].score >= 0.75 * ranked.front().score) rival_keyframes.push_back(static_cast<int>(ranked[k].id));
-            }
-          } else {
-            for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && rival_keyframes.size() < 8; --kf) {
-              if (!keyframes[static_cast<std::size_t>(kf)].bad) rival_keyframes.push_back(kf);
-            }
-          }
-        }
-      }
-      if (was_lost || jumped) {
-        relocalisation_candidates = candidates;
-        for (const int id : rival_keyframes) {
-          if (std::find(candidates.begin(), candidates.end(), id) == candidates.end()) relocalisation_candidates.push_back(id);
-        }
-        if (use_nodes) relocalisation_nodes = std::move(frame_nodes);
-      }
-    }
-    if (result.used_image_alignment) ++summary->image_alignment_poses;
-    const bool relocalising = was_lost || jumped;
-    // Neither the prediction nor the reference keyframe explained the frame (fewer than the 30
-    // first-stage inliers the fallback stops at): the local map then searches around a pose that
-    // is only a guess, and what it finds must reach the relocalisation's count to be believed.
-    // Measured on a kidnap (test_vslam_synthetic.cpp): 16 chance inliers at the old place made
-    // a "degraded" frame, its keyframe put the new view's points there, and the next frames
-    // tracked 458-895 "inliers" 14 m from the truth, reported ok. ORB-SLAM2 calls a frame lost
-    // below 30 local-map inliers (50 after a relocalisation); cairn keeps `degraded` for frames
-    // whose start was sound. Not for monocular runs, whose points come from triangulation only
-    // and which track with fewer (on TUM fr1/desk this rule left 1 of 149 frames tracked, not 13).
-    const bool unverified_start = !relocalising && inliers < 30 && kind != io::SequenceKind::kMonocular;
-    result.motion_matches = matches;
-    int given = 0;
-    if (inliers >= 10) {
-      // The local map must not make the frame worse than the first stage left it (wrong
-      // matches from a poorly predicted projection): then the first stage's result stands.
-      FrameData first_stage = f;
-      const int first_inliers = inliers;
-      inliers = track_local_map(f, &result.sigma_position_m, &given);
-      if (inliers < first_inliers / 2) {
-        f = std::move(first_stage);
-        inliers = first_inliers;
-        given = first_inliers;
-        result.note = "local-map matches contradicted the first stage; its pose kept";
-      }
-    }
-    result.inliers = inliers;
-    result.inlier_ratio = given > 0 ? static_cast<double>(inliers) / given : 0.0;
-    times.tracking_s = seconds_since(tracking_start);
-    if (relocalising && inliers >= options.relocalisation_min_inliers && accepted_keyframe >= 0) {
-      const std::string ambiguous = relocalisation_rival(f, inliers, accepted_keyframe, relocalisation_candidates,
-                                                         relocalisation_nodes.empty() ? nullptr : &relocalisation_nodes);
-      if (!ambiguous.empty()) {
-        result.note = ambiguous;
-        inliers = 0;
-        ++summary->relocalisations_ambiguous;
-      }
-    }
-    if (relocalising && inliers >= options.lost_below_inliers && inliers < options.relocalisation_min_inliers) {
-      result.note = "relocalisation candidate with " + std::to_string(inliers) + " inliers (< " +
-                    std::to_string(options.relocalisation_min_inliers) + " needed after being lost): still lost";
-      inliers = 0;
-    }
-    if (unverified_start && inliers >= options.lost_below_inliers && inliers < options.relocalisation_min_inliers) {
-      result.note = "neither the prediction nor the reference keyframe explained the frame, and the local map gave " +
-                    std::to_string(inliers) + " inliers (< " + std::to_string(options.relocalisation_min_inliers) + "): lost";
-      inliers = 0;
-    }
-    if (jumped) {
-      char buffer[96];
-      std::snprintf(buffer, sizeof buffer, "the fallback pose jumped %.2f m from the last frame: verified as a relocalisation; ", jump_m);
-      result.note = buffer + result.note;
-    }
-    if (inliers < options.lost_below_inliers) {
-      result.health = TrackingHealth::kLost;
-      result.tracked = false;
-      if (result.note.empty()) {
-        result.note = "only " + std::to_string(inliers) + " inlier map-point matches (lost below " +
-                      std::to_string(options.lost_below_inliers) + "): pose from the motion model";
-      }
-      f.T_world_camera = have_velocity ? last.T_world_camera * velocity : last.T_world_camera;
-      lost = true;
-      ++lost_frames;
-      if (options.new_map_after_lost_frames > 0 && kind != io::SequenceKind::kMonocular && lost_frames >= options.new_map_after_lost_frames &&
-          result.stereo_points >= options.min_new_points) {
-        // The Atlas: a new map segment from this frame, where the motion model put it.
-        segment = static_cast<int>(segment_parent.size());
-        segment_parent.push_back(segment);
-        const auto mapping_start = Clock::now();
-        std::fill(f.map_point.begin(), f.map_point.end(), -1);
-        insert_keyframe(f, true);
-        detect_and_close_loop(result);
-        if (!result.loop_closed) merge_with_recent(result);
-        f.T_world_camera = keyframes.back().frame.T_world_camera;
-        times.mapping_s = seconds_since(mapping_start);
-        ++summary->maps_started;
-        result.new_map = true;
-        result.keyframe = true;
-        result.tracked = true;
-        result.health = TrackingHealth::kDegraded;
-        result.note = "lost for " + std::to_string(lost_frames) + " frames: new map segment " + std::to_string(segment) + " started";
-        result.inliers = 0;
-        lost = false;
-        lost_frames = 0;
-        have_velocity = false;
-      } else if (options.new_map_after_lost_frames > 0 && kind == io::SequenceKind::kMonocular && lost_frames >= options.new_map_after_lost_frames) {
-        start_monocular_segment(f, result, times);
-      }
-    } else {
-      lost_frames = 0;
-      result.tracked = true;
-      // Tracking may have relocalised into another segment: a keyframe made now belongs to the
-      // segment whose points it tracked, not to the one it was lost from.
-      segment = segment_of(reference_keyframe);
-      if (relocalising) {
-        result.relocalised = true;
-        ++summary->relocalisations;
-      }
-      lost = false;
-      if (inliers < options.degraded_below_inliers) {
-        result.health = TrackingHealth::kDegraded;
-        result.note = std::to_string(inliers) + " inlier matches (degraded below " + std::to_string(options.degraded_below_inliers) + ")";
-      } else {
-        result.health = TrackingHealth::kOk;
-      }
-      if (need_keyframe(f, inliers)) {
-        const auto mapping_start = Clock::now();
-        insert_keyframe(f);
-        cull_points();
-        if (kind == io::SequenceKind::kMonocular) {
-          triangulate_new_points(static_cast<int>(keyframes.size()) - 1, 20);  // the only source of points (ORB-SLAM2: 20)
-        } else if (options.triangulation_keyframes > 0) {
-          triangulate_new_points(static_cast<int>(keyframes.size()) - 1, options.triangulation_keyframes);
-        }
-        if (options.fuse_points) search_in_neighbours(static_cast<int>(keyframes.size()) - 1);
-        if (options.local_ba) local_bundle_adjustment();
-        if (options.keyframe_culling && kind != io::SequenceKind::kMonocular) cull_keyframes();
-        detect_and_close_loop(result);
-        if (!result.loop_closed) merge_with_recent(result);
-        // The frame is the keyframe: it takes the pose the bundle adjustment and any loop
-        // correction gave the keyframe (its trajectory entry is relative to it), and its points
-        // as fusion, culling and loop fusion left them.
-        f.T_world_camera = keyframes.back().frame.T_world_camera;
-        f.map_point = keyframes.back().frame.map_point;
-        times.mapping_s = seconds_since(mapping_start);
-        result.keyframe = true;
       }
     }
   }
+}
+
+// Stage 2: the prediction explains too little (fast motion, or no prediction): the reference
+// keyframe's points by descriptor, a PnP RANSAC pose, then the same optimisation; the
+// best of the three (prediction, images' rotation, reference keyframe) is kept.
+// When lost, the most recent keyframes are tried too (a bounded stand-in for ORB-SLAM2's
+// bag-of-words relocalisation over the whole map). A relocalisation (after being lost, or a
+// fallback pose that jumped) keeps its candidates for the uniqueness test.
+void VisualSlam::Impl::track_reference_fallback(TrackingFrame& w) {
+  FallbackCandidates c = fallback_candidates(w.f);
+  try_fallback_candidates(w, c);
+  check_fallback_jump(w, c);
+  if (w.was_lost || w.jumped) {
+    w.relocalisation_candidates = c.candidates;
+    for (const int id : c.rival_keyframes) {
+      if (std::find(c.candidates.begin(), c.candidates.end(), id) == c.candidates.end()) w.relocalisation_candidates.push_back(id);
+    }
+    if (c.use_nodes) w.relocalisation_nodes = std::move(c.frame_nodes);
+  }
+}
+
+// The keyframes the fallback tries, the reference keyframe first: when lost, the database's best
+// for the frame's words (and the uniqueness test's rivals), or without a database the most
+// recent keyframes; also the frame's words (for the query and node-restricted matching).
+VisualSlam::Impl::FallbackCandidates VisualSlam::Impl::fallback_candidates(const FrameData& f) const {
+  FallbackCandidates c;
+  std::vector<int>& candidates = c.candidates;
+  candidates = {reference_keyframe >= 0 ? reference_keyframe : static_cast<int>(keyframes.size()) - 1};
+  std::vector<int>& rival_keyframes = c.rival_keyframes;
+  // The frame's words: for the database query when lost, and for node-restricted matching.
+  c.use_nodes = options.vocabulary && options.bow_restricted_matching;
+  if (options.vocabulary && (lost || c.use_nodes)) {
+    c.frame_bow = options.vocabulary->transform(f.descriptors, nullptr, c.use_nodes ? &c.frame_nodes : nullptr, bow_levels_up());
+  }
+  if (lost && options.vocabulary && database.size() > 0) {
+    // Relocalisation (ORB-SLAM2 Tracking::Relocalization): the keyframes the database
+    // ranks best for this frame's words.
+    // The uniqueness test's rivals: every keyframe scoring at least 0.75 x the best, as
+    // ORB-SLAM2's KeyFrameDatabase::DetectRelocalizationCandidates keeps (minScoreToRetain),
+    // up to 40; the 8 best are the candidates tried first.
+    const std::vector<vision::BowDatabase::Result> ranked = database.query(c.frame_bow, 40);
+    for (std::size_t k = 0; k < ranked.size(); ++k) {
+      const int id = static_cast<int>(ranked[k].id);
+      if (k < 8 && id != candidates.front()) candidates.push_back(id);
+      if (ranked[k].score >= 0.75 * ranked.front().score) rival_keyframes.push_back(id);
+    }
+  } else if (lost) {
+    for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && candidates.size() < 9; --kf) {
+      if (kf != candidates.front() && !keyframes[static_cast<std::size_t>(kf)].bad) candidates.push_back(kf);
+    }
+  }
+  return c;
+}
+
+// Each candidate keyframe in turn (match_pose_to_keyframe); the pose with the most inliers so far
+// is kept, and the search stops at 30 inliers.
+void VisualSlam::Impl::try_fallback_candidates(TrackingFrame& w, const FallbackCandidates& c) {
+  FrameData& f = w.f;
+  FrameResult& result = w.result;
+  for (const int kf : c.candidates) {
+    FrameData alternative = f;
+    int alternative_matches = 0;
+    const int alternative_inliers = match_pose_to_keyframe(alternative, kf, c.use_nodes ? &c.frame_nodes : nullptr, &alternative_matches);
+    ++summary->reference_fallbacks;
+    if (alternative_inliers > w.inliers) {
+      f = std::move(alternative);
+      w.inliers = alternative_inliers;
+      w.matches = alternative_matches;
+      result.used_reference = true;
+      result.used_image_alignment = false;
+      w.accepted_keyframe = kf;
+    }
+    if (w.inliers >= 30) break;
+  }
+}
+
+// A fallback pose farther from the last frame than twice its last step plus
+// loop_drift_floor_m is no tracking step but a jump (a kidnap, a dropped stretch of
+// frames): PnP against the reference keyframe can land anywhere that keyframe's points
+// explain, e.g. in its look-alike. ORB-SLAM2's TrackReferenceKeyFrame cannot jump (it
+// optimises from the last pose); here such a pose is treated as a relocalisation: the
+// relocalisation's inlier count and uniqueness test, against the database's candidates.
+// Not without a velocity (the first frames of a map segment: no step to compare with) and
+// not in monocular runs (metres have no scale there).
+void VisualSlam::Impl::check_fallback_jump(TrackingFrame& w, FallbackCandidates& c) {
+  const FrameData& f = w.f;
+  vision::BowVector& frame_bow = c.frame_bow;
+  std::vector<int>& rival_keyframes = c.rival_keyframes;
+  if (!w.was_lost && w.accepted_keyframe >= 0 && have_last && have_velocity && kind != io::SequenceKind::kMonocular) {
+    const double step = velocity.translation().norm();
+    w.jump_m = (f.T_world_camera.translation() - last.T_world_camera.translation()).norm();
+    if (w.jump_m > options.loop_drift_floor_m + 2.0 * step) {
+      w.jumped = true;
+      if (options.vocabulary && database.size() > 0) {
+        if (frame_bow.empty()) frame_bow = options.vocabulary->transform(f.descriptors, nullptr, nullptr, bow_levels_up());
+        const std::vector<vision::BowDatabase::Result> ranked = database.query(frame_bow, 40);
+        for (std::size_t k = 0; k < ranked.size(); ++k) {
+          if (k < 8 || ranked[k].score >= 0.75 * ranked.front().score) rival_keyframes.push_back(static_cast<int>(ranked[k].id));
+        }
+      } else {
+        for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0 && rival_keyframes.size() < 8; --kf) {
+          if (!keyframes[static_cast<std::size_t>(kf)].bad) rival_keyframes.push_back(kf);
+        }
+      }
+    }
+  }
+}
+
+// What the first stage amounts to: whether the frame relocalises (after being lost, or a jump)
+// and whether its start is unverified; counts a pose from the images' rotation.
+void VisualSlam::Impl::assess_first_stage(TrackingFrame& w) {
+  if (w.result.used_image_alignment) ++summary->image_alignment_poses;
+  w.relocalising = w.was_lost || w.jumped;
+  // Neither the prediction nor the reference keyframe explained the frame (fewer than the 30
+  // first-stage inliers the fallback stops at): the local map then searches around a pose that
+  // is only a guess, and what it finds must reach the relocalisation's count to be believed.
+  // Measured on a kidnap (test_vslam_synthetic.cpp): 16 chance inliers at the old place made
+  // a "degraded" frame, its keyframe put the new view's points there, and the next frames
+  // tracked 458-895 "inliers" 14 m from the truth, reported ok. ORB-SLAM2 calls a frame lost
+  // below 30 local-map inliers (50 after a relocalisation); cairn keeps `degraded` for frames
+  // whose start was sound. Not for monocular runs, whose points come from triangulation only
+  // and which track with fewer (on TUM fr1/desk this rule left 1 of 149 frames tracked, not 13).
+  w.unverified_start = !w.relocalising && w.inliers < 30 && kind != io::SequenceKind::kMonocular;
+  w.result.motion_matches = w.matches;
+}
+
+// Stage 3 (ORB-SLAM2 Tracking::TrackLocalMap): the local map's points searched at the first
+// stage's pose and the pose optimised again; ends the tracking time.
+void VisualSlam::Impl::refine_with_local_map(TrackingFrame& w) {
+  FrameData& f = w.f;
+  FrameResult& result = w.result;
+  int& inliers = w.inliers;
+  int& given = w.given;
+  given = 0;
+  if (inliers >= 10) {
+    // The local map must not make the frame worse than the first stage left it (wrong
+    // matches from a poorly predicted projection): then the first stage's result stands.
+    FrameData first_stage = f;
+    const int first_inliers = inliers;
+    inliers = track_local_map(f, &result.sigma_position_m, &given);
+    if (inliers < first_inliers / 2) {
+      f = std::move(first_stage);
+      inliers = first_inliers;
+      given = first_inliers;
+      result.note = "local-map matches contradicted the first stage; its pose kept";
+    }
+  }
+  result.inliers = inliers;
+  result.inlier_ratio = given > 0 ? static_cast<double>(inliers) / given : 0.0;
+  w.times.tracking_s = seconds_since(w.tracking_start);
+}
+
+// The evidence a relocalisation or an unverified start must give: the uniqueness test
+// (relocalisation_rival) and relocalisation_min_inliers; a frame that fails them is lost
+// (inliers 0, the reason in the note). A jump is named in the note.
+void VisualSlam::Impl::verify_relocalisation(TrackingFrame& w) {
+  FrameResult& result = w.result;
+  int& inliers = w.inliers;
+  if (w.relocalising && inliers >= options.relocalisation_min_inliers && w.accepted_keyframe >= 0) {
+    const std::string ambiguous = relocalisation_rival(w.f, inliers, w.accepted_keyframe, w.relocalisation_candidates,
+                                                       w.relocalisation_nodes.empty() ? nullptr : &w.relocalisation_nodes);
+    if (!ambiguous.empty()) {
+      result.note = ambiguous;
+      inliers = 0;
+      ++summary->relocalisations_ambiguous;
+    }
+  }
+  if (w.relocalising && inliers >= options.lost_below_inliers && inliers < options.relocalisation_min_inliers) {
+    result.note = "relocalisation candidate with " + std::to_string(inliers) + " inliers (< " +
+                  std::to_string(options.relocalisation_min_inliers) + " needed after being lost): still lost";
+    inliers = 0;
+  }
+  if (w.unverified_start && inliers >= options.lost_below_inliers && inliers < options.relocalisation_min_inliers) {
+    result.note = "neither the prediction nor the reference keyframe explained the frame, and the local map gave " +
+                  std::to_string(inliers) + " inliers (< " + std::to_string(options.relocalisation_min_inliers) + "): lost";
+    inliers = 0;
+  }
+  if (w.jumped) {
+    char buffer[96];
+    std::snprintf(buffer, sizeof buffer, "the fallback pose jumped %.2f m from the last frame: verified as a relocalisation; ", w.jump_m);
+    result.note = buffer + result.note;
+  }
+}
+
+// Fewer than lost_below_inliers: the frame is lost and takes the motion model's pose; lost for
+// new_map_after_lost_frames, it starts a new map segment (start_stereo_segment, or the monocular
+// two-view initialisation start_monocular_segment).
+void VisualSlam::Impl::handle_lost_frame(TrackingFrame& w) {
+  FrameData& f = w.f;
+  FrameResult& result = w.result;
+  result.health = TrackingHealth::kLost;
+  result.tracked = false;
+  if (result.note.empty()) {
+    result.note = "only " + std::to_string(w.inliers) + " inlier map-point matches (lost below " +
+                  std::to_string(options.lost_below_inliers) + "): pose from the motion model";
+  }
+  f.T_world_camera = have_velocity ? last.T_world_camera * velocity : last.T_world_camera;
+  lost = true;
+  ++lost_frames;
+  if (options.new_map_after_lost_frames > 0 && kind != io::SequenceKind::kMonocular && lost_frames >= options.new_map_after_lost_frames &&
+      result.stereo_points >= options.min_new_points) {
+    start_stereo_segment(w);
+  } else if (options.new_map_after_lost_frames > 0 && kind == io::SequenceKind::kMonocular && lost_frames >= options.new_map_after_lost_frames) {
+    start_monocular_segment(f, result, w.times);
+  }
+}
+
+// The Atlas: a new map segment from this frame, where the motion model put it (stereo / RGB-D).
+void VisualSlam::Impl::start_stereo_segment(TrackingFrame& w) {
+  FrameData& f = w.f;
+  FrameResult& result = w.result;
+  segment = static_cast<int>(segment_parent.size());
+  segment_parent.push_back(segment);
+  const auto mapping_start = Clock::now();
+  std::fill(f.map_point.begin(), f.map_point.end(), -1);
+  insert_keyframe(f, true);
+  detect_and_close_loop(result);
+  if (!result.loop_closed) merge_with_recent(result);
+  f.T_world_camera = keyframes.back().frame.T_world_camera;
+  w.times.mapping_s = seconds_since(mapping_start);
+  ++summary->maps_started;
+  result.new_map = true;
+  result.keyframe = true;
+  result.tracked = true;
+  result.health = TrackingHealth::kDegraded;
+  result.note = "lost for " + std::to_string(lost_frames) + " frames: new map segment " + std::to_string(segment) + " started";
+  result.inliers = 0;
+  lost = false;
+  lost_frames = 0;
+  have_velocity = false;
+}
+
+// The frame is tracked: its health from the inliers, a relocalisation counted, and a keyframe
+// made when need_keyframe asks for one (map_keyframe).
+void VisualSlam::Impl::accept_tracked_frame(TrackingFrame& w) {
+  FrameResult& result = w.result;
+  const int inliers = w.inliers;
+  lost_frames = 0;
+  result.tracked = true;
+  // Tracking may have relocalised into another segment: a keyframe made now belongs to the
+  // segment whose points it tracked, not to the one it was lost from.
+  segment = segment_of(reference_keyframe);
+  if (w.relocalising) {
+    result.relocalised = true;
+    ++summary->relocalisations;
+  }
+  lost = false;
+  if (inliers < options.degraded_below_inliers) {
+    result.health = TrackingHealth::kDegraded;
+    result.note = std::to_string(inliers) + " inlier matches (degraded below " + std::to_string(options.degraded_below_inliers) + ")";
+  } else {
+    result.health = TrackingHealth::kOk;
+  }
+  if (need_keyframe(w.f, inliers)) map_keyframe(w);
+}
+
+// Local mapping of a new keyframe (ORB-SLAM2 LocalMapping::Run, in line): insert, cull points,
+// triangulate, fuse, local BA, cull keyframes, then loop closing or a merge.
+void VisualSlam::Impl::map_keyframe(TrackingFrame& w) {
+  FrameData& f = w.f;
+  FrameResult& result = w.result;
+  const auto mapping_start = Clock::now();
+  insert_keyframe(f);
+  cull_points();
+  if (kind == io::SequenceKind::kMonocular) {
+    triangulate_new_points(static_cast<int>(keyframes.size()) - 1, 20);  // the only source of points (ORB-SLAM2: 20)
+  } else if (options.triangulation_keyframes > 0) {
+    triangulate_new_points(static_cast<int>(keyframes.size()) - 1, options.triangulation_keyframes);
+  }
+  if (options.fuse_points) search_in_neighbours(static_cast<int>(keyframes.size()) - 1);
+  if (options.local_ba) local_bundle_adjustment();
+  if (options.keyframe_culling && kind != io::SequenceKind::kMonocular) cull_keyframes();
+  detect_and_close_loop(result);
+  if (!result.loop_closed) merge_with_recent(result);
+  // The frame is the keyframe: it takes the pose the bundle adjustment and any loop
+  // correction gave the keyframe (its trajectory entry is relative to it), and its points
+  // as fusion, culling and loop fusion left them.
+  f.T_world_camera = keyframes.back().frame.T_world_camera;
+  f.map_point = keyframes.back().frame.map_point;
+  w.times.mapping_s = seconds_since(mapping_start);
+  result.keyframe = true;
+}
+
+// The frame's record: keypoint states, the velocity, `last` (a tracked frame) or the guess (a
+// lost one), its trajectory entry relative to the reference keyframe, the times.
+FrameResult VisualSlam::Impl::record_frame(TrackingFrame& w) {
+  FrameData& f = w.f;
+  FrameResult& result = w.result;
   result.keypoints = f.keypoints;
   result.keypoint_states.resize(f.size());
   for (std::size_t i = 0; i < f.size(); ++i) {
@@ -938,10 +1052,10 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
     }
   }
   result.segment = segment;
-  result.times = times;
-  result.times.total_s = seconds_since(start);
+  result.times = w.times;
+  result.times.total_s = seconds_since(w.start);
   ++frames;
-  return result;
+  return std::move(result);
 }
 
 // The Atlas for one camera (ORB-SLAM3 Tracking::Track: a map lost for good is set aside and the
