@@ -9,18 +9,17 @@
 
 #include "cairn/core/assert.hpp"
 #include "cairn/core/so2.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/filter/nees.hpp"
 #include "cairn/filter/range_bearing.hpp"
 
 namespace cairn::landmarks {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using core::Clock;
+using core::seconds_since;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 struct Step {
   core::Timestamp time;
@@ -153,27 +152,64 @@ struct EkfPass {
   std::size_t steps_done = 0;  // < steps.size() when should_stop ended the pass
 };
 
+// The EKF pass one step at a time (run_ekf): the filter and the association state kept between
+// steps, and the stages of a step. What it reports goes into `pass`.
+class EkfSteps {
+ public:
+  EkfSteps(const LandmarkRun& run, const LandmarkSlamOptions& options, const Truth& truth,
+           const std::vector<std::size_t>& checkpoints, const Vector3& first_pose, EkfPass& pass)
+      : run_(run),
+        options_(options),
+        truth_(truth),
+        checkpoints_(checkpoints),
+        pass_(pass),
+        ekf_(first_pose, Matrix3::Zero(), options.sensor) {}
+
+  // Predict: the motion since the previous step (Step::u with its covariance Step::Q).
+  void predict(const Step& step) { ekf_.predict(step.u, step.Q); }
+  std::vector<std::size_t> valid_observations(const Step& step);
+  void update_known_association(const std::vector<std::size_t>& valid);
+  void update_unknown_association(const Step& step, std::size_t k, const std::vector<std::size_t>& valid);
+  void record_step(const Step& step, std::size_t k);
+  void finish();
+
+ private:
+  std::vector<std::size_t> update_known(const std::vector<std::size_t>& valid);
+  void augment_known(const std::vector<std::size_t>& new_ones);
+  filter::AssociationResult associate(const std::vector<Vector2>& zs);
+  std::vector<std::size_t> update_paired(const std::vector<std::size_t>& valid, const std::vector<Vector2>& zs,
+                                         const filter::AssociationResult& result);
+  void expire_candidates(double now_s);
+  void augment_from_unpaired(std::size_t i, std::size_t k, double now_s);
+  void add_landmark(const Vector2& z, std::int64_t label, std::size_t observation);
+  void label_landmarks_by_truth();
+  void score_pairings();
+  void count_landmark_origins();
+  void count_spurious_rejected();
+  void output_landmarks();
+
+  const LandmarkRun& run_;
+  const LandmarkSlamOptions& options_;
+  const Truth& truth_;
+  const std::vector<std::size_t>& checkpoints_;
+  EkfPass& pass_;
+  filter::EkfSlam ekf_;
+  std::map<std::int64_t, std::size_t> index_of_id_;  // known association
+  std::vector<Candidate> candidates_;                // unknown association
+  std::vector<std::pair<std::size_t, std::size_t>> pairings_;  // (observation, landmark), unknown association
+  std::size_t next_checkpoint_ = 0;
+  double nees_sum_ = 0.0;
+  std::size_t nees_count_ = 0;
+};
+
+// The EKF pass: per step predict, associate and update, augment the map, record; then the
+// scoring of the associations.
 EkfPass run_ekf(const LandmarkRun& run, const std::vector<Step>& steps, const LandmarkSlamOptions& options,
                 const Truth& truth, const std::vector<std::size_t>& checkpoints) {
   EkfPass pass;
   pass.landmark_of_observation.assign(run.observations.size(), std::nullopt);
-  filter::EkfSlam ekf(steps.front().odometry, Matrix3::Zero(), options.sensor);
-  std::map<std::int64_t, std::size_t> index_of_id;  // known association
-  std::vector<Candidate> candidates;                // unknown association
-  std::vector<std::pair<std::size_t, std::size_t>> pairings;  // (observation, landmark), unknown association
-  std::size_t next_checkpoint = 0;
-  double nees_sum = 0.0;
-  std::size_t nees_count = 0;
+  EkfSteps ekf(run, options, truth, checkpoints, steps.front().odometry, pass);
   const auto run_start = Clock::now();
-
-  const auto add_landmark = [&](const Vector2& z, std::int64_t label, std::size_t observation) {
-    const std::optional<std::size_t> index = ekf.add_landmark(z);
-    if (!index) return;
-    pass.labels.push_back(label);
-    pass.landmark_observations.push_back(1);
-    pass.landmark_of_observation[observation] = *index;
-    ++pass.counts.landmarks_created;
-  };
 
   pass.steps_done = steps.size();
   for (std::size_t k = 0; k < steps.size(); ++k) {
@@ -184,192 +220,287 @@ EkfPass run_ekf(const LandmarkRun& run, const std::vector<Step>& steps, const La
     const Step& step = steps[k];
     const auto step_start = Clock::now();
     if (k > 0) {
-      ekf.predict(step.u, step.Q);
+      ekf.predict(step);
     }
-    // Invalid observations are refused by the filter and counted; the rest are associated.
-    std::vector<std::size_t> valid;
-    for (const std::size_t i : step.observations) {
-      const Observation& o = run.observations[i];
-      ++pass.counts.observations;
-      if (o.landmark_id == kSpuriousId) ++pass.counts.spurious_observations;
-      if (!ekf.is_valid_observation(measurement(o))) {
-        ++pass.counts.rejected_invalid;
-        continue;
-      }
-      if (options.association == Association::kKnown && o.landmark_id == kSpuriousId) {
-        continue;  // no identity: known association cannot use it (counted as spurious_rejected below)
-      }
-      valid.push_back(i);
-    }
+    const std::vector<std::size_t> valid = ekf.valid_observations(step);
     if (options.association == Association::kKnown) {
-      std::vector<std::size_t> new_ones;
-      for (const std::size_t i : valid) {
-        const Observation& o = run.observations[i];
-        const auto it = index_of_id.find(o.landmark_id);
-        if (it == index_of_id.end()) {
-          new_ones.push_back(i);
-          continue;
-        }
-        if (ekf.update(it->second, measurement(o))) {
-          pass.landmark_of_observation[i] = it->second;
-          ++pass.landmark_observations[it->second];
-          ++pass.counts.paired_correct;
-        } else {
-          ++pass.counts.rejected_invalid;
-        }
-      }
-      for (const std::size_t i : new_ones) {
-        const Observation& o = run.observations[i];
-        if (index_of_id.count(o.landmark_id) != 0) {
-          // The same id twice in one step: the second is an ordinary update.
-          if (ekf.update(index_of_id[o.landmark_id], measurement(o))) {
-            pass.landmark_of_observation[i] = index_of_id[o.landmark_id];
-            ++pass.landmark_observations[index_of_id[o.landmark_id]];
-            ++pass.counts.paired_correct;
-          }
-          continue;
-        }
-        const std::size_t before = ekf.landmark_count();
-        add_landmark(measurement(o), o.landmark_id, i);
-        if (ekf.landmark_count() > before) index_of_id[o.landmark_id] = before;
-      }
+      ekf.update_known_association(valid);
     } else {
-      std::vector<Vector2> zs;
-      for (const std::size_t i : valid) zs.push_back(measurement(run.observations[i]));
-      const filter::AssociationResult result = options.association == Association::kJcbb
-                                                   ? filter::associate_jcbb(ekf, zs, options.gating)
-                                                   : filter::associate_nearest_neighbour(ekf, zs, options.gating);
-      pass.counts.jcbb_nodes += result.nodes;
-      if (result.search_truncated) ++pass.counts.jcbb_truncated_searches;
-      // Apply the pairings (sequential updates of a jointly compatible set)...
-      std::vector<std::size_t> unpaired;
-      for (std::size_t a = 0; a < valid.size(); ++a) {
-        const std::size_t i = valid[a];
-        const auto& landmark = result.landmark_of_observation[a];
-        if (!landmark) {
-          unpaired.push_back(i);
-          continue;
-        }
-        pairings.emplace_back(i, *landmark);  // scored at the end, against the final map
-        if (ekf.update(*landmark, zs[a])) {
-          pass.landmark_of_observation[i] = *landmark;
-          ++pass.landmark_observations[*landmark];
-        }
-      }
-      // Tentative landmarks: expire, then match or start.
-      const double now_s = step.time.seconds();
-      const auto expired = std::remove_if(candidates.begin(), candidates.end(), [&](const Candidate& c) {
-        return now_s - c.first_time_s > options.candidate_lifetime_s;
-      });
-      pass.counts.candidates_expired += static_cast<std::size_t>(candidates.end() - expired);
-      candidates.erase(expired, candidates.end());
-      for (const std::size_t i : unpaired) {
-        const Observation& o = run.observations[i];
-        if (o.landmark_id != kSpuriousId) ++pass.counts.true_unpaired;
-        const Vector2 p_world = filter::landmark_from_range_bearing(ekf.pose(), measurement(o));
-        auto best = candidates.end();
-        double best_distance = options.candidate_match_distance_m;
-        for (auto it = candidates.begin(); it != candidates.end(); ++it) {
-          if (it->last_step == k) continue;  // one observation per step and candidate
-          const double distance = (it->p_world - p_world).norm();
-          if (distance <= best_distance) {
-            best = it;
-            best_distance = distance;
-          }
-        }
-        if (best == candidates.end()) {
-          candidates.push_back({p_world, now_s, k, 1});
-          best = candidates.end() - 1;
-        } else {
-          ++best->support;
-          best->last_step = k;
-          best->p_world = p_world;
-        }
-        if (best->support >= options.confirmations_to_create) {
-          // Its position comes from this observation, so it stands for this observation's landmark.
-          add_landmark(measurement(o), o.landmark_id, i);
-          candidates.erase(best);
-        }
-      }
+      ekf.update_unknown_association(step, k, valid);
     }
     const double step_s = seconds_since(step_start);
     pass.max_step_s = std::max(pass.max_step_s, step_s);
-    pass.poses.push_back(ekf.pose());
-
-    const std::optional<Vector3> true_pose = truth.pose(step.time);
-    double pose_nees = kNaN;
-    if (true_pose && k > 0) {
-      if (const auto value = filter::pose_nees(ekf.pose(), *true_pose, ekf.pose_covariance())) {
-        pose_nees = *value;
-        nees_sum += pose_nees;
-        ++nees_count;
-      }
-    }
-    if (next_checkpoint < checkpoints.size() && checkpoints[next_checkpoint] == k) {
-      ++next_checkpoint;
-      NeesPoint point;
-      point.step = k;
-      point.time_s = step.time.seconds();
-      point.pose_nees = pose_nees;
-      const auto [mean, count] = landmark_nees_mean(truth, pass.labels, [&](std::size_t l) {
-        return std::make_pair(ekf.landmark(l), ekf.landmark_covariance(l));
-      });
-      point.landmark_nees_mean = mean;
-      point.landmarks_evaluated = count;
-      pass.nees.push_back(point);
-    }
+    ekf.record_step(step, k);
   }
   pass.time_s = seconds_since(run_start);
   pass.mean_step_s = pass.time_s / static_cast<double>(pass.steps_done);
-  pass.mean_pose_nees = nees_count == 0 ? kNaN : nees_sum / static_cast<double>(nees_count);
-  pass.counters = ekf.counters();
-  if (options.association != Association::kKnown) {
-    // Scoring (unknown association): each estimated landmark stands for the true landmark nearest
-    // to its final estimate, if one lies within kLabelDistanceM (else it is counted as made from
-    // clutter); a pairing is correct when the observation came from that true landmark. Without a
-    // true map, the id of the creating observation is kept.
-    constexpr double kLabelDistanceM = 1.0;
-    if (!run.true_landmarks.empty()) {
-      for (std::size_t l = 0; l < ekf.landmark_count(); ++l) {
-        std::int64_t nearest = kSpuriousId;
-        double nearest_distance = kLabelDistanceM;
-        for (const auto& [id, p_true] : run.true_landmarks) {
-          const double distance = (ekf.landmark(l) - p_true).norm();
-          if (distance <= nearest_distance) {
-            nearest = id;
-            nearest_distance = distance;
-          }
-        }
-        pass.labels[l] = nearest;
-      }
-    }
-    for (const auto& [i, l] : pairings) {
-      const std::int64_t id = run.observations[i].landmark_id;
-      if (id != kSpuriousId && pass.labels[l] == id) {
-        ++pass.counts.paired_correct;
-      } else {
-        ++pass.counts.paired_wrong;
-        if (id == kSpuriousId) ++pass.counts.spurious_paired;
-      }
-    }
-  }
-  std::set<std::int64_t> seen;
-  for (const std::int64_t label : pass.labels) {
-    if (label == kSpuriousId) {
-      ++pass.counts.landmarks_from_spurious;
-    } else if (!seen.insert(label).second) {
-      ++pass.counts.landmarks_duplicated;
-    }
-  }
-  for (std::size_t i = 0; i < run.observations.size(); ++i) {
-    if (run.observations[i].landmark_id == kSpuriousId && !pass.landmark_of_observation[i]) {
-      ++pass.counts.spurious_rejected;
-    }
-  }
-  for (std::size_t l = 0; l < ekf.landmark_count(); ++l) {
-    pass.landmarks.push_back({pass.labels[l], ekf.landmark(l), ekf.landmark_covariance(l), pass.landmark_observations[l]});
-  }
+  ekf.finish();
   return pass;
+}
+
+// Invalid observations are refused by the filter and counted; the rest are associated (known
+// association: not those without an identity).
+std::vector<std::size_t> EkfSteps::valid_observations(const Step& step) {
+  std::vector<std::size_t> valid;
+  for (const std::size_t i : step.observations) {
+    const Observation& o = run_.observations[i];
+    ++pass_.counts.observations;
+    if (o.landmark_id == kSpuriousId) ++pass_.counts.spurious_observations;
+    if (!ekf_.is_valid_observation(measurement(o))) {
+      ++pass_.counts.rejected_invalid;
+      continue;
+    }
+    if (options_.association == Association::kKnown && o.landmark_id == kSpuriousId) {
+      continue;  // no identity: known association cannot use it (counted as spurious_rejected below)
+    }
+    valid.push_back(i);
+  }
+  return valid;
+}
+
+// Known association: the observations of mapped ids update the filter, the others add landmarks.
+void EkfSteps::update_known_association(const std::vector<std::size_t>& valid) {
+  const std::vector<std::size_t> new_ones = update_known(valid);
+  augment_known(new_ones);
+}
+
+// Update (known association): each observation of an id already in the map; returns the others.
+std::vector<std::size_t> EkfSteps::update_known(const std::vector<std::size_t>& valid) {
+  std::vector<std::size_t> new_ones;
+  for (const std::size_t i : valid) {
+    const Observation& o = run_.observations[i];
+    const auto it = index_of_id_.find(o.landmark_id);
+    if (it == index_of_id_.end()) {
+      new_ones.push_back(i);
+      continue;
+    }
+    if (ekf_.update(it->second, measurement(o))) {
+      pass_.landmark_of_observation[i] = it->second;
+      ++pass_.landmark_observations[it->second];
+      ++pass_.counts.paired_correct;
+    } else {
+      ++pass_.counts.rejected_invalid;
+    }
+  }
+  return new_ones;
+}
+
+// Augment (known association): a landmark per new id, initialised from its first observation.
+void EkfSteps::augment_known(const std::vector<std::size_t>& new_ones) {
+  for (const std::size_t i : new_ones) {
+    const Observation& o = run_.observations[i];
+    if (index_of_id_.count(o.landmark_id) != 0) {
+      // The same id twice in one step: the second is an ordinary update.
+      if (ekf_.update(index_of_id_[o.landmark_id], measurement(o))) {
+        pass_.landmark_of_observation[i] = index_of_id_[o.landmark_id];
+        ++pass_.landmark_observations[index_of_id_[o.landmark_id]];
+        ++pass_.counts.paired_correct;
+      }
+      continue;
+    }
+    const std::size_t before = ekf_.landmark_count();
+    add_landmark(measurement(o), o.landmark_id, i);
+    if (ekf_.landmark_count() > before) index_of_id_[o.landmark_id] = before;
+  }
+}
+
+// Unknown association: associate (NN or JCBB), update with the pairings, then the unpaired
+// observations support tentative landmarks, which enter the map once confirmed.
+void EkfSteps::update_unknown_association(const Step& step, std::size_t k, const std::vector<std::size_t>& valid) {
+  std::vector<Vector2> zs;
+  for (const std::size_t i : valid) zs.push_back(measurement(run_.observations[i]));
+  const filter::AssociationResult result = associate(zs);
+  // Apply the pairings (sequential updates of a jointly compatible set)...
+  const std::vector<std::size_t> unpaired = update_paired(valid, zs, result);
+  // Tentative landmarks: expire, then match or start.
+  const double now_s = step.time.seconds();
+  expire_candidates(now_s);
+  for (const std::size_t i : unpaired) augment_from_unpaired(i, k, now_s);
+}
+
+// Associate: the step's observations with the map's landmarks, by JCBB or nearest neighbour.
+filter::AssociationResult EkfSteps::associate(const std::vector<Vector2>& zs) {
+  const filter::AssociationResult result = options_.association == Association::kJcbb
+                                               ? filter::associate_jcbb(ekf_, zs, options_.gating)
+                                               : filter::associate_nearest_neighbour(ekf_, zs, options_.gating);
+  pass_.counts.jcbb_nodes += result.nodes;
+  if (result.search_truncated) ++pass_.counts.jcbb_truncated_searches;
+  return result;
+}
+
+// Update: one sequential update per pairing (scored at the end); returns the unpaired observations.
+std::vector<std::size_t> EkfSteps::update_paired(const std::vector<std::size_t>& valid, const std::vector<Vector2>& zs,
+                                                 const filter::AssociationResult& result) {
+  std::vector<std::size_t> unpaired;
+  for (std::size_t a = 0; a < valid.size(); ++a) {
+    const std::size_t i = valid[a];
+    const auto& landmark = result.landmark_of_observation[a];
+    if (!landmark) {
+      unpaired.push_back(i);
+      continue;
+    }
+    pairings_.emplace_back(i, *landmark);  // scored at the end, against the final map
+    if (ekf_.update(*landmark, zs[a])) {
+      pass_.landmark_of_observation[i] = *landmark;
+      ++pass_.landmark_observations[*landmark];
+    }
+  }
+  return unpaired;
+}
+
+// Tentative landmarks older than candidate_lifetime_s are dropped, and counted.
+void EkfSteps::expire_candidates(double now_s) {
+  const auto expired = std::remove_if(candidates_.begin(), candidates_.end(), [&](const Candidate& c) {
+    return now_s - c.first_time_s > options_.candidate_lifetime_s;
+  });
+  pass_.counts.candidates_expired += static_cast<std::size_t>(candidates_.end() - expired);
+  candidates_.erase(expired, candidates_.end());
+}
+
+// Augment (unknown association): unpaired observation i supports the nearest tentative landmark
+// within candidate_match_distance_m (or starts one); confirmed, it becomes a landmark.
+void EkfSteps::augment_from_unpaired(std::size_t i, std::size_t k, double now_s) {
+  const Observation& o = run_.observations[i];
+  if (o.landmark_id != kSpuriousId) ++pass_.counts.true_unpaired;
+  const Vector2 p_world = filter::landmark_from_range_bearing(ekf_.pose(), measurement(o));
+  auto best = candidates_.end();
+  double best_distance = options_.candidate_match_distance_m;
+  for (auto it = candidates_.begin(); it != candidates_.end(); ++it) {
+    if (it->last_step == k) continue;  // one observation per step and candidate
+    const double distance = (it->p_world - p_world).norm();
+    if (distance <= best_distance) {
+      best = it;
+      best_distance = distance;
+    }
+  }
+  if (best == candidates_.end()) {
+    candidates_.push_back({p_world, now_s, k, 1});
+    best = candidates_.end() - 1;
+  } else {
+    ++best->support;
+    best->last_step = k;
+    best->p_world = p_world;
+  }
+  if (best->support >= options_.confirmations_to_create) {
+    // Its position comes from this observation, so it stands for this observation's landmark.
+    add_landmark(measurement(o), o.landmark_id, i);
+    candidates_.erase(best);
+  }
+}
+
+// A new landmark from observation z (unless the filter refuses it), labelled `label`.
+void EkfSteps::add_landmark(const Vector2& z, std::int64_t label, std::size_t observation) {
+  const std::optional<std::size_t> index = ekf_.add_landmark(z);
+  if (!index) return;
+  pass_.labels.push_back(label);
+  pass_.landmark_observations.push_back(1);
+  pass_.landmark_of_observation[observation] = *index;
+  ++pass_.counts.landmarks_created;
+}
+
+// Record: the step's pose, its NEES against ground truth, and at a checkpoint the landmarks' NEES.
+void EkfSteps::record_step(const Step& step, std::size_t k) {
+  pass_.poses.push_back(ekf_.pose());
+
+  const std::optional<Vector3> true_pose = truth_.pose(step.time);
+  double pose_nees = kNaN;
+  if (true_pose && k > 0) {
+    if (const auto value = filter::pose_nees(ekf_.pose(), *true_pose, ekf_.pose_covariance())) {
+      pose_nees = *value;
+      nees_sum_ += pose_nees;
+      ++nees_count_;
+    }
+  }
+  if (next_checkpoint_ < checkpoints_.size() && checkpoints_[next_checkpoint_] == k) {
+    ++next_checkpoint_;
+    NeesPoint point;
+    point.step = k;
+    point.time_s = step.time.seconds();
+    point.pose_nees = pose_nees;
+    const auto [mean, count] = landmark_nees_mean(truth_, pass_.labels, [&](std::size_t l) {
+      return std::make_pair(ekf_.landmark(l), ekf_.landmark_covariance(l));
+    });
+    point.landmark_nees_mean = mean;
+    point.landmarks_evaluated = count;
+    pass_.nees.push_back(point);
+  }
+}
+
+// After the last step: mean NEES, the filter's counters, the scoring of the associations and
+// the landmarks.
+void EkfSteps::finish() {
+  pass_.mean_pose_nees = nees_count_ == 0 ? kNaN : nees_sum_ / static_cast<double>(nees_count_);
+  pass_.counters = ekf_.counters();
+  if (options_.association != Association::kKnown) {
+    label_landmarks_by_truth();
+    score_pairings();
+  }
+  count_landmark_origins();
+  count_spurious_rejected();
+  output_landmarks();
+}
+
+// Scoring (unknown association): each estimated landmark stands for the true landmark nearest
+// to its final estimate, if one lies within kLabelDistanceM (else it is counted as made from
+// clutter); a pairing is correct when the observation came from that true landmark. Without a
+// true map, the id of the creating observation is kept.
+void EkfSteps::label_landmarks_by_truth() {
+  constexpr double kLabelDistanceM = 1.0;
+  if (!run_.true_landmarks.empty()) {
+    for (std::size_t l = 0; l < ekf_.landmark_count(); ++l) {
+      std::int64_t nearest = kSpuriousId;
+      double nearest_distance = kLabelDistanceM;
+      for (const auto& [id, p_true] : run_.true_landmarks) {
+        const double distance = (ekf_.landmark(l) - p_true).norm();
+        if (distance <= nearest_distance) {
+          nearest = id;
+          nearest_distance = distance;
+        }
+      }
+      pass_.labels[l] = nearest;
+    }
+  }
+}
+
+// A pairing is correct when its observation came from the true landmark its landmark stands for.
+void EkfSteps::score_pairings() {
+  for (const auto& [i, l] : pairings_) {
+    const std::int64_t id = run_.observations[i].landmark_id;
+    if (id != kSpuriousId && pass_.labels[l] == id) {
+      ++pass_.counts.paired_correct;
+    } else {
+      ++pass_.counts.paired_wrong;
+      if (id == kSpuriousId) ++pass_.counts.spurious_paired;
+    }
+  }
+}
+
+// Landmarks made from clutter, and second (third...) landmarks for one true landmark.
+void EkfSteps::count_landmark_origins() {
+  std::set<std::int64_t> seen;
+  for (const std::int64_t label : pass_.labels) {
+    if (label == kSpuriousId) {
+      ++pass_.counts.landmarks_from_spurious;
+    } else if (!seen.insert(label).second) {
+      ++pass_.counts.landmarks_duplicated;
+    }
+  }
+}
+
+// Clutter that never became (or updated) a landmark.
+void EkfSteps::count_spurious_rejected() {
+  for (std::size_t i = 0; i < run_.observations.size(); ++i) {
+    if (run_.observations[i].landmark_id == kSpuriousId && !pass_.landmark_of_observation[i]) {
+      ++pass_.counts.spurious_rejected;
+    }
+  }
+}
+
+// The filter's landmarks with their labels, covariances and observation counts.
+void EkfSteps::output_landmarks() {
+  for (std::size_t l = 0; l < ekf_.landmark_count(); ++l) {
+    pass_.landmarks.push_back({pass_.labels[l], ekf_.landmark(l), ekf_.landmark_covariance(l), pass_.landmark_observations[l]});
+  }
 }
 
 struct GraphPass {
@@ -383,18 +514,100 @@ struct GraphPass {
   std::size_t steps_done = 0;  // < steps.size() when should_stop ended the pass
 };
 
+// The growing graph of run_graph: the variables and factors of the steps added so far, and the
+// landmark variable of each association key (made at the key's first observation).
+struct GraphBuild {
+  GraphBuild(std::size_t keys, const LandmarkSlamOptions& options)
+      : variable_of_key(keys), R(options.sensor.measurement_covariance()), R_information(R.inverse()) {}
+
+  backend::LandmarkGraph2D graph;
+  std::vector<std::optional<std::size_t>> variable_of_key;
+  std::vector<std::int64_t> variable_labels;
+  std::vector<std::size_t> variable_observations;
+  Matrix2 R;
+  Matrix2 R_information;
+};
+
+// Step `built` joins the graph: its pose (dead-reckoned from the last) with the odometry factor,
+// then a range-bearing factor per associated observation, a landmark variable at a key's first.
+void add_step_to_graph(const LandmarkRun& run, const Step& step, std::size_t built,
+                       const std::vector<std::optional<std::size_t>>& landmark_key_of_observation,
+                       const std::vector<std::int64_t>& key_labels, GraphBuild& build) {
+  backend::LandmarkGraph2D& graph = build.graph;
+  if (built == 0) {
+    graph.poses.push_back(step.odometry);
+  } else {
+    graph.poses.push_back(filter::compose(graph.poses.back(), step.u));
+    backend::OdometryFactor2D factor;
+    factor.from = built - 1;
+    factor.to = built;
+    factor.u = step.u;
+    factor.information = step.Q.inverse();
+    graph.odometry.push_back(factor);
+  }
+  for (const std::size_t i : step.observations) {
+    const auto& key = landmark_key_of_observation[i];
+    if (!key) continue;
+    const Vector2 z = measurement(run.observations[i]);
+    if (!build.variable_of_key[*key]) {
+      build.variable_of_key[*key] = graph.landmarks.size();
+      graph.landmarks.push_back(filter::landmark_from_range_bearing(graph.poses.back(), z));
+      build.variable_labels.push_back(key_labels[*key]);
+      build.variable_observations.push_back(0);
+    }
+    backend::RangeBearingFactor2D factor;
+    factor.pose = built;
+    factor.landmark = *build.variable_of_key[*key];
+    factor.z = z;
+    factor.information = build.R_information;
+    graph.observations.push_back(factor);
+    ++build.variable_observations[factor.landmark];
+  }
+}
+
+// Solves the graph at a checkpoint, with the marginals of its last pose and every landmark, and
+// records the NEES there; at the last checkpoint (or when stopping) also the landmarks.
+void solve_checkpoint(const std::vector<Step>& steps, const LandmarkSlamOptions& options, const Truth& truth,
+                      std::size_t checkpoint, bool last, bool stopping, GraphBuild& build, GraphPass& pass) {
+  backend::LandmarkGraph2D& graph = build.graph;
+  const auto solve_start = Clock::now();
+  pass.summary = backend::optimize(graph, options.graph);
+  ++pass.solves;
+  std::vector<std::size_t> all_landmarks(graph.landmarks.size());
+  for (std::size_t l = 0; l < all_landmarks.size(); ++l) all_landmarks[l] = l;
+  const backend::LandmarkGraphMarginals marginals =
+      backend::marginal_covariances(graph, {graph.poses.size() - 1}, all_landmarks);
+  pass.final_solve_s = seconds_since(solve_start);
+
+  NeesPoint point;
+  point.step = checkpoint;
+  point.time_s = steps[checkpoint].time.seconds();
+  point.pose_nees = kNaN;
+  const std::optional<Vector3> true_pose = truth.pose(steps[checkpoint].time);
+  if (true_pose && marginals.ok && checkpoint > 0) {
+    if (const auto value = filter::pose_nees(graph.poses.back(), *true_pose, marginals.poses[0])) point.pose_nees = *value;
+  }
+  const auto [mean, count] = landmark_nees_mean(truth, build.variable_labels, [&](std::size_t l) {
+    return std::make_pair(graph.landmarks[l], marginals.landmarks[l]);
+  });
+  point.landmark_nees_mean = marginals.ok ? mean : kNaN;
+  point.landmarks_evaluated = marginals.ok ? count : 0;
+  if (stopping && !pass.nees.empty() && pass.nees.back().step == checkpoint) pass.nees.pop_back();  // solved again
+  pass.nees.push_back(point);
+  if (last || stopping) {
+    for (std::size_t l = 0; l < graph.landmarks.size(); ++l) {
+      pass.landmarks.push_back({build.variable_labels[l], graph.landmarks[l], marginals.landmarks[l], build.variable_observations[l]});
+    }
+  }
+}
+
 // Graph SLAM over growing prefixes of the run, warm-started from the previous prefix.
 GraphPass run_graph(const LandmarkRun& run, const std::vector<Step>& steps, const LandmarkSlamOptions& options,
                     const Truth& truth, const std::vector<std::size_t>& checkpoints,
                     const std::vector<std::optional<std::size_t>>& landmark_key_of_observation,
                     const std::vector<std::int64_t>& key_labels) {
   GraphPass pass;
-  backend::LandmarkGraph2D graph;
-  std::vector<std::optional<std::size_t>> variable_of_key(key_labels.size());
-  std::vector<std::int64_t> variable_labels;
-  std::vector<std::size_t> variable_observations;
-  const Matrix2 R = options.sensor.measurement_covariance();
-  const Matrix2 R_information = R.inverse();
+  GraphBuild build(key_labels.size(), options);
   std::size_t built = 0;  // steps already in the graph
   const auto start = Clock::now();
   bool stopping = false;
@@ -406,77 +619,146 @@ GraphPass run_graph(const LandmarkRun& run, const std::vector<Step>& steps, cons
         checkpoint = built - 1;
         break;
       }
-      const Step& step = steps[built];
-      if (built == 0) {
-        graph.poses.push_back(step.odometry);
-      } else {
-        graph.poses.push_back(filter::compose(graph.poses.back(), step.u));
-        backend::OdometryFactor2D factor;
-        factor.from = built - 1;
-        factor.to = built;
-        factor.u = step.u;
-        factor.information = step.Q.inverse();
-        graph.odometry.push_back(factor);
-      }
-      for (const std::size_t i : step.observations) {
-        const auto& key = landmark_key_of_observation[i];
-        if (!key) continue;
-        const Vector2 z = measurement(run.observations[i]);
-        if (!variable_of_key[*key]) {
-          variable_of_key[*key] = graph.landmarks.size();
-          graph.landmarks.push_back(filter::landmark_from_range_bearing(graph.poses.back(), z));
-          variable_labels.push_back(key_labels[*key]);
-          variable_observations.push_back(0);
-        }
-        backend::RangeBearingFactor2D factor;
-        factor.pose = built;
-        factor.landmark = *variable_of_key[*key];
-        factor.z = z;
-        factor.information = R_information;
-        graph.observations.push_back(factor);
-        ++variable_observations[factor.landmark];
-      }
+      add_step_to_graph(run, steps[built], built, landmark_key_of_observation, key_labels, build);
       const int every = options.graph_solve_every_steps;
       if (every > 0 && built > 0 && built < checkpoint && built % static_cast<std::size_t>(every) == 0) {
-        backend::optimize(graph, options.graph);
+        backend::optimize(build.graph, options.graph);
         ++pass.solves;
       }
     }
-    const auto solve_start = Clock::now();
-    pass.summary = backend::optimize(graph, options.graph);
-    ++pass.solves;
-    std::vector<std::size_t> all_landmarks(graph.landmarks.size());
-    for (std::size_t l = 0; l < all_landmarks.size(); ++l) all_landmarks[l] = l;
-    const backend::LandmarkGraphMarginals marginals =
-        backend::marginal_covariances(graph, {graph.poses.size() - 1}, all_landmarks);
-    pass.final_solve_s = seconds_since(solve_start);
-
-    NeesPoint point;
-    point.step = checkpoint;
-    point.time_s = steps[checkpoint].time.seconds();
-    point.pose_nees = kNaN;
-    const std::optional<Vector3> true_pose = truth.pose(steps[checkpoint].time);
-    if (true_pose && marginals.ok && checkpoint > 0) {
-      if (const auto value = filter::pose_nees(graph.poses.back(), *true_pose, marginals.poses[0])) point.pose_nees = *value;
-    }
-    const auto [mean, count] = landmark_nees_mean(truth, variable_labels, [&](std::size_t l) {
-      return std::make_pair(graph.landmarks[l], marginals.landmarks[l]);
-    });
-    point.landmark_nees_mean = marginals.ok ? mean : kNaN;
-    point.landmarks_evaluated = marginals.ok ? count : 0;
-    if (stopping && !pass.nees.empty() && pass.nees.back().step == checkpoint) pass.nees.pop_back();  // solved again
-    pass.nees.push_back(point);
-    if (checkpoint == checkpoints.back() || stopping) {
-      for (std::size_t l = 0; l < graph.landmarks.size(); ++l) {
-        pass.landmarks.push_back({variable_labels[l], graph.landmarks[l], marginals.landmarks[l], variable_observations[l]});
-      }
-    }
+    solve_checkpoint(steps, options, truth, checkpoint, checkpoint == checkpoints.back(), stopping, build, pass);
     if (stopping) break;
   }
-  pass.poses = graph.poses;
-  pass.steps_done = graph.poses.size();
+  pass.poses = build.graph.poses;
+  pass.steps_done = build.graph.poses.size();
   pass.time_s = seconds_since(start);
   return pass;
+}
+
+// Interrupted (options.should_stop): what follows sees the run up to the last step processed.
+void truncate_run(std::size_t done, std::vector<Step>& steps, std::vector<std::size_t>& checkpoints) {
+  if (done >= steps.size()) return;
+  steps.resize(done);
+  while (!checkpoints.empty() && checkpoints.back() >= done) checkpoints.pop_back();
+  if (checkpoints.empty() || checkpoints.back() != done - 1) checkpoints.push_back(done - 1);
+}
+
+// Graph SLAM's result: its poses and landmarks, and its part of the report.
+void take_graph_pass(const GraphPass& graph, std::vector<Step>& steps, std::vector<std::size_t>& checkpoints,
+                     std::vector<Vector3>& poses, LandmarkSlamResult& result) {
+  LandmarkSlamReport& report = result.report;
+  poses = graph.poses;
+  truncate_run(graph.steps_done, steps, checkpoints);
+  result.landmarks = graph.landmarks;
+  report.nees = graph.nees;
+  report.graph_summary = graph.summary;
+  report.graph_time_s = graph.time_s;
+  report.graph_final_solve_s = graph.final_solve_s;
+  report.graph_solves = graph.solves;
+  report.mean_pose_nees_all_steps = kNaN;
+}
+
+// The EKF, as the estimate (EKF method) or as the association front end of graph SLAM with
+// unknown association.
+void run_with_ekf(const LandmarkRun& run, const LandmarkSlamOptions& options, const Truth& truth,
+                  std::vector<Step>& steps, std::vector<std::size_t>& checkpoints, std::size_t steps_in_run,
+                  std::vector<Vector3>& poses, LandmarkSlamResult& result) {
+  LandmarkSlamReport& report = result.report;
+  EkfPass ekf = run_ekf(run, steps, options, truth, checkpoints);
+  truncate_run(ekf.steps_done, steps, checkpoints);
+  report.association_counts = ekf.counts;
+  report.ekf_counters = ekf.counters;
+  report.ekf_time_s = ekf.time_s;
+  report.ekf_mean_step_s = ekf.mean_step_s;
+  report.ekf_max_step_s = ekf.max_step_s;
+  if (options.method == Method::kEkf) {
+    poses = ekf.poses;
+    result.landmarks = ekf.landmarks;
+    report.nees = ekf.nees;
+    report.mean_pose_nees_all_steps = ekf.mean_pose_nees;
+  } else {
+    // The EKF (the association front end) already stopped: the graph takes all it associated.
+    LandmarkSlamOptions graph_options = options;
+    if (steps.size() < steps_in_run) graph_options.should_stop = nullptr;
+    const GraphPass graph =
+        run_graph(run, steps, graph_options, truth, checkpoints, ekf.landmark_of_observation, ekf.labels);
+    take_graph_pass(graph, steps, checkpoints, poses, result);
+  }
+}
+
+// Known association: the landmark key is the id, numbered in order of first sight; invalid and
+// unidentified observations get none.
+void known_association_keys(const LandmarkRun& run, const LandmarkSlamOptions& options,
+                            std::vector<std::optional<std::size_t>>& key_of_observation,
+                            std::vector<std::int64_t>& labels, AssociationCounts& counts) {
+  std::map<std::int64_t, std::size_t> key_of_id;
+  for (std::size_t i = 0; i < run.observations.size(); ++i) {
+    const Observation& o = run.observations[i];
+    ++counts.observations;
+    if (o.landmark_id == kSpuriousId) ++counts.spurious_observations;
+    if (!(std::isfinite(o.range_m) && std::isfinite(o.bearing_rad) && o.range_m > options.sensor.min_range_m)) {
+      ++counts.rejected_invalid;
+      continue;
+    }
+    if (o.landmark_id == kSpuriousId) {
+      ++counts.spurious_rejected;  // no identity: known association cannot use it
+      continue;
+    }
+    const auto [it, inserted] = key_of_id.emplace(o.landmark_id, labels.size());
+    if (inserted) {
+      labels.push_back(o.landmark_id);
+      ++counts.landmarks_created;
+    } else {
+      ++counts.paired_correct;
+    }
+    key_of_observation[i] = it->second;
+  }
+}
+
+// Graph SLAM with known association.
+void run_graph_known(const LandmarkRun& run, const LandmarkSlamOptions& options, const Truth& truth,
+                     std::vector<Step>& steps, std::vector<std::size_t>& checkpoints, std::vector<Vector3>& poses,
+                     LandmarkSlamResult& result) {
+  std::vector<std::int64_t> labels;
+  std::vector<std::optional<std::size_t>> key_of_observation(run.observations.size());
+  known_association_keys(run, options, key_of_observation, labels, result.report.association_counts);
+  const GraphPass graph = run_graph(run, steps, options, truth, checkpoints, key_of_observation, labels);
+  take_graph_pass(graph, steps, checkpoints, poses, result);
+}
+
+// Errors of the trajectory against ground truth, no alignment (both in the world frame).
+void score_trajectory(const Truth& truth, LandmarkSlamResult& result) {
+  LandmarkSlamReport& report = result.report;
+  double sum_squared = 0.0;
+  report.ate_max_m = 0.0;
+  report.final_position_error_m = kNaN;
+  report.final_heading_error_rad = kNaN;
+  for (const TimedPose& estimate : result.trajectory) {
+    const std::optional<Vector3> true_pose = truth.pose(estimate.time);
+    if (!true_pose) continue;
+    const double error = (estimate.pose.head<2>() - true_pose->head<2>()).norm();
+    sum_squared += error * error;
+    report.ate_max_m = std::max(report.ate_max_m, error);
+    ++report.ate_poses;
+    report.final_position_error_m = error;
+    report.final_heading_error_rad = std::abs(core::wrap_angle(estimate.pose.z() - true_pose->z()));
+  }
+  report.ate_rmse_m = report.ate_poses == 0 ? kNaN : std::sqrt(sum_squared / static_cast<double>(report.ate_poses));
+  if (report.ate_poses == 0) report.ate_max_m = kNaN;
+}
+
+// RMS error of the landmarks that stand for a true landmark.
+void score_landmarks(const Truth& truth, LandmarkSlamResult& result) {
+  LandmarkSlamReport& report = result.report;
+  double landmark_sum = 0.0;
+  std::size_t landmark_count = 0;
+  for (const LandmarkEstimate& l : result.landmarks) {
+    const Vector2* p_true = truth.landmark(l.id);
+    if (p_true == nullptr) continue;
+    landmark_sum += (l.p_world - *p_true).squaredNorm();
+    ++landmark_count;
+  }
+  report.landmark_rmse_m = landmark_count == 0 ? kNaN : std::sqrt(landmark_sum / static_cast<double>(landmark_count));
 }
 
 }  // namespace
@@ -564,13 +846,6 @@ LandmarkSlamResult run_landmark_slam(const LandmarkRun& run, const LandmarkSlamO
   const Truth truth(run);
   std::vector<std::size_t> checkpoints = checkpoint_steps(steps.size(), options.nees_checkpoints);
   const std::size_t steps_in_run = steps.size();
-  // Interrupted (options.should_stop): what follows sees the run up to the last step processed.
-  auto truncate = [&](std::size_t done) {
-    if (done >= steps.size()) return;
-    steps.resize(done);
-    while (!checkpoints.empty() && checkpoints.back() >= done) checkpoints.pop_back();
-    if (checkpoints.empty() || checkpoints.back() != done - 1) checkpoints.push_back(done - 1);
-  };
 
   LandmarkSlamResult result;
   LandmarkSlamReport& report = result.report;
@@ -582,71 +857,9 @@ LandmarkSlamResult run_landmark_slam(const LandmarkRun& run, const LandmarkSlamO
   // The EKF runs for the EKF method, and as the association front end for graph SLAM with
   // unknown association.
   if (options.method == Method::kEkf || options.association != Association::kKnown) {
-    EkfPass ekf = run_ekf(run, steps, options, truth, checkpoints);
-    truncate(ekf.steps_done);
-    report.association_counts = ekf.counts;
-    report.ekf_counters = ekf.counters;
-    report.ekf_time_s = ekf.time_s;
-    report.ekf_mean_step_s = ekf.mean_step_s;
-    report.ekf_max_step_s = ekf.max_step_s;
-    if (options.method == Method::kEkf) {
-      poses = ekf.poses;
-      result.landmarks = ekf.landmarks;
-      report.nees = ekf.nees;
-      report.mean_pose_nees_all_steps = ekf.mean_pose_nees;
-    } else {
-      // The EKF (the association front end) already stopped: the graph takes all it associated.
-      LandmarkSlamOptions graph_options = options;
-      if (steps.size() < steps_in_run) graph_options.should_stop = nullptr;
-      const GraphPass graph =
-          run_graph(run, steps, graph_options, truth, checkpoints, ekf.landmark_of_observation, ekf.labels);
-      poses = graph.poses;
-      truncate(graph.steps_done);
-      result.landmarks = graph.landmarks;
-      report.nees = graph.nees;
-      report.graph_summary = graph.summary;
-      report.graph_time_s = graph.time_s;
-      report.graph_final_solve_s = graph.final_solve_s;
-      report.graph_solves = graph.solves;
-      report.mean_pose_nees_all_steps = kNaN;
-    }
+    run_with_ekf(run, options, truth, steps, checkpoints, steps_in_run, poses, result);
   } else {
-    // Known association: the landmark key is the id, numbered in order of first sight.
-    std::map<std::int64_t, std::size_t> key_of_id;
-    std::vector<std::int64_t> labels;
-    std::vector<std::optional<std::size_t>> key_of_observation(run.observations.size());
-    AssociationCounts& counts = report.association_counts;
-    for (std::size_t i = 0; i < run.observations.size(); ++i) {
-      const Observation& o = run.observations[i];
-      ++counts.observations;
-      if (o.landmark_id == kSpuriousId) ++counts.spurious_observations;
-      if (!(std::isfinite(o.range_m) && std::isfinite(o.bearing_rad) && o.range_m > options.sensor.min_range_m)) {
-        ++counts.rejected_invalid;
-        continue;
-      }
-      if (o.landmark_id == kSpuriousId) {
-        ++counts.spurious_rejected;  // no identity: known association cannot use it
-        continue;
-      }
-      const auto [it, inserted] = key_of_id.emplace(o.landmark_id, labels.size());
-      if (inserted) {
-        labels.push_back(o.landmark_id);
-        ++counts.landmarks_created;
-      } else {
-        ++counts.paired_correct;
-      }
-      key_of_observation[i] = it->second;
-    }
-    const GraphPass graph = run_graph(run, steps, options, truth, checkpoints, key_of_observation, labels);
-    poses = graph.poses;
-    truncate(graph.steps_done);
-    result.landmarks = graph.landmarks;
-    report.nees = graph.nees;
-    report.graph_summary = graph.summary;
-    report.graph_time_s = graph.time_s;
-    report.graph_final_solve_s = graph.final_solve_s;
-    report.graph_solves = graph.solves;
-    report.mean_pose_nees_all_steps = kNaN;
+    run_graph_known(run, options, truth, steps, checkpoints, poses, result);
   }
 
   report.steps = steps.size();
@@ -654,33 +867,8 @@ LandmarkSlamResult run_landmark_slam(const LandmarkRun& run, const LandmarkSlamO
   report.interrupted = steps.size() < steps_in_run;
   for (std::size_t k = 0; k < steps.size(); ++k) result.trajectory.push_back({steps[k].time, poses[k]});
   report.landmarks = result.landmarks.size();
-
-  // Errors against ground truth, no alignment (both in the world frame).
-  double sum_squared = 0.0;
-  report.ate_max_m = 0.0;
-  report.final_position_error_m = kNaN;
-  report.final_heading_error_rad = kNaN;
-  for (const TimedPose& estimate : result.trajectory) {
-    const std::optional<Vector3> true_pose = truth.pose(estimate.time);
-    if (!true_pose) continue;
-    const double error = (estimate.pose.head<2>() - true_pose->head<2>()).norm();
-    sum_squared += error * error;
-    report.ate_max_m = std::max(report.ate_max_m, error);
-    ++report.ate_poses;
-    report.final_position_error_m = error;
-    report.final_heading_error_rad = std::abs(core::wrap_angle(estimate.pose.z() - true_pose->z()));
-  }
-  report.ate_rmse_m = report.ate_poses == 0 ? kNaN : std::sqrt(sum_squared / static_cast<double>(report.ate_poses));
-  if (report.ate_poses == 0) report.ate_max_m = kNaN;
-  double landmark_sum = 0.0;
-  std::size_t landmark_count = 0;
-  for (const LandmarkEstimate& l : result.landmarks) {
-    const Vector2* p_true = truth.landmark(l.id);
-    if (p_true == nullptr) continue;
-    landmark_sum += (l.p_world - *p_true).squaredNorm();
-    ++landmark_count;
-  }
-  report.landmark_rmse_m = landmark_count == 0 ? kNaN : std::sqrt(landmark_sum / static_cast<double>(landmark_count));
+  score_trajectory(truth, result);
+  score_landmarks(truth, result);
   report.total_time_s = seconds_since(start);
   return result;
 }

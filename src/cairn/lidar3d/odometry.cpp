@@ -11,14 +11,13 @@
 #include <stdexcept>
 
 #include "cairn/core/threads.hpp"
+#include "cairn/core/timer.hpp"
 
 namespace cairn::lidar3d {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using core::Clock;
+using core::seconds_since;
 
 // KISS-ICP's model error of a pose deviation (Vizzo et al. 2023, eq. 3): the largest
 // displacement it causes on a point within max_range.
@@ -101,15 +100,6 @@ std::string_view to_string(DeskewMode mode) {
   return "?";
 }
 
-std::string_view to_string(Health health) {
-  switch (health) {
-    case Health::kOk: return "ok";
-    case Health::kDegraded: return "degraded";
-    case Health::kLost: return "lost";
-  }
-  return "?";
-}
-
 LidarOdometry::LidarOdometry(const LidarOdometryOptions& options)
     : options_(options),
       map_(VoxelHashMapOptions{options.voxel_size_m, options.max_points_per_voxel}),
@@ -122,6 +112,30 @@ LidarOdometry::LidarOdometry(const LidarOdometryOptions& options)
 
 LidarOdometry::~LidarOdometry() = default;
 
+// The state one add_scan call shares between its stages.
+struct LidarOdometry::ScanWork {
+  double time_s = 0.0;  ///< the scan's stamp
+  bool from_file = false;  ///< deskew with the file's per-point times
+  bool deskew = false;
+  bool loam = false;  ///< the LOAM front end (else dense)
+  /// In range, corrected for the vertical angle, then deskewed; with their times and rings.
+  std::vector<Eigen::Vector3d> points;
+  std::vector<float> point_time;
+  std::vector<std::uint16_t> point_ring;
+  double tau_0 = 0.0, tau_mid = 0.0;  ///< the stamp's and the sweep middle's instants in the sweep
+  double t_mid = 0.0;                 ///< time of the sweep's middle, where the scan is registered
+  std::size_t n = 0;                  ///< poses before this scan
+  Eigen::Matrix<double, 6, 1> velocity = Eigen::Matrix<double, 6, 1>::Zero();
+  core::SE3 T_pred;
+  std::vector<Eigen::Vector3d> frame, source;  ///< subsampled at 0.5 v (map) and 1.5 v (dense registration)
+  LoamFeatures features;
+  double sigma = 0.0;  ///< adaptive threshold
+  bool too_few_points = false;
+  bool lost = false;
+  bool map_empty = false;
+  core::SE3 T_world_sensor;  ///< at the sweep's middle
+};
+
 OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double time_s) {
   if (!std::isfinite(time_s) || (!stamps_.empty() && !(time_s > stamps_.back()))) {
     throw std::invalid_argument("LidarOdometry::add_scan: scan times must be finite and strictly increasing");
@@ -131,15 +145,38 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   result.time_s = time_s;
   result.segment = segment_;
   result.points_read = cloud.size();
+  ScanWork work;
+  work.time_s = time_s;
 
-  // Point times: tau_i in the sweep, the stamp's own tau_0, and the middle of the sweep tau_mid
-  // where the scan is registered. Registering at the middle keeps the deskew's mean displacement
-  // zero, so an error of the velocity does not shift the registered pose (with tau_0 = 0 it
-  // shifts it by half a sweep of that error, the next velocity inherits it with the opposite
-  // sign, and the estimate oscillates: measured on the simulated street, 1.6 m steps). The pose
-  // at the stamp is reported (after registration), the pose at the middle kept for prediction.
-  const double min2 = options_.min_range_m * options_.min_range_m;
-  const double max2 = options_.max_range_m * options_.max_range_m;
+  choose_point_times(cloud, work, result);
+  choose_front_end(cloud);
+  work.loam = front_end_ == FrontEnd::kLoamFeatures;
+  crop_and_correct(cloud, work);
+  result.points_in_range = work.points.size();
+  sweep_instants(work);
+  predict(work);
+  preprocess(work);
+  result.times.preprocess_s = seconds_since(start);
+
+  work.sigma = adaptive_threshold();
+  result.threshold_sigma_m = work.sigma;
+  const auto register_start = Clock::now();
+  register_to_map(work, result);
+  result.times.register_s = seconds_since(register_start);
+
+  const auto map_start = Clock::now();
+  start_segment_if_lost(work, result);
+  report_pose(work, result);
+  update_map(work, result);
+  result.times.map_s = seconds_since(map_start);
+  record(work);
+  result.times.total_s = seconds_since(start);
+  return result;
+}
+
+// Step 2's times: the file's per-point times where usable (DeskewMode::kPointTimes), the
+// azimuth's (kAzimuth), or none.
+void LidarOdometry::choose_point_times(const io::PointCloud& cloud, ScanWork& work, OdometryScanResult& result) const {
   bool have_time = cloud.time_s.size() == cloud.size() && !cloud.time_s.empty();
   if (have_time) {
     // Times that cannot be offsets within one sweep from the stamp (absolute times, another unit)
@@ -153,18 +190,26 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
       result.point_times_unusable = options_.deskew == DeskewMode::kPointTimes;
     }
   }
-  const bool from_file = options_.deskew == DeskewMode::kPointTimes && have_time;
-  const bool deskew = from_file || options_.deskew == DeskewMode::kAzimuth;
+  work.from_file = options_.deskew == DeskewMode::kPointTimes && have_time;
+  work.deskew = work.from_file || options_.deskew == DeskewMode::kAzimuth;
+}
+
+// FrontEnd::kAuto decides once, at the first scan: LOAM's features when it has rings.
+void LidarOdometry::choose_front_end(const io::PointCloud& cloud) {
   if (front_end_ == FrontEnd::kAuto) {
     front_end_ = options_.front_end != FrontEnd::kAuto ? options_.front_end
                  : (cloud.ring.size() == cloud.size() && cloud.size() > 0) || options_.rings_from_kitti_order
                      ? FrontEnd::kLoamFeatures
                      : FrontEnd::kDense;
   }
-  const bool loam = front_end_ == FrontEnd::kLoamFeatures;
-  std::vector<std::uint16_t> recovered_rings;
+}
+
+// The ring of each point, for the LOAM front end: the file's, or recovered from KITTI's point
+// order into `recovered_rings`. Throws std::invalid_argument when there is neither.
+const std::vector<std::uint16_t>* LidarOdometry::rings_of(const io::PointCloud& cloud, const ScanWork& work,
+                                                          std::vector<std::uint16_t>& recovered_rings) const {
   const std::vector<std::uint16_t>* rings = &cloud.ring;
-  if (loam && cloud.ring.size() != cloud.size()) {
+  if (work.loam && cloud.ring.size() != cloud.size()) {
     if (!options_.rings_from_kitti_order) {
       throw std::invalid_argument("the LOAM front end needs a ring per point (a ring field, or rings from KITTI's point order)");
     }
@@ -174,12 +219,22 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
     recovered_rings = std::move(copy.ring);
     rings = &recovered_rings;
   }
-  std::vector<Eigen::Vector3d> points;
-  std::vector<float> point_time;
-  std::vector<std::uint16_t> point_ring;
+  return rings;
+}
+
+// Step 3's range crop [min_range_m, max_range_m], with the vertical-angle correction (p turned
+// about p x z), keeping each point's time (step 2) and ring (LOAM).
+void LidarOdometry::crop_and_correct(const io::PointCloud& cloud, ScanWork& work) const {
+  const double min2 = options_.min_range_m * options_.min_range_m;
+  const double max2 = options_.max_range_m * options_.max_range_m;
+  std::vector<std::uint16_t> recovered_rings;
+  const std::vector<std::uint16_t>* rings = rings_of(cloud, work, recovered_rings);
+  std::vector<Eigen::Vector3d>& points = work.points;
+  std::vector<float>& point_time = work.point_time;
+  std::vector<std::uint16_t>& point_ring = work.point_ring;
   points.reserve(cloud.size());
-  if (deskew) point_time.reserve(cloud.size());
-  if (loam) point_ring.reserve(cloud.size());
+  if (work.deskew) point_time.reserve(cloud.size());
+  if (work.loam) point_ring.reserve(cloud.size());
   const double correction = options_.vertical_angle_correction_rad;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     Eigen::Vector3d p = cloud.points[i].cast<double>();
@@ -191,152 +246,207 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
       if (axis_norm > 0.0) p = Eigen::AngleAxisd(correction, axis / axis_norm) * p;
     }
     points.push_back(p);
-    if (loam) point_ring.push_back((*rings)[i]);
-    if (deskew) {
-      point_time.push_back(from_file ? cloud.time_s[i]
-                                     : static_cast<float>((std::numbers::pi - std::atan2(p.y(), p.x())) /
-                                                          (2.0 * std::numbers::pi) * options_.sweep_period_s));
+    if (work.loam) point_ring.push_back((*rings)[i]);
+    if (work.deskew) {
+      point_time.push_back(work.from_file ? cloud.time_s[i]
+                                          : static_cast<float>((std::numbers::pi - std::atan2(p.y(), p.x())) /
+                                                               (2.0 * std::numbers::pi) * options_.sweep_period_s));
     }
   }
-  result.points_in_range = points.size();
-  double tau_0 = 0.0, tau_mid = 0.0;
-  if (deskew && !point_time.empty()) {
-    if (from_file) {
-      const auto [lo, hi] = std::minmax_element(point_time.begin(), point_time.end());
-      tau_mid = 0.5 * (static_cast<double>(*lo) + static_cast<double>(*hi));
-    } else {
-      tau_0 = tau_mid = 0.5 * options_.sweep_period_s;  // KITTI stamps facing forward
-    }
-  }
-  double t_mid = time_s + (tau_mid - tau_0);
-  if (!times_.empty() && !(t_mid > times_.back())) t_mid = times_.back() + (time_s - stamps_.back());
+}
 
-  // 1. Constant-velocity prediction from the last two poses (twist per second, at sweep middles).
-  Eigen::Matrix<double, 6, 1> velocity = Eigen::Matrix<double, 6, 1>::Zero();
-  core::SE3 T_pred;
-  const std::size_t n = poses_.size();
+// Point times: tau_i in the sweep, the stamp's own tau_0, and the middle of the sweep tau_mid
+// where the scan is registered. Registering at the middle keeps the deskew's mean displacement
+// zero, so an error of the velocity does not shift the registered pose (with tau_0 = 0 it
+// shifts it by half a sweep of that error, the next velocity inherits it with the opposite
+// sign, and the estimate oscillates: measured on the simulated street, 1.6 m steps). The pose
+// at the stamp is reported (after registration), the pose at the middle kept for prediction.
+void LidarOdometry::sweep_instants(ScanWork& work) const {
+  if (work.deskew && !work.point_time.empty()) {
+    if (work.from_file) {
+      const auto [lo, hi] = std::minmax_element(work.point_time.begin(), work.point_time.end());
+      work.tau_mid = 0.5 * (static_cast<double>(*lo) + static_cast<double>(*hi));
+    } else {
+      work.tau_0 = work.tau_mid = 0.5 * options_.sweep_period_s;  // KITTI stamps facing forward
+    }
+  }
+  work.t_mid = work.time_s + (work.tau_mid - work.tau_0);
+  if (!times_.empty() && !(work.t_mid > times_.back())) work.t_mid = times_.back() + (work.time_s - stamps_.back());
+}
+
+// 1. Constant-velocity prediction from the last two poses (twist per second, at sweep middles).
+void LidarOdometry::predict(ScanWork& work) const {
+  const std::size_t n = work.n = poses_.size();
   if (n >= 2) {
-    velocity = (poses_[n - 2].inverse() * poses_[n - 1]).log() / (times_[n - 1] - times_[n - 2]);
+    work.velocity = (poses_[n - 2].inverse() * poses_[n - 1]).log() / (times_[n - 1] - times_[n - 2]);
   }
-  if (n >= 1) T_pred = poses_[n - 1] * core::SE3::exp(velocity * (t_mid - times_[n - 1]));
+  if (n >= 1) work.T_pred = poses_[n - 1] * core::SE3::exp(work.velocity * (work.t_mid - times_[n - 1]));
+}
 
-  // 2-3. Deskew to the sweep's middle, subsample.
-  std::vector<Eigen::Vector3d> frame, source;
-  LoamFeatures features;
+// 2-3. Deskew to the sweep's middle, subsample; then LOAM's features, or the dense front end's
+// points subsampled again at 1.5 v.
+void LidarOdometry::preprocess(ScanWork& work) const {
   arena_->arena.execute([&] {
-    if (deskew && n >= 2) {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096),
-                        [&](const tbb::blocked_range<std::size_t>& range) {
-                          for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                            points[i] = core::SE3::exp(velocity * (static_cast<double>(point_time[i]) - tau_mid)) * points[i];
-                          }
-                        });
-    }
-    frame = voxel_downsample(points, 0.5 * options_.voxel_size_m);
-    if (loam) {
-      features = extract_loam_features(points, point_ring, options_.loam);
+    if (work.deskew && work.n >= 2) deskew_to_sweep_middle(work);
+    work.frame = voxel_downsample(work.points, 0.5 * options_.voxel_size_m);
+    if (work.loam) {
+      work.features = extract_loam_features(work.points, work.point_ring, options_.loam);
     } else {
-      source = voxel_downsample(frame, 1.5 * options_.voxel_size_m);
+      work.source = voxel_downsample(work.frame, 1.5 * options_.voxel_size_m);
     }
   });
-  result.times.preprocess_s = seconds_since(start);
+}
 
-  // 4. Adaptive threshold.
-  const double sigma = model_error_samples_ > 0
-                           ? std::sqrt(model_error_sse_ / static_cast<double>(model_error_samples_))
-                           : options_.initial_threshold_m;
-  result.threshold_sigma_m = sigma;
+// 2. Deskew (KISS-ICP Sec. III-A): p taken at tau moves to exp(xi (tau - tau_mid)) p.
+void LidarOdometry::deskew_to_sweep_middle(ScanWork& work) const {
+  std::vector<Eigen::Vector3d>& points = work.points;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        points[i] = core::SE3::exp(work.velocity * (static_cast<double>(work.point_time[i]) - work.tau_mid)) * points[i];
+                      }
+                    });
+}
 
-  // 5. Registration.
-  const auto register_start = Clock::now();
-  core::SE3 T_world_sensor = T_pred;
-  const bool too_few_points = points.size() < static_cast<std::size_t>(options_.min_scan_points);
-  bool lost = too_few_points && n > 0;
-  const bool map_empty = loam ? (edge_map_.empty() && plane_map_.empty()) : map_.empty();
-  if (!map_empty && !too_few_points) {
-    arena_->arena.execute([&] {
-      if (loam) {
-        RegistrationOptions registration = options_.registration;
-        registration.remap_degenerate_directions = true;
-        result.registration = register_features(edge_map_, plane_map_, features.sharp, features.flat, T_pred,
-                                                 3.0 * sigma, sigma / 3.0, registration);
-      } else {
-        result.registration = register_scan(map_, source, T_pred, 3.0 * sigma, sigma / 3.0, options_.registration);
-      }
-    });
-    const RegistrationResult& reg = result.registration;
-    const double fraction =
-        reg.source_points > 0 ? static_cast<double>(reg.correspondences) / static_cast<double>(reg.source_points) : 0.0;
-    // A fit that explains few points badly is a wrong pose (e.g. the same street seen from the
-    // other direction), not a weak one.
-    const bool untrustworthy_fit = !loam && fraction < options_.lost_rms_max_correspondence_fraction &&
-                                   reg.rms_m > options_.lost_max_rms_voxels * options_.voxel_size_m;
-    lost = fraction < options_.lost_min_correspondence_fraction || reg.correspondences < 6 || untrustworthy_fit;
-    if (!lost) {
-      T_world_sensor = reg.T_map_sensor;
-      if (reg.degenerate_directions > 0) {
-        result.health = Health::kDegraded;
-        result.degenerate_axis =
-            name_direction(reg.weakest_direction, T_world_sensor.so3(), reg.characteristic_length_m);
-      } else if (fraction < options_.degraded_min_correspondence_fraction || !reg.converged) {
-        result.health = Health::kDegraded;
-      }
-      const double error = model_error(T_pred.inverse() * T_world_sensor, options_.max_range_m);
-      if (error > options_.min_motion_m) {
-        model_error_sse_ += error * error;
-        ++model_error_samples_;
-      }
+// 4. Adaptive threshold (KISS-ICP Sec. III-C, eq. 3-4): the RMS of the model errors so far.
+double LidarOdometry::adaptive_threshold() const {
+  return model_error_samples_ > 0 ? std::sqrt(model_error_sse_ / static_cast<double>(model_error_samples_))
+                                  : options_.initial_threshold_m;
+}
+
+// 5. Registration to the local map from the prediction, unless the map is empty or the scan has
+// too few points; then its health and the threshold's model error.
+void LidarOdometry::register_to_map(ScanWork& work, OdometryScanResult& result) {
+  work.T_world_sensor = work.T_pred;
+  work.too_few_points = work.points.size() < static_cast<std::size_t>(options_.min_scan_points);
+  work.lost = work.too_few_points && work.n > 0;
+  work.map_empty = work.loam ? (edge_map_.empty() && plane_map_.empty()) : map_.empty();
+  if (work.map_empty || work.too_few_points) return;
+  arena_->arena.execute([&] {
+    if (work.loam) {
+      result.registration = register_loam(work);
+    } else {
+      result.registration = register_dense(work);
     }
-  }
-  result.times.register_s = seconds_since(register_start);
+  });
+  assess_health(work, result);
+  if (!work.lost) update_model_error(work);
+}
 
-  // 6. Map update; a lost scan starts a new segment from the predicted pose.
-  const auto map_start = Clock::now();
-  if (lost) {
-    result.health = Health::kLost;
-    // A new segment, unless the map is already empty (still blind since the last lost scan).
-    if (!map_empty) {
-      map_.clear();
-      edge_map_.clear();
-      plane_map_.clear();
-      ++segment_;
-    }
-    result.segment = segment_;
+// LOAM: sharp points against the line map, flat points against the plane map, degenerate
+// directions always from the prediction.
+RegistrationResult LidarOdometry::register_loam(const ScanWork& work) const {
+  RegistrationOptions registration = options_.registration;
+  registration.remap_degenerate_directions = true;
+  return register_features(edge_map_, plane_map_, work.features.sharp, work.features.flat, work.T_pred,
+                           3.0 * work.sigma, work.sigma / 3.0, registration);
+}
+
+// Dense (KISS-ICP): the points subsampled at 1.5 v against the voxel-hash map.
+RegistrationResult LidarOdometry::register_dense(const ScanWork& work) const {
+  return register_scan(map_, work.source, work.T_pred, 3.0 * work.sigma, work.sigma / 3.0, options_.registration);
+}
+
+// 6. Health of the registration: lost (then the prediction stands), degraded, or ok; a scan not
+// lost takes the registered pose.
+void LidarOdometry::assess_health(ScanWork& work, OdometryScanResult& result) const {
+  const RegistrationResult& reg = result.registration;
+  const double fraction =
+      reg.source_points > 0 ? static_cast<double>(reg.correspondences) / static_cast<double>(reg.source_points) : 0.0;
+  // A fit that explains few points badly is a wrong pose (e.g. the same street seen from the
+  // other direction), not a weak one.
+  const bool untrustworthy_fit = !work.loam && fraction < options_.lost_rms_max_correspondence_fraction &&
+                                 reg.rms_m > options_.lost_max_rms_voxels * options_.voxel_size_m;
+  work.lost = fraction < options_.lost_min_correspondence_fraction || reg.correspondences < 6 || untrustworthy_fit;
+  if (work.lost) return;
+  work.T_world_sensor = reg.T_map_sensor;
+  if (reg.degenerate_directions > 0) {
+    result.health = Health::kDegraded;
+    result.degenerate_axis = name_direction(reg.weakest_direction, work.T_world_sensor.so3(), reg.characteristic_length_m);
+  } else if (fraction < options_.degraded_min_correspondence_fraction || !reg.converged) {
+    result.health = Health::kDegraded;
   }
-  // The pose at the stamp: from the middle back (or on) by the new velocity.
-  result.T_world_sensor = T_world_sensor;
-  result.T_world_registered = T_world_sensor;
-  if (tau_mid != tau_0 && n >= 1) {
-    const Eigen::Matrix<double, 6, 1> new_velocity = (poses_[n - 1].inverse() * T_world_sensor).log() / (t_mid - times_[n - 1]);
-    result.T_world_sensor = T_world_sensor * core::SE3::exp(new_velocity * (tau_0 - tau_mid));
+}
+
+// 4. The threshold's sample (KISS-ICP eq. 3): the model error of the deviation T_pred^-1 T_est,
+// when above min_motion_m.
+void LidarOdometry::update_model_error(const ScanWork& work) {
+  const double error = model_error(work.T_pred.inverse() * work.T_world_sensor, options_.max_range_m);
+  if (error > options_.min_motion_m) {
+    model_error_sse_ += error * error;
+    ++model_error_samples_;
   }
-  const Eigen::Matrix3d R = T_world_sensor.rotation_matrix();
-  const Eigen::Vector3d t = T_world_sensor.translation();
-  if (too_few_points) frame.clear();
-  last_frame_sensor_ = frame;
-  for (Eigen::Vector3d& p : frame) p = R * p + t;
-  if (loam) {
-    if (too_few_points) features = {};
-    for (Eigen::Vector3d& p : features.less_sharp) p = R * p + t;
-    for (Eigen::Vector3d& p : features.less_flat) p = R * p + t;
-    edge_map_.add_points(features.less_sharp);
-    plane_map_.add_points(features.less_flat);
-    edge_map_.remove_far_from(t, options_.max_range_m);
-    plane_map_.remove_far_from(t, options_.max_range_m);
-    result.map_points_added = features.less_sharp.size() + features.less_flat.size();
-    result.local_map_points = edge_map_.num_points() + plane_map_.num_points();
+}
+
+// 6. A lost scan starts a new segment from the predicted pose.
+void LidarOdometry::start_segment_if_lost(const ScanWork& work, OdometryScanResult& result) {
+  if (!work.lost) return;
+  result.health = Health::kLost;
+  // A new segment, unless the map is already empty (still blind since the last lost scan).
+  if (!work.map_empty) {
+    map_.clear();
+    edge_map_.clear();
+    plane_map_.clear();
+    ++segment_;
+  }
+  result.segment = segment_;
+}
+
+// The pose at the stamp: from the middle back (or on) by the new velocity.
+void LidarOdometry::report_pose(const ScanWork& work, OdometryScanResult& result) const {
+  const std::size_t n = work.n;
+  result.T_world_sensor = work.T_world_sensor;
+  result.T_world_registered = work.T_world_sensor;
+  if (work.tau_mid != work.tau_0 && n >= 1) {
+    const Eigen::Matrix<double, 6, 1> new_velocity =
+        (poses_[n - 1].inverse() * work.T_world_sensor).log() / (work.t_mid - times_[n - 1]);
+    result.T_world_sensor = work.T_world_sensor * core::SE3::exp(new_velocity * (work.tau_0 - work.tau_mid));
+  }
+}
+
+// 5. The scan's map points join the map (none when it had too few points) and voxels beyond
+// max_range_m of the sensor leave it.
+void LidarOdometry::update_map(ScanWork& work, OdometryScanResult& result) {
+  const Eigen::Matrix3d R = work.T_world_sensor.rotation_matrix();
+  const Eigen::Vector3d t = work.T_world_sensor.translation();
+  if (work.too_few_points) work.frame.clear();
+  last_frame_sensor_ = work.frame;
+  for (Eigen::Vector3d& p : work.frame) p = R * p + t;
+  if (work.loam) {
+    update_loam_maps(work, R, t, result);
   } else {
-    map_.add_points(frame);
-    map_.remove_far_from(t, options_.max_range_m);
-    result.map_points_added = frame.size();
-    result.local_map_points = map_.num_points();
+    update_dense_map(work, t, result);
   }
-  result.times.map_s = seconds_since(map_start);
-  poses_.push_back(T_world_sensor);
-  times_.push_back(t_mid);
-  stamps_.push_back(time_s);
-  result.times.total_s = seconds_since(start);
-  return result;
+}
+
+// LOAM: less-sharp points join the line map, less-flat points the plane map.
+void LidarOdometry::update_loam_maps(ScanWork& work, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                                     OdometryScanResult& result) {
+  LoamFeatures& features = work.features;
+  if (work.too_few_points) features = {};
+  for (Eigen::Vector3d& p : features.less_sharp) p = R * p + t;
+  for (Eigen::Vector3d& p : features.less_flat) p = R * p + t;
+  edge_map_.add_points(features.less_sharp);
+  plane_map_.add_points(features.less_flat);
+  edge_map_.remove_far_from(t, options_.max_range_m);
+  plane_map_.remove_far_from(t, options_.max_range_m);
+  result.map_points_added = features.less_sharp.size() + features.less_flat.size();
+  result.local_map_points = edge_map_.num_points() + plane_map_.num_points();
+}
+
+// Dense: the scan's points subsampled at 0.5 v join the voxel-hash map.
+void LidarOdometry::update_dense_map(const ScanWork& work, const Eigen::Vector3d& t, OdometryScanResult& result) {
+  map_.add_points(work.frame);
+  map_.remove_far_from(t, options_.max_range_m);
+  result.map_points_added = work.frame.size();
+  result.local_map_points = map_.num_points();
+}
+
+// The scan's pose at the sweep's middle, that time and its stamp, for the next prediction.
+void LidarOdometry::record(const ScanWork& work) {
+  poses_.push_back(work.T_world_sensor);
+  times_.push_back(work.t_mid);
+  stamps_.push_back(work.time_s);
 }
 
 }  // namespace cairn::lidar3d

@@ -53,6 +53,7 @@
 #include <string_view>
 #include <vector>
 
+#include "cairn/core/health.hpp"
 #include "cairn/core/se3.hpp"
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/lidar3d/loam_features.hpp"
@@ -143,8 +144,8 @@ struct LidarOdometryOptions {
 /// published scans are already motion-compensated). Throws std::invalid_argument for another name.
 LidarOdometryOptions preset_options(std::string_view name);
 
-enum class Health { kOk, kDegraded, kLost };
-std::string_view to_string(Health health);
+using core::Health;  // ok / degraded / lost (core/health.hpp)
+using core::to_string;
 
 /// Seconds spent per stage on one scan.
 struct OdometryStageTimes {
@@ -205,6 +206,32 @@ class LidarOdometry {
 
  private:
   struct Arena;
+  /// What the stages of one add_scan call share (odometry.cpp).
+  struct ScanWork;
+
+  // The stages of add_scan, in the order it calls them (steps 1-6 of the file comment).
+  void choose_point_times(const io::PointCloud& cloud, ScanWork& work, OdometryScanResult& result) const;
+  void choose_front_end(const io::PointCloud& cloud);
+  const std::vector<std::uint16_t>* rings_of(const io::PointCloud& cloud, const ScanWork& work,
+                                             std::vector<std::uint16_t>& recovered_rings) const;
+  void crop_and_correct(const io::PointCloud& cloud, ScanWork& work) const;
+  void sweep_instants(ScanWork& work) const;
+  void predict(ScanWork& work) const;
+  void preprocess(ScanWork& work) const;
+  void deskew_to_sweep_middle(ScanWork& work) const;
+  double adaptive_threshold() const;
+  void register_to_map(ScanWork& work, OdometryScanResult& result);
+  RegistrationResult register_loam(const ScanWork& work) const;
+  RegistrationResult register_dense(const ScanWork& work) const;
+  void assess_health(ScanWork& work, OdometryScanResult& result) const;
+  void update_model_error(const ScanWork& work);
+  void start_segment_if_lost(const ScanWork& work, OdometryScanResult& result);
+  void report_pose(const ScanWork& work, OdometryScanResult& result) const;
+  void update_map(ScanWork& work, OdometryScanResult& result);
+  void update_loam_maps(ScanWork& work, const Eigen::Matrix3d& R, const Eigen::Vector3d& t, OdometryScanResult& result);
+  void update_dense_map(const ScanWork& work, const Eigen::Vector3d& t, OdometryScanResult& result);
+  void record(const ScanWork& work);
+
   LidarOdometryOptions options_;
   std::unique_ptr<Arena> arena_;
   VoxelHashMap map_;

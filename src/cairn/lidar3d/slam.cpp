@@ -11,6 +11,7 @@
 #include "cairn/backend/optimizer.hpp"
 #include "cairn/backend/problem.hpp"
 #include "cairn/core/threads.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/io/pose_graph.hpp"
 #include "cairn/lidar3d/registration.hpp"
 #include "cairn/lidar3d/voxel_hash_map.hpp"
@@ -18,10 +19,8 @@
 namespace cairn::lidar3d {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using core::Clock;
+using core::seconds_since;
 
 Eigen::Matrix<double, 6, 6> information(double translation_sigma_m, double rotation_sigma_rad) {
   Eigen::Matrix<double, 6, 1> diagonal;
@@ -55,6 +54,13 @@ struct Verification {
   double fitness = 0.0;
   double rms_m = 0.0;
   bool degenerate = false;
+};
+
+// A loop candidate's place after verification (search_loops).
+struct VerifiedPlace {
+  LoopCandidateRecord record;
+  Verification v;
+  Eigen::Vector3d query_position;  // where the loop puts the query
 };
 
 }  // namespace
@@ -210,6 +216,57 @@ struct LidarSlam::Impl {
     summary.optimization_s += seconds_since(start);
   }
 
+  // Odometry path length up to this scan, and the scan's odometry pose (at its stamp).
+  void track_path(const core::SE3& T_odom_stamp) {
+    if (!scan_T_odom.empty()) path_m += (T_odom_stamp.translation() - scan_T_odom.back().translation()).norm();
+    scan_T_odom.push_back(T_odom_stamp);
+  }
+
+  // A keyframe: the first scan, one that moved keyframe_distance_m or turned keyframe_angle_rad
+  // since the last keyframe, or the first of a new odometry segment.
+  bool is_keyframe(const core::SE3& T_odom, int segment) const {
+    bool make_keyframe = keyframes.empty();
+    if (!make_keyframe) {
+      const Keyframe& last = keyframes.back();
+      const core::SE3 motion = last.T_odom_sensor.inverse() * T_odom;
+      make_keyframe = motion.translation().norm() >= options.keyframe_distance_m ||
+                      motion.so3().log().norm() >= options.keyframe_angle_rad || segment != last.segment;
+    }
+    return make_keyframe;
+  }
+
+  // Adds the last scan as a keyframe with the odometry edge from the previous one (weak across a
+  // segment break); returns its id.
+  int add_keyframe(double time_s, const core::SE3& T_odom, int segment) {
+    Keyframe kf;
+    kf.scan = scan_T_odom.size() - 1;
+    kf.time_s = time_s;
+    kf.T_odom_sensor = T_odom;
+    kf.T_world_sensor = keyframes.empty() ? T_odom : T_world_from_odom(T_odom);
+    kf.segment = segment;
+    kf.path_m = path_m;
+    kf.points_sensor = odometry.last_frame_points();
+    const int id = static_cast<int>(keyframes.size());
+    if (!keyframes.empty()) {
+      const Keyframe& last = keyframes.back();
+      edges.push_back({id - 1, id, last.T_odom_sensor.inverse() * T_odom, false, last.segment != kf.segment, -1});
+    }
+    keyframes.push_back(std::move(kf));
+    return id;
+  }
+
+  // The new keyframe's Scan Context, the loop search with it, then its entry in the database.
+  void close_loops(int id, LidarSlamSummary& summary) {
+    const auto start = Clock::now();
+    ScanContext context = make_scan_context(keyframes.back().points_sensor, options.scan_context);
+    summary.loop_search_s += seconds_since(start);
+    search_loops(id, context, summary);
+    database.add(id, std::move(context));
+  }
+
+  // Loop closure for keyframe `query`: candidates from the Scan Context database, the distinct
+  // places among them verified (steps 1-3) and tested for uniqueness (step 4); an accepted loop
+  // adds an edge and the graph is optimised.
   void search_loops(int query, const ScanContext& context, LidarSlamSummary& summary) {
     auto start = Clock::now();
     const std::vector<LoopCandidate> candidates = database.query(context, query);
@@ -217,9 +274,19 @@ struct LidarSlam::Impl {
     summary.loop_search_s += seconds_since(start);
     if (candidates.empty() || !candidates.front().below_threshold) return;
     start = Clock::now();
-    const Keyframe& q = keyframes[static_cast<std::size_t>(query)];
-    // Distinct places among the candidates below the threshold, best first: a candidate within
-    // the separation of one already taken is the same place seen from a neighbouring keyframe.
+    const std::vector<const LoopCandidate*> places = distinct_places(candidates);
+    // Verify each place (steps 1-3); the places that pass are then tested for uniqueness (step 4).
+    std::vector<VerifiedPlace> verified;
+    for (const LoopCandidate* place : places) verified.push_back(verify_place(query, place, places));
+    VerifiedPlace* best = choose_unique_place(verified);
+    summary.verification_s += seconds_since(start);
+    record_loops(query, verified, summary);
+    if (best != nullptr && best->record.decision == "accepted") optimize(false, summary);
+  }
+
+  // Distinct places among the candidates below the threshold, best first: a candidate within
+  // the separation of one already taken is the same place seen from a neighbouring keyframe.
+  std::vector<const LoopCandidate*> distinct_places(const std::vector<LoopCandidate>& candidates) const {
     std::vector<const LoopCandidate*> places;
     for (const LoopCandidate& candidate : candidates) {
       if (!candidate.below_threshold || static_cast<int>(places.size()) >= options.loop_places_verified) break;
@@ -231,59 +298,61 @@ struct LidarSlam::Impl {
       }
       if (!seen) places.push_back(&candidate);
     }
-    // Verify each place (steps 1-3); the places that pass are then tested for uniqueness (step 4).
-    struct Verified {
-      LoopCandidateRecord record;
-      Verification v;
-      Eigen::Vector3d query_position;  // where the loop puts the query
-    };
-    std::vector<Verified> verified;
-    for (const LoopCandidate* place : places) {
-      const Keyframe& c = keyframes[static_cast<std::size_t>(place->id)];
-      Verified item;
-      LoopCandidateRecord& record = item.record;
-      record.query_keyframe = query;
-      record.candidate_keyframe = place->id;
-      record.query_time_s = q.time_s;
-      record.candidate_time_s = c.time_s;
-      record.descriptor_distance = place->match.distance;
-      record.descriptor_yaw_rad = place->match.yaw_rad;
-      record.second_descriptor_distance = places.size() > 1 ? places[place == places[0] ? 1 : 0]->match.distance : 1.0;
-      arena.execute([&] { item.v = verify(query, place->id, place->match); });
-      const Verification& v = item.v;
-      record.T_candidate_query = v.T_candidate_query;
-      record.fitness = v.fitness;
-      record.rms_m = v.rms_m;
-      item.query_position = (c.T_world_sensor * v.T_candidate_query).translation();
-      const core::SE3 T_estimate = c.T_world_sensor.inverse() * q.T_world_sensor;
-      const core::SE3 difference = T_estimate.inverse() * v.T_candidate_query;
-      const double travelled = std::abs(q.path_m - c.path_m);
-      record.gate_translation_m = difference.translation().norm();
-      record.gate_rotation_rad = difference.so3().log().norm();
-      record.gate_limit_m = options.loop_gate_translation_m + options.loop_gate_drift_per_m * travelled;
-      const double rotation_limit = options.loop_gate_rotation_rad + options.loop_gate_rotation_drift_per_m * travelled;
-      if (v.fitness < options.loop_min_fitness) {
-        record.decision = "icp fitness";
-      } else if (v.rms_m > options.loop_max_rms_m) {
-        record.decision = "icp rms";
-      } else if (v.degenerate) {
-        record.decision = "icp degenerate";
-      } else if (record.gate_translation_m > record.gate_limit_m || record.gate_rotation_rad > rotation_limit) {
-        record.decision = "odometry gate";
-      } else {
-        record.decision = "passed";
-      }
-      verified.push_back(std::move(item));
+    return places;
+  }
+
+  // One place verified by ICP (steps 1-2) and gated by the odometry (step 3): its record with
+  // the decision "passed" or the first test it failed.
+  VerifiedPlace verify_place(int query, const LoopCandidate* place, const std::vector<const LoopCandidate*>& places) {
+    const Keyframe& q = keyframes[static_cast<std::size_t>(query)];
+    const Keyframe& c = keyframes[static_cast<std::size_t>(place->id)];
+    VerifiedPlace item;
+    LoopCandidateRecord& record = item.record;
+    record.query_keyframe = query;
+    record.candidate_keyframe = place->id;
+    record.query_time_s = q.time_s;
+    record.candidate_time_s = c.time_s;
+    record.descriptor_distance = place->match.distance;
+    record.descriptor_yaw_rad = place->match.yaw_rad;
+    record.second_descriptor_distance = places.size() > 1 ? places[place == places[0] ? 1 : 0]->match.distance : 1.0;
+    arena.execute([&] { item.v = verify(query, place->id, place->match); });
+    const Verification& v = item.v;
+    record.T_candidate_query = v.T_candidate_query;
+    record.fitness = v.fitness;
+    record.rms_m = v.rms_m;
+    item.query_position = (c.T_world_sensor * v.T_candidate_query).translation();
+    const core::SE3 T_estimate = c.T_world_sensor.inverse() * q.T_world_sensor;
+    const core::SE3 difference = T_estimate.inverse() * v.T_candidate_query;
+    const double travelled = std::abs(q.path_m - c.path_m);
+    record.gate_translation_m = difference.translation().norm();
+    record.gate_rotation_rad = difference.so3().log().norm();
+    record.gate_limit_m = options.loop_gate_translation_m + options.loop_gate_drift_per_m * travelled;
+    const double rotation_limit = options.loop_gate_rotation_rad + options.loop_gate_rotation_drift_per_m * travelled;
+    if (v.fitness < options.loop_min_fitness) {
+      record.decision = "icp fitness";
+    } else if (v.rms_m > options.loop_max_rms_m) {
+      record.decision = "icp rms";
+    } else if (v.degenerate) {
+      record.decision = "icp degenerate";
+    } else if (record.gate_translation_m > record.gate_limit_m || record.gate_rotation_rad > rotation_limit) {
+      record.decision = "odometry gate";
+    } else {
+      record.decision = "passed";
     }
-    // Uniqueness: two places that both pass, about as well, and put the query in different
-    // places make the loop ambiguous (a garage's identical bays within what the odometry allows).
-    Verified* best = nullptr;
-    for (Verified& item : verified) {
+    return item;
+  }
+
+  // Uniqueness (step 4): two places that both pass, about as well, and put the query in different
+  // places make the loop ambiguous (a garage's identical bays within what the odometry allows).
+  // Decides every passed place; returns the best passed place, or null.
+  VerifiedPlace* choose_unique_place(std::vector<VerifiedPlace>& verified) const {
+    VerifiedPlace* best = nullptr;
+    for (VerifiedPlace& item : verified) {
       if (item.record.decision == "passed" && (best == nullptr || item.v.fitness > best->v.fitness)) best = &item;
     }
     if (best != nullptr) {
       bool ambiguous = false;
-      for (Verified& item : verified) {
+      for (VerifiedPlace& item : verified) {
         if (&item == best || item.record.decision != "passed") continue;
         best->record.second_fitness = std::max(best->record.second_fitness, item.v.fitness);
         if (item.v.fitness > best->v.fitness - options.loop_ambiguity_fitness_margin &&
@@ -291,13 +360,17 @@ struct LidarSlam::Impl {
           ambiguous = true;
         }
       }
-      for (Verified& item : verified) {
+      for (VerifiedPlace& item : verified) {
         if (item.record.decision != "passed") continue;
         item.record.decision = ambiguous ? "ambiguous" : &item == best ? "accepted" : "not the best place";
       }
     }
-    summary.verification_s += seconds_since(start);
-    for (Verified& item : verified) {
+    return best;
+  }
+
+  // Every verified place goes into the summary; the accepted one becomes a loop edge.
+  void record_loops(int query, std::vector<VerifiedPlace>& verified, LidarSlamSummary& summary) {
+    for (VerifiedPlace& item : verified) {
       item.record.accepted = item.record.decision == "accepted";
       summary.candidates.push_back(item.record);
       if (item.record.accepted) {
@@ -306,7 +379,6 @@ struct LidarSlam::Impl {
         ++summary.loops_accepted;
       }
     }
-    if (best != nullptr && best->record.decision == "accepted") optimize(false, summary);
   }
 };
 
@@ -325,40 +397,12 @@ SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s) {
   // Keyframes live at the registered instant (their points' frame); scans report their stamp.
   const core::SE3& T_odom = result.odometry.T_world_registered;
   const core::SE3 T_odom_stamp = result.odometry.T_world_sensor;
-  if (!m.scan_T_odom.empty()) m.path_m += (T_odom_stamp.translation() - m.scan_T_odom.back().translation()).norm();
-  m.scan_T_odom.push_back(T_odom_stamp);
-
-  bool make_keyframe = m.keyframes.empty();
-  if (!make_keyframe) {
-    const Keyframe& last = m.keyframes.back();
-    const core::SE3 motion = last.T_odom_sensor.inverse() * T_odom;
-    make_keyframe = motion.translation().norm() >= options_.keyframe_distance_m ||
-                    motion.so3().log().norm() >= options_.keyframe_angle_rad || result.odometry.segment != last.segment;
-  }
-  if (make_keyframe && !m.odometry.last_frame_points().empty()) {
-    Keyframe kf;
-    kf.scan = m.scan_T_odom.size() - 1;
-    kf.time_s = time_s;
-    kf.T_odom_sensor = T_odom;
-    kf.T_world_sensor = m.keyframes.empty() ? T_odom : m.T_world_from_odom(T_odom);
-    kf.segment = result.odometry.segment;
-    kf.path_m = m.path_m;
-    kf.points_sensor = m.odometry.last_frame_points();
-    const int id = static_cast<int>(m.keyframes.size());
-    if (!m.keyframes.empty()) {
-      const Keyframe& last = m.keyframes.back();
-      m.edges.push_back({id - 1, id, last.T_odom_sensor.inverse() * T_odom, false, last.segment != kf.segment, -1});
-    }
-    m.keyframes.push_back(std::move(kf));
+  m.track_path(T_odom_stamp);
+  if (m.is_keyframe(T_odom, result.odometry.segment) && !m.odometry.last_frame_points().empty()) {
+    const int id = m.add_keyframe(time_s, T_odom, result.odometry.segment);
     result.keyframe = true;
     summary_.keyframes = m.keyframes.size();
-    if (options_.loop_closure) {
-      const auto start = Clock::now();
-      ScanContext context = make_scan_context(m.keyframes.back().points_sensor, options_.scan_context);
-      summary_.loop_search_s += seconds_since(start);
-      m.search_loops(id, context, summary_);
-      m.database.add(id, std::move(context));
-    }
+    if (options_.loop_closure) m.close_loops(id, summary_);
   }
   m.scan_anchor.push_back(m.keyframes.empty() ? -1 : static_cast<int>(m.keyframes.size()) - 1);
   if (!m.keyframes.empty()) {
