@@ -31,6 +31,7 @@
 #include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/core/assert.hpp"
 #include "cairn/core/threads.hpp"
+#include "cairn/core/timer.hpp"
 
 namespace cairn::backend {
 
@@ -140,7 +141,8 @@ std::string LeastSquaresSummary::brief_report() const {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using core::Clock;
+using core::seconds_since;
 // block += A^T B for one pair of a Schur complement with two residuals (bundle adjustment):
 // A = J_a (2 x F, row-major), B = M J_b (2 x F, column-major), block F x F column-major, so
 // column j gains A.row(0)^T B(0, j) + A.row(1)^T B(1, j), a rank-2 update. The scalar version
@@ -280,9 +282,6 @@ __attribute__((target("avx"))) void schur_product_r2e3_avx(const SchurProductTab
 }
 #endif
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 /// Row-major matrix type that stays valid for one column (Eigen forbids row-major column vectors;
 /// their memory layout is the same).

@@ -18,6 +18,7 @@
 #include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/core/assert.hpp"
 #include "cairn/core/threads.hpp"
+#include "cairn/core/timer.hpp"
 
 namespace cairn::backend {
 
@@ -61,11 +62,9 @@ std::string OptimizerSummary::brief_report() const {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using core::Clock;
+using core::seconds_since;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // OptimizerOptions::edge_weights[e], 1 when there are none.
 double edge_weight(const OptimizerOptions& options, std::size_t e) {

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "cairn/core/assert.hpp"
+#include "cairn/core/timer.hpp"
 
 namespace cairn::backend {
 
@@ -49,8 +50,8 @@ bool TrustRegionOptions::is_valid(std::string* error) const {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+using core::Clock;
+using core::seconds_since;
 
 // Ceres' min_relative_decrease: a step is taken when rho exceeds it.
 constexpr double kMinRelativeDecrease = 1e-3;

@@ -37,15 +37,6 @@ std::string VisualSlamOptions::problems() const {
   return out;
 }
 
-std::string_view to_string(TrackingHealth health) {
-  switch (health) {
-    case TrackingHealth::kOk: return "ok";
-    case TrackingHealth::kDegraded: return "degraded";
-    case TrackingHealth::kLost: return "lost";
-  }
-  return "?";
-}
-
 VisualSlam::VisualSlam(const io::CameraCalibration& camera, io::SequenceKind kind, const VisualSlamOptions& options)
     : options_(options) {
   if (const std::string p = options.problems(); !p.empty()) throw std::invalid_argument("visual SLAM options: " + p);

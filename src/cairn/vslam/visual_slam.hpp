@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "cairn/core/health.hpp"
 #include "cairn/core/se3.hpp"
 #include "cairn/core/time.hpp"
 #include "cairn/io/image_sequence.hpp"
@@ -150,8 +151,8 @@ struct VisualSlamOptions {
   std::string problems() const;
 };
 
-enum class TrackingHealth { kOk, kDegraded, kLost };
-std::string_view to_string(TrackingHealth health);
+using TrackingHealth = core::Health;  // ok / degraded / lost (core/health.hpp)
+using core::to_string;
 
 struct FrameTimes {
   double features_s = 0.0;  ///< ORB on both images (in parallel for stereo)
