@@ -66,6 +66,29 @@ std::vector<Relation> read_relations(const std::string& path) {
   return relations;
 }
 
+MatrixTrajectory relations_estimate_from_carmen(const io::CarmenLog& log, const std::string& path) {
+  MatrixTrajectory estimate;
+  for (const io::LaserScan& scan : log.scans) {
+    Matrix4 T = Matrix4::Identity();
+    const core::SE2& p = scan.T_odom_laser;
+    T(0, 0) = std::cos(p.angle());
+    T(0, 1) = -std::sin(p.angle());
+    T(1, 0) = std::sin(p.angle());
+    T(1, 1) = std::cos(p.angle());
+    T(0, 3) = p.x();
+    T(1, 3) = p.y();
+    if (!estimate.stamps.empty() && scan.time <= estimate.stamps.back()) {
+      throw io::ParseError(path, scan.line,
+                           "laser record time " + scan.time.to_seconds_string() + " s does not follow the previous one (" +
+                               estimate.stamps.back().to_seconds_string() + " s); the estimate needs increasing times");
+    }
+    estimate.stamps.push_back(scan.time);
+    estimate.poses.push_back(T);
+  }
+  if (estimate.poses.empty()) throw io::ParseError(path, 0, "no laser records (FLASER, RLASER, ROBOTLASER1)");
+  return estimate;
+}
+
 RelationsResult evaluate_relations(const std::vector<Relation>& relations, const MatrixTrajectory& estimate,
                                    const RelationsOptions& options) {
   RelationsResult result;

@@ -34,6 +34,7 @@
 #include "cairn/core/time.hpp"
 #include "cairn/eval/status.hpp"
 #include "cairn/eval/matrix_trajectory.hpp"
+#include "cairn/io/carmen_log.hpp"
 
 namespace cairn::eval {
 
@@ -50,6 +51,13 @@ struct Relation {
 /// Reads a relations file. Throws io::ParseError naming file and line on a line without
 /// exactly 8 numbers, a non-finite number, an unreadable time, or a file without relations.
 std::vector<Relation> read_relations(const std::string& path);
+
+/// The estimate in a (corrected) CARMEN log, as the evaluator reads it: one planar pose per
+/// laser record, its T_odom_laser as a rotation about z and a translation in x, y, stamped with
+/// its ipc_timestamp (the relations' times name these records). Throws io::ParseError naming
+/// `path` (the log's file) and the record's line when a laser time does not follow the previous
+/// one, and when the log has no laser record.
+MatrixTrajectory relations_estimate_from_carmen(const io::CarmenLog& log, const std::string& path);
 
 struct RelationsOptions {
   /// Largest |t_pose - t_relation| for the nearest estimated pose, seconds, >= 0.
