@@ -2,7 +2,8 @@
 /// \file
 /// What `cairn slam3d` writes besides the trajectory: the voxelised global map, a top-down
 /// picture of map and trajectory coloured by health, and the trajectory's errors against a
-/// ground truth (docs/lidar3d.md).
+/// ground truth (docs/lidar3d.md). run_outputs.hpp writes them, with the trajectory and
+/// report.json, for a whole run (slam_run.hpp).
 
 #include <Eigen/Core>
 #include <cstddef>
