@@ -1,31 +1,29 @@
 // `cairn vslam FOLDER --out DIR`: stereo (KITTI odometry layout) or RGB-D (TUM layout) visual
 // SLAM, fed one frame at a time through the interface a robot would use (vslam/visual_slam.hpp).
+// The images are prepared by vslam/image_input.hpp; the files, the evaluation against ground truth
+// and report.json are vslam/outputs.hpp's.
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
-#include <nlohmann/json.hpp>
-#include <map>
-#include <numeric>
+#include <limits>
+#include <memory>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <unistd.h>
 
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
-#include "cairn/cli/spread.hpp"
-#include "cairn/eval/ape.hpp"
-#include "cairn/eval/rpe.hpp"
+#include "cairn/eval/spread.hpp"
 #include "cairn/io/calibration_yaml.hpp"
 #include "cairn/io/image_sequence.hpp"
-#include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
-#include "cairn/io/parse_error.hpp"
-#include "cairn/io/point_cloud.hpp"
 #include "cairn/io/trajectory.hpp"
-#include "cairn/vision/features.hpp"
-#include "cairn/viz/render.hpp"
+#include "cairn/vslam/evaluation.hpp"
+#include "cairn/vslam/image_input.hpp"
+#include "cairn/vslam/outputs.hpp"
 #include "cairn/vslam/visual_slam.hpp"
 
 namespace cairn::cli {
@@ -48,31 +46,19 @@ struct VslamFlags {
   bool overwrite = false;
 };
 
-nlohmann::json stats_json(const eval::Statistics& s) {
-  return {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median}, {"max", s.max}, {"count", s.count}};
+io::ImageSequence read_sequence(const std::string& folder) {
+  const std::string layout = io::detect_image_layout(folder);
+  return layout == "kitti"    ? io::read_kitti_stereo(folder)
+         : layout == "euroc"  ? io::read_euroc_stereo(folder)
+         : layout == "folder" ? io::read_image_folder(folder)
+                              : io::read_tum_rgbd(folder);
 }
 
-int vslam_command(const VslamFlags& flags) {
-  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
-  const std::string layout = io::detect_image_layout(flags.folder);
-  io::ImageSequence seq = layout == "kitti"    ? io::read_kitti_stereo(flags.folder)
-                          : layout == "euroc"  ? io::read_euroc_stereo(flags.folder)
-                          : layout == "folder" ? io::read_image_folder(flags.folder)
-                                               : io::read_tum_rgbd(flags.folder);
-  // EuRoC's cameras are not rectified: rectify every pair (Bouguet) and track the rectified
-  // left camera; its ground truth is the body's moved to that camera.
-  std::optional<vision::StereoRectifier> rectifier;
-  if (seq.rig) {
-    if (!flags.calib.empty() || !flags.camera.empty()) throw std::invalid_argument("an EuRoC folder brings its own calibration: no --camera or --calib");
-    int w = seq.rig->left.width, h = seq.rig->left.height;
-    if (w <= 0 || h <= 0) {
-      const cv::Mat first = vision::read_gray_image(seq.frames.front().image);
-      w = first.cols;
-      h = first.rows;
-    }
-    rectifier.emplace(*seq.rig, w, h);
-    seq.calibration = rectifier->rectified();
-  }
+/// The camera: an EuRoC pair's own (rectified), --calib, --camera or the dataset's; refused when
+/// missing, given twice, or stereo without a baseline. Returns the EuRoC pair's rectifier.
+std::optional<vision::StereoRectifier> resolve_calibration(io::ImageSequence& seq, const VslamFlags& flags) {
+  if (seq.rig && (!flags.calib.empty() || !flags.camera.empty())) throw std::invalid_argument("an EuRoC folder brings its own calibration: no --camera or --calib");
+  std::optional<vision::StereoRectifier> rectifier = vslam::rectify_calibration(seq);
   if (!flags.calib.empty() && !flags.camera.empty()) throw std::invalid_argument("give --camera or --calib, not both");
   if (!flags.calib.empty()) {
     io::CameraCalibration c = io::read_calibration_yaml(flags.calib);
@@ -90,42 +76,28 @@ int vslam_command(const VslamFlags& flags) {
     throw std::invalid_argument("stereo images need the baseline between the rectified cameras: baseline_m in " +
                                 (flags.calib.empty() ? std::string("the calibration") : flags.calib) + " (or --mono for the left images only)");
   }
-  const io::SequenceKind kind = flags.mono ? io::SequenceKind::kMonocular : seq.kind;
-  std::size_t n = seq.frames.size();
-  if (flags.max_frames > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_frames));
-  io::Trajectory ground_truth;
-  std::string ground_truth_path;
-  if (!flags.ground_truth.empty()) {
-    ground_truth = io::read_tum(flags.ground_truth);
-    ground_truth_path = flags.ground_truth;
-  } else if (seq.ground_truth) {
-    ground_truth = *seq.ground_truth;
-    ground_truth_path = seq.ground_truth_path;
-    if (rectifier) {
-      const core::SE3 T_body_camera = seq.rig->T_body_left * rectifier->T_left_rectified();
-      for (core::SE3& T : ground_truth.poses) T = T * T_body_camera;
-    }
-  }
+  return rectifier;
+}
 
-  // A calibration that no real camera has (fx in other units, a baseline of 0.05 mm) would be
-  // tracked "ok" while measuring nothing: refused before any work, against the first image's size.
-  if (n > 0) {
-    int first_width = seq.calibration.width, first_height = seq.calibration.height;
-    if (first_width == 0 || first_height == 0) {
-      const cv::Mat first = vision::read_gray_image(seq.frames[0].image);
-      first_width = first.cols;
-      first_height = first.rows;
-    }
-    const bool stereo = seq.kind == io::SequenceKind::kStereo && !flags.mono;
-    if (const std::string implausible = seq.calibration.implausibilities(first_width, first_height, stereo); !implausible.empty()) {
-      const std::string source = !flags.calib.empty()    ? flags.calib
-                                 : !flags.camera.empty() ? "--camera " + flags.camera
-                                                         : seq.layout == "kitti" ? seq.folder + "/calib.txt"
-                                                         : seq.folder + " (its calibration)";
-      throw io::ParseError(source, 0, "implausible calibration: " + implausible);
-    }
-  }
+/// --ground-truth, else the dataset's (EuRoC's moved from the body to the rectified left camera).
+vslam::GroundTruth resolve_ground_truth(const io::ImageSequence& seq, const VslamFlags& flags,
+                                        const std::optional<vision::StereoRectifier>& rectifier) {
+  if (!flags.ground_truth.empty()) return {io::read_tum(flags.ground_truth), flags.ground_truth};
+  if (!seq.ground_truth) return {};
+  if (!rectifier) return {*seq.ground_truth, seq.ground_truth_path};
+  return {vslam::ground_truth_of_rectified_camera(*seq.ground_truth, *seq.rig, *rectifier), seq.ground_truth_path};
+}
 
+/// Refuses an implausible calibration before any work, naming where it came from.
+void check_calibration(const io::ImageSequence& seq, const VslamFlags& flags) {
+  const std::string source = !flags.calib.empty()    ? flags.calib
+                             : !flags.camera.empty() ? "--camera " + flags.camera
+                                                     : seq.layout == "kitti" ? seq.folder + "/calib.txt"
+                                                     : seq.folder + " (its calibration)";
+  vslam::check_calibration_plausible(seq, seq.kind == io::SequenceKind::kStereo && !flags.mono, source);
+}
+
+vslam::VisualSlamOptions make_options(const VslamFlags& flags, const io::ImageSequence& seq) {
   vslam::VisualSlamOptions options;
   // ORB-SLAM2's settings: 2000 for KITTI (stereo and monocular), 1000 for TUM.
   options.orb.features = flags.features > 0 ? flags.features : (seq.layout == "kitti" ? 2000 : 1000);
@@ -137,68 +109,37 @@ int vslam_command(const VslamFlags& flags) {
   } else if (!flags.quiet) {
     std::fprintf(stderr, "cairn vslam: no --vocabulary: no loop closure; relocalisation tries the 8 most recent keyframes only\n");
   }
-  if (!flags.quiet) {
-    std::fprintf(stderr, "cairn vslam: %s %s%s, %zu frames, fx %.6g, %s %.6g m%s\n", seq.layout.c_str(),
-                 std::string(io::to_string(kind)).c_str(), flags.mono ? " (the left / colour images only; scale unobservable)" : "", n,
-                 seq.calibration.fx,
-                 seq.kind == io::SequenceKind::kStereo ? "baseline" : "virtual baseline",
-                 seq.kind == io::SequenceKind::kStereo ? seq.calibration.baseline_m : seq.calibration.virtual_baseline_m,
-                 seq.calibration.has_distortion() ? ", distorted (keypoints undistorted)" : "");
-    for (const std::string& note : seq.notes) std::fprintf(stderr, "cairn vslam: %s\n", note.c_str());
-  }
+  return options;
+}
 
-  io::OutputDirectory out(flags.out, flags.overwrite);
-  vslam::VisualSlam slam(seq.calibration, kind, options);
-  std::vector<vslam::FrameResult> results;
-  std::vector<double> read_s;
+void print_input(const io::ImageSequence& seq, io::SequenceKind kind, std::size_t n, const VslamFlags& flags) {
+  std::fprintf(stderr, "cairn vslam: %s %s%s, %zu frames, fx %.6g, %s %.6g m%s\n", seq.layout.c_str(),
+               std::string(io::to_string(kind)).c_str(), flags.mono ? " (the left / colour images only; scale unobservable)" : "", n,
+               seq.calibration.fx,
+               seq.kind == io::SequenceKind::kStereo ? "baseline" : "virtual baseline",
+               seq.kind == io::SequenceKind::kStereo ? seq.calibration.baseline_m : seq.calibration.virtual_baseline_m,
+               seq.calibration.has_distortion() ? ", distorted (keypoints undistorted)" : "");
+  for (const std::string& note : seq.notes) std::fprintf(stderr, "cairn vslam: %s\n", note.c_str());
+}
+
+/// Feeds frames 0 .. n-1 to `slam` until the last or a signal, printing health changes and progress.
+vslam::RunRecord run_frames(vslam::VisualSlam& slam, vslam::FrameReader& reader, const io::ImageSequence& seq, std::size_t n,
+                            std::size_t feature_frame, const VslamFlags& flags) {
+  vslam::RunRecord run;
+  run.features.frame = feature_frame;
   const bool tty = !flags.quiet && !flags.progress && isatty(fileno(stderr));
   const auto start = std::chrono::steady_clock::now();
-  const std::size_t feature_frame = flags.feature_frame >= 0 ? static_cast<std::size_t>(flags.feature_frame) : n / 2;
-  if (flags.feature_frame >= 0 && feature_frame >= n) {
-    throw UsageError("--feature-frame " + std::to_string(flags.feature_frame) + ": this run has " + std::to_string(n) +
-                     " frames (0 to " + std::to_string(n - 1) + ")");
-  }
-  cv::Mat feature_image;
-  std::vector<cv::KeyPoint> feature_keypoints;
-  std::vector<signed char> feature_states;
   vslam::TrackingHealth last_health = vslam::TrackingHealth::kOk;
   std::string last_note;
   int messages = 0;
-  int width = seq.calibration.width, height = seq.calibration.height;
   for (std::size_t k = 0; k < n && !interrupted(); ++k) {
-    const io::ImageFrame& frame = seq.frames[k];
-    const auto read_start = std::chrono::steady_clock::now();
-    cv::Mat image = vision::read_gray_image(frame.image, width, height);
-    width = image.cols;
-    height = image.rows;
-    vslam::FrameResult r;
-    if (kind == io::SequenceKind::kMonocular) {
-      if (rectifier) {
-        cv::Mat unused, rectified;
-        rectifier->rectify(image, image, rectified, unused);
-        image = rectified;
-      }
-      read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
-      r = slam.add_monocular(frame.time, image);
-    } else if (seq.kind == io::SequenceKind::kStereo) {
-      cv::Mat right = vision::read_gray_image(frame.right_image, width, height);
-      if (rectifier) {
-        cv::Mat left_rectified, right_rectified;
-        rectifier->rectify(image, right, left_rectified, right_rectified);
-        image = left_rectified;
-        right = right_rectified;
-      }
-      read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
-      r = slam.add_stereo(frame.time, image, right);
-    } else {
-      const cv::Mat depth = vision::read_depth_image(frame.depth_image, width, height);
-      read_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count());
-      r = slam.add_rgbd(frame.time, image, depth);
-    }
+    const vslam::FrameImages images = reader.read(k);
+    run.read_s.push_back(images.read_s);
+    vslam::FrameResult r = vslam::add_frame(slam, seq.frames[k].time, images);
     if (k == feature_frame) {
-      feature_image = image;
-      feature_keypoints = r.keypoints;
-      feature_states = r.keypoint_states;
+      run.features.image = images.gray;
+      run.features.keypoints = r.keypoints;
+      run.features.states = r.keypoint_states;
     }
     r.keypoints.clear();
     r.keypoint_states.clear();
@@ -217,274 +158,66 @@ int vslam_command(const VslamFlags& flags) {
                    r.inliers, slam.summary().keyframes, tty ? "   " : "\n");
       std::fflush(stderr);
     }
-    results.push_back(std::move(r));
+    run.frames.push_back(std::move(r));
   }
   if (tty) std::fprintf(stderr, "\n");
-  const bool stopped = interrupted();
-  if (stopped) std::fprintf(stderr, "cairn vslam: interrupted by %s after %zu frames: writing the result so far\n", interrupt_signal_name(), results.size());
-  if (results.empty()) throw std::runtime_error("no frame was processed");
-  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.interrupted = interrupted();
+  if (run.interrupted) std::fprintf(stderr, "cairn vslam: interrupted by %s after %zu frames: writing the result so far\n", interrupt_signal_name(), run.frames.size());
+  if (run.frames.empty()) throw std::runtime_error("no frame was processed");
+  run.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
 
-  // Trajectories (every frame, at the final keyframe poses) and keyframes.
-  const std::vector<core::SE3> poses = slam.trajectory();
-  // TUM: the tracked frames only (a lost frame has no pose, as ORB-SLAM2's SaveTrajectoryTUM);
-  // KITTI: one line per frame as its devkit needs, a lost frame carrying the motion model's guess.
-  // Frames of map segments that never merged with the main map (the one of the first keyframe)
-  // are in frames of their own: trajectory_map_<segment>.tum.
-  const std::vector<int> segments = slam.frame_segments();
-  const int main_segment = slam.main_segment();
-  io::Trajectory trajectory, every_frame;
-  std::map<int, io::Trajectory> other_maps;
-  for (std::size_t k = 0; k < results.size(); ++k) {
-    every_frame.stamps.push_back(results[k].time);
-    every_frame.poses.push_back(poses[k]);
-    if (!results[k].tracked || segments[k] < 0) continue;
-    io::Trajectory& t = segments[k] == main_segment ? trajectory : other_maps[segments[k]];
-    t.stamps.push_back(results[k].time);
-    t.poses.push_back(poses[k]);
+void print_summary(const vslam::VisualSlamSummary& s, const vslam::RunRecord& run, const vslam::WrittenOutputs& written,
+                   const VslamFlags& flags) {
+  const vslam::FrameTimeSeries t = vslam::frame_times(run.frames);
+  std::printf("%zu frames: %zu ok, %zu degraded, %zu lost; %zu relocalisations, %zu loops closed, %zu revisits verified, %zu new maps (%zu merged); %zu keyframes, %zu map points; per frame median %.1f ms "
+              "(tracking %.1f ms, ORB %.1f ms, mapping %.1f ms)\n",
+              s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loops_accepted, s.revisits_verified, s.maps_started, s.maps_merged,
+              s.keyframes, written.map_points, eval::spread(t.total_s).median * 1e3,
+              eval::spread(t.tracking_s).median * 1e3, eval::spread(t.features_s).median * 1e3, eval::spread(t.mapping_s).median * 1e3);
+  if (const std::optional<vslam::GroundTruthEvaluation>& e = written.evaluation; e && e->ape.outcome.ok() && e->sim3) {
+    std::printf("against %s, the %zu tracked frames of %zu: ATE (Sim(3)-aligned, scale %.4f: monocular scale is not observable) "
+                "RMSE %.4f m\n",
+                e->ground_truth_path.c_str(), e->ape.reference.size(), run.frames.size(), e->ape.alignment.scale, e->ape.statistics.rmse);
+  } else if (e && e->ape.outcome.ok()) {
+    constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+    std::printf("against %s, the main map's %zu tracked frames of %zu: ATE (SE(3)-aligned) RMSE %.4f m; end-point drift %.3f m "
+                "over %.1f m; RPE (1 frame) RMSE %.4f m, %.4f deg\n",
+                e->ground_truth_path.c_str(), e->ape.reference.size(), run.frames.size(), e->ape.statistics.rmse,
+                e->end_point_drift_m, e->path_length_m,
+                e->rpe_translation.outcome.ok() ? e->rpe_translation.statistics.rmse : kNone,
+                e->rpe_rotation.outcome.ok() ? e->rpe_rotation.statistics.rmse : kNone);
   }
-  if (trajectory.poses.empty()) throw std::runtime_error("no frame was tracked: nothing to write (see the messages above)");
-  io::write_output(out.staging_path("trajectory.tum"), [&](std::ostream& o) { io::write_tum(o, trajectory); });
-  for (const auto& [id, t] : other_maps) {
-    io::write_output(out.staging_path("trajectory_map_" + std::to_string(id) + ".tum"), [&](std::ostream& o) { io::write_tum(o, t); });
-  }
-  io::write_output(out.staging_path("trajectory.kitti"), [&](std::ostream& o) { io::write_kitti(o, every_frame); });
-  io::Trajectory keyframes;
-  for (const std::size_t k : slam.keyframe_frames()) {
-    if (segments[k] != main_segment) continue;  // keyframes of the main map, as trajectory.tum
-    keyframes.stamps.push_back(results[k].time);
-    keyframes.poses.push_back(poses[k]);  // keyframes are tracked frames
-  }
-  io::write_output(out.staging_path("keyframes.tum"), [&](std::ostream& o) { io::write_tum(o, keyframes); });
-  std::vector<Eigen::Vector3f> map_points;
-  for (const Eigen::Vector3d& p : slam.map_points()) map_points.push_back(p.cast<float>());
-  io::write_output(out.staging_path("map_points.ply"), [&](std::ostream& o) {
-    io::write_ply(o, map_points, "cairn vslam map points, world = the first camera (x right, y down, z forward)");
-  });
-  io::write_output(out.staging_path("frames.csv"), [&](std::ostream& o) {
-    o << "frame,time_s,health,tracked,segment,keyframe,relocalised,loop_closed,new_map,features,stereo_points,first_stage_matches,used_reference,used_image_alignment,inliers,inlier_ratio,"
-         "sigma_position_m,features_ms,stereo_ms,tracking_ms,mapping_ms,total_ms,note\n";
-    for (const auto& r : results) {
-      o << r.frame << ',' << r.time.to_seconds_string() << ',' << vslam::to_string(r.health) << ',' << (r.tracked ? 1 : 0) << ','
-        << segments[r.frame] << ',' << (r.keyframe ? 1 : 0) << ',' << (r.relocalised ? 1 : 0) << ',' << (r.loop_closed ? 1 : 0) << ','
-        << (r.new_map ? 1 : 0) << ',' << r.features << ',' << r.stereo_points << ',' << r.motion_matches << ','
-        << (r.used_reference ? 1 : 0) << ',' << (r.used_image_alignment ? 1 : 0) << ',' << r.inliers << ',' << r.inlier_ratio << ',' << r.sigma_position_m << ','
-        << 1e3 * r.times.features_s << ',' << 1e3 * r.times.stereo_s << ',' << 1e3 * r.times.tracking_s << ','
-        << 1e3 * r.times.mapping_s << ',' << 1e3 * r.times.total_s << ",\"" << r.note << "\"\n";
-    }
-  });
+  std::printf("wrote %s\n", flags.out.c_str());
+}
 
-  // Evaluation against the ground truth, when there is one.
-  nlohmann::json evaluation = nullptr;
-  viz::Figure figure;
-  figure.title = "cairn vslam: " + seq.folder;
-  figure.width_px = 1000;
-  figure.height_px = 800;
-  viz::Axes axes;
-  axes.title = "top view (x right, z forward of the first camera)";
-  axes.x_label = "x [m]";
-  axes.y_label = "z [m]";
-  axes.equal_aspect = true;
-  if (!ground_truth.poses.empty()) {
-    eval::ApeOptions ape_options;
-    ape_options.alignment.method = kind == io::SequenceKind::kMonocular ? eval::AlignmentMethod::kSim3 : eval::AlignmentMethod::kSE3;
-    ape_options.association.max_time_difference_s = 0.02;
-    const eval::ApeResult ape = eval::evaluate_ape(ground_truth, trajectory, ape_options);
-    eval::RpeOptions rpe_options;
-    rpe_options.association = ape_options.association;
-    const eval::RpeResult rpe_t = eval::evaluate_rpe(ground_truth, trajectory, rpe_options);
-    rpe_options.relation = eval::PoseRelation::kRotationAngleDeg;
-    const eval::RpeResult rpe_r = eval::evaluate_rpe(ground_truth, trajectory, rpe_options);
-    evaluation = {{"ground_truth", ground_truth_path}};
-    if (ape.outcome.ok()) {
-      evaluation[kind == io::SequenceKind::kMonocular ? "ate_sim3_aligned_m" : "ate_se3_aligned_m"] = stats_json(ape.statistics);
-      if (kind == io::SequenceKind::kMonocular) evaluation["sim3_scale"] = ape.alignment.scale;
-      // The ground truth drawn in the estimate's frame: T_est = alignment^-1 * T_gt.
-      viz::Series gt;
-      gt.label = kind == io::SequenceKind::kMonocular ? "ground truth (estimate Sim(3)-aligned)" : "ground truth (estimate SE(3)-aligned)";
-      gt.color = viz::kBlack;
-      gt.dashed = true;
-      viz::Series est;
-      est.label = "cairn vslam";
-      for (std::size_t i = 0; i < ape.reference.size(); ++i) {
-        gt.x.push_back(ape.reference[i](0, 3));
-        gt.y.push_back(ape.reference[i](2, 3));
-        est.x.push_back(ape.estimate[i](0, 3));
-        est.y.push_back(ape.estimate[i](2, 3));
-      }
-      axes.title = std::string("top view, estimate ") + (kind == io::SequenceKind::kMonocular ? "Sim(3)" : "SE(3)") +
-                   "-aligned to the ground truth (x, z of the ground truth's frame)";
-      axes.series.push_back(gt);
-      axes.series.push_back(est);
-      // Drift at the end with no alignment, both trajectories re-based on their first pair.
-      const Eigen::Matrix4d d_ref = ape.reference.front().inverse() * ape.reference.back();
-      const Eigen::Matrix4d aligned_first = ape.estimate.front();
-      const Eigen::Matrix4d d_est = aligned_first.inverse() * ape.estimate.back();
-      evaluation["end_point_drift_m"] = (d_ref.block<3, 1>(0, 3) - d_est.block<3, 1>(0, 3)).norm();
-      double path = 0.0;
-      for (std::size_t i = 1; i < ape.reference.size(); ++i) path += (ape.reference[i].block<3, 1>(0, 3) - ape.reference[i - 1].block<3, 1>(0, 3)).norm();
-      evaluation["path_length_m"] = path;
-      evaluation["frames_compared"] = ape.reference.size();
-    } else {
-      evaluation["ate_error"] = ape.outcome.message;
-    }
-    if (rpe_t.outcome.ok()) evaluation["rpe_1_frame_translation_m"] = stats_json(rpe_t.statistics);
-    if (rpe_r.outcome.ok()) evaluation["rpe_1_frame_rotation_deg"] = stats_json(rpe_r.statistics);
-  }
-  if (axes.series.empty()) {
-    viz::Series est;
-    est.label = "cairn vslam";
-    for (const auto& T : trajectory.poses) {
-      est.x.push_back(T.translation().x());
-      est.y.push_back(T.translation().z());
-    }
-    axes.series.push_back(est);
-  }
-  figure.panels.push_back(axes);
-  const viz::RenderResult png = viz::render(figure, viz::ImageFormat::kPng);
-  if (!png.ok) throw std::runtime_error("cannot draw trajectory.png: " + png.message);
-  io::write_output(out.staging_path("trajectory.png"), [&](std::ostream& o) { o << png.bytes; });
-  if (!feature_image.empty()) {
-    const std::string bytes = vision::draw_features_png(feature_image, feature_keypoints, feature_states,
-                                                          "frame " + std::to_string(feature_frame));
-    io::write_output(out.staging_path("features.png"), [&](std::ostream& o) { o << bytes; });
-  }
+int vslam_command(const VslamFlags& flags) {
+  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
+  io::ImageSequence seq = read_sequence(flags.folder);
+  const std::optional<vision::StereoRectifier> rectifier = resolve_calibration(seq, flags);
+  const io::SequenceKind kind = flags.mono ? io::SequenceKind::kMonocular : seq.kind;
+  std::size_t n = seq.frames.size();
+  if (flags.max_frames > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_frames));
+  const vslam::GroundTruth ground_truth = resolve_ground_truth(seq, flags, rectifier);
+  check_calibration(seq, flags);
+  const vslam::VisualSlamOptions options = make_options(flags, seq);
+  if (!flags.quiet) print_input(seq, kind, n, flags);
 
-  // Report.
-  const vslam::VisualSlamSummary& s = slam.summary();
-  std::vector<double> tracking, features_s, total, mapping;
-  for (const auto& r : results) {
-    tracking.push_back(r.times.stereo_s + r.times.tracking_s);
-    features_s.push_back(r.times.features_s);
-    mapping.push_back(r.times.mapping_s);
-    total.push_back(r.times.total_s);
+  io::OutputDirectory out(flags.out, flags.overwrite);
+  vslam::VisualSlam slam(seq.calibration, kind, options);
+  const std::size_t feature_frame = flags.feature_frame >= 0 ? static_cast<std::size_t>(flags.feature_frame) : n / 2;
+  if (flags.feature_frame >= 0 && feature_frame >= n) {
+    throw UsageError("--feature-frame " + std::to_string(flags.feature_frame) + ": this run has " + std::to_string(n) +
+                     " frames (0 to " + std::to_string(n - 1) + ")");
   }
-  nlohmann::json report;
-  report["input"] = {{"folder", seq.folder},
-                     {"layout", seq.layout},
-                     {"kind", std::string(io::to_string(kind))},
-                     {"frames_listed", seq.frames.size()},
-                     {"frames_processed", results.size()},
-                     {"times_from_file", seq.times_from_file},
-                     {"notes", seq.notes},
-                     {"calibration",
-                      {{"fx", seq.calibration.fx}, {"fy", seq.calibration.fy}, {"cx", seq.calibration.cx}, {"cy", seq.calibration.cy},
-                       {"distortion", {seq.calibration.k1, seq.calibration.k2, seq.calibration.p1, seq.calibration.p2, seq.calibration.k3}},
-                       {"baseline_m", seq.calibration.baseline_m}, {"virtual_baseline_m", seq.calibration.virtual_baseline_m},
-                       {"depth_units_per_m", seq.calibration.depth_units_per_m},
-                       {"source", !flags.calib.empty() ? flags.calib : (!flags.camera.empty() ? "preset " + flags.camera : "dataset")}}}};
-  report["options"] = {{"features", options.orb.features},
-                       {"scale_factor", options.orb.scale_factor},
-                       {"levels", options.orb.levels},
-                       {"fast_thresholds", {options.orb.initial_fast_threshold, options.orb.min_fast_threshold}},
-                       {"close_depth_baselines", options.close_depth_baselines},
-                       {"lost_below_inliers", options.lost_below_inliers},
-                       {"degraded_below_inliers", options.degraded_below_inliers},
-                       {"local_ba", options.local_ba},
-                       {"keyframe_culling", options.keyframe_culling},
-                       {"keyframe_culling_redundancy", options.keyframe_culling_redundancy},
-                       {"image_alignment", options.image_alignment},
-                       {"image_alignment_min_correlation", options.image_alignment_min_correlation},
-                       {"fuse_points", options.fuse_points},
-                       {"monocular_keyframe_turn_fov", options.monocular_keyframe_turn_fov}};
-  report["summary"] = {{"frames", s.frames},
-                       {"ok", s.frames_ok},
-                       {"degraded", s.frames_degraded},
-                       {"lost", s.frames_lost},
-                       {"keyframes", s.keyframes},
-                       {"map_points_created", s.map_points},
-                       {"map_points_culled", s.map_points_culled},
-                       {"map_points", map_points.size()},
-                       {"local_bundle_adjustments", s.local_bas},
-                       {"reference_fallbacks", s.reference_fallbacks},
-                       {"interrupted", stopped}};
-  report["timing"] = {{"total_s", total_s},
-                      {"per_frame_ms", spread_json_ms(total)},
-                      {"features_ms", spread_json_ms(features_s)},
-                      {"tracking_ms", spread_json_ms(tracking)},
-                      {"mapping_ms", spread_json_ms(mapping)},
-                      {"image_read_ms", spread_json_ms(read_s)},
-                      {"local_ba_s", s.local_ba_s},
-                      {"threads", "ORB of the two images in parallel; everything else on one thread"}};
-  {
-    nlohmann::json maps = nlohmann::json::array();
-    std::map<int, std::size_t> frames_in;
-    for (std::size_t k = 0; k < results.size(); ++k) {
-      if (results[k].tracked && segments[k] >= 0) ++frames_in[segments[k]];
-    }
-    for (const auto& [id, count] : frames_in) {
-      maps.push_back({{"segment", id},
-                      {"main", id == main_segment},
-                      {"tracked_frames", count},
-                      {"trajectory", id == main_segment ? "trajectory.tum" : "trajectory_map_" + std::to_string(id) + ".tum"}});
-    }
-    report["maps"] = maps;
-  }
-  report["evaluation"] = evaluation;
-  report["place_recognition"] = {{"vocabulary", flags.vocabulary.empty() ? nlohmann::json(nullptr) : nlohmann::json(flags.vocabulary)},
-                                 {"vocabulary_description", options.vocabulary ? options.vocabulary->description() : ""},
-                                 {"loop_queries", s.loop_queries},
-                                 {"loops_accepted", s.loops_accepted},
-                                 {"relocalisations", s.relocalisations},
-                                 {"relocalisations_refused_ambiguous", s.relocalisations_ambiguous},
-                                 {"keyframes_culled", s.keyframes_culled},
-                                 {"loops_refused_ambiguous", s.loops_ambiguous},
-                                 {"map_points_fused", s.map_points_fused},
-                                 {"fusion_observations_added", s.fusion_observations},
-                                 {"image_alignment_poses", s.image_alignment_poses},
-                                 {"maps_started", s.maps_started},
-                                 {"maps_merged", s.maps_merged},
-                                 {"merge_attempts_with_recent_keyframes", s.merge_attempts},
-                                 {"revisits_verified", s.revisits_verified},
-                                 {"global_bundle_adjustments", s.global_bas},
-                                 {"loop_s", s.loop_s},
-                                 {"global_ba_s", s.global_ba_s},
-                                 {"candidates", nlohmann::json::array()}};
-  for (const vslam::LoopRecord& l : s.loops) {
-    report["place_recognition"]["candidates"].push_back({{"keyframe", l.keyframe},
-                                                         {"frame", l.frame},
-                                                         {"candidate_keyframe", l.candidate},
-                                                         {"candidate_frame", l.candidate_frame},
-                                                         {"score", l.score},
-                                                         {"min_covisible_score", l.min_covisible_score},
-                                                         {"consistency", l.consistency},
-                                                         {"pnp_inliers", l.pnp_inliers},
-                                                         {"matches", l.matches},
-                                                         {"merge", l.merge},
-                                                         {"decision", l.decision},
-                                                         {"reason", l.reason},
-                                                         {"correction_m", l.correction_m},
-                                                         {"correction_deg", l.correction_deg},
-                                                         {"scale", l.scale}});
-  }
-  report["not_implemented"] = {"local mapping in its own thread"};
-  io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
+  vslam::FrameReader reader(seq, kind, rectifier ? &*rectifier : nullptr);
+  const vslam::RunRecord run = run_frames(slam, reader, seq, n, feature_frame, flags);
+  const std::string calibration_source = !flags.calib.empty() ? flags.calib : (!flags.camera.empty() ? "preset " + flags.camera : "dataset");
+  const vslam::WrittenOutputs written = vslam::write_outputs(out, slam, {seq, kind, calibration_source, flags.vocabulary}, run, ground_truth);
   out.commit();
-
-  if (!flags.quiet) {
-    std::printf("%zu frames: %zu ok, %zu degraded, %zu lost; %zu relocalisations, %zu loops closed, %zu revisits verified, %zu new maps (%zu merged); %zu keyframes, %zu map points; per frame median %.1f ms "
-                "(tracking %.1f ms, ORB %.1f ms, mapping %.1f ms)\n",
-                s.frames, s.frames_ok, s.frames_degraded, s.frames_lost, s.relocalisations, s.loops_accepted, s.revisits_verified, s.maps_started, s.maps_merged,
-                s.keyframes, map_points.size(), spread(total).median * 1e3,
-                spread(tracking).median * 1e3, spread(features_s).median * 1e3, spread(mapping).median * 1e3);
-    if (!evaluation.is_null() && evaluation.contains("ate_sim3_aligned_m")) {
-      std::printf("against %s, the %zu tracked frames of %zu: ATE (Sim(3)-aligned, scale %.4f: monocular scale is not observable) "
-                  "RMSE %.4f m\n",
-                  ground_truth_path.c_str(), evaluation["frames_compared"].get<std::size_t>(), results.size(),
-                  evaluation["sim3_scale"].get<double>(), evaluation["ate_sim3_aligned_m"]["rmse"].get<double>());
-    }
-    if (!evaluation.is_null() && evaluation.contains("ate_se3_aligned_m")) {
-      std::printf("against %s, the main map's %zu tracked frames of %zu: ATE (SE(3)-aligned) RMSE %.4f m; end-point drift %.3f m "
-                  "over %.1f m; RPE (1 frame) RMSE %.4f m, %.4f deg\n",
-                  ground_truth_path.c_str(), evaluation["frames_compared"].get<std::size_t>(), results.size(),
-                  evaluation["ate_se3_aligned_m"]["rmse"].get<double>(),
-                  evaluation["end_point_drift_m"].get<double>(), evaluation["path_length_m"].get<double>(),
-                  evaluation.value("rpe_1_frame_translation_m", nlohmann::json{{"rmse", NAN}})["rmse"].get<double>(),
-                  evaluation.value("rpe_1_frame_rotation_deg", nlohmann::json{{"rmse", NAN}})["rmse"].get<double>());
-    }
-    std::printf("wrote %s\n", flags.out.c_str());
-  }
-  return stopped ? 130 : 0;
+  if (!flags.quiet) print_summary(slam.summary(), run, written, flags);
+  return run.interrupted ? 130 : 0;
 }
 
 }  // namespace
