@@ -41,80 +41,17 @@ struct Localize2dFlags : LogReplayFlags {
   int confirmations = 0;
 };
 
-core::SE3 to_se3(const core::SE2& T) {
-  return core::SE3(core::SO3::from_rpy(0.0, 0.0, T.angle()), Eigen::Vector3d(T.x(), T.y(), 0.0));
-}
-
-/// Mean, RMS and maximum of a list of errors.
-nlohmann::json error_statistics(std::vector<double> errors) {
-  if (errors.empty()) return nlohmann::json();
-  double sum = 0.0, squares = 0.0;
-  for (const double e : errors) {
-    sum += e;
-    squares += e * e;
+/// The terminal line of a ground-truth comparison.
+void print_ground_truth(const std::string& path, const slam2d::LocalizationTruthErrors& e) {
+  if (e.translation_m.empty()) return;
+  double mean = 0.0, max = 0.0;
+  for (const double t : e.translation_m) {
+    mean += t / static_cast<double>(e.translation_m.size());
+    max = std::max(max, t);
   }
-  const double n = static_cast<double>(errors.size());
-  std::sort(errors.begin(), errors.end());
-  return {{"mean", sum / n},
-          {"rmse", std::sqrt(squares / n)},
-          {"median", errors[errors.size() / 2]},
-          {"max", errors.back()}};
-}
-
-/// Error of every localised scan against a TUM ground truth in the map's frame (no alignment:
-/// the point is to check where the localiser put the robot in the map). A scan is compared with
-/// the ground-truth pose of the nearest stamp within 0.05 s.
-nlohmann::json ground_truth_errors(const std::string& path, const std::vector<slam2d::LocalizationResult>& results,
-                                   bool quiet) {
-  const io::Trajectory truth = io::read_tum(path);
-  std::vector<double> translation_m, rotation_deg;
-  std::vector<double> translation_ok_m;
-  std::size_t wrong_relocalisations = 0, relocalisations_compared = 0, unmatched = 0;
-  for (const slam2d::LocalizationResult& r : results) {
-    if (!r.localised) continue;
-    const std::size_t after = static_cast<std::size_t>(
-        std::lower_bound(truth.stamps.begin(), truth.stamps.end(), r.time) - truth.stamps.begin());
-    std::size_t best = truth.stamps.size();
-    double best_dt = 0.05;
-    for (const std::size_t candidate : {after - 1, after}) {  // after - 1 wraps when after == 0
-      if (candidate >= truth.stamps.size()) continue;
-      const double dt = std::abs(truth.stamps[candidate].seconds() - r.time.seconds());
-      if (dt <= best_dt) {
-        best_dt = dt;
-        best = candidate;
-      }
-    }
-    if (best == truth.stamps.size()) {
-      ++unmatched;
-      continue;
-    }
-    const core::SE3 error = to_se3(r.T_map_laser).inverse() * truth.poses[best];
-    const double t = error.translation().head<2>().norm();
-    const double angle_deg = std::abs(std::atan2(error.rotation_matrix()(1, 0), error.rotation_matrix()(0, 0))) * 180.0 / M_PI;
-    translation_m.push_back(t);
-    rotation_deg.push_back(angle_deg);
-    if (r.health == slam2d::Health::kOk) translation_ok_m.push_back(t);
-    if (r.relocalised) {
-      ++relocalisations_compared;
-      if (t > 0.3 || angle_deg > 3.0) ++wrong_relocalisations;
-    }
-  }
-  if (!quiet && !translation_m.empty()) {
-    const nlohmann::json t = error_statistics(translation_m);
-    std::printf("against %s: %zu localised scans compared, translation error mean %.3f m, max %.3f m; %zu of %zu "
-                "relocalisations off by more than 0.3 m or 3 degrees\n",
-                path.c_str(), translation_m.size(), t["mean"].get<double>(), t["max"].get<double>(), wrong_relocalisations,
-                relocalisations_compared);
-  }
-  return {{"file", path},
-          {"frame", "the map's (no alignment)"},
-          {"scans_compared", translation_m.size()},
-          {"localised_scans_without_ground_truth", unmatched},
-          {"translation_error_m", error_statistics(translation_m)},
-          {"translation_error_ok_scans_m", error_statistics(translation_ok_m)},
-          {"rotation_error_deg", error_statistics(rotation_deg)},
-          {"relocalisations_compared", relocalisations_compared},
-          {"relocalisations_off_by_more_than_0.3_m_or_3_deg", wrong_relocalisations}};
+  std::printf("against %s: %zu localised scans compared, translation error mean %.3f m, max %.3f m; %zu of %zu "
+              "relocalisations off by more than 0.3 m or 3 degrees\n",
+              path.c_str(), e.translation_m.size(), mean, max, e.wrong_relocalisations, e.relocalisations_compared);
 }
 
 int localize2d_command(const Localize2dFlags& flags) {
@@ -180,19 +117,7 @@ int localize2d_command(const Localize2dFlags& flags) {
   }
 
   // Outputs: trajectory.tum (localised scans only, by time), scans.csv, map.png, report.json.
-  io::Trajectory trajectory;
-  {
-    std::vector<const slam2d::LocalizationResult*> localised;
-    for (const auto& r : results)
-      if (r.localised) localised.push_back(&r);
-    std::stable_sort(localised.begin(), localised.end(),
-                     [](const auto* a, const auto* b) { return a->time < b->time; });
-    for (const auto* r : localised) {
-      if (!trajectory.stamps.empty() && !(trajectory.stamps.back() < r->time)) continue;
-      trajectory.stamps.push_back(r->time);
-      trajectory.poses.push_back(to_se3(r->T_map_laser));
-    }
-  }
+  const io::Trajectory trajectory = slam2d::localized_trajectory(results);
   if (!trajectory.stamps.empty()) io::write_tum(out.staging_path("trajectory.tum"), trajectory);
   else io::write_output(out.staging_path("trajectory.tum"), [](std::ostream& o) { o << "# no scan was localised\n"; });
   slam2d::write_localization_csv(results, out.staging_path("scans.csv"));
@@ -215,7 +140,12 @@ int localize2d_command(const Localize2dFlags& flags) {
   }
   report["wall_time_s"] = total_s;
   report["scans_per_second"] = summary.total_s > 0 ? static_cast<double>(used) / summary.total_s : 0.0;
-  if (!flags.ground_truth.empty()) report["ground_truth"] = ground_truth_errors(flags.ground_truth, results, flags.quiet);
+  if (!flags.ground_truth.empty()) {
+    const slam2d::LocalizationTruthErrors errors =
+        slam2d::compare_with_ground_truth(io::read_tum(flags.ground_truth), results);
+    if (!flags.quiet) print_ground_truth(flags.ground_truth, errors);
+    report["ground_truth"] = slam2d::ground_truth_json(flags.ground_truth, errors);
+  }
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
   if (!flags.quiet) {

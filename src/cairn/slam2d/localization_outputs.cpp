@@ -11,6 +11,7 @@
 #include <numbers>
 #include <ostream>
 
+#include "cairn/eval/statistics.hpp"
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -291,6 +292,83 @@ nlohmann::json localization_report_json(const Localizer2d& localizer, const Loca
   report["relocalisations"] = relocalisations;
   report["health_events"] = health_events_json(s.health_events);
   return report;
+}
+
+namespace {
+
+core::SE3 to_se3(const core::SE2& T) {
+  return core::SE3(core::SO3::from_rpy(0.0, 0.0, T.angle()), Eigen::Vector3d(T.x(), T.y(), 0.0));
+}
+
+/// eval's statistics of `errors` (evo's definitions), null when there are none.
+nlohmann::json statistics_json(const std::vector<double>& errors) {
+  if (errors.empty()) return nlohmann::json();
+  const eval::Statistics s = eval::compute_statistics(errors);
+  return {{"mean", s.mean}, {"rmse", s.rmse}, {"median", s.median}, {"std", s.std}, {"max", s.max}};
+}
+
+}  // namespace
+
+io::Trajectory localized_trajectory(const std::vector<LocalizationResult>& results) {
+  std::vector<const LocalizationResult*> localised;
+  for (const auto& r : results)
+    if (r.localised) localised.push_back(&r);
+  std::stable_sort(localised.begin(), localised.end(), [](const auto* a, const auto* b) { return a->time < b->time; });
+  io::Trajectory trajectory;
+  for (const auto* r : localised) {
+    if (!trajectory.stamps.empty() && !(trajectory.stamps.back() < r->time)) continue;
+    trajectory.stamps.push_back(r->time);
+    trajectory.poses.push_back(to_se3(r->T_map_laser));
+  }
+  return trajectory;
+}
+
+LocalizationTruthErrors compare_with_ground_truth(const io::Trajectory& truth,
+                                                  const std::vector<LocalizationResult>& results) {
+  LocalizationTruthErrors e;
+  for (const LocalizationResult& r : results) {
+    if (!r.localised) continue;
+    const std::size_t after = static_cast<std::size_t>(
+        std::lower_bound(truth.stamps.begin(), truth.stamps.end(), r.time) - truth.stamps.begin());
+    std::size_t best = truth.stamps.size();
+    double best_dt = 0.05;
+    for (const std::size_t candidate : {after - 1, after}) {  // after - 1 wraps when after == 0
+      if (candidate >= truth.stamps.size()) continue;
+      const double dt = std::abs(truth.stamps[candidate].seconds() - r.time.seconds());
+      if (dt <= best_dt) {
+        best_dt = dt;
+        best = candidate;
+      }
+    }
+    if (best == truth.stamps.size()) {
+      ++e.unmatched;
+      continue;
+    }
+    const core::SE3 error = to_se3(r.T_map_laser).inverse() * truth.poses[best];
+    const double t = error.translation().head<2>().norm();
+    const double angle_deg =
+        std::abs(std::atan2(error.rotation_matrix()(1, 0), error.rotation_matrix()(0, 0))) * 180.0 / std::numbers::pi;
+    e.translation_m.push_back(t);
+    e.rotation_deg.push_back(angle_deg);
+    if (r.health == Health::kOk) e.translation_ok_m.push_back(t);
+    if (r.relocalised) {
+      ++e.relocalisations_compared;
+      if (t > 0.3 || angle_deg > 3.0) ++e.wrong_relocalisations;
+    }
+  }
+  return e;
+}
+
+nlohmann::json ground_truth_json(const std::string& path, const LocalizationTruthErrors& e) {
+  return {{"file", path},
+          {"frame", "the map's (no alignment)"},
+          {"scans_compared", e.translation_m.size()},
+          {"localised_scans_without_ground_truth", e.unmatched},
+          {"translation_error_m", statistics_json(e.translation_m)},
+          {"translation_error_ok_scans_m", statistics_json(e.translation_ok_m)},
+          {"rotation_error_deg", statistics_json(e.rotation_deg)},
+          {"relocalisations_compared", e.relocalisations_compared},
+          {"relocalisations_off_by_more_than_0.3_m_or_3_deg", e.wrong_relocalisations}};
 }
 
 }  // namespace cairn::slam2d
