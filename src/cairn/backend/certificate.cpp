@@ -12,6 +12,7 @@
 
 #include "cairn/backend/chordal_relaxation.hpp"
 #include "cairn/backend/sparse_cholesky.hpp"
+#include "cairn/core/timer.hpp"
 
 namespace cairn::backend {
 namespace {
@@ -134,7 +135,7 @@ double ChordalRelaxation::f(const Eigen::MatrixXd& Y) const {
 
 CertificateSummary certify_relaxation(const ChordalRelaxation& relaxation, const Eigen::MatrixXd& R,
                                       const CertificateOptions& options, Eigen::RowVectorXd* escape) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = core::Clock::now();
   if (escape != nullptr) escape->resize(0);  // set below only when a direction was found
   CertificateSummary summary;
   const int n = relaxation.n;
@@ -302,16 +303,16 @@ CertificateSummary certify_relaxation(const ChordalRelaxation& relaxation, const
                          " poses: the certificate speaks of the problem with one (the gauge)";
     }
   }
-  summary.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.time_s = core::seconds_since(start);
   return summary;
 }
 
 template <class Group>
 CertificateSummary certify_chordal(const PoseGraphProblem<Group>& problem, const CertificateOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = core::Clock::now();
   const ChordalRelaxation relaxation = make_chordal_relaxation(problem);
   CertificateSummary summary = certify_relaxation(relaxation, rotation_blocks(problem), options);
-  summary.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.time_s = core::seconds_since(start);
   return summary;
 }
 

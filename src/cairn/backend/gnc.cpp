@@ -11,6 +11,7 @@
 #include "cairn/backend/factors.hpp"
 #include "cairn/backend/initialization.hpp"
 #include "cairn/core/assert.hpp"
+#include "cairn/core/timer.hpp"
 
 namespace cairn::backend {
 
@@ -483,7 +484,7 @@ class Stages {
 
 template <class Group>
 GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = core::Clock::now();
   CAIRN_ASSERT(options.mu_factor > 1.0 && options.max_outer_iterations >= 1 && options.binary_tolerance > 0.0 &&
                    options.iterations_per_outer >= 1 && options.max_reclassify_rounds >= 0 &&
                    options.group_window >= 0 && options.scaled_threshold_multiplier > 0.0 &&
@@ -513,7 +514,7 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   summary.initial_threshold_chi2 = c2;
   const std::vector<Group> initial_poses = problem.T_world_pose;
 
-  using Clock = std::chrono::steady_clock;
+  using core::Clock;
   // Adds the time since `from` to `seconds` and returns now.
   auto lap = [](double& seconds, Clock::time_point from) {
     const Clock::time_point now = Clock::now();
@@ -603,7 +604,7 @@ GncSummary optimize_gnc(PoseGraphProblem<Group>& problem, const GncOptions& opti
   summary.message = summary.interrupted          ? "interrupted (the classification so far)"
                     : summary.graduation_converged ? "weights converged to 0 or 1"
                                                    : "maximum number of outer iterations reached before the weights were binary";
-  summary.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.total_s = core::seconds_since(start);
   return summary;
 }
 

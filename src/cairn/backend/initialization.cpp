@@ -6,6 +6,7 @@
 
 #include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/core/assert.hpp"
+#include "cairn/core/timer.hpp"
 
 namespace cairn::backend {
 
@@ -20,7 +21,8 @@ std::string_view to_string(Initialization initialization) {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using core::Clock;
+using core::seconds_since;
 
 // The unknowns of both linear systems: pose -> block, -1 for fixed poses, blocks numbered in a
 // fill-reducing elimination order (block_amd_labels) shared by the rotation and the
@@ -182,7 +184,7 @@ InitializationSummary initialize_odometry(PoseGraphProblem<Group>& problem) {
     }
   }
   for (std::size_t p = 0; p < n; ++p) summary.poses_reached += reached[p];
-  summary.total_s = std::chrono::duration<double>(Clock::now() - start).count();
+  summary.total_s = seconds_since(start);
   return summary;
 }
 
@@ -240,7 +242,7 @@ InitializationSummary initialize_chordal(PoseGraphProblem<Group>& problem) {
     problem.T_world_pose[static_cast<std::size_t>(p)] = pose_from<Group>(R[static_cast<std::size_t>(p)], VectorD(t.row(p).transpose()));
   }
   summary.poses_reached = n;
-  summary.total_s = std::chrono::duration<double>(Clock::now() - start).count();
+  summary.total_s = seconds_since(start);
   return summary;
 }
 

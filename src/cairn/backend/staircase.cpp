@@ -10,11 +10,13 @@
 #include "cairn/backend/chordal_relaxation.hpp"
 #include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/backend/trust_region.hpp"
+#include "cairn/core/timer.hpp"
 
 namespace cairn::backend {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using core::Clock;
+using core::seconds_since;
 
 /// The polar factor U W^T of A (r x d, full column rank): the nearest matrix with orthonormal columns.
 Eigen::MatrixXd polar(const Eigen::MatrixXd& A) {
@@ -351,7 +353,7 @@ StaircaseSummary riemannian_staircase(PoseGraphProblem<Group>& problem, const St
   summary.f_initial = summary.f_final = first.f;
   auto finish = [&](const std::string& message) {
     summary.message = message;
-    summary.time_s = std::chrono::duration<double>(Clock::now() - start).count();
+    summary.time_s = seconds_since(start);
     return summary;
   };
   if (first.certificate.certified) {

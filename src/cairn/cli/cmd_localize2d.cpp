@@ -16,6 +16,7 @@
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/io/carmen_log.hpp"
 #include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
@@ -68,14 +69,14 @@ int localize2d_command(const Localize2dFlags& flags) {
 
   // Refuse a directory of another run before the work, not after it.
   io::OutputDirectory out(flags.out, flags.overwrite);
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = core::Clock::now();
   slam2d::SavedMap2D map = slam2d::read_saved_map(flags.map);
   if (map.submaps.empty()) throw io::ParseError(flags.map, 0, "the map holds no submaps: nothing to localise in");
   io::CarmenReadReport read_report;
   io::CarmenReadOptions read_options;
   read_options.skip_malformed_records = flags.lenient;
   const io::CarmenLog log = io::read_carmen_log(flags.log, &read_report, read_options);
-  const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double read_s = core::seconds_since(start);
   if (log.scans.empty()) throw io::ParseError(flags.log, 0, "no laser records (FLASER, RLASER, ROBOTLASER1) in the log");
   const std::size_t first = static_cast<std::size_t>(std::max<long>(flags.first_scan, 0));
   if (first >= log.scans.size()) {
@@ -125,7 +126,7 @@ int localize2d_command(const Localize2dFlags& flags) {
   slam2d::write_localization_png(grid, results, out.staging_path("map.png"));
   const auto& summary = localizer.summary();
   nlohmann::json report = slam2d::localization_report_json(localizer, options);
-  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double total_s = core::seconds_since(start);
   report["input"] = {{"log", flags.log},
                      {"map", flags.map},
                      {"first_scan", first},

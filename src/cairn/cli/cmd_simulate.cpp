@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "cairn/cli/commands.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/parse_error.hpp"
@@ -91,11 +92,11 @@ int simulate_command(const SimulateFlags& flags) {
   // Files go to a staging directory on --out's file system and appear together at the end (io/output_file.hpp).
   io::OutputDirectory out(flags.out, flags.overwrite);
 
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = core::Clock::now();
   const sim::SimulationResult result = sim::simulate(scenario, flags.seed);
-  const auto simulated = std::chrono::steady_clock::now();
+  const auto simulated = core::Clock::now();
   const std::vector<std::string> files = sim::write_outputs(result, scenario, flags.seed, out.staging());
-  const auto written = std::chrono::steady_clock::now();
+  const auto written = core::Clock::now();
   const double simulate_s = std::chrono::duration<double>(simulated - start).count();
   const double write_s = std::chrono::duration<double>(written - simulated).count();
 

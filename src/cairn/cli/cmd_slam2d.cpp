@@ -15,6 +15,7 @@
 
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/eval/relations.hpp"
 #include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
@@ -74,12 +75,12 @@ int slam2d_command(const Slam2dFlags& flags) {
   io::OutputDirectory out(flags.out, flags.overwrite);
   options.should_stop = stop_on_signal();
 
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = core::Clock::now();
   io::CarmenReadReport read_report;
   io::CarmenReadOptions read_options;
   read_options.skip_malformed_records = flags.lenient;
   const io::CarmenLog log = io::read_carmen_log(flags.log, &read_report, read_options);
-  const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double read_s = core::seconds_since(start);
   if (log.scans.empty()) throw io::ParseError(flags.log, 0, "no laser records (FLASER, RLASER, ROBOTLASER1) in the log");
   std::vector<eval::Relation> relations;
   if (!flags.relations.empty()) relations = eval::read_relations(flags.relations);
@@ -115,7 +116,7 @@ int slam2d_command(const Slam2dFlags& flags) {
     std::fprintf(stderr, "cairn slam2d: interrupted by %s after scan %zu of %zu: writing the result so far\n",
                  interrupt_signal_name(), used, n);
   }
-  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double total_s = core::seconds_since(start);
 
   const slam2d::OutputFiles files = slam2d::write_outputs(slam, log, used, out.staging(), options);
   const auto& summary = slam.summary();

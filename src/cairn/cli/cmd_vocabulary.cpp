@@ -10,6 +10,7 @@
 
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/flag_checks.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/vision/features.hpp"
@@ -54,7 +55,7 @@ int train_command(const VocabularyFlags& flags) {
   options.branching = flags.branching;
   options.depth = flags.levels;
   options.seed = flags.seed;
-  if (const std::string p = options.problems(); !p.empty()) throw std::invalid_argument("vocabulary options: " + p);
+  if (std::string p; !options.is_valid(&p)) throw std::invalid_argument("vocabulary options: " + p);
   vision::OrbOptions orb_options;
   orb_options.features = flags.features;
   const vision::OrbExtractor orb(orb_options);
@@ -62,7 +63,7 @@ int train_command(const VocabularyFlags& flags) {
   std::vector<std::string> used;
   for (std::size_t i = 0; i < all.size(); i += static_cast<std::size_t>(flags.every)) used.push_back(all[i]);
   const bool tty = !flags.quiet && isatty(fileno(stderr));
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = core::Clock::now();
   std::vector<cv::Mat> descriptors;
   std::size_t total = 0;
   for (std::size_t i = 0; i < used.size(); ++i) {
@@ -75,9 +76,9 @@ int train_command(const VocabularyFlags& flags) {
     }
   }
   if (tty) std::fprintf(stderr, "\n");
-  const double features_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double features_s = core::seconds_since(start);
   const vision::Vocabulary vocabulary = vision::Vocabulary::train(descriptors, options);
-  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double total_s = core::seconds_since(start);
   vocabulary.save(flags.out);
   if (!flags.quiet) {
     std::printf("%s: %s; %zu images (%s%s), %zu descriptors; features %.1f s, k-means %.1f s\n", flags.out.c_str(),

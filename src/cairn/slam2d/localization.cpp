@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "cairn/core/so2.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/slam2d/branch_and_bound.hpp"
 #include "cairn/slam2d/icp.hpp"
 #include "cairn/slam2d/place_search.hpp"
@@ -20,8 +21,8 @@
 namespace cairn::slam2d {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+using core::Clock;
+using core::seconds_since;
 
 std::string fixed(double value, int decimals) {
   std::ostringstream s;

@@ -75,6 +75,7 @@
 #include <string>
 #include <vector>
 
+#include "cairn/core/health.hpp"
 #include "cairn/core/se2.hpp"
 #include "cairn/core/time.hpp"
 #include "cairn/io/carmen_log.hpp"
@@ -198,8 +199,8 @@ struct Slam2dOptions {
   bool is_valid(std::string* error) const;
 };
 
-enum class Health { kOk, kDegraded, kLost };
-std::string_view to_string(Health health);
+using core::Health;  // ok / degraded / lost (core/health.hpp)
+using core::to_string;
 
 struct ScanResult {
   core::Timestamp time;

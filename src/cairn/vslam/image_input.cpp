@@ -2,6 +2,7 @@
 
 #include <chrono>
 
+#include "cairn/core/timer.hpp"
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::vslam {
@@ -42,7 +43,7 @@ FrameReader::FrameReader(const io::ImageSequence& sequence, io::SequenceKind kin
 
 FrameImages FrameReader::read(std::size_t frame_index) {
   const io::ImageFrame& frame = sequence_.frames[frame_index];
-  const auto read_start = std::chrono::steady_clock::now();
+  const auto read_start = core::Clock::now();
   FrameImages images;
   images.gray = vision::read_gray_image(frame.image, width_, height_);
   width_ = images.gray.cols;
@@ -67,7 +68,7 @@ FrameImages FrameReader::read(std::size_t frame_index) {
     images.kind = io::SequenceKind::kRgbd;
     images.depth = vision::read_depth_image(frame.depth_image, width_, height_);
   }
-  images.read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - read_start).count();
+  images.read_s = core::seconds_since(read_start);
   return images;
 }
 
