@@ -7,10 +7,10 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "cairn/backend/gnc.hpp"
-#include "cairn/backend/optimizer.hpp"
+#include "cairn/backend/keyframe_graph.hpp"
 #include "cairn/backend/problem.hpp"
 #include "cairn/core/threads.hpp"
+#include "cairn/core/problems.hpp"
 #include "cairn/core/timer.hpp"
 #include "cairn/io/pose_graph.hpp"
 #include "cairn/lidar3d/registration.hpp"
@@ -72,35 +72,34 @@ ScanContextOptions slam_scan_context_options() {
 }
 
 bool LidarSlamOptions::is_valid(std::string* error) const {
-  auto fail = [&](const std::string& message) {
-    if (error != nullptr) *error = message;
-    return false;
-  };
-  if (!odometry.is_valid(error)) return false;
-  if (!scan_context.is_valid(error)) return false;
+  core::Problems problems;
+  auto fail = [&](const std::string& message) { problems.add(message); };
+  std::string nested;
+  if (!odometry.is_valid(&nested)) problems.add(nested);
+  if (!scan_context.is_valid(&nested)) problems.add(nested);
   auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
-  if (!positive(keyframe_distance_m) || !positive(keyframe_angle_rad)) return fail("keyframe_distance_m and keyframe_angle_rad must be > 0");
-  if (verification_neighbours < 0) return fail("verification_neighbours must be >= 0");
+  if (!positive(keyframe_distance_m) || !positive(keyframe_angle_rad)) fail("keyframe_distance_m and keyframe_angle_rad must be > 0");
+  if (verification_neighbours < 0) fail("verification_neighbours must be >= 0");
   if (!positive(verification_coarse_threshold_m) || !positive(verification_fine_threshold_m) || !positive(verification_voxel_m)) {
-    return fail("verification thresholds and voxel must be > 0");
+    fail("verification thresholds and voxel must be > 0");
   }
-  if (!(loop_min_fitness >= 0.0 && loop_min_fitness <= 1.0)) return fail("loop_min_fitness must be in [0, 1]");
-  if (!positive(loop_max_rms_m)) return fail("loop_max_rms_m must be > 0");
+  if (!(loop_min_fitness >= 0.0 && loop_min_fitness <= 1.0)) fail("loop_min_fitness must be in [0, 1]");
+  if (!positive(loop_max_rms_m)) fail("loop_max_rms_m must be > 0");
   if (!(loop_gate_translation_m >= 0.0) || !(loop_gate_rotation_rad >= 0.0) || !(loop_gate_drift_per_m >= 0.0) ||
       !(loop_gate_rotation_drift_per_m >= 0.0)) {
-    return fail("loop gates must be >= 0");
+    fail("loop gates must be >= 0");
   }
-  if (!(loop_uniqueness_separation_m >= 0.0)) return fail("loop_uniqueness_separation_m must be >= 0");
-  if (loop_places_verified < 1) return fail("loop_places_verified must be >= 1");
+  if (!(loop_uniqueness_separation_m >= 0.0)) fail("loop_uniqueness_separation_m must be >= 0");
+  if (loop_places_verified < 1) fail("loop_places_verified must be >= 1");
   if (!(loop_ambiguity_fitness_margin >= 0.0 && loop_ambiguity_fitness_margin <= 1.0)) {
-    return fail("loop_ambiguity_fitness_margin must be in [0, 1]");
+    fail("loop_ambiguity_fitness_margin must be in [0, 1]");
   }
   if (!positive(odometry_translation_sigma_m) || !positive(odometry_rotation_sigma_rad) ||
       !positive(segment_break_translation_sigma_m) || !positive(segment_break_rotation_sigma_rad) ||
       !positive(loop_translation_sigma_m) || !positive(loop_rotation_sigma_rad)) {
-    return fail("pose-graph sigmas must be > 0");
+    fail("pose-graph sigmas must be > 0");
   }
-  return true;
+  return problems.report(error);
 }
 
 struct LidarSlam::Impl {
@@ -188,28 +187,21 @@ struct LidarSlam::Impl {
     if (keyframes.size() < 2) return;
     const auto start = Clock::now();
     backend::Problem3D problem = backend::make_problem(graph(), "slam3d pose graph");
-    backend::OptimizerOptions solver;
-    solver.max_iterations = 30;
-    solver.function_tolerance = 1e-9;
-    solver.threads = 1;
+    std::vector<bool> is_loop;
+    for (const Edge& edge : edges) is_loop.push_back(edge.loop);
+    const backend::KeyframeGraphSolve solve = backend::solve_keyframe_graph(problem, gnc, is_loop, {});
+    if (!solve.applied) return;
     if (gnc) {
-      backend::GncOptions gnc_options;
-      gnc_options.inner = solver;
-      const backend::GncSummary result = backend::optimize_gnc(problem, gnc_options);
-      if (result.interrupted) return;
       std::vector<Edge> kept;
       for (std::size_t e = 0; e < edges.size(); ++e) {
-        const bool rejected = !result.weights.empty() && result.weights[e] <= 0.5 && edges[e].loop;
-        if (rejected) {
+        if (solve.keep[e]) {
+          kept.push_back(edges[e]);
+        } else {
           summary.candidates[static_cast<std::size_t>(edges[e].candidate)].rejected_by_gnc = true;
           ++summary.loops_rejected_by_gnc;
-        } else {
-          kept.push_back(edges[e]);
         }
       }
       edges = std::move(kept);
-    } else {
-      backend::optimize(problem, solver);
     }
     for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k].T_world_sensor = problem.T_world_pose[k];
     ++summary.optimizations;

@@ -10,11 +10,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "cairn/backend/gnc.hpp"
-#include "cairn/backend/optimizer.hpp"
+#include "cairn/backend/keyframe_graph.hpp"
 #include "cairn/backend/problem.hpp"
 #include "cairn/core/assert.hpp"
 #include "cairn/core/so2.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/slam2d/place_search.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -27,10 +27,8 @@
 namespace cairn::slam2d {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using core::Clock;
+using core::seconds_since;
 
 struct Keyframe {
   core::Timestamp time;
@@ -143,15 +141,6 @@ Eigen::Matrix3d information(double sigma_t, double sigma_r) {
 }
 
 }  // namespace
-
-std::string_view to_string(Health health) {
-  switch (health) {
-    case Health::kOk: return "ok";
-    case Health::kDegraded: return "degraded";
-    case Health::kLost: return "lost";
-  }
-  return "?";
-}
 
 bool Slam2dOptions::is_valid(std::string* error) const {
   std::ostringstream problems;
@@ -629,30 +618,25 @@ struct Slam2d::Impl {
     if (options.should_stop && options.should_stop()) return;
     const auto start = Clock::now();
     backend::Problem2D problem = make_graph_problem();
-    backend::OptimizerOptions solver;
-    solver.max_iterations = 30;
-    solver.function_tolerance = 1e-9;
-    solver.threads = 1;
-    solver.should_stop = options.should_stop;
+    std::vector<bool> is_loop;
+    for (const Edge& edge : edges) is_loop.push_back(edge.loop);
+    backend::KeyframeGraphSolveOptions solve_options;
+    solve_options.should_stop = options.should_stop;
+    const backend::KeyframeGraphSolve solve = backend::solve_keyframe_graph(problem, gnc, is_loop, solve_options);
+    // A GNC cut short is no classification to act on: keep the graph as it was.
+    if (!solve.applied) return;
     if (gnc) {
-      backend::GncOptions gnc_options;
-      gnc_options.inner = solver;
-      const backend::GncSummary result = backend::optimize_gnc(problem, gnc_options);
-      // Cut short, its weights are not a classification to act on: keep the graph as it was.
-      if (result.interrupted) return;
-      for (const std::size_t index : result.rejected_edges) {
-        Edge& edge = edges[index];
+      for (const std::size_t index : solve.rejected_loops) {
+        const Edge& edge = edges[index];
         if (edge.candidate >= 0) summary.candidates[static_cast<std::size_t>(edge.candidate)].rejected_by_gnc = true;
       }
-      summary.loops_rejected_by_gnc = result.rejected_edges.size();
+      summary.loops_rejected_by_gnc = solve.rejected_loops.size();
       // Drop the rejected loops from the graph for good.
       std::vector<Edge> kept;
       for (std::size_t e = 0; e < edges.size(); ++e) {
-        if (result.weights.empty() || result.weights[e] > 0.5 || !edges[e].loop) kept.push_back(edges[e]);
+        if (solve.keep[e]) kept.push_back(edges[e]);
       }
       edges = std::move(kept);
-    } else {
-      backend::optimize(problem, solver);
     }
     for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k].T_world_laser = problem.T_world_pose[k];
     ++summary.optimizations;
