@@ -19,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const cairn::io::CameraCalibration c = cairn::io::parse_calibration_yaml("fuzz.yaml", text);
     if (!(c.fx > 0.0 && c.fy > 0.0 && std::isfinite(c.fx) && std::isfinite(c.fy) && std::isfinite(c.cx) && std::isfinite(c.cy)) ||
-        !c.problems().empty()) {
+        !c.is_valid(nullptr)) {
       std::fprintf(stderr, "fuzz_calibration: an accepted calibration is not usable\n");
       std::abort();
     }

@@ -248,7 +248,7 @@ std::string check_calibration(const CameraCalibration& c, const std::string& who
   }
   if (!(c.fx > 0.0) || !(c.fy > 0.0)) out += who + ": fx / fy not positive; ";
   if (c.width < 0 || c.height < 0) out += who + ": negative image size; ";
-  if (const std::string p = c.problems(); !p.empty()) out += who + ": " + p + "; ";
+  if (std::string p; !c.is_valid(&p)) out += who + ": " + p + "; ";
   return out;
 }
 

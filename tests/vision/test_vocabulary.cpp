@@ -115,12 +115,15 @@ void expect_normalised(const BowVector& v) {
 // ---------------------------------------------------------------------------------------------
 
 TEST(Vocabulary, OptionsReportEveryProblem) {
-  EXPECT_EQ(VocabularyOptions{}.problems(), "");
+  std::string none;
+  EXPECT_TRUE(VocabularyOptions{}.is_valid(&none));
+  EXPECT_EQ(none, "");
   VocabularyOptions bad;
   bad.branching = 1;
   bad.depth = 0;
   bad.kmeans_iterations = 0;
-  const std::string p = bad.problems();
+  std::string p;
+  EXPECT_FALSE(bad.is_valid(&p));
   EXPECT_NE(p.find("branching"), std::string::npos);
   EXPECT_NE(p.find("depth"), std::string::npos);
   EXPECT_NE(p.find("kmeans_iterations"), std::string::npos);

@@ -5,27 +5,28 @@
 #include "cairn/backend/covariance.hpp"
 #include "cairn/backend/sparse_cholesky.hpp"
 #include "cairn/core/assert.hpp"
+#include "cairn/core/problems.hpp"
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::backend {
 
-std::vector<std::string> PoseGraphJobOptions::validate() const {
-  std::vector<std::string> problems;
+bool PoseGraphJobOptions::is_valid(std::string* why) const {
+  core::Problems problems;
   std::string invalid;
-  if (!solver.is_valid(&invalid)) problems.push_back(invalid);
+  if (!solver.is_valid(&invalid)) problems.add(invalid);
   if (gnc) {
-    if (solver.kernel != RobustKernel::kNone) problems.push_back("gnc replaces the robust kernel: solver.kernel must be none");
-    if (!(gnc_options.inlier_threshold_chi2 >= 0.0)) problems.push_back("gnc_options.inlier_threshold_chi2 must be >= 0");
-    if (!(gnc_options.mu_factor > 1.0)) problems.push_back("gnc_options.mu_factor must be > 1");
-    if (!(gnc_options.final_threshold_factor >= 1.0)) problems.push_back("gnc_options.final_threshold_factor must be >= 1");
-    if (gnc_options.iterations_per_outer < 1) problems.push_back("gnc_options.iterations_per_outer must be >= 1");
+    if (solver.kernel != RobustKernel::kNone) problems.add("gnc replaces the robust kernel: solver.kernel must be none");
+    if (!(gnc_options.inlier_threshold_chi2 >= 0.0)) problems.add("gnc_options.inlier_threshold_chi2 must be >= 0");
+    if (!(gnc_options.mu_factor > 1.0)) problems.add("gnc_options.mu_factor must be > 1");
+    if (!(gnc_options.final_threshold_factor >= 1.0)) problems.add("gnc_options.final_threshold_factor must be >= 1");
+    if (gnc_options.iterations_per_outer < 1) problems.add("gnc_options.iterations_per_outer must be >= 1");
   }
   if (certify && !certificate.is_valid(&invalid)) {
     // CertificateOptions lists its problems as "a; b; ".
     while (!invalid.empty() && (invalid.back() == ' ' || invalid.back() == ';')) invalid.pop_back();
-    problems.push_back(invalid);
+    problems.add(invalid);
   }
-  return problems;
+  return problems.report(why);
 }
 
 std::string_view robust_cost_name(const PoseGraphJobOptions& options) {
@@ -179,7 +180,7 @@ void marginals(const PoseGraphProblem<Group>& problem, const PoseGraphJobOptions
 template <class Group>
 PoseGraphJobResult<Group> run_pose_graph_job(const io::PoseGraphT<Group>& graph, const std::string& path,
                                              const PoseGraphJobOptions& options) {
-  CAIRN_ASSERT(options.validate().empty(), "run_pose_graph_job: options.validate() lists problems");
+  CAIRN_ASSERT(options.is_valid(nullptr), "run_pose_graph_job: options.is_valid() found problems");
   // The solver's thread count holds for CHOLMOD's BLAS in every stage (solve, GNC, certificate,
   // staircase, covariances).
   const ScopedBlasThreads blas(options.solver.threads);

@@ -6,7 +6,7 @@
 ///   a robust kernel, or GNC over the loop closures) -> certify (SE-Sync's certificate and, when
 ///   it fails, the Riemannian staircase) -> polish (the geodesic objective from the chordal
 ///   solution) -> final costs and marginal covariances.
-/// Options are validated before work (PoseGraphJobOptions::validate, every problem at once); the
+/// Options are validated before work (PoseGraphJobOptions::is_valid, every problem at once); the
 /// result is a PoseGraphJobSummary (what each stage did, whether the solution is usable) and the
 /// optimised graph. The library prints nothing: a caller follows the stages through
 /// `stage_finished` and the solver's `progress`, and pose_graph_report.hpp turns the summary into
@@ -83,9 +83,8 @@ struct PoseGraphJobOptions {
   /// progress output. May be empty.
   std::function<void(PoseGraphJobStage, const PoseGraphJobSummary&)> stage_finished;
 
-  /// Every problem with these options, one sentence each (empty = valid), like Ceres'
-  /// Solver::Options::IsValid but listing them all.
-  std::vector<std::string> validate() const;
+  /// True when usable; otherwise false with every problem, "; "-separated, in *why (core/problems.hpp).
+  bool is_valid(std::string* why) const;
 };
 
 /// "none", "huber", "cauchy", "geman-mcclure" (the kernel) or "gnc".
@@ -151,7 +150,7 @@ struct PoseGraphJobResult {
 };
 
 /// Runs the job on `graph` (read from `path`, which error messages name). Preconditions:
-/// options.validate() is empty. Throws io::ParseError for input the job cannot use: a graph
+/// options.is_valid(). Throws io::ParseError for input the job cannot use: a graph
 /// make_problem refuses, kFile initialisation without VERTEX lines, a starting cost that is not
 /// finite (naming the edge and its line), a covariance id not in the graph.
 template <class Group>

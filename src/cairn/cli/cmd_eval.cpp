@@ -107,7 +107,7 @@ int run_rpe(const EvalFlags& f) {
   options.all_pairs = f.all_pairs;
   options.association = eval_association_options(f);
   options.alignment = eval_alignment_options(f);
-  if (std::string problems = options.validate(); !problems.empty()) {
+  if (std::string problems; !options.is_valid(&problems)) {
     throw std::runtime_error("invalid RPE options: " + problems);
   }
   const eval::RpeResult r = eval::evaluate_rpe(reference, estimate, options);

@@ -147,11 +147,7 @@ int run_optimize(const OptimizeFlags& flags, backend::PoseGraphJobOptions job, c
 int optimize_command(const OptimizeFlags& flags) {
   check_optimize_flags(flags);
   const backend::PoseGraphJobOptions job = optimize_job_options(flags);
-  if (const auto problems = job.validate(); !problems.empty()) {
-    std::string text;
-    for (const auto& problem : problems) text += (text.empty() ? "" : "; ") + problem;
-    throw io::ParseError("cairn optimize", 0, text);
-  }
+  if (std::string problems; !job.is_valid(&problems)) throw io::ParseError("cairn optimize", 0, problems);
   if (io::is_standard_output(flags.output) && !flags.report.empty() && io::is_standard_output(flags.report)) {
     throw io::ParseError(flags.report, 0, "the graph already goes to standard output: give --report a file");
   }

@@ -8,6 +8,7 @@
 #include <Eigen/LU>
 
 #include "cairn/core/assert.hpp"
+#include "cairn/core/problems.hpp"
 
 namespace cairn::eval {
 namespace {
@@ -36,19 +37,18 @@ float devkit_translation_error(const Vector3& t) {
 
 }  // namespace
 
-std::string KittiOptions::validate() const {
-  std::string problems;
-  if (lengths_m.empty()) problems += "at least one segment length is needed\n";
+bool KittiOptions::is_valid(std::string* why) const {
+  core::Problems problems;
+  if (lengths_m.empty()) problems.add("at least one segment length is needed");
   for (double l : lengths_m) {
     if (!(l > 0.0) || !std::isfinite(l)) {
-      problems += "segment lengths must be finite and > 0, found " + std::to_string(l) + "\n";
+      problems.add("segment lengths must be finite and > 0, found " + std::to_string(l));
       break;
     }
   }
-  if (step_frames == 0) problems += "step between start frames must be >= 1\n";
-  if (!(frame_period_s > 0.0) || !std::isfinite(frame_period_s)) problems += "frame period must be finite and > 0\n";
-  if (!problems.empty()) problems.pop_back();
-  return problems;
+  if (step_frames == 0) problems.add("step between start frames must be >= 1");
+  if (!(frame_period_s > 0.0) || !std::isfinite(frame_period_s)) problems.add("frame period must be finite and > 0");
+  return problems.report(why);
 }
 
 double KittiResult::rotation_error_deg_per_m() const { return rotation_error_rad_per_m * 180.0 / std::numbers::pi; }
@@ -109,7 +109,7 @@ std::vector<KittiSegment> kitti_segments(const std::vector<Matrix4>& ground_trut
 KittiResult evaluate_kitti(const MatrixTrajectory& ground_truth, const MatrixTrajectory& result,
                            const KittiOptions& options) {
   KittiResult r;
-  if (std::string problems = options.validate(); !problems.empty()) {
+  if (std::string problems; !options.is_valid(&problems)) {
     r.outcome = {Status::kInvalidOptions, problems};
     return r;
   }

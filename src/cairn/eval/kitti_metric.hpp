@@ -43,8 +43,8 @@ struct KittiOptions {
   /// Used only when both trajectories have timestamps.
   AssociationOptions association;
 
-  /// Empty when valid; otherwise every problem, one per line.
-  std::string validate() const;
+  /// True when usable; otherwise false with every problem, "; "-separated, in *why (core/problems.hpp).
+  bool is_valid(std::string* why) const;
 };
 
 /// One line of the devkit's errors/NN.txt.

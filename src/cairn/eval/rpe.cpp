@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cairn/core/assert.hpp"
+#include "cairn/core/problems.hpp"
 #include "cairn/eval/paired_poses.hpp"
 
 namespace cairn::eval {
@@ -17,18 +18,17 @@ std::optional<DeltaUnit> delta_unit_from_name(std::string_view name) {
   return std::nullopt;
 }
 
-std::string RpeOptions::validate() const {
-  std::string problems;
-  if (!(delta > 0.0) || !std::isfinite(delta)) problems += "delta must be a finite number > 0\n";
+bool RpeOptions::is_valid(std::string* why) const {
+  core::Problems problems;
+  if (!(delta > 0.0) || !std::isfinite(delta)) problems.add("delta must be a finite number > 0");
   if (delta_unit == DeltaUnit::kFrames && std::isfinite(delta) &&
       (delta != std::floor(delta) || delta > 1e15)) {
-    problems += "delta in frames must be a whole number\n";
+    problems.add("delta in frames must be a whole number");
   }
   if (!(relative_delta_tolerance >= 0.0) || !std::isfinite(relative_delta_tolerance)) {
-    problems += "relative delta tolerance must be a finite number >= 0\n";
+    problems.add("relative delta tolerance must be a finite number >= 0");
   }
-  if (!problems.empty()) problems.pop_back();
-  return problems;
+  return problems.report(why);
 }
 
 std::vector<IndexPair> rpe_pairs(const std::vector<Matrix4>& poses, const RpeOptions& options) {
@@ -83,7 +83,7 @@ std::vector<IndexPair> rpe_pairs(const std::vector<Matrix4>& poses, const RpeOpt
 RpeResult evaluate_rpe(const MatrixTrajectory& reference, const MatrixTrajectory& estimate, const RpeOptions& options) {
   RpeResult result;
   result.relation = options.relation;
-  if (std::string problems = options.validate(); !problems.empty()) {
+  if (std::string problems; !options.is_valid(&problems)) {
     result.outcome = {Status::kInvalidOptions, problems};
     return result;
   }

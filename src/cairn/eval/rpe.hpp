@@ -60,8 +60,8 @@ struct RpeOptions {
   /// Default none (evo's default). SE(3) alignment cannot change an RPE; Sim(3) can.
   AlignmentOptions alignment;
 
-  /// Empty when valid; otherwise every problem, one per line (Ceres Solver::Options::IsValid).
-  std::string validate() const;
+  /// True when usable; otherwise false with every problem, "; "-separated, in *why (core/problems.hpp).
+  bool is_valid(std::string* why) const;
 };
 
 using IndexPair = std::pair<std::size_t, std::size_t>;

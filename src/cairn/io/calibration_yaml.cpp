@@ -66,7 +66,7 @@ CameraCalibration parse_calibration_yaml(const std::string& name, const std::str
       throw ParseError(name, 0, std::string("missing required key \"") + required + "\"");
     }
   }
-  if (const std::string p = c.problems(); !p.empty()) throw ParseError(name, 0, p);
+  if (std::string p; !c.is_valid(&p)) throw ParseError(name, 0, p);
   return c;
 }
 

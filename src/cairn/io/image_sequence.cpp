@@ -11,6 +11,7 @@
 #include <set>
 #include <tuple>
 
+#include "cairn/core/problems.hpp"
 #include "cairn/io/file_names.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/text_reader.hpp"
@@ -62,9 +63,9 @@ std::vector<std::string> image_files_in(const std::string& folder) {
   return names;
 }
 
-std::string CameraCalibration::problems() const {
-  std::string out;
-  auto add = [&](const std::string& p) { out += (out.empty() ? "" : "; ") + p; };
+bool CameraCalibration::is_valid(std::string* why) const {
+  core::Problems problems;
+  auto add = [&](const std::string& p) { problems.add(p); };
   for (const auto& [name, v] : {std::pair{"fx", fx}, {"fy", fy}}) {
     if (!(std::isfinite(v) && v > 0.0)) add(std::string(name) + " must be a positive number");
   }
@@ -75,7 +76,7 @@ std::string CameraCalibration::problems() const {
   }
   if (width < 0 || height < 0) add("width and height must not be negative");
   if (baseline_m < 0.0 || depth_units_per_m < 0.0 || virtual_baseline_m < 0.0) add("baselines and depth scale must not be negative");
-  return out;
+  return problems.report(why);
 }
 
 std::string CameraCalibration::implausibilities(int image_width, int image_height, bool stereo) const {
@@ -539,7 +540,7 @@ CameraCalibration read_euroc_camera(const std::string& path, core::SE3* T_body_c
     throw ParseError(path, line, "T_BS: the rotation block is not a rotation");
   }
   if (T_body_camera) *T_body_camera = core::SE3::from_matrix(T);
-  if (const std::string p = c.problems(); !p.empty()) throw ParseError(path, 0, p);
+  if (std::string p; !c.is_valid(&p)) throw ParseError(path, 0, p);
   return c;
 }
 

@@ -40,8 +40,8 @@ struct CameraCalibration {
   double virtual_baseline_m = 0.0;
 
   bool has_distortion() const { return k1 != 0.0 || k2 != 0.0 || p1 != 0.0 || p2 != 0.0 || k3 != 0.0; }
-  /// Empty when usable, else what is wrong (every problem, "; "-separated).
-  std::string problems() const;
+  /// True when usable; otherwise false with every problem, "; "-separated, in *why (core/problems.hpp).
+  bool is_valid(std::string* why) const;
   /// Empty when the calibration is plausible for a real camera taking `width` x `height` images,
   /// else every implausibility ("; "-separated): a field of view outside 1-170 degrees on
   /// either axis (fx = 1e7 on a 1241-pixel image is 0.007 degrees: a calibration in other units,

@@ -6,9 +6,25 @@
 
 #include <tbb/parallel_for.h>
 
+#include "cairn/core/problems.hpp"
 #include "cairn/lidar3d/voxel_hash_map.hpp"
 
 namespace cairn::lidar3d {
+
+bool LoamFeatureOptions::is_valid(std::string* why) const {
+  core::Problems problems;
+  if (neighbours < 1 || neighbours > 1000) problems.add("loam.neighbours must be in [1, 1000]");
+  if (sectors_per_ring < 1 || sectors_per_ring > 1000) problems.add("loam.sectors_per_ring must be in [1, 1000]");
+  if (sharp_per_sector < 0 || less_sharp_per_sector < 0 || flat_per_sector < 0) {
+    problems.add("loam.sharp_per_sector, less_sharp_per_sector and flat_per_sector must be >= 0");
+  }
+  if (!std::isfinite(edge_curvature) || !std::isfinite(plane_curvature)) {
+    problems.add("loam.edge_curvature and plane_curvature must be finite");
+  }
+  if (!(depth_jump_ratio >= 0.0) || !std::isfinite(depth_jump_ratio)) problems.add("loam.depth_jump_ratio must be >= 0");
+  if (!(less_flat_voxel_m > 0.0) || !std::isfinite(less_flat_voxel_m)) problems.add("loam.less_flat_voxel_m must be > 0");
+  return problems.report(why);
+}
 
 LoamFeatures extract_loam_features(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint16_t>& ring,
                                    const LoamFeatureOptions& options) {

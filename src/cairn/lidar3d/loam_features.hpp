@@ -13,11 +13,15 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace cairn::lidar3d {
 
 struct LoamFeatureOptions {
+  /// True when usable; otherwise false with every problem in *why (neighbours and sectors index
+  /// into a ring, so both are bounded).
+  bool is_valid(std::string* why) const;
   int neighbours = 5;               ///< |S| / 2 of eq. 1 (LOAM: 5)
   int sectors_per_ring = 6;         ///< LOAM: 6
   int sharp_per_sector = 2;         ///< LOAM: 2

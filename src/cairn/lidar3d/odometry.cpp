@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "cairn/core/threads.hpp"
+#include "cairn/core/problems.hpp"
 #include "cairn/core/timer.hpp"
 
 namespace cairn::lidar3d {
@@ -34,39 +35,38 @@ struct LidarOdometry::Arena {
 };
 
 bool LidarOdometryOptions::is_valid(std::string* error) const {
-  auto fail = [&](const std::string& message) {
-    if (error != nullptr) *error = message;
-    return false;
-  };
-  if (!(max_range_m > 0.0) || !std::isfinite(max_range_m)) return fail("max_range_m must be > 0");
-  if (!(min_range_m >= 0.0) || !(min_range_m < max_range_m)) return fail("min_range_m must be in [0, max_range_m)");
+  core::Problems problems;
+  auto fail = [&](const std::string& message) { problems.add(message); };
+  if (!(max_range_m > 0.0) || !std::isfinite(max_range_m)) fail("max_range_m must be > 0");
+  if (!(min_range_m >= 0.0) || !(min_range_m < max_range_m)) fail("min_range_m must be in [0, max_range_m)");
   if (!std::isfinite(vertical_angle_correction_rad) || std::abs(vertical_angle_correction_rad) > 0.1) {
-    return fail("vertical_angle_correction_rad must be within +-0.1 rad");
+    fail("vertical_angle_correction_rad must be within +-0.1 rad");
   }
-  if (!(sweep_period_s > 0.0) || !std::isfinite(sweep_period_s)) return fail("sweep_period_s must be > 0");
-  if (!(voxel_size_m > 0.0) || !std::isfinite(voxel_size_m)) return fail("voxel_size_m must be > 0");
-  if (max_points_per_voxel < 1) return fail("max_points_per_voxel must be >= 1");
-  if (!(initial_threshold_m > 0.0) || !std::isfinite(initial_threshold_m)) return fail("initial_threshold_m must be > 0");
-  if (!(min_motion_m >= 0.0) || !std::isfinite(min_motion_m)) return fail("min_motion_m must be >= 0");
-  if (registration.max_iterations < 1) return fail("registration.max_iterations must be >= 1");
-  if (!(registration.convergence_step > 0.0)) return fail("registration.convergence_step must be > 0");
+  if (!(sweep_period_s > 0.0) || !std::isfinite(sweep_period_s)) fail("sweep_period_s must be > 0");
+  if (!(voxel_size_m > 0.0) || !std::isfinite(voxel_size_m)) fail("voxel_size_m must be > 0");
+  if (max_points_per_voxel < 1) fail("max_points_per_voxel must be >= 1");
+  if (!(initial_threshold_m > 0.0) || !std::isfinite(initial_threshold_m)) fail("initial_threshold_m must be > 0");
+  if (!(min_motion_m >= 0.0) || !std::isfinite(min_motion_m)) fail("min_motion_m must be >= 0");
+  if (registration.max_iterations < 1) fail("registration.max_iterations must be >= 1");
+  if (!(registration.convergence_step > 0.0)) fail("registration.convergence_step must be > 0");
   if (!(registration.degenerate_min_eigenvalue >= 0.0 && registration.degenerate_min_eigenvalue < 1.0 / 3.0)) {
-    return fail("registration.degenerate_min_eigenvalue must be in [0, 1/3)");
+    fail("registration.degenerate_min_eigenvalue must be in [0, 1/3)");
   }
-  if (threads < 0) return fail("threads must be >= 0 (0 = all)");
-  if (min_scan_points < 0) return fail("min_scan_points must be >= 0");
+  if (threads < 0) fail("threads must be >= 0 (0 = all)");
+  if (std::string nested; !loam.is_valid(&nested)) fail(nested);
+  if (min_scan_points < 0) fail("min_scan_points must be >= 0");
   if (!(lost_min_correspondence_fraction >= 0.0 && lost_min_correspondence_fraction <= 1.0)) {
-    return fail("lost_min_correspondence_fraction must be in [0, 1]");
+    fail("lost_min_correspondence_fraction must be in [0, 1]");
   }
-  if (!(lost_max_rms_voxels > 0.0 && std::isfinite(lost_max_rms_voxels))) return fail("lost_max_rms_voxels must be a finite number > 0");
+  if (!(lost_max_rms_voxels > 0.0 && std::isfinite(lost_max_rms_voxels))) fail("lost_max_rms_voxels must be a finite number > 0");
   if (!(lost_rms_max_correspondence_fraction >= 0.0 && lost_rms_max_correspondence_fraction <= 1.0)) {
-    return fail("lost_rms_max_correspondence_fraction must be in [0, 1]");
+    fail("lost_rms_max_correspondence_fraction must be in [0, 1]");
   }
   if (!(degraded_min_correspondence_fraction >= lost_min_correspondence_fraction &&
         degraded_min_correspondence_fraction <= 1.0)) {
-    return fail("degraded_min_correspondence_fraction must be in [lost_min_correspondence_fraction, 1]");
+    fail("degraded_min_correspondence_fraction must be in [lost_min_correspondence_fraction, 1]");
   }
-  return true;
+  return problems.report(error);
 }
 
 LidarOdometryOptions preset_options(std::string_view name) {

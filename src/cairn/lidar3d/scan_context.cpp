@@ -13,13 +13,14 @@
 #include <utility>
 
 #include "cairn/core/assert.hpp"
+#include "cairn/core/problems.hpp"
 
 namespace cairn::lidar3d {
 
 bool ScanContextOptions::is_valid(std::string* error) const {
-  std::string problems;
+  core::Problems problems;
   auto check = [&](bool ok, const char* message) {
-    if (!ok) problems += std::string(problems.empty() ? "" : "\n") + message;
+    if (!ok) problems.add(message);
   };
   check(rings > 0, "rings must be > 0");
   check(sectors > 0, "sectors must be > 0");
@@ -33,8 +34,7 @@ bool ScanContextOptions::is_valid(std::string* error) const {
   check(std::all_of(lateral_offsets_m.begin(), lateral_offsets_m.end(),
                     [](double offset) { return std::isfinite(offset) && offset != 0.0; }),
         "lateral_offsets_m must be finite and non-zero (the scan's own viewpoint is always used)");
-  if (error != nullptr) *error = problems;
-  return problems.empty();
+  return problems.report(error);
 }
 
 namespace {

@@ -9,6 +9,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "cairn/core/problems.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/vision/image_file.hpp"
 
@@ -69,9 +70,20 @@ cv::Mat read_depth_image(const std::string& path, int expected_width, int expect
   return depth;
 }
 
-std::string OrbOptions::problems() const {
-  std::string out;
-  auto add = [&](const std::string& p) { out += (out.empty() ? "" : "; ") + p; };
+bool StereoOptions::is_valid(std::string* why) const {
+  core::Problems problems;
+  if (max_descriptor_distance < 1 || max_descriptor_distance > 256) problems.add("stereo.max_descriptor_distance must be in [1, 256]");
+  if (window_half_size < 1 || window_half_size > 50) problems.add("stereo.window_half_size must be in [1, 50]");
+  if (search_half_range < 1 || search_half_range > 50) problems.add("stereo.search_half_range must be in [1, 50]");
+  if (!(row_band_px >= 0.0 && row_band_px <= 100.0)) problems.add("stereo.row_band_px must be in [0, 100]");
+  if (!(min_depth_baselines > 0.0)) problems.add("stereo.min_depth_baselines must be > 0");
+  if (!(sad_outlier_factor > 0.0)) problems.add("stereo.sad_outlier_factor must be > 0");
+  return problems.report(why);
+}
+
+bool OrbOptions::is_valid(std::string* why) const {
+  core::Problems problems;
+  auto add = [&](const std::string& p) { problems.add(p); };
   if (features < 10 || features > 100000) add("features must be in [10, 100000]");
   if (!(scale_factor > 1.0 && scale_factor < 2.0)) add("scale_factor must be in (1, 2)");
   if (levels < 1 || levels > 16) add("levels must be in [1, 16]");
@@ -79,11 +91,11 @@ std::string OrbOptions::problems() const {
     add("FAST thresholds must satisfy 1 <= min_fast_threshold <= initial_fast_threshold");
   }
   if (cell_px < 10) add("cell_px must be >= 10");
-  return out;
+  return problems.report(why);
 }
 
 OrbExtractor::OrbExtractor(const OrbOptions& options) : options_(options) {
-  if (const std::string p = options.problems(); !p.empty()) throw std::invalid_argument("ORB options: " + p);
+  if (std::string p; !options.is_valid(&p)) throw std::invalid_argument("ORB options: " + p);
   // Features per level proportional to the level's area (ORB-SLAM2 ORBextractor's constructor).
   const double factor = 1.0 / options.scale_factor;
   double desired = options.features * (1.0 - factor) / (1.0 - std::pow(factor, options.levels));

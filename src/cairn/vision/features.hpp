@@ -37,8 +37,8 @@ struct OrbOptions {
   int initial_fast_threshold = 20;
   int min_fast_threshold = 7;   ///< where the initial threshold finds no corner in a cell
   int cell_px = 30;             ///< detection cells (ORB-SLAM's W)
-  /// Empty when usable, else every problem.
-  std::string problems() const;
+  /// True when usable; otherwise false with every problem, "; "-separated, in *why (core/problems.hpp).
+  bool is_valid(std::string* why) const;
 };
 
 /// Features of one image. keypoints[i].pt is in level-0 pixels of the (distorted) image,
@@ -77,6 +77,9 @@ struct StereoOptions {
   double row_band_px = 2.0;          ///< rows considered: +- this x scale of the level
   double min_depth_baselines = 1.0;  ///< nearest depth accepted, in baselines (disparity <= fx)
   double sad_outlier_factor = 2.1;   ///< reject SAD above this x the median (ORB-SLAM2: 1.5 x 1.4)
+  /// True when usable; otherwise false with every problem in *why (match_stereo sizes its SAD
+  /// table by search_half_range and indexes rows by row_band_px, so both are bounded).
+  bool is_valid(std::string* why) const;
 };
 
 /// For each left keypoint the right image's x coordinate (u_right) and the depth, or -1 for

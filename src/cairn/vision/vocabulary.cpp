@@ -16,6 +16,7 @@
 #include <unordered_set>
 
 #include "cairn/core/assert.hpp"
+#include "cairn/core/problems.hpp"
 #include "cairn/core/threads.hpp"
 #include "cairn/io/compressed_file.hpp"
 #include "cairn/io/output_file.hpp"
@@ -461,9 +462,9 @@ std::uint32_t Vocabulary::descend(const Descriptor& d, int node_level, std::uint
 // ---------------------------------------------------------------------------------------------
 // Training.
 
-std::string VocabularyOptions::problems() const {
-  std::string out;
-  auto add = [&](const std::string& p) { out += (out.empty() ? "" : "; ") + p; };
+bool VocabularyOptions::is_valid(std::string* why) const {
+  core::Problems problems;
+  auto add = [&](const std::string& p) { problems.add(p); };
   if (branching < 2 || branching > 64) add("branching must be in [2, 64]");
   if (depth < 1 || depth > 12) add("depth must be in [1, 12]");
   if (branching >= 2 && branching <= 64 && depth >= 1 && depth <= 12 &&
@@ -472,7 +473,7 @@ std::string VocabularyOptions::problems() const {
   }
   if (kmeans_iterations < 1 || kmeans_iterations > 1000) add("kmeans_iterations must be in [1, 1000]");
   if (max_threads < 0) add("max_threads must be >= 0 (0 = all)");
-  return out;
+  return problems.report(why);
 }
 
 Vocabulary VocabularyBuilder::train(const std::vector<cv::Mat>& images, const VocabularyOptions& options) {
@@ -562,7 +563,7 @@ Vocabulary VocabularyBuilder::train(const std::vector<cv::Mat>& images, const Vo
 }
 
 Vocabulary Vocabulary::train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularyOptions& options) {
-  if (const std::string p = options.problems(); !p.empty()) throw std::invalid_argument("vocabulary options: " + p);
+  if (std::string p; !options.is_valid(&p)) throw std::invalid_argument("vocabulary options: " + p);
   if (options.max_threads > 0) {
     tbb::task_arena arena(core::arena_concurrency(options.max_threads));
     return arena.execute([&] { return VocabularyBuilder::train(descriptors_per_image, options); });

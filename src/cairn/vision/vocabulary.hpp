@@ -40,8 +40,8 @@ struct VocabularyOptions {
   std::uint64_t seed = 1;     ///< k-means++ seeding; the tree depends only on the data and this
   int max_threads = 0;        ///< worker threads for training; 0 = all (TBB's default). The
                               ///< result does not depend on it.
-  /// Empty when usable, else every problem, "; "-separated.
-  std::string problems() const;
+  /// True when usable; otherwise false with every problem, "; "-separated, in *why (core/problems.hpp).
+  bool is_valid(std::string* why) const;
 };
 
 /// Sparse bag-of-words vector: (word id, weight) sorted by word id, weights > 0, L1-normalised

@@ -3,14 +3,16 @@
 
 #include "cairn/vslam/visual_slam.hpp"
 
+#include "cairn/core/problems.hpp"
 #include "cairn/vslam/slam_state.hpp"
 
 namespace cairn::vslam {
 
-std::string VisualSlamOptions::problems() const {
-  std::string out;
-  auto add = [&](const std::string& p) { out += (out.empty() ? "" : "; ") + p; };
-  if (const std::string p = orb.problems(); !p.empty()) add(p);
+bool VisualSlamOptions::is_valid(std::string* why) const {
+  core::Problems problems;
+  auto add = [&](const std::string& p) { problems.add(p); };
+  if (std::string p; !orb.is_valid(&p)) add(p);
+  if (std::string p; !stereo.is_valid(&p)) add(p);
   if (!(close_depth_baselines > 0.0)) add("close_depth_baselines must be > 0");
   if (min_new_points < 1) add("min_new_points must be >= 1");
   if (!(motion_search_radius_px > 0.0) || !(local_search_radius_px > 0.0)) add("search radii must be > 0");
@@ -34,13 +36,13 @@ std::string VisualSlamOptions::problems() const {
   }
   if (!(triangulation_match_ratio > 0.0 && triangulation_match_ratio <= 1.0)) add("triangulation_match_ratio must be in (0, 1]");
   if (!(keyframe_culling_redundancy > 0.0 && keyframe_culling_redundancy <= 1.0)) add("keyframe_culling_redundancy must be in (0, 1]");
-  return out;
+  return problems.report(why);
 }
 
 VisualSlam::VisualSlam(const io::CameraCalibration& camera, io::SequenceKind kind, const VisualSlamOptions& options)
     : options_(options) {
-  if (const std::string p = options.problems(); !p.empty()) throw std::invalid_argument("visual SLAM options: " + p);
-  if (const std::string p = camera.problems(); !p.empty()) throw std::invalid_argument("camera calibration: " + p);
+  if (std::string p; !options.is_valid(&p)) throw std::invalid_argument("visual SLAM options: " + p);
+  if (std::string p; !camera.is_valid(&p)) throw std::invalid_argument("camera calibration: " + p);
   if (kind == io::SequenceKind::kStereo && !(camera.baseline_m > 0.0)) throw std::invalid_argument("stereo needs a positive baseline");
   if (kind == io::SequenceKind::kRgbd && (!(camera.depth_units_per_m > 0.0) || !(camera.virtual_baseline_m > 0.0))) {
     throw std::invalid_argument("RGB-D needs depth_units_per_m and virtual_baseline_m > 0");

@@ -147,8 +147,8 @@ struct VisualSlamOptions {
   /// A new segment's first this-many keyframes each try to merge with the 8 keyframes tracked
   /// last before it (verified as a loop; no vocabulary needed). 0 = only place recognition merges.
   int merge_recent_keyframes_of_new_map = 10;
-  /// Empty when usable, else every problem.
-  std::string problems() const;
+  /// True when usable; otherwise false with every problem, "; "-separated, in *why (core/problems.hpp).
+  bool is_valid(std::string* why) const;
 };
 
 using TrackingHealth = core::Health;  // ok / degraded / lost (core/health.hpp)
