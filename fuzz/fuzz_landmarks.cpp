@@ -1,5 +1,5 @@
 // libFuzzer entry point for the landmark CSV readers of `cairn landmarks`
-// (landmarks/landmark_run.hpp): landmark_observations.csv (with and without a landmark map to
+// (io/landmark_csv.hpp): landmark_observations.csv (with and without a landmark map to
 // check ids against) and landmarks.csv. Any input must end in a result or a
 // cairn::io::ParseError; another exception, a crash, a hang or a sanitizer report is a bug. What
 // is accepted holds finite numbers, ranges > 0, bearings in [-pi, pi] and times that never go
@@ -20,7 +20,7 @@
 #include <system_error>
 
 #include "cairn/io/parse_error.hpp"
-#include "cairn/landmarks/landmark_run.hpp"
+#include "cairn/io/landmark_csv.hpp"
 
 namespace {
 
@@ -56,7 +56,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static const std::map<std::int64_t, Eigen::Vector2d> known{{0, {1.0, 2.0}}, {1, {3.0, 4.0}}, {7, {5.0, 6.0}}};
   for (const auto* ids : {static_cast<const std::map<std::int64_t, Eigen::Vector2d>*>(nullptr), &known}) {
     try {
-      const auto observations = cairn::landmarks::read_landmark_observations(path, ids);
+      const auto observations = cairn::io::read_landmark_observations(path, ids);
       for (std::size_t i = 0; i < observations.size(); ++i) {
         const auto& o = observations[i];
         check(std::isfinite(o.range_m) && o.range_m > 0.0, "ranges are finite and > 0");
@@ -68,7 +68,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
   }
   try {
-    for (const auto& [id, p] : cairn::landmarks::read_landmark_map(path)) {
+    for (const auto& [id, p] : cairn::io::read_landmark_map(path)) {
       check(id >= 0 && p.allFinite(), "landmarks have ids >= 0 and finite positions");
     }
   } catch (const cairn::io::ParseError&) {

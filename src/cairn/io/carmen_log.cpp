@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "cairn/core/assert.hpp"
 #include "cairn/io/compressed_file.hpp"
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/text_reader.hpp"
@@ -212,6 +213,14 @@ CarmenLog read_carmen_log(const std::string& path, CarmenReadReport* report, con
   CarmenLog log = parser.finish();
   if (reader.last_line_unterminated()) out.warnings.push_back(reader.unterminated_last_line_warning());
   return log;
+}
+
+std::string format_carmen_time(core::Timestamp stamp) {
+  CAIRN_ASSERT(stamp.nanoseconds() >= 0, "format_carmen_time: negative time");
+  const std::int64_t microseconds = (stamp.nanoseconds() + 500) / 1000;
+  std::string fraction = std::to_string(microseconds % 1000000);
+  fraction.insert(0, 6 - fraction.size(), '0');
+  return std::to_string(microseconds / 1000000) + "." + fraction;
 }
 
 }  // namespace cairn::io

@@ -94,4 +94,8 @@ struct CarmenReadOptions {
 CarmenLog read_carmen_log(const std::string& path, CarmenReadReport* report = nullptr,
                           const CarmenReadOptions& options = {});
 
+/// A time as CARMEN logs write their ipc_timestamp: "<seconds>.<6 digits>", rounded to the
+/// microsecond. Precondition: stamp >= 0.
+std::string format_carmen_time(core::Timestamp stamp);
+
 }  // namespace cairn::io

@@ -3,99 +3,21 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <numbers>
 
 #include "cairn/core/so2.hpp"
 #include "cairn/io/carmen_log.hpp"
+#include "cairn/io/landmark_csv.hpp"
 #include "cairn/io/parse_error.hpp"
-#include "cairn/io/text_reader.hpp"
 #include "cairn/io/trajectory.hpp"
 
 namespace cairn::landmarks {
 namespace {
-
-std::vector<std::string_view> csv_fields(const io::TextReader& reader, std::size_t expected, std::string_view header) {
-  auto fields = io::split_fields(reader.line(), ',');
-  if (fields.size() != expected) {
-    throw io::ParseError(reader.path(), reader.line_number(),
-                         "expected " + std::to_string(expected) + " comma-separated fields (" + std::string(header) +
-                             "), found " + std::to_string(fields.size()));
-  }
-  return fields;
-}
-
-// Skips blank lines and '#' comments; refuses a missing or wrong header.
-void expect_header(io::TextReader& reader, std::string_view header) {
-  while (reader.next_line()) {
-    if (io::is_blank_or_comment(reader.line())) continue;
-    if (reader.line() != header) {
-      throw io::ParseError(reader.path(), reader.line_number(),
-                           "expected the header '" + std::string(header) + "', found " + io::quote_token(reader.line()));
-    }
-    return;
-  }
-  throw io::ParseError(reader.path(), reader.line_number(), "expected the header '" + std::string(header) + "', found an empty file");
-}
 
 TimedPose to_timed_pose(core::Timestamp time, const core::SE2& T_world_body) {
   return {time, Vector3(T_world_body.x(), T_world_body.y(), T_world_body.angle())};
 }
 
 }  // namespace
-
-std::map<std::int64_t, Vector2> read_landmark_map(const std::string& path) {
-  io::TextReader reader(path);
-  constexpr std::string_view kHeader = "id,x_m,y_m";
-  expect_header(reader, kHeader);
-  std::map<std::int64_t, Vector2> map;
-  while (reader.next_line()) {
-    if (io::is_blank_or_comment(reader.line())) continue;
-    const auto f = csv_fields(reader, 3, kHeader);
-    const std::int64_t id = io::parse_id(reader, f[0], "the landmark id");
-    const Vector2 p(io::parse_double(reader, f[1], "x_m"), io::parse_double(reader, f[2], "y_m"));
-    if (!map.emplace(id, p).second) {
-      throw io::ParseError(path, reader.line_number(), "landmark id " + std::to_string(id) + " appears twice");
-    }
-  }
-  return map;
-}
-
-std::vector<Observation> read_landmark_observations(const std::string& path,
-                                                    const std::map<std::int64_t, Vector2>* known_ids) {
-  io::TextReader reader(path);
-  constexpr std::string_view kHeader = "time_s,landmark_id,range_m,bearing_rad";
-  expect_header(reader, kHeader);
-  std::vector<Observation> observations;
-  while (reader.next_line()) {
-    if (io::is_blank_or_comment(reader.line())) continue;
-    const auto f = csv_fields(reader, 4, kHeader);
-    Observation o;
-    o.line = reader.line_number();
-    const auto time = core::Timestamp::parse_seconds(f[0]);
-    if (!time) {
-      throw io::ParseError(path, o.line, "expected a time in seconds for time_s, found " + io::quote_token(f[0]));
-    }
-    o.time = *time;
-    o.landmark_id = io::parse_id(reader, f[1], "landmark_id");
-    o.range_m = io::parse_double(reader, f[2], "range_m");
-    o.bearing_rad = io::parse_double(reader, f[3], "bearing_rad");
-    if (!(o.range_m > 0.0)) {
-      throw io::ParseError(path, o.line, "expected range_m > 0, found " + io::quote_token(f[2]));
-    }
-    if (std::abs(o.bearing_rad) > std::numbers::pi + 1e-9) {
-      throw io::ParseError(path, o.line, "expected bearing_rad in [-pi, pi], found " + io::quote_token(f[3]));
-    }
-    if (known_ids != nullptr && known_ids->count(o.landmark_id) == 0) {
-      throw io::ParseError(path, o.line,
-                           "landmark_id " + std::to_string(o.landmark_id) + " is not in the landmark map (landmarks.csv)");
-    }
-    if (!observations.empty() && o.time < observations.back().time) {
-      throw io::ParseError(path, o.line, "time_s goes backwards (previous line has a later time)");
-    }
-    observations.push_back(o);
-  }
-  return observations;
-}
 
 std::optional<Vector3> odometry_at(const std::vector<TimedPose>& odometry, core::Timestamp time) {
   if (odometry.empty() || time < odometry.front().time || odometry.back().time < time) return std::nullopt;
@@ -126,7 +48,7 @@ LandmarkRun read_landmark_run(const std::string& directory) {
     if (!fs::exists(required)) throw io::ParseError(required, 0, "expected this file, found none");
   }
   const std::string map_path = (dir / "landmarks.csv").string();
-  if (fs::exists(map_path)) run.true_landmarks = read_landmark_map(map_path);
+  if (fs::exists(map_path)) run.true_landmarks = io::read_landmark_map(map_path);
 
   const io::CarmenLog log = io::read_carmen_log(log_path);
   for (const io::OdometryRecord& record : log.odometry) {
@@ -142,7 +64,7 @@ LandmarkRun read_landmark_run(const std::string& directory) {
   }
   if (run.odometry.empty()) throw io::ParseError(log_path, 0, "expected ODOM records, found none");
 
-  run.observations = read_landmark_observations(observations_path, run.true_landmarks.empty() ? nullptr : &run.true_landmarks);
+  run.observations = io::read_landmark_observations(observations_path, run.true_landmarks.empty() ? nullptr : &run.true_landmarks);
   // Steps are made at observation times: without observations the run would be one pose that
   // ignores every odometry record, and its error would read 0.
   if (run.observations.empty()) {

@@ -12,12 +12,12 @@
 /// simulator makes equal to its world frame, so estimates and ground truth are compared without
 /// alignment.
 ///
-/// Strictness (every refusal is an io::ParseError naming file and line): a range that is not a
-/// finite number > 0, a bearing outside [-pi, pi], a negative landmark id, an id absent from
-/// landmarks.csv (when that file exists), observation times going backwards, an observation
-/// outside the odometry's time span.
+/// The two CSV files are read by io/landmark_csv.hpp, which documents their format and
+/// strictness. Strictness here (every refusal is an io::ParseError naming file and line): a
+/// missing directory or required file, ODOM times not increasing or an infinite motion between
+/// them, no ODOM record, no observation, an observation id absent from landmarks.csv (when that
+/// file exists), an observation outside the odometry's time span.
 
-#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -26,22 +26,15 @@
 
 #include "cairn/core/time.hpp"
 #include "cairn/core/types.hpp"
+#include "cairn/io/landmark_csv.hpp"
 
 namespace cairn::landmarks {
 
 /// Marks an observation that no landmark produced (injected clutter, see clutter.hpp).
 inline constexpr std::int64_t kSpuriousId = -1;
 
-struct Observation {
-  core::Timestamp time;
-  /// The landmark's identity as the sensor reported it (known association uses it; unknown
-  /// association uses it only to score the associations afterwards), or kSpuriousId.
-  std::int64_t landmark_id = 0;
-  double range_m = 0.0;
-  double bearing_rad = 0.0;
-  /// Line in the observation file (0 when made in memory).
-  std::size_t line = 0;
-};
+/// A range-bearing observation: time, landmark_id (or kSpuriousId), range_m, bearing_rad, line.
+using Observation = io::LandmarkObservation;
 
 struct TimedPose {
   core::Timestamp time;
@@ -65,11 +58,9 @@ struct LandmarkRun {
 /// Reads the files above from `directory`. Throws io::ParseError naming file and line.
 LandmarkRun read_landmark_run(const std::string& directory);
 
-/// Reads landmark_observations.csv. When `known_ids` is given, an id not in it is refused.
-std::vector<Observation> read_landmark_observations(const std::string& path,
-                                                    const std::map<std::int64_t, Vector2>* known_ids = nullptr);
-/// Reads landmarks.csv.
-std::map<std::int64_t, Vector2> read_landmark_map(const std::string& path);
+/// The two CSV readers, io::read_landmark_observations and io::read_landmark_map.
+using io::read_landmark_map;
+using io::read_landmark_observations;
 
 /// Dead reckoning at `time`, linearly interpolated between the bracketing records (angle along
 /// the shorter arc); nullopt outside the span.

@@ -42,14 +42,6 @@ void append_stamps(std::string& line, core::Timestamp stamp, core::Timestamp fir
 
 }  // namespace
 
-std::string format_carmen_time(core::Timestamp stamp) {
-  CAIRN_ASSERT(stamp.nanoseconds() >= 0, "format_carmen_time: negative time");
-  const std::int64_t microseconds = (stamp.nanoseconds() + 500) / 1000;
-  std::string fraction = std::to_string(microseconds % 1000000);
-  fraction.insert(0, 6 - fraction.size(), '0');
-  return std::to_string(microseconds / 1000000) + "." + fraction;
-}
-
 void write_carmen(const std::string& path, const CarmenLog& log) {
   core::Timestamp first;
   bool have_first = false;

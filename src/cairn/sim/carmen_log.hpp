@@ -28,6 +28,7 @@
 
 #include "cairn/core/se2.hpp"
 #include "cairn/core/time.hpp"
+#include "cairn/io/carmen_log.hpp"
 #include "cairn/sim/lidar.hpp"
 
 namespace cairn::sim {
@@ -56,8 +57,8 @@ struct CarmenLog {
   std::vector<CarmenScan> scans;
 };
 
-/// "<seconds>.<6 digits>", rounded to the microsecond. Precondition: stamp >= 0.
-std::string format_carmen_time(core::Timestamp stamp);
+/// "<seconds>.<6 digits>", rounded to the microsecond (io/carmen_log.hpp).
+using io::format_carmen_time;
 
 /// Writes `log` to `path` atomically. Throws io::ParseError when the file cannot be written.
 void write_carmen(const std::string& path, const CarmenLog& log);

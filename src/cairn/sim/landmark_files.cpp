@@ -1,43 +1,21 @@
 #include "cairn/sim/landmark_files.hpp"
 
-#include "cairn/io/output_file.hpp"
-#include "cairn/io/number_format.hpp"
-#include "cairn/sim/carmen_log.hpp"
+#include "cairn/io/landmark_csv.hpp"
 
 namespace cairn::sim {
 
 void write_landmark_map(const std::string& path, const std::vector<Landmark>& landmarks) {
-  io::write_output(path, [&](std::ostream& out) {
-    out << "id,x_m,y_m\n";
-    std::string line;
-    for (const auto& landmark : landmarks) {
-      line = std::to_string(landmark.id);
-      line += ',';
-      io::append_number(line, landmark.position.x());
-      line += ',';
-      io::append_number(line, landmark.position.y());
-      line += '\n';
-      out << line;
-    }
-  });
+  std::vector<io::LandmarkPosition> records;
+  records.reserve(landmarks.size());
+  for (const Landmark& landmark : landmarks) records.push_back({landmark.id, landmark.position.x(), landmark.position.y()});
+  io::write_landmark_map(path, records);
 }
 
 void write_landmark_observations(const std::string& path, const std::vector<LandmarkObservation>& observations) {
-  io::write_output(path, [&](std::ostream& out) {
-    out << "time_s,landmark_id,range_m,bearing_rad\n";
-    std::string line;
-    for (const auto& o : observations) {
-      line = format_carmen_time(o.stamp);
-      line += ',';
-      line += std::to_string(o.landmark_id);
-      line += ',';
-      io::append_number(line, o.range_m);
-      line += ',';
-      io::append_number(line, o.bearing_rad);
-      line += '\n';
-      out << line;
-    }
-  });
+  std::vector<io::LandmarkObservation> records;
+  records.reserve(observations.size());
+  for (const LandmarkObservation& o : observations) records.push_back({o.stamp, o.landmark_id, o.range_m, o.bearing_rad, 0});
+  io::write_landmark_observations(path, records);
 }
 
 }  // namespace cairn::sim
