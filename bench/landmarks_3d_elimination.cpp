@@ -23,7 +23,7 @@
 #include <numbers>
 #include <string>
 
-#include "cairn/landmarks/world_3d.hpp"
+#include "cairn/sim/landmark_world_3d_graph.hpp"
 
 namespace {
 
@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
         o.max_range_m = 12.0;
       }
       const cairn::sim::LandmarkWorld3D world = cairn::sim::simulate_landmark_world_3d(o, 1);
-      const cairn::landmarks::WorldGraph3D built = cairn::landmarks::graph_from_world(world);
+      const cairn::sim::WorldGraph3D built = cairn::sim::graph_from_world(world);
       if (const std::string problem = built.graph.check(); !problem.empty()) {
         std::fprintf(stderr, "bench_landmarks_3d_elimination: %s\n", problem.c_str());
         return 1;

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "cairn/core/so3.hpp"
-#include "cairn/landmarks/world_3d.hpp"
+#include "cairn/sim/landmark_world_3d_graph.hpp"
 #include "cairn/sim/random.hpp"
 
 namespace cairn::landmarks {
@@ -22,7 +22,11 @@ namespace {
 using backend::LandmarkElimination;
 using backend::LandmarkGraph3D;
 using backend::LandmarkGraph3DOptions;
+using sim::Errors3D;
 using sim::LandmarkSensor3D;
+using sim::WorldGraph3D;
+using sim::errors;
+using sim::graph_from_world;
 
 sim::LandmarkWorld3DOptions world_options(LandmarkSensor3D sensor) {
   sim::LandmarkWorld3DOptions options;

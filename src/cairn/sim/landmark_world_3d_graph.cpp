@@ -1,13 +1,13 @@
-#include "cairn/landmarks/world_3d.hpp"
+#include "cairn/sim/landmark_world_3d_graph.hpp"
 
 #include <cmath>
 #include <optional>
 
 #include "cairn/core/so3.hpp"
 
-namespace cairn::landmarks {
+namespace cairn::sim {
 
-WorldGraph3D graph_from_world(const sim::LandmarkWorld3D& world) {
+WorldGraph3D graph_from_world(const LandmarkWorld3D& world) {
   WorldGraph3D out;
   backend::LandmarkGraph3D& graph = out.graph;
   if (world.T_world_body.empty()) return out;
@@ -39,7 +39,7 @@ WorldGraph3D graph_from_world(const sim::LandmarkWorld3D& world) {
   return out;
 }
 
-Errors3D errors(const sim::LandmarkWorld3D& world, const WorldGraph3D& built, const backend::LandmarkGraph3D& graph) {
+Errors3D errors(const LandmarkWorld3D& world, const WorldGraph3D& built, const backend::LandmarkGraph3D& graph) {
   Errors3D e;
   if (graph.poses.empty()) return e;
   double position = 0.0;
@@ -60,4 +60,4 @@ Errors3D errors(const sim::LandmarkWorld3D& world, const WorldGraph3D& built, co
   return e;
 }
 
-}  // namespace cairn::landmarks
+}  // namespace cairn::sim

@@ -2,7 +2,8 @@
 /// \file
 /// 3D landmark graph SLAM on the simulator's 3D landmark world (sim/landmark_world_3d.hpp):
 /// the factor graph built from its measurements, initialised by dead reckoning and each
-/// landmark's first observation, and the errors of an estimate against its ground truth.
+/// landmark's first observation, and the errors of an estimate against its ground truth. For the
+/// tests and benchmarks of the back end's 3D landmark elimination (backend/landmark_graph_3d.hpp).
 
 #include <cstddef>
 #include <vector>
@@ -10,7 +11,7 @@
 #include "cairn/backend/landmark_graph_3d.hpp"
 #include "cairn/sim/landmark_world_3d.hpp"
 
-namespace cairn::landmarks {
+namespace cairn::sim {
 
 struct WorldGraph3D {
   /// Pose 0 at the true pose 0 (it fixes the gauge, so no alignment is needed), the others
@@ -20,7 +21,7 @@ struct WorldGraph3D {
   std::vector<std::size_t> world_landmark;
 };
 
-WorldGraph3D graph_from_world(const sim::LandmarkWorld3D& world);
+WorldGraph3D graph_from_world(const LandmarkWorld3D& world);
 
 struct Errors3D {
   double position_rms_m = 0.0;   ///< poses, RMS of |t_est - t_true|
@@ -29,6 +30,6 @@ struct Errors3D {
 };
 
 /// Precondition: `graph` has the poses and landmark variables of `built` (maybe optimised).
-Errors3D errors(const sim::LandmarkWorld3D& world, const WorldGraph3D& built, const backend::LandmarkGraph3D& graph);
+Errors3D errors(const LandmarkWorld3D& world, const WorldGraph3D& built, const backend::LandmarkGraph3D& graph);
 
-}  // namespace cairn::landmarks
+}  // namespace cairn::sim
