@@ -8,8 +8,11 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli_runner.hpp"
 #include "test_data.hpp"
@@ -163,6 +166,137 @@ TEST(Slam3dCli, AShortGroundTruthAndBadOptionsAreRefused) {
   r = run(q(scans) + " --metric nearest --out " + q(scratch() / "o11"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("--metric"), std::string::npos) << r.err;
+}
+
+// The configuration (lidar3d/config.hpp): --print-config lists every key of LidarSlamOptions, and
+// what it prints reads back through --config to the same text, with every key read from the file
+// (the printed file starts from another preset and still gives the same configuration).
+TEST(Slam3dCli, PrintConfigListsEveryKeyAndReadsBack) {
+  const Result defaults = run("--print-config");
+  ASSERT_EQ(defaults.status, 0) << defaults.err;
+  EXPECT_EQ(defaults.out.rfind("# cairn slam3d configuration", 0), 0u) << defaults.out;
+  std::istringstream lines(defaults.out);
+  std::string line, section;
+  std::set<std::string> keys;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (line[0] != ' ') {
+      section = line.substr(0, line.find(':'));
+    } else {
+      EXPECT_NE(line.find("  # "), std::string::npos) << "a key without its meaning: " << line;
+      keys.insert(section + "." + line.substr(2, line.find(':') - 2));
+    }
+  }
+  // One key per field: LidarOdometryOptions 12 (with threads), RegistrationOptions 5,
+  // LoamFeatureOptions 9, health 5, keyframes 2, ScanContextOptions 10, loop closure 14, back end 7.
+  EXPECT_EQ(keys.size(), 64u) << defaults.out;
+  for (const char* key : {"odometry.front_end", "odometry.deskew", "odometry.voxel_size_m", "odometry.threads",
+                          "registration.metric", "registration.remap_degenerate_directions", "loam.neighbours",
+                          "loam.less_flat_voxel_m", "health.min_scan_points", "health.lost_rms_max_correspondence_fraction",
+                          "keyframes.distance_m", "keyframes.angle_rad", "scan_context.max_distance",
+                          "scan_context.lateral_offsets_m", "loop_closure.enabled", "loop_closure.min_fitness",
+                          "loop_closure.ambiguity_fitness_margin", "back_end.segment_break_rotation_sigma_rad",
+                          "back_end.final_gnc"}) {
+    EXPECT_EQ(keys.count(key), 1u) << key;
+  }
+  EXPECT_NE(defaults.out.find("\n  front_end: auto  #"), std::string::npos) << defaults.out;
+  EXPECT_NE(defaults.out.find("\n  lateral_offsets_m: -4 -2 2 4  #"), std::string::npos) << defaults.out;
+
+  const Result kitti = run("--print-config --preset kitti --set registration.metric=point-to-point "
+                           "--set scan_context.lateral_offsets_m=none --set keyframes.distance_m=2.5 --set loam.neighbours=4");
+  ASSERT_EQ(kitti.status, 0) << kitti.err;
+  EXPECT_NE(kitti.out, defaults.out);
+  EXPECT_NE(kitti.out.find("\n  front_end: dense  #"), std::string::npos) << kitti.out;
+  EXPECT_NE(kitti.out.find("\n  metric: point-to-point  #"), std::string::npos) << kitti.out;
+  EXPECT_NE(kitti.out.find("\n  lateral_offsets_m: none  #"), std::string::npos) << kitti.out;
+  EXPECT_NE(kitti.out.find("\n  distance_m: 2.5  #"), std::string::npos) << kitti.out;
+  const fs::path file = scratch() / "printed.yaml";
+  std::ofstream(file) << kitti.out;
+  const Result again = run("--print-config --config " + q(file));
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_EQ(again.out, kitti.out);
+  std::ofstream(file) << defaults.out;
+  const Result back = run("--print-config --preset kitti --config " + q(file));
+  ASSERT_EQ(back.status, 0) << back.err;
+  EXPECT_EQ(back.out, defaults.out);
+}
+
+// --set is applied after --preset and --config; the dedicated flags win over both.
+TEST(Slam3dCli, DedicatedFlagsWinOverSettings) {
+  Result r = run("--print-config --set odometry.threads=3 --set registration.metric=point-to-point");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("\n  threads: 3  #"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\n  metric: point-to-point  #"), std::string::npos) << r.out;
+  r = run("--print-config --set odometry.threads=3 --threads 1 --set registration.metric=point-to-point --metric "
+          "point-to-plane --set loop_closure.enabled=true --no-loop-closure --set odometry.deskew=off --deskew azimuth");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("\n  threads: 1  #"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\n  metric: point-to-plane  #"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\n  enabled: false  #"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\n  deskew: azimuth  #"), std::string::npos) << r.out;
+}
+
+// An unknown key, a value of the wrong type and options the validation refuses are usage errors
+// (status 2) naming the key, found before any scan is read; a bad --config names file and line.
+TEST(Slam3dCli, BadSettingsAreUsageErrorsNamingTheKey) {
+  const fs::path out = scratch() / "o_bad_set";
+  const std::string scans = q(scratch() / "no_such_folder");
+  for (const auto& [assignment, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"odometry.no_such_key=1", "unknown key 'odometry.no_such_key'"},
+           {"no_such_section.voxel_size_m=1", "unknown key 'no_such_section.voxel_size_m'"},
+           {"registration.max_iterations=many", "registration.max_iterations"},
+           {"registration.max_iterations=2.5", "registration.max_iterations"},
+           {"odometry.voxel_size_m=abc", "odometry.voxel_size_m"},
+           {"odometry.deskew=sideways", "odometry.deskew"},
+           {"loop_closure.enabled=maybe", "loop_closure.enabled"},
+           {"odometry.voxel_size_m=-1", "voxel_size_m must be > 0"},
+           {"loam.neighbours=-1", "loam.neighbours"},
+           {"scan_context.max_distance=3", "max_distance must be in [0, 2]"}}) {
+    Result r = run(scans + " --out " + q(out) + " --set " + q(assignment));
+    EXPECT_EQ(r.status, 2) << assignment << "\n" << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << assignment << "\n" << r.err;
+    r = run("--print-config --set " + q(assignment));
+    EXPECT_EQ(r.status, 2) << assignment << "\n" << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << assignment << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  const fs::path config = scratch() / "bad_config.yaml";
+  std::ofstream(config) << "odometry:\n  voxel_size_m: 0.5\n  no_such_key: 1\n";
+  Result r = run("--print-config --config " + q(config));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("bad_config.yaml:3"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("odometry.no_such_key"), std::string::npos) << r.err;
+  // Without --print-config, SCANS are required as before.
+  r = run("--set odometry.voxel_size_m=0.5");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("SCANS is required"), std::string::npos) << r.err;
+}
+
+// report.json's "options" is the configuration in effect (config_json), with the preset, the
+// front end kAuto chose and the written map's voxel beside it; --print-config with SCANS prints
+// the configuration and runs.
+TEST(Slam3dCli, ReportOptionsHoldTheSettings) {
+  CAIRN_REQUIRE_DATA("lidar3d/kitti00_keyframes/keyframes.txt");
+  const fs::path scans = linked_scans("settings", 3);
+  const fs::path out = scratch() / "o_settings";
+  fs::remove_all(out);
+  const Result r = run(q(scans) + " --set keyframes.distance_m=2.5 --set registration.metric=point-to-point "
+                       "--set health.min_scan_points=50 --no-loop-closure --print-config -q --out " + q(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("# cairn slam3d configuration", 0), 0u) << r.out;
+  EXPECT_NE(r.out.find("\n  distance_m: 2.5  #"), std::string::npos) << r.out;
+  nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  nlohmann::json& options = report["options"];
+  EXPECT_EQ(options["keyframes"]["distance_m"].get<double>(), 2.5);
+  EXPECT_EQ(options["registration"]["metric"], "point-to-point");
+  EXPECT_EQ(options["health"]["min_scan_points"], 50);
+  EXPECT_EQ(options["loop_closure"]["enabled"], false);
+  EXPECT_EQ(options["odometry"]["voxel_size_m"].get<double>(), 1.0);
+  EXPECT_EQ(options["scan_context"]["lateral_offsets_m"], "-4 -2 2 4");
+  EXPECT_EQ(options["preset"], "default");
+  EXPECT_EQ(options["map_voxel_m"].get<double>(), 0.25);
+  EXPECT_TRUE(options["front_end_used"] == "dense" || options["front_end_used"] == "loam") << options;
+  EXPECT_EQ(report["input"]["scans_processed"], 3);
 }
 
 }  // namespace

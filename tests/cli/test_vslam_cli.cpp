@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli_runner.hpp"
@@ -119,6 +121,102 @@ TEST(VslamCli, FoldersThatAreNotSequencesOrLackACalibrationAreRefused) {
           quoted(scratch() / "x"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("calib.yaml:4: \"cy\" must be a number"), std::string::npos) << r.err;
+}
+
+// --print-config, --config and --set (vslam/config.hpp): without a FOLDER the defaults are printed
+// and nothing runs; every key is listed, and the printed file read back prints the same text.
+TEST(VslamCli, PrintConfigListsEveryKeyAndRoundTrips) {
+  const Result printed = run("vslam --print-config");
+  ASSERT_EQ(printed.status, 0) << printed.err;
+  std::size_t keys = 0;
+  std::istringstream lines(printed.out);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("  ", 0) == 0 && line.find(": ") != std::string::npos && line.find("  # ") != std::string::npos) ++keys;
+  }
+  EXPECT_EQ(keys, 56u) << printed.out;  // VisualSlamOptions with its OrbOptions and StereoOptions, but the vocabulary
+  for (const char* key : {"orb:\n  features: 2000  #", "  scale_factor: 1.2  #", "stereo:\n  max_descriptor_distance: 75  #",
+                          "tracking:\n", "health:\n", "keyframes:\n  close_depth_baselines: 35  #", "local_mapping:\n  local_ba: true  #",
+                          "loop_closure:\n  enabled: true  #", "maps:\n"}) {
+    EXPECT_NE(printed.out.find(key), std::string::npos) << key;
+  }
+  const fs::path config = scratch() / "vslam_config.yaml";
+  std::ofstream(config) << printed.out;
+  const Result again = run("vslam --print-config --config " + quoted(config));
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_EQ(again.out, printed.out);
+  // --set over --config; --features and --no-local-ba win over both.
+  std::ofstream(config) << "orb:\n  levels: 6\n  features: 1500\n";
+  const Result changed = run("vslam --print-config --config " + quoted(config) +
+                             " --set orb.levels=7 --set local_mapping.keyframe_culling=false --features 1200 --no-local-ba");
+  ASSERT_EQ(changed.status, 0) << changed.err;
+  for (const char* value : {"  levels: 7  #", "  features: 1200  #", "  keyframe_culling: false  #", "  local_ba: false  #"}) {
+    EXPECT_NE(changed.out.find(value), std::string::npos) << value << "\n" << changed.out;
+  }
+}
+
+TEST(VslamCli, BadSettingsAreRefusedNamingTheKey) {
+  for (const auto& [set, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"orb.bogus=1", "--set: unknown key 'orb.bogus'"},
+           {"orb.features=many", "--set orb.features: expected an integer, got 'many'"},
+           {"local_mapping.local_ba=yes", "--set local_mapping.local_ba: expected true or false"}}) {
+    const Result r = run("vslam --print-config --set " + set);
+    EXPECT_EQ(r.status, 2) << set;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "") << set;
+  }
+  // Well-typed values the pipeline cannot use: its validation, every problem at once.
+  Result r = run("vslam --print-config --set orb.levels=0 --set stereo.search_half_range=-1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("invalid configuration: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("levels must be in [1, 16]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("stereo.search_half_range must be in [1, 50]"), std::string::npos) << r.err;
+  // A file: its line (a bad input file, exit status 1 as every other).
+  const fs::path config = scratch() / "bad_vslam_config.yaml";
+  std::ofstream(config) << "orb:\n  features: 1500\n  bogus: 1\n";
+  r = run("vslam --print-config --config " + quoted(config));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("bad_vslam_config.yaml:3: unknown key 'orb.bogus'"), std::string::npos) << r.err;
+  // Before any work on a sequence.
+  CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/calib.txt");
+  const fs::path out = scratch() / "bad_set";
+  r = run("vslam " + quoted(cairn::test::data_path("visual/kitti_extract_seq2")) + " --max-frames 2 --set orb.features=0 --out " +
+          quoted(out));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("features must be in [10, 100000]"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// With a FOLDER, the dataset's settings come first (1000 features and close points within 40
+// baselines for TUM RGB-D), and report.json's "options" are the keys in effect.
+TEST(VslamCli, ReportOptionsAreTheConfigurationInEffect) {
+  CAIRN_REQUIRE_DATA("visual/tum_fr1_desk_every4th/associations.txt");
+  const Result tum = run("vslam " + quoted(cairn::test::data_path("visual/tum_fr1_desk_every4th")) + " --camera tum-fr1 --print-config -q");
+  EXPECT_NE(tum.out.find("  features: 1000  #"), std::string::npos) << tum.out;
+  EXPECT_NE(tum.out.find("  close_depth_baselines: 40  #"), std::string::npos) << tum.out;
+  EXPECT_EQ(tum.status, 1);  // printed, then the run needs --out (as slam2d)
+  EXPECT_NE(tum.err.find("--out DIR is required"), std::string::npos) << tum.err;
+
+  CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/calib.txt");
+  const fs::path out = scratch() / "configured";
+  fs::remove_all(out);
+  const Result r = run("vslam " + quoted(cairn::test::data_path("visual/kitti_extract_seq2")) +
+                       " --max-frames 3 -q --set loop_closure.drift_floor_m=0.75 --set local_mapping.keyframe_culling=false"
+                       " --set orb.features=1500 --features 1800 --out " + quoted(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  const nlohmann::json& options = report["options"];
+  // Every section of `cairn vslam --print-config`, and nothing else.
+  std::vector<std::string> sections;
+  for (const auto& [name, keys] : options.items()) sections.push_back(name);
+  EXPECT_EQ(sections, (std::vector<std::string>{"health", "keyframes", "local_mapping", "loop_closure", "maps", "orb",
+                                                "stereo", "tracking"}))
+      << options.dump();
+  EXPECT_EQ(options["loop_closure"]["drift_floor_m"], 0.75);
+  EXPECT_EQ(options["local_mapping"]["keyframe_culling"], false);
+  EXPECT_EQ(options["orb"]["features"], 1800);  // --features wins over --set
+  EXPECT_EQ(options["orb"]["levels"], 8);
+  EXPECT_EQ(options["keyframes"]["close_depth_baselines"], 35.0);  // KITTI stereo
+  EXPECT_EQ(report["input"]["frames_processed"], 3);
 }
 
 TEST(VocabularyCli, TrainDescribeAndUseAVocabulary) {

@@ -1,11 +1,13 @@
 // `cairn vslam FOLDER --out DIR`: stereo (KITTI odometry layout) or RGB-D (TUM layout) visual
 // SLAM, fed one frame at a time through the interface a robot would use (vslam/visual_slam.hpp).
 // The images are prepared by vslam/image_input.hpp; the files, the evaluation against ground truth
-// and report.json are vslam/outputs.hpp's.
+// and report.json are vslam/outputs.hpp's; the options' keys (--config, --set, --print-config) are
+// vslam/config.hpp's.
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <iostream>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -14,13 +16,15 @@
 #include <unistd.h>
 
 #include "cairn/cli/commands.hpp"
-#include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
+#include "cairn/cli/vslam_flags.hpp"
+#include "cairn/core/timer.hpp"
 #include "cairn/eval/spread.hpp"
 #include "cairn/io/calibration_yaml.hpp"
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/trajectory.hpp"
+#include "cairn/vslam/config.hpp"
 #include "cairn/vslam/evaluation.hpp"
 #include "cairn/vslam/image_input.hpp"
 #include "cairn/vslam/outputs.hpp"
@@ -28,23 +32,6 @@
 
 namespace cairn::cli {
 namespace {
-
-struct VslamFlags {
-  std::string folder;
-  std::string out;
-  std::string camera;
-  std::string calib;
-  std::string ground_truth;
-  std::string vocabulary;
-  int features = 0;
-  long max_frames = 0;
-  long feature_frame = -1;
-  bool no_local_ba = false;
-  bool mono = false;
-  bool quiet = false;
-  bool progress = false;
-  bool overwrite = false;
-};
 
 io::ImageSequence read_sequence(const std::string& folder) {
   const std::string layout = io::detect_image_layout(folder);
@@ -97,12 +84,24 @@ void check_calibration(const io::ImageSequence& seq, const VslamFlags& flags) {
   vslam::check_calibration_plausible(seq, seq.kind == io::SequenceKind::kStereo && !flags.mono, source);
 }
 
+/// `options` (the dataset's settings), then --config, --set and the dedicated flags, which win;
+/// refused with exit status 2 when a key or the result is invalid. Printed with --print-config.
+vslam::VisualSlamOptions configured_options(const VslamFlags& flags, vslam::VisualSlamOptions options) {
+  if (!flags.config.empty()) vslam::load_config(flags.config, options);
+  try {
+    for (const std::string& assignment : flags.set) vslam::apply_setting(assignment, options);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  if (flags.features > 0) options.orb.features = flags.features;
+  if (flags.no_local_ba) options.local_ba = false;
+  if (std::string p; !options.is_valid(&p)) throw UsageError("invalid configuration: " + p);
+  if (flags.print_config) std::cout << vslam::config_to_yaml(options);
+  return options;
+}
+
 vslam::VisualSlamOptions make_options(const VslamFlags& flags, const io::ImageSequence& seq) {
-  vslam::VisualSlamOptions options;
-  // ORB-SLAM2's settings: 2000 for KITTI (stereo and monocular), 1000 for TUM.
-  options.orb.features = flags.features > 0 ? flags.features : (seq.layout == "kitti" ? 2000 : 1000);
-  if (seq.kind == io::SequenceKind::kRgbd) options.close_depth_baselines = 40.0;  // ORB-SLAM2 TUM*.yaml ThDepth
-  options.local_ba = !flags.no_local_ba;
+  vslam::VisualSlamOptions options = configured_options(flags, vslam::dataset_options(seq.layout, seq.kind));
   if (!flags.vocabulary.empty()) {
     options.vocabulary = std::make_shared<const vision::Vocabulary>(vision::Vocabulary::load(flags.vocabulary));
     if (!flags.quiet) std::fprintf(stderr, "cairn vslam: vocabulary %s: %s\n", flags.vocabulary.c_str(), options.vocabulary->description().c_str());
@@ -128,7 +127,7 @@ vslam::RunRecord run_frames(vslam::VisualSlam& slam, vslam::FrameReader& reader,
   vslam::RunRecord run;
   run.features.frame = feature_frame;
   const bool tty = !flags.quiet && !flags.progress && isatty(fileno(stderr));
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = core::Clock::now();
   vslam::TrackingHealth last_health = vslam::TrackingHealth::kOk;
   std::string last_note;
   int messages = 0;
@@ -164,7 +163,7 @@ vslam::RunRecord run_frames(vslam::VisualSlam& slam, vslam::FrameReader& reader,
   run.interrupted = interrupted();
   if (run.interrupted) std::fprintf(stderr, "cairn vslam: interrupted by %s after %zu frames: writing the result so far\n", interrupt_signal_name(), run.frames.size());
   if (run.frames.empty()) throw std::runtime_error("no frame was processed");
-  run.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.total_s = core::seconds_since(start);
   return run;
 }
 
@@ -193,7 +192,11 @@ void print_summary(const vslam::VisualSlamSummary& s, const vslam::RunRecord& ru
 }
 
 int vslam_command(const VslamFlags& flags) {
-  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
+  if (flags.print_config && flags.folder.empty()) {  // no dataset: VisualSlamOptions' defaults
+    configured_options(flags, vslam::VisualSlamOptions{});
+    return 0;
+  }
+  if (flags.out.empty() && !flags.print_config) throw std::invalid_argument("--out DIR is required");
   io::ImageSequence seq = read_sequence(flags.folder);
   const std::optional<vision::StereoRectifier> rectifier = resolve_calibration(seq, flags);
   const io::SequenceKind kind = flags.mono ? io::SequenceKind::kMonocular : seq.kind;
@@ -202,6 +205,7 @@ int vslam_command(const VslamFlags& flags) {
   const vslam::GroundTruth ground_truth = resolve_ground_truth(seq, flags, rectifier);
   check_calibration(seq, flags);
   const vslam::VisualSlamOptions options = make_options(flags, seq);
+  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
   if (!flags.quiet) print_input(seq, kind, n, flags);
 
   io::OutputDirectory out(flags.out, flags.overwrite);
@@ -217,30 +221,14 @@ int vslam_command(const VslamFlags& flags) {
   const vslam::WrittenOutputs written = vslam::write_outputs(out, slam, {seq, kind, calibration_source, flags.vocabulary}, run, ground_truth);
   out.commit();
   if (!flags.quiet) print_summary(slam.summary(), run, written, flags);
-  return run.interrupted ? 130 : 0;
+  return run.interrupted ? interrupted_exit_status() : 0;
 }
 
 }  // namespace
 
 Runner register_vslam(CLI::App& app) {
   auto flags = std::make_shared<VslamFlags>();
-  CLI::App* cmd = &app;
-  cmd->add_option("folder", flags->folder, "KITTI odometry folder (calib.txt, image_0/1 or image_l/r), EuRoC MAV folder (mav0/cam0, cam1), TUM RGB-D folder, or a plain folder: images (monocular) or left/ and right/ (rectified stereo), with --calib")->required();
-  cmd->add_option("--out", flags->out, "Output directory (trajectory.tum/.kitti, keyframes.tum, map_points.ply, frames.csv, report.json, trajectory.png, features.png)");
-  cmd->add_option("--camera", flags->camera, "Calibration preset for TUM RGB-D: tum-fr1, tum-fr2, tum-fr3");
-  cmd->add_option("--calib", flags->calib, "Calibration YAML (fx, fy, cx, cy, k1..k3, p1, p2, baseline_m, depth_units_per_m, virtual_baseline_m)");
-  cmd->add_option("--ground-truth", flags->ground_truth, "TUM-format ground truth (default: the dataset's poses.txt / groundtruth.txt)");
-  cmd->add_option("--vocabulary", flags->vocabulary, "Bag-of-words vocabulary (cairn vocabulary train, or DBoW2 .txt/.yml): loop closure and relocalisation");
-  cmd->add_option("--features", flags->features, "ORB features per image (default 2000 stereo, 1000 RGB-D, as ORB-SLAM2)")
-      ->check(checks::whole_range(10, 100000));
-  cmd->add_option("--max-frames", flags->max_frames, "Process at most N frames")->check(checks::count(std::numeric_limits<long>::max()));
-  cmd->add_option("--feature-frame", flags->feature_frame, "Frame drawn in features.png, 0-based (default: the middle one)")
-      ->check(checks::count_or_zero(std::numeric_limits<long>::max()));
-  cmd->add_flag("--mono", flags->mono, "Monocular: the left (stereo) or colour (TUM) images only; the scale is not observable (a plain folder of images is monocular anyway)");
-  cmd->add_flag("--no-local-ba", flags->no_local_ba, "Skip local bundle adjustment (visual odometry only)");
-  cmd->add_flag("-q,--quiet", flags->quiet, "No progress or summary");
-  cmd->add_flag("--progress", flags->progress, "Progress lines even when stderr is not a terminal");
-  cmd->add_flag("--overwrite", flags->overwrite, "Replace an existing output directory's files");
+  add_vslam_flags(app, *flags);
   return [flags] { return vslam_command(*flags); };
 }
 

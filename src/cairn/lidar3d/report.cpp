@@ -1,5 +1,6 @@
 #include "cairn/lidar3d/report.hpp"
 #include "cairn/eval/spread.hpp"
+#include "cairn/lidar3d/config.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -25,24 +26,14 @@ nlohmann::json input_json(const SlamRunInputs& inputs, const ScanSequence& seque
   return input;
 }
 
+// config_json of the options in effect, with the run's facts that are not options: the preset
+// they started from, the front end kAuto chose, and the written map's voxel.
 nlohmann::json options_json(const SlamRunInputs& inputs, const LidarSlam& slam, const SlamRun& run) {
-  const LidarOdometryOptions& options = slam.options().odometry;
-  return {{"preset", inputs.preset},
-          {"front_end", std::string(to_string(options.front_end))},
-          {"front_end_used", std::string(to_string(slam.front_end()))},
-          {"metric", options.registration.metric == IcpMetric::kPointToPlane ? "point-to-plane" : "point-to-point"},
-          {"deskew", std::string(to_string(options.deskew))},
-          {"max_range_m", options.max_range_m},
-          {"min_range_m", options.min_range_m},
-          {"voxel_size_m", options.voxel_size_m},
-          {"max_points_per_voxel", options.max_points_per_voxel},
-          {"vertical_angle_correction_rad", options.vertical_angle_correction_rad},
-          {"initial_threshold_m", options.initial_threshold_m},
-          {"min_motion_m", options.min_motion_m},
-          {"degenerate_min_eigenvalue", options.registration.degenerate_min_eigenvalue},
-          {"remap_degenerate_directions", options.registration.remap_degenerate_directions},
-          {"threads", options.threads},
-          {"map_voxel_m", run.map_voxel_m()}};
+  nlohmann::json options = config_json(slam.options());
+  options["preset"] = inputs.preset;
+  options["front_end_used"] = std::string(to_string(slam.front_end()));
+  options["map_voxel_m"] = run.map_voxel_m();
+  return options;
 }
 
 nlohmann::json scan_json(const OdometryScanResult& r, std::size_t sequence_index, const std::string& file) {

@@ -1,30 +1,10 @@
 #include "cairn/slam2d/config.hpp"
 
-#include <yaml-cpp/yaml.h>
-
-#include <charconv>
-#include <cmath>
-#include <functional>
-#include <sstream>
 #include <stdexcept>
-#include <variant>
-
-#include "cairn/io/input_file.hpp"
-#include "cairn/io/number_format.hpp"
-#include "cairn/io/parse_error.hpp"
 
 namespace cairn::slam2d {
-namespace {
 
-struct Key {
-  std::string section;
-  std::string name;
-  std::variant<double*, int*, bool*> value;
-  std::string doc;
-  std::string full() const { return section + "." + name; }
-};
-
-std::vector<Key> keys(Slam2dOptions& o) {
+io::Parameters parameters(Slam2dOptions& o) {
   return {
       {"scan", "min_range_m", &o.filter.min_range_m, "readings below are dropped"},
       {"scan", "max_range_m", &o.filter.max_range_m, "readings at or beyond are no-returns (the log's PARAM max range wins when smaller)"},
@@ -110,34 +90,6 @@ std::vector<Key> keys(Slam2dOptions& o) {
   };
 }
 
-bool parse_value(const std::string& text, std::variant<double*, int*, bool*> target) {
-  if (auto* d = std::get_if<double*>(&target)) {
-    double v = 0;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v)) return false;
-    **d = v;
-    return true;
-  }
-  if (auto* i = std::get_if<int*>(&target)) {
-    int v = 0;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (ec != std::errc() || end != text.data() + text.size()) return false;
-    **i = v;
-    return true;
-  }
-  bool* b = std::get<bool*>(target);
-  if (text == "true") *b = true;
-  else if (text == "false") *b = false;
-  else return false;
-  return true;
-}
-
-const char* type_name(const std::variant<double*, int*, bool*>& v) {
-  return std::holds_alternative<double*>(v) ? "a finite number" : std::holds_alternative<int*>(v) ? "an integer" : "true or false";
-}
-
-}  // namespace
-
 std::vector<std::string> preset_names() { return {"default", "short-range"}; }
 
 Slam2dOptions preset_options(const std::string& name) {
@@ -160,64 +112,57 @@ Slam2dOptions preset_options(const std::string& name) {
 }
 
 void apply_setting(const std::string& assignment, Slam2dOptions& options) {
-  const auto eq = assignment.find('=');
-  if (eq == std::string::npos) throw std::invalid_argument("--set expects section.key=value, got '" + assignment + "'");
-  const std::string name = assignment.substr(0, eq);
-  const std::string value = assignment.substr(eq + 1);
-  for (auto& key : keys(options)) {
-    if (key.full() != name) continue;
-    if (!parse_value(value, key.value))
-      throw std::invalid_argument("--set " + name + ": expected " + type_name(key.value) + ", got '" + value + "'");
-    return;
-  }
-  throw std::invalid_argument("--set: unknown key '" + name + "' (cairn slam2d --print-config lists them)");
+  io::Parameters keys = parameters(options);
+  io::set_parameter(keys, assignment, "slam2d");
 }
 
 void load_config(const std::string& path, Slam2dOptions& options) {
-  io::check_input_file(path, "a YAML configuration file");
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw io::ParseError(path, 0, "cannot open the configuration file");
-  } catch (const YAML::Exception& e) {
-    throw io::ParseError(path, static_cast<std::size_t>(e.mark.line + 1), "YAML syntax error: " + e.msg);
-  }
-  if (root.IsNull()) return;
-  if (!root.IsMap()) throw io::ParseError(path, static_cast<std::size_t>(root.Mark().line + 1), "expected a map of sections");
-  auto all = keys(options);
-  for (const auto& section : root) {
-    const std::string section_name = section.first.as<std::string>();
-    const auto line = static_cast<std::size_t>(section.first.Mark().line + 1);
-    if (!section.second.IsMap()) throw io::ParseError(path, line, "section '" + section_name + "' must be a map of keys");
-    for (const auto& entry : section.second) {
-      const std::string name = section_name + "." + entry.first.as<std::string>();
-      const auto entry_line = static_cast<std::size_t>(entry.first.Mark().line + 1);
-      auto it = std::find_if(all.begin(), all.end(), [&](const Key& k) { return k.full() == name; });
-      if (it == all.end()) throw io::ParseError(path, entry_line, "unknown key '" + name + "' (cairn slam2d --print-config lists them)");
-      if (!entry.second.IsScalar() || !parse_value(entry.second.Scalar(), it->value))
-        throw io::ParseError(path, entry_line, "'" + name + "' expects " + type_name(it->value));
-    }
-  }
+  io::Parameters keys = parameters(options);
+  io::load_parameters(keys, path, "slam2d");
 }
 
 std::string config_to_yaml(const Slam2dOptions& options) {
   Slam2dOptions copy = options;
-  std::ostringstream out;
-  out << "# cairn slam2d configuration: every key, its value and what it means.\n";
-  std::string section;
-  for (const auto& key : keys(copy)) {
-    if (key.section != section) {
-      section = key.section;
-      out << section << ":\n";
-    }
-    std::string value;
-    if (auto* d = std::get_if<double*>(&key.value)) io::append_number(value, **d);
-    else if (auto* i = std::get_if<int*>(&key.value)) value = std::to_string(**i);
-    else value = *std::get<bool*>(key.value) ? "true" : "false";
-    out << "  " << key.name << ": " << value << "  # " << key.doc << '\n';
-  }
-  return out.str();
+  return io::parameters_yaml(parameters(copy), "# cairn slam2d configuration: every key, its value and what it means.");
+}
+
+nlohmann::json config_json(const Slam2dOptions& options) {
+  Slam2dOptions copy = options;
+  return io::parameters_json(parameters(copy));
+}
+
+io::Parameters localization_parameters(Localizer2dOptions& o) {
+  const char* s = "localization";
+  return {
+      {s, "tracking_min_inlier_fraction", &o.tracking_min_inlier_fraction, "a tracked match below this failed (odometry carries the pose)"},
+      {s, "ok_min_inlier_fraction", &o.ok_min_inlier_fraction, "a tracked match below this is degraded"},
+      {s, "verification_min_inlier_fraction", &o.verification_min_inlier_fraction, "verification: ICP inliers against the submap"},
+      {s, "verification_min_degeneracy", &o.verification_min_degeneracy, "verification: the match constrains every direction at least this much"},
+      {s, "verification_max_free_fraction", &o.verification_max_free_fraction, "verification: at most this share of the points where the map saw empty space"},
+      {s, "look_alike_min_observed_fraction", &o.look_alike_min_observed_fraction, "a partly mapped look-alike counts when this share of the scan lands in observed cells"},
+      {s, "look_alike_places", &o.look_alike_places, "places of the coarse ranking tested as look-alikes"},
+      {s, "global_searches_per_scan", &o.global_searches_per_scan, "whole-submap searches per scan while searching"},
+      {s, "round_robin_searches_per_scan", &o.round_robin_searches_per_scan, "of those, submaps taken in turn rather than by the coarse ranking"},
+      {s, "coarse_cell_factor", &o.coarse_cell_factor, "max-pooled cell of the coarse search, in map cells"},
+      {s, "coarse_depth", &o.coarse_depth, "precomputation grids of the coarse search"},
+      {s, "global_search_margin_m", &o.global_search_margin_m, "whole-submap searches reach this far beyond the submap"},
+      {s, "check_every_n_scans", &o.check_every_n_scans, "while tracking, a verification search every n scans"},
+      {s, "confirmations", &o.confirmations, "scans whose verified matches must agree before a pose is accepted"},
+      {s, "agreement_m", &o.agreement_m, "two matches agree within this ..."},
+      {s, "agreement_rad", &o.agreement_rad, "... and this"},
+      {s, "confirmation_window_m", &o.confirmation_window_m, "confirmation searches: translation half-width around the hypothesis"},
+      {s, "confirmation_window_rad", &o.confirmation_window_rad, "confirmation searches: angle half-width"},
+      {s, "hypothesis_drop_deficit", &o.hypothesis_drop_deficit, "a hypothesis this far behind the best over the window is dropped"},
+      {s, "hypothesis_drop_window_scans", &o.hypothesis_drop_window_scans, "scans the drop deficit is measured over"},
+      {s, "max_hypotheses", &o.max_hypotheses, "hypotheses kept at once"},
+  };
+}
+
+nlohmann::json localization_config_json(const Localizer2dOptions& options) {
+  Localizer2dOptions copy = options;
+  nlohmann::json j = io::parameters_json(localization_parameters(copy));
+  j["matching"] = config_json(options.matching);
+  return j;
 }
 
 }  // namespace cairn::slam2d

@@ -9,9 +9,12 @@
 ///   loop_closure:
 ///     min_score: 0.6
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "cairn/io/parameters.hpp"
+#include "cairn/slam2d/localization.hpp"
 #include "cairn/slam2d/slam.hpp"
 
 namespace cairn::slam2d {
@@ -29,5 +32,14 @@ void load_config(const std::string& path, Slam2dOptions& options);
 void apply_setting(const std::string& assignment, Slam2dOptions& options);
 /// Every key with its value and a comment saying what it means.
 std::string config_to_yaml(const Slam2dOptions& options);
+/// {section: {key: value}} of every key (report.json's "options").
+nlohmann::json config_json(const Slam2dOptions& options);
+/// The keys: pointers into `options`, each with its section, name and meaning.
+io::Parameters parameters(Slam2dOptions& options);
+
+/// The localiser's own keys (section "localization"; its matching keys are Slam2dOptions').
+io::Parameters localization_parameters(Localizer2dOptions& options);
+/// report.json's "options" of a localisation run: the localization keys, and "matching" (config_json).
+nlohmann::json localization_config_json(const Localizer2dOptions& options);
 
 }  // namespace cairn::slam2d

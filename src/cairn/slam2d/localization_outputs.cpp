@@ -1,5 +1,6 @@
 #include "cairn/slam2d/map_picture.hpp"
 #include "cairn/slam2d/localization_outputs.hpp"
+#include "cairn/slam2d/config.hpp"
 #include "cairn/slam2d/outputs.hpp"
 
 #include <cairo.h>
@@ -233,37 +234,7 @@ nlohmann::json localization_report_json(const Localizer2d& localizer, const Loca
                       {"localisation_total", s.total_s},
                       {"slowest_scan", s.max_scan_s},
                       {"slowest_global_search", s.max_global_search_s}};
-  const Slam2dOptions& m = options.matching;
-  report["options"] = {{"global_searches_per_scan", options.global_searches_per_scan},
-                       {"round_robin_searches_per_scan", options.round_robin_searches_per_scan},
-                       {"coarse_cell_factor", options.coarse_cell_factor},
-                       {"coarse_depth", options.coarse_depth},
-                       {"global_search_margin_m", options.global_search_margin_m},
-                       {"confirmations", options.confirmations},
-                       {"agreement_m", options.agreement_m},
-                       {"agreement_rad", options.agreement_rad},
-                       {"confirmation_window_m", options.confirmation_window_m},
-                       {"confirmation_window_rad", options.confirmation_window_rad},
-                       {"max_hypotheses", options.max_hypotheses},
-                       {"hypothesis_drop_deficit", options.hypothesis_drop_deficit},
-                       {"hypothesis_drop_window_scans", options.hypothesis_drop_window_scans},
-                       {"tracking_min_inlier_fraction", options.tracking_min_inlier_fraction},
-                       {"ok_min_inlier_fraction", options.ok_min_inlier_fraction},
-                       {"check_every_n_scans", options.check_every_n_scans},
-                       {"min_score", m.loop_min_score},
-                       {"verification_min_inlier_fraction", options.verification_min_inlier_fraction},
-                       {"max_rms_m", m.loop_max_rms_m},
-                       {"verification_min_degeneracy", options.verification_min_degeneracy},
-                       {"verification_max_free_fraction", options.verification_max_free_fraction},
-                       {"look_alike_min_observed_fraction", options.look_alike_min_observed_fraction},
-                       {"look_alike_places", options.look_alike_places},
-                       {"ambiguity_window_m", m.loop_ambiguity_window_m},
-                       {"ambiguity_distance_m", m.loop_ambiguity_distance_m},
-                       {"ambiguity_angle_rad", m.loop_ambiguity_angle_rad},
-                       {"ambiguity_margin", m.loop_ambiguity_margin},
-                       {"degraded_min_degeneracy", m.degraded_min_degeneracy},
-                       {"min_matching_points", m.min_matching_points},
-                       {"lost_after_scans", m.lost_after_scans}};
+  report["options"] = localization_config_json(options);
   nlohmann::json relocalisations = nlohmann::json::array();
   for (const Relocalisation& r : s.relocalisations) {
     nlohmann::json evidence = nlohmann::json::array();

@@ -342,6 +342,7 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                       {"moved_m", m.moved_m}});
   }
   report["merges"] = merges;
+  report["options"] = config_json(options);
   report["config_yaml"] = config_to_yaml(options);
   return report;
 }

@@ -11,6 +11,7 @@
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/io/trajectory.hpp"
 #include "cairn/viz/render.hpp"
+#include "cairn/vslam/config.hpp"
 
 namespace cairn::vslam {
 namespace {
@@ -133,23 +134,6 @@ nlohmann::json input_json(const RunInput& input, std::size_t frames_processed) {
             {"baseline_m", seq.calibration.baseline_m}, {"virtual_baseline_m", seq.calibration.virtual_baseline_m},
             {"depth_units_per_m", seq.calibration.depth_units_per_m},
             {"source", input.calibration_source}}}};
-}
-
-nlohmann::json options_json(const VisualSlamOptions& options) {
-  return {{"features", options.orb.features},
-          {"scale_factor", options.orb.scale_factor},
-          {"levels", options.orb.levels},
-          {"fast_thresholds", {options.orb.initial_fast_threshold, options.orb.min_fast_threshold}},
-          {"close_depth_baselines", options.close_depth_baselines},
-          {"lost_below_inliers", options.lost_below_inliers},
-          {"degraded_below_inliers", options.degraded_below_inliers},
-          {"local_ba", options.local_ba},
-          {"keyframe_culling", options.keyframe_culling},
-          {"keyframe_culling_redundancy", options.keyframe_culling_redundancy},
-          {"image_alignment", options.image_alignment},
-          {"image_alignment_min_correlation", options.image_alignment_min_correlation},
-          {"fuse_points", options.fuse_points},
-          {"monocular_keyframe_turn_fov", options.monocular_keyframe_turn_fov}};
 }
 
 nlohmann::json summary_json(const VisualSlamSummary& s, std::size_t map_points, bool interrupted) {
@@ -275,7 +259,7 @@ WrittenOutputs write_outputs(const io::OutputDirectory& out, const VisualSlam& s
   const VisualSlamSummary& s = slam.summary();
   nlohmann::json report;
   report["input"] = input_json(input, results.size());
-  report["options"] = options_json(slam.options());
+  report["options"] = config_json(slam.options());
   report["summary"] = summary_json(s, written.map_points, record.interrupted);
   report["timing"] = timing_json(record, s);
   report["maps"] = maps_json(results, t);

@@ -1,0 +1,89 @@
+#include "cairn/cli/slam3d_flags.hpp"
+
+#include <limits>
+#include <stdexcept>
+
+#include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
+#include "cairn/lidar3d/config.hpp"
+#include "cairn/lidar3d/odometry.hpp"
+
+namespace cairn::cli {
+namespace {
+
+// A dedicated flag naming an enum: the word of its key (lidar3d/config.hpp), else `message`.
+void set_word(lidar3d::LidarSlamOptions& options, const std::string& key, const std::string& word, const char* message) {
+  if (word.empty()) return;
+  try {
+    lidar3d::apply_setting(key + "=" + word, options);
+  } catch (const std::invalid_argument&) {
+    throw std::invalid_argument(message);
+  }
+}
+
+}  // namespace
+
+lidar3d::LidarSlamOptions slam3d_options(const Slam3dFlags& flags) {
+  lidar3d::LidarSlamOptions options;
+  options.odometry = lidar3d::preset_options(flags.preset);
+  if (!flags.config.empty()) lidar3d::load_config(flags.config, options);
+  for (const std::string& assignment : flags.set) {
+    try {
+      lidar3d::apply_setting(assignment, options);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(e.what());
+    }
+  }
+  if (flags.no_loop_closure) options.loop_closure = false;
+  set_word(options, "registration.metric", flags.metric, "--metric must be point-to-plane or point-to-point");
+  if (flags.remap_degenerate) options.odometry.registration.remap_degenerate_directions = true;
+  set_word(options, "odometry.front_end", flags.front_end, "--front-end must be auto, dense or loam");
+  set_word(options, "odometry.deskew", flags.deskew, "--deskew must be off, point-times or azimuth");
+  if (flags.command != nullptr && flags.command->count("--threads") > 0) options.odometry.threads = flags.threads;
+  std::string error;
+  if (!options.is_valid(&error)) throw UsageError("invalid configuration: " + error);
+  return options;
+}
+
+void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
+  CLI::Option* scans =
+      app.add_option("SCANS", flags.scans,
+                     "A folder of scans (.pcd/.ply/.bin, optionally .gz/.bz2/.xz; natural name order) or scan files in order")
+          ->required();
+  app.add_option("--out", flags.out, "Output directory: trajectory.tum, trajectory.kitti, map.ply, map.png, report.json");
+  app.add_option("--preset", flags.preset,
+                 "Starting configuration: default, or kitti (KITTI HDL-64E scans: 0.205 deg vertical-angle correction, no deskew)")
+      ->capture_default_str();
+  app.add_option("--config", flags.config, "YAML configuration (every key optional; --print-config lists them), applied after --preset");
+  app.add_option("--set", flags.set, "Override one key: section.key=value (repeatable), after --config; the dedicated flags "
+                 "(--metric, --front-end, --deskew, --threads, --remap-degenerate, --no-loop-closure) win over both");
+  // CLI11 runs a flag's callback before it checks requirements: with --print-config, SCANS may be left out.
+  app.add_flag_callback("--print-config", [&flags, scans] { flags.print_config = true; scans->required(false); },
+                        "Print the configuration in effect (YAML) and exit unless SCANS are given");
+  app.add_option("--times", flags.times, "Table with one row per scan holding its time in seconds (e.g. KITTI times.txt)");
+  app.add_option("--times-column", flags.times_column, "Column of --times holding the time (1-based)")->check(checks::count(10000))->capture_default_str();
+  app.add_option("--ground-truth", flags.ground_truth,
+                 "Ground-truth poses of the same scans (KITTI 3x4 per line, or TUM): print and report drift, RPE, ATE");
+  app.add_option("--ground-truth-format", flags.ground_truth_format, "kitti or tum (default: from the file)");
+  app.add_option("--metric", flags.metric, "ICP residual of the dense front end: point-to-plane (default) or point-to-point (KISS-ICP's)");
+  app.add_option("--front-end", flags.front_end,
+                 "auto (default: loam when the scans carry rings, dense otherwise; the kitti preset: dense), dense (every "
+                 "point, KISS-ICP's way) or loam (edge and planar features per ring, Zhang & Singh 2014)");
+  app.add_option("--deskew", flags.deskew, "off, point-times (default: with the files' per-point times) or azimuth");
+  app.add_option("--threads", flags.threads, "Threads (0 = all; more than the machine has are clamped)")->transform(checks::threads())->capture_default_str();
+  app.add_option("--map-voxel", flags.map_voxel_m, "Voxel of the written map, metres")->check(checks::in_range(0.001, 1000.0))->capture_default_str();
+  app.add_option("--picture-size", flags.picture_px, "Longer side of map.png, pixels")->capture_default_str()->check(checks::whole_range(200, 20000));
+  app.add_option("--max-scans", flags.max_scans, "Process only the first N scans")->check(checks::count(std::numeric_limits<long>::max()));
+  app.add_flag("--remap-degenerate", flags.remap_degenerate,
+               "Dense front end: solve degenerate directions from the motion prediction only (Zhang et al. 2016's "
+               "remapping; the loam front end always does)");
+  app.add_flag("--no-loop-closure", flags.no_loop_closure, "Odometry only: no Scan Context search, no pose graph");
+  app.add_flag("--lenient", flags.lenient, "Skip scans that cannot be read (listed in the report) instead of stopping");
+  app.add_flag("-q,--quiet", flags.quiet, "Print nothing on success");
+  app.add_flag("--progress", flags.progress, "Progress as a line every 20 scans on stderr, also when stderr is not a terminal");
+  app.add_flag("--overwrite", flags.overwrite,
+               "Write into an --out directory that already holds files (those of the same names are replaced)");
+  flags.command = &app;
+}
+
+}  // namespace cairn::cli
