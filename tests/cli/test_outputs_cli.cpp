@@ -379,6 +379,49 @@ TEST_F(OutputsCli, SigintMidSlam2dLeavesACompleteResultMarkedInterrupted) {
   for (const auto& name : entries()) EXPECT_EQ(name.find("cairn-partial"), std::string::npos) << name;
 }
 
+// slam3d and vslam stop at the next scan or frame too, and write what they have, marked.
+TEST_F(OutputsCli, SigintMidSlam3dLeavesACompleteResultMarkedInterrupted) {
+  CAIRN_REQUIRE_DATA("lidar3d/kitti00_keyframes/key_frames");
+  const fs::path kitti = cairn::test::data_path("lidar3d/kitti00_keyframes");
+  const fs::path out = path("kitti");
+  const Child c = spawn({"slam3d", (kitti / "key_frames").string(), "--preset", "kitti", "--times",
+                         (kitti / "keyframes.txt").string(), "--times-column", "4", "--out", out.string(), "--progress"},
+                        path("stdout"), false, true, {});
+  std::string err;
+  ASSERT_TRUE(wait_for(c, "scan 21 /", &err, std::chrono::seconds(300))) << err;
+  ::kill(c.pid, SIGINT);
+  const Ended e = wait_end(c, &err);
+  EXPECT_EQ(e.exit_code, 130) << err;
+  EXPECT_NE(err.find("interrupted by SIGINT"), std::string::npos) << err;
+  const auto report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["interrupted"], true);
+  const std::size_t scans = report["input"]["scans_processed"].get<std::size_t>();
+  EXPECT_GE(scans, 21u);
+  EXPECT_LT(scans, report["input"]["scans_listed"].get<std::size_t>());
+  const Result info = run(dir_, {"info", (out / "trajectory.tum").string(), "--json", "-"});
+  ASSERT_EQ(info.status, 0) << info.err;
+  EXPECT_EQ(nlohmann::json::parse(info.out)["poses"].get<std::size_t>(), scans);
+  for (const auto& name : entries()) EXPECT_EQ(name.find("cairn-partial"), std::string::npos) << name;
+}
+
+TEST_F(OutputsCli, SigtermMidVslamExitsWith143AndWritesTheFramesSoFar) {
+  CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/image_l");
+  const fs::path out = path("vslam");
+  const Child c = spawn({"vslam", cairn::test::data_path("visual/kitti_extract_seq2").string(), "--out", out.string(),
+                         "--progress"},
+                        path("stdout"), false, true, {});
+  std::string err;
+  ASSERT_TRUE(wait_for(c, "frame 11 /", &err, std::chrono::seconds(300))) << err;
+  ::kill(c.pid, SIGTERM);
+  const Ended e = wait_end(c, &err);
+  EXPECT_EQ(e.exit_code, 143) << err;
+  const auto report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["summary"]["interrupted"], true);
+  const std::size_t frames = report["summary"]["frames"].get<std::size_t>();
+  EXPECT_GE(frames, 11u);
+  EXPECT_LT(frames, 51u);  // the extract holds 51 frame pairs
+}
+
 TEST_F(OutputsCli, SigtermMidSlam2dExitsWith143) {
   CAIRN_REQUIRE_DATA("laser2d/intel/intel.clf.bz2");
   const Child c = spawn({"slam2d", intel_log().string(), "--out", path("intel").string(), "--progress", "-q"},

@@ -110,7 +110,8 @@ int main(int argc, char** argv) {
   // The commands with safe points stop at the first SIGINT/SIGTERM; the others end at once.
   for (const auto& [command, run] : runners) {
     const std::string name = command->get_name();
-    if (command->parsed() && (name == "slam2d" || name == "localize2d" || name == "optimize" || name == "landmarks" || name == "ba")) {
+    if (command->parsed() && (name == "slam2d" || name == "localize2d" || name == "slam3d" || name == "vslam" || name == "optimize" ||
+                               name == "landmarks" || name == "ba")) {
       cairn::cli::use_stop_points();
     }
   }
