@@ -162,6 +162,21 @@ Ended wait_end(const Child& c, std::string* rest_of_stderr) {
   return e;
 }
 
+/// Runs `args` with stderr piped, waits (up to 300 s) for `marker` on it, sends `signal` and waits
+/// for the end. False, after killing the run, when the marker never came.
+bool interrupt_when(const std::vector<std::string>& args, const fs::path& stdout_file, const std::string& marker,
+                    int signal, Ended* ended, std::string* err) {
+  const Child c = spawn(args, stdout_file, false, true, {});
+  if (!wait_for(c, marker, err, std::chrono::seconds(300))) {
+    ::kill(c.pid, SIGKILL);
+    wait_end(c, err);
+    return false;
+  }
+  ::kill(c.pid, signal);
+  *ended = wait_end(c, err);
+  return true;
+}
+
 struct Result {
   int status = -1;
   std::string out;
@@ -384,13 +399,12 @@ TEST_F(OutputsCli, SigintMidSlam3dLeavesACompleteResultMarkedInterrupted) {
   CAIRN_REQUIRE_DATA("lidar3d/kitti00_keyframes/key_frames");
   const fs::path kitti = cairn::test::data_path("lidar3d/kitti00_keyframes");
   const fs::path out = path("kitti");
-  const Child c = spawn({"slam3d", (kitti / "key_frames").string(), "--preset", "kitti", "--times",
-                         (kitti / "keyframes.txt").string(), "--times-column", "4", "--out", out.string(), "--progress"},
-                        path("stdout"), false, true, {});
   std::string err;
-  ASSERT_TRUE(wait_for(c, "scan 21 /", &err, std::chrono::seconds(300))) << err;
-  ::kill(c.pid, SIGINT);
-  const Ended e = wait_end(c, &err);
+  Ended e;
+  ASSERT_TRUE(interrupt_when({"slam3d", (kitti / "key_frames").string(), "--preset", "kitti", "--times",
+                              (kitti / "keyframes.txt").string(), "--times-column", "4", "--out", out.string(), "--progress"},
+                             path("stdout"), "scan 21 /", SIGINT, &e, &err))
+      << err;
   EXPECT_EQ(e.exit_code, 130) << err;
   EXPECT_NE(err.find("interrupted by SIGINT"), std::string::npos) << err;
   const auto report = nlohmann::json::parse(slurp(out / "report.json"));
@@ -407,13 +421,12 @@ TEST_F(OutputsCli, SigintMidSlam3dLeavesACompleteResultMarkedInterrupted) {
 TEST_F(OutputsCli, SigtermMidVslamExitsWith143AndWritesTheFramesSoFar) {
   CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/image_l");
   const fs::path out = path("vslam");
-  const Child c = spawn({"vslam", cairn::test::data_path("visual/kitti_extract_seq2").string(), "--out", out.string(),
-                         "--progress"},
-                        path("stdout"), false, true, {});
   std::string err;
-  ASSERT_TRUE(wait_for(c, "frame 11 /", &err, std::chrono::seconds(300))) << err;
-  ::kill(c.pid, SIGTERM);
-  const Ended e = wait_end(c, &err);
+  Ended e;
+  ASSERT_TRUE(interrupt_when({"vslam", cairn::test::data_path("visual/kitti_extract_seq2").string(), "--out", out.string(),
+                              "--progress"},
+                             path("stdout"), "frame 11 /", SIGTERM, &e, &err))
+      << err;
   EXPECT_EQ(e.exit_code, 143) << err;
   const auto report = nlohmann::json::parse(slurp(out / "report.json"));
   EXPECT_EQ(report["summary"]["interrupted"], true);

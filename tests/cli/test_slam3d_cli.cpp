@@ -272,7 +272,7 @@ TEST(Slam3dCli, BadSettingsAreUsageErrorsNamingTheKey) {
   EXPECT_NE(r.err.find("SCANS is required"), std::string::npos) << r.err;
 }
 
-// report.json's "options" is the configuration in effect (config_json), with the preset, the
+// report.json's "options" is the configuration in effect (configuration().json), with the preset, the
 // front end kAuto chose and the written map's voxel beside it; --print-config with SCANS prints
 // the configuration and runs.
 TEST(Slam3dCli, ReportOptionsHoldTheSettings) {

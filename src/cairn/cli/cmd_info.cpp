@@ -40,45 +40,7 @@ int info_graph(const InfoFlags& flags, io::FileFormat format) {
   const io::GraphStatistics s = io::compute_statistics(file.graph);
   const io::GraphReadReport& r = file.report;
 
-  nlohmann::json j;
-  j["file"] = flags.path;
-  j["kind"] = "pose_graph";
-  j["format"] = io::to_string(r.format);
-  j["dimension"] = s.dimension;
-  j["poses"] = s.poses;
-  j["vertices"] = s.vertices;
-  j["edges"] = s.edges;
-  j["odometry_edges"] = s.odometry_edges;
-  j["loop_closure_edges"] = s.loop_closure_edges;
-  j["duplicate_edges"] = s.duplicate_edges;
-  j["connected_components"] = s.connected_components;
-  j["largest_component"] = s.largest_component;
-  j["isolated_vertices"] = s.isolated_vertices;
-  j["fixed"] = s.fixed;
-  j["min_id"] = s.min_id;
-  j["max_id"] = s.max_id;
-  j["contiguous_ids"] = s.contiguous_ids;
-  j["has_initial_guess"] = s.has_initial_guess;
-  nlohmann::json records = nlohmann::json::object();
-  for (const auto& [tag, count] : r.records) records[tag] = count.count;
-  j["records"] = records;
-  nlohmann::json unknown = nlohmann::json::object();
-  for (const auto& [tag, count] : r.unknown_records) {
-    unknown[tag] = {{"count", count.count}, {"first_line", count.first_line}};
-  }
-  j["unknown_records"] = unknown;
-  j["information_not_positive_definite"] = r.information_not_positive_definite;
-  if (r.information_not_positive_definite > 0) {
-    j["first_not_positive_definite_line"] = r.first_not_positive_definite_line;
-  }
-  j["information_indefinite"] = r.information_indefinite;
-  j["information_singular"] = r.information_singular;
-  if (r.information_indefinite > 0) j["first_indefinite_line"] = r.first_indefinite_line;
-  if (r.information_singular > 0) j["first_singular_line"] = r.first_singular_line;
-  j["information_policy"] = io::to_string(r.information_policy);
-  j["edges_without_information"] = r.edges_without_information;
-  if (!r.toro_information_order.empty()) j["toro_information_order"] = r.toro_information_order;
-  j["warnings"] = r.warnings;
+  const nlohmann::json j = io::graph_info_json(flags.path, s, r);
 
   if (!io::is_standard_output(flags.json)) {
     std::ostringstream o;

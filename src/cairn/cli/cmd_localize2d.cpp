@@ -55,10 +55,8 @@ void print_ground_truth(const std::string& path, const slam2d::LocalizationTruth
               path.c_str(), e.translation_m.size(), mean, max, e.wrong_relocalisations, e.relocalisations_compared);
 }
 
-int localize2d_command(const Localize2dFlags& flags) {
-  if (flags.log.empty()) throw std::invalid_argument("a LOG to localise is required");
-  if (flags.map.empty()) throw std::invalid_argument("--map FILE is required (write one with cairn slam2d --save-map)");
-  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
+/// The options in effect: slam2d's --config and --set on the matching, then the dedicated flags.
+slam2d::Localizer2dOptions localizer_options(const Localize2dFlags& flags) {
   slam2d::Localizer2dOptions options;
   if (!flags.config.empty()) slam2d::load_config(flags.config, options.matching);
   for (const std::string& assignment : flags.set) slam2d::apply_setting(assignment, options.matching);
@@ -66,6 +64,63 @@ int localize2d_command(const Localize2dFlags& flags) {
   if (flags.confirmations > 0) options.confirmations = flags.confirmations;
   std::string error;
   if (!options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
+  return options;
+}
+
+/// Scans [first, end) through the localiser until the last or a signal, printing health changes
+/// and progress. Returns one result per scan fed.
+std::vector<slam2d::LocalizationResult> feed_scans(slam2d::Localizer2d& localizer, const io::CarmenLog& log,
+                                                   std::size_t first, std::size_t end, const Localize2dFlags& flags) {
+  std::vector<slam2d::LocalizationResult> results;
+  results.reserve(end - first);
+  const bool tty_progress = !flags.quiet && !flags.progress && isatty(fileno(stderr));
+  slam2d::Health last_health = slam2d::Health::kLost;
+  for (std::size_t k = first; k < end && !interrupted(); ++k) {
+    const slam2d::LocalizationResult result = localizer.add_scan(log.scans[k]);
+    results.push_back(result);
+    if ((result.health != last_health || result.relocalised) && !flags.quiet) {
+      const auto& events = localizer.summary().health_events;
+      std::fprintf(stderr, "%s[scan %zu, t = %s] %s: %s\n", tty_progress ? "\r" : "", k,
+                   log.scans[k].time.to_seconds_string().c_str(), std::string(slam2d::to_string(result.health)).c_str(),
+                   events.empty() ? "" : events.back().reason.c_str());
+      last_health = result.health;
+    }
+    if ((tty_progress || flags.progress) && ((k - first) % 200 == 0 || k + 1 == end)) {
+      const auto& s = localizer.summary();
+      std::fprintf(stderr, "%sscan %zu / %zu  localised %zu  relocalisations %zu  %s%s", tty_progress ? "\r" : "",
+                   k - first + 1, end - first, s.scans_localised, s.relocalisations.size(),
+                   std::string(slam2d::to_string(result.health)).c_str(), tty_progress ? "   " : "\n");
+      std::fflush(stderr);
+    }
+  }
+  if (tty_progress) std::fprintf(stderr, "\n");
+  return results;
+}
+
+void print_summary(const slam2d::Localizer2dSummary& summary, std::size_t used, std::size_t first, double total_s,
+                   bool stopped, const Localize2dFlags& flags) {
+  std::printf("%zu scans in %.1f s (%.1f s localising, slowest scan %.3f s); map: %zu submaps, %zu tracking points\n", used,
+              total_s, summary.total_s, summary.max_scan_s, summary.map_submaps, summary.map_points);
+  if (summary.first_localised_scan) {
+    std::printf("localised at scan %zu; %zu of %zu scans localised (%zu ok, %zu degraded), %zu lost\n",
+                first + *summary.first_localised_scan, summary.scans_localised, used, summary.scans_ok,
+                summary.scans_degraded, summary.scans_lost);
+  } else {
+    std::printf("never localised: %zu scans searched without an accepted pose\n", used);
+  }
+  std::printf("search: %zu global and %zu confirmation searches, %zu verified matches, %zu relocalisations, %zu "
+              "hypotheses dropped, tracking contradicted %zu times\n",
+              summary.global_searches, summary.confirmation_searches, summary.verified_matches,
+              summary.relocalisations.size(), summary.hypotheses_dropped, summary.tracking_contradicted);
+  std::printf("wrote map.png, trajectory.tum, scans.csv, report.json to %s%s\n", flags.out.c_str(),
+              stopped ? " (interrupted: the result so far)" : "");
+}
+
+int localize2d_command(const Localize2dFlags& flags) {
+  if (flags.log.empty()) throw std::invalid_argument("a LOG to localise is required");
+  if (flags.map.empty()) throw std::invalid_argument("--map FILE is required (write one with cairn slam2d --save-map)");
+  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
+  const slam2d::Localizer2dOptions options = localizer_options(flags);
 
   // Refuse a directory of another run before the work, not after it.
   io::OutputDirectory out(flags.out, flags.overwrite);
@@ -87,29 +142,7 @@ int localize2d_command(const Localize2dFlags& flags) {
   if (flags.max_scans > 0) end = std::min(end, first + static_cast<std::size_t>(flags.max_scans));
 
   slam2d::Localizer2d localizer(std::move(map), options);
-  const bool tty_progress = !flags.quiet && !flags.progress && isatty(fileno(stderr));
-  std::vector<slam2d::LocalizationResult> results;
-  results.reserve(end - first);
-  slam2d::Health last_health = slam2d::Health::kLost;
-  for (std::size_t k = first; k < end && !interrupted(); ++k) {
-    const slam2d::LocalizationResult result = localizer.add_scan(log.scans[k]);
-    results.push_back(result);
-    if ((result.health != last_health || result.relocalised) && !flags.quiet) {
-      const auto& events = localizer.summary().health_events;
-      std::fprintf(stderr, "%s[scan %zu, t = %s] %s: %s\n", tty_progress ? "\r" : "", k,
-                   log.scans[k].time.to_seconds_string().c_str(), std::string(slam2d::to_string(result.health)).c_str(),
-                   events.empty() ? "" : events.back().reason.c_str());
-      last_health = result.health;
-    }
-    if ((tty_progress || flags.progress) && ((k - first) % 200 == 0 || k + 1 == end)) {
-      const auto& s = localizer.summary();
-      std::fprintf(stderr, "%sscan %zu / %zu  localised %zu  relocalisations %zu  %s%s", tty_progress ? "\r" : "",
-                   k - first + 1, end - first, s.scans_localised, s.relocalisations.size(),
-                   std::string(slam2d::to_string(result.health)).c_str(), tty_progress ? "   " : "\n");
-      std::fflush(stderr);
-    }
-  }
-  if (tty_progress) std::fprintf(stderr, "\n");
+  const std::vector<slam2d::LocalizationResult> results = feed_scans(localizer, log, first, end, flags);
   const bool stopped = interrupted();
   const std::size_t used = results.size();
   if (stopped) {
@@ -149,23 +182,7 @@ int localize2d_command(const Localize2dFlags& flags) {
   }
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
-  if (!flags.quiet) {
-    std::printf("%zu scans in %.1f s (%.1f s localising, slowest scan %.3f s); map: %zu submaps, %zu tracking points\n", used,
-                total_s, summary.total_s, summary.max_scan_s, summary.map_submaps, summary.map_points);
-    if (summary.first_localised_scan) {
-      std::printf("localised at scan %zu; %zu of %zu scans localised (%zu ok, %zu degraded), %zu lost\n",
-                  first + *summary.first_localised_scan, summary.scans_localised, used, summary.scans_ok,
-                  summary.scans_degraded, summary.scans_lost);
-    } else {
-      std::printf("never localised: %zu scans searched without an accepted pose\n", used);
-    }
-    std::printf("search: %zu global and %zu confirmation searches, %zu verified matches, %zu relocalisations, %zu "
-                "hypotheses dropped, tracking contradicted %zu times\n",
-                summary.global_searches, summary.confirmation_searches, summary.verified_matches,
-                summary.relocalisations.size(), summary.hypotheses_dropped, summary.tracking_contradicted);
-    std::printf("wrote map.png, trajectory.tum, scans.csv, report.json to %s%s\n", flags.out.c_str(),
-                stopped ? " (interrupted: the result so far)" : "");
-  }
+  if (!flags.quiet) print_summary(localizer.summary(), used, first, total_s, stopped, flags);
   if (stopped) {
     if (flags.quiet) std::fprintf(stderr, "cairn localize2d: wrote the result so far to %s\n", flags.out.c_str());
     return interrupted_exit_status();

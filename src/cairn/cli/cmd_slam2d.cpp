@@ -50,47 +50,30 @@ void print_relations(const eval::RelationsResult& r, std::size_t relations) {
   std::printf("  squared rotational      %.3f +- %.3f deg^2\n", r.rotation_squared_deg2.mean, r.rotation_squared_deg2.std);
 }
 
-int slam2d_command(const Slam2dFlags& flags) {
+/// The options in effect: the preset, then --config, then each --set.
+slam2d::Slam2dOptions slam2d_options(const Slam2dFlags& flags) {
   slam2d::Slam2dOptions options = slam2d::preset_options(flags.preset);
   if (!flags.config.empty()) slam2d::load_config(flags.config, options);
   for (const std::string& assignment : flags.set) slam2d::apply_setting(assignment, options);
-  if (flags.print_config) {
-    std::cout << slam2d::config_to_yaml(options);
-    if (flags.log.empty()) return 0;
-  }
-  if (flags.log.empty()) throw std::invalid_argument("a LOG to process is required");
-  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
-  std::string error;
-  if (!options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
+  return options;
+}
 
-  if (!flags.save_map.empty() && io::is_standard_output(flags.save_map))
+/// --save-map must name a file outside --out: refused before the work, not after it.
+void check_save_map(const Slam2dFlags& flags) {
+  if (flags.save_map.empty()) return;
+  if (io::is_standard_output(flags.save_map))
     throw std::invalid_argument("--save-map needs a file: the map is binary and standard output carries the messages");
-  if (!flags.save_map.empty()) {
-    io::resolve_output(flags.save_map);  // a directory, a link loop: refused before the work
-    std::vector<std::string> names;
-    for (const std::string& path : slam2d::output_files("").all()) names.push_back(std::filesystem::path(path).filename().string());
-    io::check_file_outside_directory("--save-map", flags.save_map, "--out", flags.out, names);
-  }
-  // Refuse a directory of another run before the work, not after it.
-  io::OutputDirectory out(flags.out, flags.overwrite);
-  options.should_stop = stop_on_signal();
+  io::resolve_output(flags.save_map);  // a directory, a link loop: refused before the work
+  std::vector<std::string> names;
+  for (const std::string& path : slam2d::output_files("").all()) names.push_back(std::filesystem::path(path).filename().string());
+  io::check_file_outside_directory("--save-map", flags.save_map, "--out", flags.out, names);
+}
 
-  const auto start = core::Clock::now();
-  io::CarmenReadReport read_report;
-  io::CarmenReadOptions read_options;
-  read_options.skip_malformed_records = flags.lenient;
-  const io::CarmenLog log = io::read_carmen_log(flags.log, &read_report, read_options);
-  const double read_s = core::seconds_since(start);
-  if (log.scans.empty()) throw io::ParseError(flags.log, 0, "no laser records (FLASER, RLASER, ROBOTLASER1) in the log");
-  std::vector<eval::Relation> relations;
-  if (!flags.relations.empty()) relations = eval::read_relations(flags.relations);
-
-  slam2d::Slam2d slam(options);
-  // On a terminal: one line rewritten in place. With --progress: a line every 200 scans, for
-  // logs and for programs that watch the run.
+/// Feeds the first `n` scans to `slam` until the last or a signal, printing health changes and
+/// progress (on a terminal one line rewritten in place; with --progress a line every 200 scans,
+/// for logs and for programs that watch the run). Returns the scans used.
+std::size_t feed_scans(slam2d::Slam2d& slam, const io::CarmenLog& log, std::size_t n, const Slam2dFlags& flags) {
   const bool tty_progress = !flags.quiet && !flags.progress && isatty(fileno(stderr));
-  std::size_t n = log.scans.size();
-  if (flags.max_scans > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_scans));
   slam2d::Health last_health = slam2d::Health::kOk;
   std::size_t used = 0;
   for (std::size_t k = 0; k < n && !interrupted(); ++k) {
@@ -111,6 +94,82 @@ int slam2d_command(const Slam2dFlags& flags) {
   }
   slam.finish();  // after an interrupt: no final optimisation (Slam2dOptions::should_stop)
   if (tty_progress) std::fprintf(stderr, "\n");
+  return used;
+}
+
+/// report.json's "relations": the Freiburg metric of the trajectory (printed unless --quiet).
+nlohmann::json relations_report(const slam2d::Slam2d& slam, const std::vector<eval::Relation>& relations,
+                                const Slam2dFlags& flags) {
+  const eval::RelationsResult r = eval::evaluate_relations(relations, slam2d::to_matrix_trajectory(slam));
+  if (!r.outcome.ok()) throw std::runtime_error("relations metric: " + r.outcome.message);
+  if (!flags.quiet) print_relations(r, relations.size());
+  return {{"file", flags.relations},
+          {"count", relations.size()},
+          {"translation_absolute_m", {{"mean", r.translation_absolute_m.mean}, {"std", r.translation_absolute_m.std}}},
+          {"translation_squared_m2", {{"mean", r.translation_squared_m2.mean}, {"std", r.translation_squared_m2.std}}},
+          {"rotation_absolute_deg", {{"mean", r.rotation_absolute_deg.mean}, {"std", r.rotation_absolute_deg.std}}},
+          {"rotation_squared_deg2", {{"mean", r.rotation_squared_deg2.mean}, {"std", r.rotation_squared_deg2.std}}}};
+}
+
+/// --save-map: the map encoded and written to a staged file (committed with the directory, so the
+/// map and the directory form a set); its facts go into the report.
+std::unique_ptr<io::OutputFile> stage_saved_map(const slam2d::Slam2d& slam, const Slam2dFlags& flags, nlohmann::json& report) {
+  if (flags.save_map.empty()) return nullptr;
+  slam2d::SavedMap2D saved = slam.export_map();
+  saved.source = flags.log;
+  const std::string bytes = slam2d::encode_saved_map(saved);
+  report["saved_map"] = {{"file", flags.save_map}, {"bytes", bytes.size()}, {"submaps", saved.submaps.size()},
+                         {"keyframes", saved.keyframes.size()}, {"format_version", slam2d::kMapFileVersion}};
+  auto map_file = std::make_unique<io::OutputFile>(flags.save_map);
+  map_file->write([&](std::ostream& o) { o.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
+  return map_file;
+}
+
+void print_summary(const slam2d::Slam2dSummary& summary, std::size_t used, double data_s, double total_s,
+                   double scans_per_second, bool stopped, bool saved_map, const Slam2dFlags& flags) {
+  std::printf("%zu scans (%.0f s of data) in %.1f s: %.0f scans/s; %zu keyframes, %zu submaps\n", used, data_s, total_s,
+              scans_per_second, summary.keyframes, summary.submaps);
+  std::printf("loop closures: %zu searches, %zu candidates, %zu accepted, %zu rejected by the back end (GNC)\n",
+              summary.loop_searches, summary.candidates.size(), summary.loops_accepted, summary.loops_rejected_by_gnc);
+  std::printf("health: %zu ok, %zu degraded, %zu lost scans; %zu relocalisations\n", summary.scans_ok,
+              summary.scans_degraded, summary.scans_lost, summary.relocalisations);
+  std::printf("time: match %.1f s, local map %.1f s, submaps %.1f s, loop search %.1f s, optimisation %.1f s\n",
+              summary.times.local_match_s, summary.times.local_map_s, summary.times.submap_s,
+              summary.times.loop_search_s, summary.times.optimize_s);
+  std::printf("wrote map.png, map.pgm, map.yaml, trajectory.tum, scans.csv, graph.g2o, corrected.clf, report.json to %s%s\n",
+              flags.out.c_str(), stopped ? " (interrupted: the result so far)" : "");
+  if (saved_map) std::printf("wrote the map for reuse (cairn localize2d --map) to %s\n", flags.save_map.c_str());
+}
+
+int slam2d_command(const Slam2dFlags& flags) {
+  slam2d::Slam2dOptions options = slam2d_options(flags);
+  if (flags.print_config) {
+    std::cout << slam2d::config_to_yaml(options);
+    if (flags.log.empty()) return 0;
+  }
+  if (flags.log.empty()) throw std::invalid_argument("a LOG to process is required");
+  if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
+  std::string error;
+  if (!options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
+  check_save_map(flags);
+  // Refuse a directory of another run before the work, not after it.
+  io::OutputDirectory out(flags.out, flags.overwrite);
+  options.should_stop = stop_on_signal();
+
+  const auto start = core::Clock::now();
+  io::CarmenReadReport read_report;
+  io::CarmenReadOptions read_options;
+  read_options.skip_malformed_records = flags.lenient;
+  const io::CarmenLog log = io::read_carmen_log(flags.log, &read_report, read_options);
+  const double read_s = core::seconds_since(start);
+  if (log.scans.empty()) throw io::ParseError(flags.log, 0, "no laser records (FLASER, RLASER, ROBOTLASER1) in the log");
+  std::vector<eval::Relation> relations;
+  if (!flags.relations.empty()) relations = eval::read_relations(flags.relations);
+
+  slam2d::Slam2d slam(options);
+  std::size_t n = log.scans.size();
+  if (flags.max_scans > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_scans));
+  const std::size_t used = feed_scans(slam, log, n, flags);
   const bool stopped = interrupted();
   if (stopped) {
     std::fprintf(stderr, "cairn slam2d: interrupted by %s after scan %zu of %zu: writing the result so far\n",
@@ -119,7 +178,6 @@ int slam2d_command(const Slam2dFlags& flags) {
   const double total_s = core::seconds_since(start);
 
   const slam2d::OutputFiles files = slam2d::write_outputs(slam, log, used, out.staging(), options);
-  const auto& summary = slam.summary();
   nlohmann::json report = slam2d::report_json(slam, options);
   report["input"] = {{"log", flags.log}, {"scans", used}, {"scans_in_log", log.scans.size()}, {"read_s", read_s},
                      {"records", read_report.records}};
@@ -133,49 +191,14 @@ int slam2d_command(const Slam2dFlags& flags) {
   report["wall_time_s"] = total_s;
   const double data_s = used > 1 ? log.scans[used - 1].time.seconds() - log.scans[0].time.seconds() : 0.0;
   report["data_duration_s"] = data_s;
-  report["scans_per_second"] = total_s > 0 ? static_cast<double>(used) / total_s : 0.0;
-  if (!relations.empty() && !stopped) {
-    const eval::RelationsResult r = eval::evaluate_relations(relations, slam2d::to_matrix_trajectory(slam));
-    if (!r.outcome.ok()) throw std::runtime_error("relations metric: " + r.outcome.message);
-    report["relations"] = {{"file", flags.relations},
-                           {"count", relations.size()},
-                           {"translation_absolute_m", {{"mean", r.translation_absolute_m.mean}, {"std", r.translation_absolute_m.std}}},
-                           {"translation_squared_m2", {{"mean", r.translation_squared_m2.mean}, {"std", r.translation_squared_m2.std}}},
-                           {"rotation_absolute_deg", {{"mean", r.rotation_absolute_deg.mean}, {"std", r.rotation_absolute_deg.std}}},
-                           {"rotation_squared_deg2", {{"mean", r.rotation_squared_deg2.mean}, {"std", r.rotation_squared_deg2.std}}}};
-    if (!flags.quiet) print_relations(r, relations.size());
-  }
-  // --save-map: produced before anything is committed, so the map and the directory form a set.
-  std::unique_ptr<io::OutputFile> map_file;
-  if (!flags.save_map.empty()) {
-    const slam2d::SavedMap2D saved = [&] {
-      slam2d::SavedMap2D m = slam.export_map();
-      m.source = flags.log;
-      return m;
-    }();
-    const std::string bytes = slam2d::encode_saved_map(saved);
-    report["saved_map"] = {{"file", flags.save_map}, {"bytes", bytes.size()}, {"submaps", saved.submaps.size()},
-                           {"keyframes", saved.keyframes.size()}, {"format_version", slam2d::kMapFileVersion}};
-    map_file = std::make_unique<io::OutputFile>(flags.save_map);
-    map_file->write([&](std::ostream& o) { o.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
-  }
+  const double scans_per_second = total_s > 0 ? static_cast<double>(used) / total_s : 0.0;
+  report["scans_per_second"] = scans_per_second;
+  if (!relations.empty() && !stopped) report["relations"] = relations_report(slam, relations, flags);
+  const std::unique_ptr<io::OutputFile> map_file = stage_saved_map(slam, flags, report);
   io::write_output(files.report, [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
   if (map_file) map_file->commit();
-  if (!flags.quiet) {
-    std::printf("%zu scans (%.0f s of data) in %.1f s: %.0f scans/s; %zu keyframes, %zu submaps\n", used, data_s, total_s,
-                report["scans_per_second"].get<double>(), summary.keyframes, summary.submaps);
-    std::printf("loop closures: %zu searches, %zu candidates, %zu accepted, %zu rejected by the back end (GNC)\n",
-                summary.loop_searches, summary.candidates.size(), summary.loops_accepted, summary.loops_rejected_by_gnc);
-    std::printf("health: %zu ok, %zu degraded, %zu lost scans; %zu relocalisations\n", summary.scans_ok,
-                summary.scans_degraded, summary.scans_lost, summary.relocalisations);
-    std::printf("time: match %.1f s, local map %.1f s, submaps %.1f s, loop search %.1f s, optimisation %.1f s\n",
-                summary.times.local_match_s, summary.times.local_map_s, summary.times.submap_s,
-                summary.times.loop_search_s, summary.times.optimize_s);
-    std::printf("wrote map.png, map.pgm, map.yaml, trajectory.tum, scans.csv, graph.g2o, corrected.clf, report.json to %s%s\n",
-                flags.out.c_str(), stopped ? " (interrupted: the result so far)" : "");
-    if (map_file) std::printf("wrote the map for reuse (cairn localize2d --map) to %s\n", flags.save_map.c_str());
-  }
+  if (!flags.quiet) print_summary(slam.summary(), used, data_s, total_s, scans_per_second, stopped, map_file != nullptr, flags);
   if (stopped) {
     if (flags.quiet) std::fprintf(stderr, "cairn slam2d: wrote the result so far to %s\n", flags.out.c_str());
     return interrupted_exit_status();

@@ -151,7 +151,7 @@ void print_summary(const Slam3dFlags& flags, const lidar3d::LidarSlam& slam, con
 int slam3d_command(const Slam3dFlags& flags) {
   const lidar3d::LidarSlamOptions slam_options = slam3d_options(flags);
   if (flags.print_config) {
-    std::fputs(lidar3d::config_to_yaml(slam_options).c_str(), stdout);
+    std::fputs(lidar3d::configuration().yaml(slam_options).c_str(), stdout);
     if (flags.scans.empty()) return 0;
   }
   if (!(flags.map_voxel_m > 0.0) || !std::isfinite(flags.map_voxel_m)) throw std::invalid_argument("--map-voxel must be > 0");

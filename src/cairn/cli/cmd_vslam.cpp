@@ -87,16 +87,16 @@ void check_calibration(const io::ImageSequence& seq, const VslamFlags& flags) {
 /// `options` (the dataset's settings), then --config, --set and the dedicated flags, which win;
 /// refused with exit status 2 when a key or the result is invalid. Printed with --print-config.
 vslam::VisualSlamOptions configured_options(const VslamFlags& flags, vslam::VisualSlamOptions options) {
-  if (!flags.config.empty()) vslam::load_config(flags.config, options);
+  if (!flags.config.empty()) vslam::configuration().load(flags.config, options);
   try {
-    for (const std::string& assignment : flags.set) vslam::apply_setting(assignment, options);
+    for (const std::string& assignment : flags.set) vslam::configuration().set(assignment, options);
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
   if (flags.features > 0) options.orb.features = flags.features;
   if (flags.no_local_ba) options.local_ba = false;
   if (std::string p; !options.is_valid(&p)) throw UsageError("invalid configuration: " + p);
-  if (flags.print_config) std::cout << vslam::config_to_yaml(options);
+  if (flags.print_config) std::cout << vslam::configuration().yaml(options);
   return options;
 }
 

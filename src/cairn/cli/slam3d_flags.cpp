@@ -15,7 +15,7 @@ namespace {
 void set_word(lidar3d::LidarSlamOptions& options, const std::string& key, const std::string& word, const char* message) {
   if (word.empty()) return;
   try {
-    lidar3d::apply_setting(key + "=" + word, options);
+    lidar3d::configuration().set(key + "=" + word, options);
   } catch (const std::invalid_argument&) {
     throw std::invalid_argument(message);
   }
@@ -26,10 +26,10 @@ void set_word(lidar3d::LidarSlamOptions& options, const std::string& key, const 
 lidar3d::LidarSlamOptions slam3d_options(const Slam3dFlags& flags) {
   lidar3d::LidarSlamOptions options;
   options.odometry = lidar3d::preset_options(flags.preset);
-  if (!flags.config.empty()) lidar3d::load_config(flags.config, options);
+  if (!flags.config.empty()) lidar3d::configuration().load(flags.config, options);
   for (const std::string& assignment : flags.set) {
     try {
-      lidar3d::apply_setting(assignment, options);
+      lidar3d::configuration().set(assignment, options);
     } catch (const std::invalid_argument& e) {
       throw UsageError(e.what());
     }

@@ -105,4 +105,47 @@ GraphStatistics compute_statistics(const PoseGraph& graph) {
   return compute(std::get<PoseGraph3D>(graph), 3);
 }
 
+nlohmann::json graph_info_json(const std::string& path, const GraphStatistics& statistics, const GraphReadReport& report) {
+  nlohmann::json j;
+  j["file"] = path;
+  j["kind"] = "pose_graph";
+  j["format"] = to_string(report.format);
+  j["dimension"] = statistics.dimension;
+  j["poses"] = statistics.poses;
+  j["vertices"] = statistics.vertices;
+  j["edges"] = statistics.edges;
+  j["odometry_edges"] = statistics.odometry_edges;
+  j["loop_closure_edges"] = statistics.loop_closure_edges;
+  j["duplicate_edges"] = statistics.duplicate_edges;
+  j["connected_components"] = statistics.connected_components;
+  j["largest_component"] = statistics.largest_component;
+  j["isolated_vertices"] = statistics.isolated_vertices;
+  j["fixed"] = statistics.fixed;
+  j["min_id"] = statistics.min_id;
+  j["max_id"] = statistics.max_id;
+  j["contiguous_ids"] = statistics.contiguous_ids;
+  j["has_initial_guess"] = statistics.has_initial_guess;
+  nlohmann::json records = nlohmann::json::object();
+  for (const auto& [tag, count] : report.records) records[tag] = count.count;
+  j["records"] = records;
+  nlohmann::json unknown = nlohmann::json::object();
+  for (const auto& [tag, count] : report.unknown_records) {
+    unknown[tag] = {{"count", count.count}, {"first_line", count.first_line}};
+  }
+  j["unknown_records"] = unknown;
+  j["information_not_positive_definite"] = report.information_not_positive_definite;
+  if (report.information_not_positive_definite > 0) {
+    j["first_not_positive_definite_line"] = report.first_not_positive_definite_line;
+  }
+  j["information_indefinite"] = report.information_indefinite;
+  j["information_singular"] = report.information_singular;
+  if (report.information_indefinite > 0) j["first_indefinite_line"] = report.first_indefinite_line;
+  if (report.information_singular > 0) j["first_singular_line"] = report.first_singular_line;
+  j["information_policy"] = to_string(report.information_policy);
+  j["edges_without_information"] = report.edges_without_information;
+  if (!report.toro_information_order.empty()) j["toro_information_order"] = report.toro_information_order;
+  j["warnings"] = report.warnings;
+  return j;
+}
+
 }  // namespace cairn::io

@@ -5,7 +5,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
 
+#include "cairn/io/graph_io.hpp"
 #include "cairn/io/pose_graph.hpp"
 
 namespace cairn::io {
@@ -38,5 +41,9 @@ struct GraphStatistics {
 };
 
 GraphStatistics compute_statistics(const PoseGraph& graph);
+
+/// What `cairn info --json` says of a pose-graph file: its statistics and its read report (record
+/// counts, unknown records, information matrices that were not positive definite, warnings).
+nlohmann::json graph_info_json(const std::string& path, const GraphStatistics& statistics, const GraphReadReport& report);
 
 }  // namespace cairn::io

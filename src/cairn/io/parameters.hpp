@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -55,5 +56,46 @@ void load_parameters(Parameters& parameters, const std::string& path, std::strin
 std::string parameters_yaml(const Parameters& parameters, std::string_view header);
 /// {section: {key: value}}: numbers as numbers, booleans as booleans, choices as their word.
 nlohmann::json parameters_json(const Parameters& parameters);
+
+/// A pipeline's configuration: the function that describes its Options (`parameters(Options&)`),
+/// the command that names the keys in messages, and the comment line that --print-config starts
+/// with. The four operations every pipeline offers, written once:
+///
+///   const io::Configuration<LidarSlamOptions>& c = lidar3d::configuration();
+///   c.load("slam3d.yaml", options); c.set("odometry.voxel_size_m=0.5", options);
+///   std::cout << c.yaml(options);   report["options"] = c.json(options);
+template <class Options>
+class Configuration {
+ public:
+  using Describe = Parameters (*)(Options&);
+  Configuration(Describe describe, std::string command, std::string header)
+      : describe_(describe), command_(std::move(command)), header_(std::move(header)) {}
+
+  /// "section.key=value" (set_parameter).
+  void set(const std::string& assignment, Options& options) const {
+    Parameters keys = describe_(options);
+    set_parameter(keys, assignment, command_);
+  }
+  /// A YAML file over `options` (load_parameters).
+  void load(const std::string& path, Options& options) const {
+    Parameters keys = describe_(options);
+    load_parameters(keys, path, command_);
+  }
+  /// Every key with its value and meaning (--print-config).
+  std::string yaml(const Options& options) const {
+    Options copy = options;
+    return parameters_yaml(describe_(copy), header_);
+  }
+  /// {section: {key: value}} (report.json's "options").
+  nlohmann::json json(const Options& options) const {
+    Options copy = options;
+    return parameters_json(describe_(copy));
+  }
+
+ private:
+  Describe describe_;
+  std::string command_;
+  std::string header_;
+};
 
 }  // namespace cairn::io

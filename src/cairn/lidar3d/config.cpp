@@ -134,24 +134,10 @@ io::Parameters parameters(LidarSlamOptions& o) {
   };
 }
 
-void apply_setting(const std::string& assignment, LidarSlamOptions& options) {
-  io::Parameters keys = parameters(options);
-  io::set_parameter(keys, assignment, "slam3d");
-}
 
-void load_config(const std::string& path, LidarSlamOptions& options) {
-  io::Parameters keys = parameters(options);
-  io::load_parameters(keys, path, "slam3d");
-}
-
-std::string config_to_yaml(const LidarSlamOptions& options) {
-  LidarSlamOptions copy = options;
-  return io::parameters_yaml(parameters(copy), "# cairn slam3d configuration: every key, its value and what it means.");
-}
-
-nlohmann::json config_json(const LidarSlamOptions& options) {
-  LidarSlamOptions copy = options;
-  return io::parameters_json(parameters(copy));
+const io::Configuration<LidarSlamOptions>& configuration() {
+  static const io::Configuration<LidarSlamOptions> c(&parameters, "slam3d", "# cairn slam3d configuration: every key, its value and what it means.");
+  return c;
 }
 
 }  // namespace cairn::lidar3d

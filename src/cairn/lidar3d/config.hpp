@@ -4,7 +4,7 @@
 /// RegistrationOptions, LoamFeatureOptions and ScanContextOptions) under a section, each with what
 /// it means (`cairn slam3d --print-config` prints them with their values). Files may set any subset;
 /// unknown keys and wrong types are errors naming the file and line. report.json's "options" is
-/// config_json of the options in effect.
+/// configuration().json of the options in effect.
 ///
 ///   odometry:
 ///     voxel_size_m: 0.5
@@ -19,19 +19,12 @@
 
 namespace cairn::lidar3d {
 
-/// Reads `path` over `options` (keys absent from the file keep their value). Throws
-/// io::ParseError naming file and line on a syntax error, unknown key or wrong type.
-void load_config(const std::string& path, LidarSlamOptions& options);
-/// "section.key=value". Throws std::invalid_argument on an unknown key or a bad value.
-void apply_setting(const std::string& assignment, LidarSlamOptions& options);
-/// Every key with its value and a comment saying what it means.
-std::string config_to_yaml(const LidarSlamOptions& options);
-/// {section: {key: value}} of every key (report.json's "options").
-nlohmann::json config_json(const LidarSlamOptions& options);
 /// The keys: pointers into `options`, each with its section, name and meaning. Enums are words:
 /// odometry.front_end (to_string(FrontEnd)), odometry.deskew (to_string(DeskewMode)),
 /// registration.metric (point-to-plane, point-to-point); scan_context.lateral_offsets_m is
 /// "-4 -2 2 4" (slam_scan_context_options) or "none".
 io::Parameters parameters(LidarSlamOptions& options);
+/// set / load / yaml (--print-config) / json (report.json's "options") over parameters().
+const io::Configuration<LidarSlamOptions>& configuration();
 
 }  // namespace cairn::lidar3d

@@ -26,10 +26,10 @@ nlohmann::json input_json(const SlamRunInputs& inputs, const ScanSequence& seque
   return input;
 }
 
-// config_json of the options in effect, with the run's facts that are not options: the preset
+// configuration().json of the options in effect, with the run's facts that are not options: the preset
 // they started from, the front end kAuto chose, and the written map's voxel.
 nlohmann::json options_json(const SlamRunInputs& inputs, const LidarSlam& slam, const SlamRun& run) {
-  nlohmann::json options = config_json(slam.options());
+  nlohmann::json options = configuration().json(slam.options());
   options["preset"] = inputs.preset;
   options["front_end_used"] = std::string(to_string(slam.front_end()));
   options["map_voxel_m"] = run.map_voxel_m();

@@ -111,25 +111,16 @@ Slam2dOptions preset_options(const std::string& name) {
   throw std::invalid_argument("unknown preset '" + name + "' (known: default, short-range)");
 }
 
-void apply_setting(const std::string& assignment, Slam2dOptions& options) {
-  io::Parameters keys = parameters(options);
-  io::set_parameter(keys, assignment, "slam2d");
+const io::Configuration<Slam2dOptions>& configuration() {
+  static const io::Configuration<Slam2dOptions> c(&parameters, "slam2d",
+                                                  "# cairn slam2d configuration: every key, its value and what it means.");
+  return c;
 }
 
-void load_config(const std::string& path, Slam2dOptions& options) {
-  io::Parameters keys = parameters(options);
-  io::load_parameters(keys, path, "slam2d");
-}
-
-std::string config_to_yaml(const Slam2dOptions& options) {
-  Slam2dOptions copy = options;
-  return io::parameters_yaml(parameters(copy), "# cairn slam2d configuration: every key, its value and what it means.");
-}
-
-nlohmann::json config_json(const Slam2dOptions& options) {
-  Slam2dOptions copy = options;
-  return io::parameters_json(parameters(copy));
-}
+void apply_setting(const std::string& assignment, Slam2dOptions& options) { configuration().set(assignment, options); }
+void load_config(const std::string& path, Slam2dOptions& options) { configuration().load(path, options); }
+std::string config_to_yaml(const Slam2dOptions& options) { return configuration().yaml(options); }
+nlohmann::json config_json(const Slam2dOptions& options) { return configuration().json(options); }
 
 io::Parameters localization_parameters(Localizer2dOptions& o) {
   const char* s = "localization";

@@ -36,6 +36,8 @@ std::string config_to_yaml(const Slam2dOptions& options);
 nlohmann::json config_json(const Slam2dOptions& options);
 /// The keys: pointers into `options`, each with its section, name and meaning.
 io::Parameters parameters(Slam2dOptions& options);
+/// set / load / yaml / json over parameters() (the four functions above are these).
+const io::Configuration<Slam2dOptions>& configuration();
 
 /// The localiser's own keys (section "localization"; its matching keys are Slam2dOptions').
 io::Parameters localization_parameters(Localizer2dOptions& options);

@@ -73,24 +73,10 @@ VisualSlamOptions dataset_options(const std::string& layout, io::SequenceKind ki
   return o;
 }
 
-void apply_setting(const std::string& assignment, VisualSlamOptions& options) {
-  io::Parameters keys = parameters(options);
-  io::set_parameter(keys, assignment, "vslam");
-}
 
-void load_config(const std::string& path, VisualSlamOptions& options) {
-  io::Parameters keys = parameters(options);
-  io::load_parameters(keys, path, "vslam");
-}
-
-std::string config_to_yaml(const VisualSlamOptions& options) {
-  VisualSlamOptions copy = options;
-  return io::parameters_yaml(parameters(copy), "# cairn vslam configuration: every key, its value and what it means.");
-}
-
-nlohmann::json config_json(const VisualSlamOptions& options) {
-  VisualSlamOptions copy = options;
-  return io::parameters_json(parameters(copy));
+const io::Configuration<VisualSlamOptions>& configuration() {
+  static const io::Configuration<VisualSlamOptions> c(&parameters, "vslam", "# cairn vslam configuration: every key, its value and what it means.");
+  return c;
 }
 
 }  // namespace cairn::vslam

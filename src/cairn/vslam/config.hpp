@@ -24,17 +24,10 @@ namespace cairn::vslam {
 /// RGB-D points are close within 40 baselines (TUM*.yaml ThDepth), stereo within 35.
 VisualSlamOptions dataset_options(const std::string& layout, io::SequenceKind kind);
 
-/// Reads `path` over `options` (keys absent from the file keep their value). Throws
-/// io::ParseError naming file and line on a syntax error, unknown key or wrong type.
-void load_config(const std::string& path, VisualSlamOptions& options);
-/// "section.key=value". Throws std::invalid_argument on an unknown key or a bad value.
-void apply_setting(const std::string& assignment, VisualSlamOptions& options);
-/// Every key with its value and a comment saying what it means.
-std::string config_to_yaml(const VisualSlamOptions& options);
-/// {section: {key: value}} of every key (report.json's "options").
-nlohmann::json config_json(const VisualSlamOptions& options);
 /// The keys: pointers into `options`, each with its section, name and meaning. The vocabulary is
 /// not a key (`cairn vslam --vocabulary`).
 io::Parameters parameters(VisualSlamOptions& options);
+/// set / load / yaml (--print-config) / json (report.json's "options") over parameters().
+const io::Configuration<VisualSlamOptions>& configuration();
 
 }  // namespace cairn::vslam

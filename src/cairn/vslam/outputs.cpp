@@ -259,7 +259,7 @@ WrittenOutputs write_outputs(const io::OutputDirectory& out, const VisualSlam& s
   const VisualSlamSummary& s = slam.summary();
   nlohmann::json report;
   report["input"] = input_json(input, results.size());
-  report["options"] = config_json(slam.options());
+  report["options"] = configuration().json(slam.options());
   report["summary"] = summary_json(s, written.map_points, record.interrupted);
   report["timing"] = timing_json(record, s);
   report["maps"] = maps_json(results, t);
