@@ -1,4 +1,5 @@
 #include "cairn/slam2d/map_picture.hpp"
+#include "cairn/eval/report_json.hpp"
 #include "cairn/slam2d/localization_outputs.hpp"
 #include "cairn/slam2d/config.hpp"
 #include "cairn/slam2d/outputs.hpp"
@@ -271,11 +272,10 @@ core::SE3 to_se3(const core::SE2& T) {
   return core::SE3(core::SO3::from_rpy(0.0, 0.0, T.angle()), Eigen::Vector3d(T.x(), T.y(), 0.0));
 }
 
-/// eval's statistics of `errors` (evo's definitions), null when there are none.
+/// eval's statistics of `errors` (evo's definitions, as `cairn eval` reports them), null when there are none.
 nlohmann::json statistics_json(const std::vector<double>& errors) {
   if (errors.empty()) return nlohmann::json();
-  const eval::Statistics s = eval::compute_statistics(errors);
-  return {{"mean", s.mean}, {"rmse", s.rmse}, {"median", s.median}, {"std", s.std}, {"max", s.max}};
+  return eval::statistics_json(eval::compute_statistics(errors));
 }
 
 }  // namespace

@@ -3,14 +3,9 @@
 #include <Eigen/Core>
 #include <Eigen/LU>
 
+#include "cairn/eval/report_json.hpp"
+
 namespace cairn::vslam {
-namespace {
-
-nlohmann::json stats_json(const eval::Statistics& s) {
-  return {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median}, {"max", s.max}, {"count", s.count}};
-}
-
-}  // namespace
 
 io::Trajectory ground_truth_of_rectified_camera(io::Trajectory T_world_body, const io::StereoRig& rig,
                                                 const vision::StereoRectifier& rectifier) {
@@ -50,7 +45,7 @@ GroundTruthEvaluation evaluate_against_ground_truth(const GroundTruth& ground_tr
 nlohmann::json evaluation_json(const GroundTruthEvaluation& e) {
   nlohmann::json evaluation = {{"ground_truth", e.ground_truth_path}};
   if (e.ape.outcome.ok()) {
-    evaluation[e.sim3 ? "ate_sim3_aligned_m" : "ate_se3_aligned_m"] = stats_json(e.ape.statistics);
+    evaluation[e.sim3 ? "ate_sim3_aligned_m" : "ate_se3_aligned_m"] = eval::statistics_json(e.ape.statistics);
     if (e.sim3) evaluation["sim3_scale"] = e.ape.alignment.scale;
     evaluation["end_point_drift_m"] = e.end_point_drift_m;
     evaluation["path_length_m"] = e.path_length_m;
@@ -58,8 +53,8 @@ nlohmann::json evaluation_json(const GroundTruthEvaluation& e) {
   } else {
     evaluation["ate_error"] = e.ape.outcome.message;
   }
-  if (e.rpe_translation.outcome.ok()) evaluation["rpe_1_frame_translation_m"] = stats_json(e.rpe_translation.statistics);
-  if (e.rpe_rotation.outcome.ok()) evaluation["rpe_1_frame_rotation_deg"] = stats_json(e.rpe_rotation.statistics);
+  if (e.rpe_translation.outcome.ok()) evaluation["rpe_1_frame_translation_m"] = eval::statistics_json(e.rpe_translation.statistics);
+  if (e.rpe_rotation.outcome.ok()) evaluation["rpe_1_frame_rotation_deg"] = eval::statistics_json(e.rpe_rotation.statistics);
   return evaluation;
 }
 
