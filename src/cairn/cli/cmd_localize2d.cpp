@@ -128,11 +128,8 @@ int localize2d_command(const Localize2dFlags& flags) {
   slam2d::SavedMap2D map = slam2d::read_saved_map(flags.map);
   if (map.submaps.empty()) throw io::ParseError(flags.map, 0, "the map holds no submaps: nothing to localise in");
   io::CarmenReadReport read_report;
-  io::CarmenReadOptions read_options;
-  read_options.skip_malformed_records = flags.lenient;
-  const io::CarmenLog log = io::read_carmen_log(flags.log, &read_report, read_options);
+  const io::CarmenLog log = flags.read_log(flags.log, &read_report);
   const double read_s = core::seconds_since(start);
-  if (log.scans.empty()) throw io::ParseError(flags.log, 0, "no laser records (FLASER, RLASER, ROBOTLASER1) in the log");
   const std::size_t first = static_cast<std::size_t>(std::max<long>(flags.first_scan, 0));
   if (first >= log.scans.size()) {
     throw std::invalid_argument("--first-scan " + std::to_string(first) + " is beyond the log's " +

@@ -158,11 +158,8 @@ int slam2d_command(const Slam2dFlags& flags) {
 
   const auto start = core::Clock::now();
   io::CarmenReadReport read_report;
-  io::CarmenReadOptions read_options;
-  read_options.skip_malformed_records = flags.lenient;
-  const io::CarmenLog log = io::read_carmen_log(flags.log, &read_report, read_options);
+  const io::CarmenLog log = flags.read_log(flags.log, &read_report);
   const double read_s = core::seconds_since(start);
-  if (log.scans.empty()) throw io::ParseError(flags.log, 0, "no laser records (FLASER, RLASER, ROBOTLASER1) in the log");
   std::vector<eval::Relation> relations;
   if (!flags.relations.empty()) relations = eval::read_relations(flags.relations);
 

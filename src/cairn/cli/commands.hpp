@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cairn/io/carmen_log.hpp"
 #include "cairn/io/graph_io.hpp"
 
 namespace cairn::cli {
@@ -50,6 +51,9 @@ struct LogReplayFlags {
   bool overwrite = false;
 
   void add_to(CLI::App& command);
+  /// The CARMEN log at `path` with --lenient applied. Throws io::ParseError when it holds no laser
+  /// record (FLASER, RLASER, ROBOTLASER1).
+  io::CarmenLog read_log(const std::string& path, io::CarmenReadReport* report) const;
 };
 
 /// A flag combination that does nothing, or a flag value the input cannot honour, found before
