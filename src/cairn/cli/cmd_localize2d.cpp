@@ -17,6 +17,7 @@
 #include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/core/timer.hpp"
+#include "cairn/eval/statistics.hpp"
 #include "cairn/io/carmen_log.hpp"
 #include "cairn/io/json_text.hpp"
 #include "cairn/io/output_file.hpp"
@@ -45,14 +46,11 @@ struct Localize2dFlags : LogReplayFlags {
 /// The terminal line of a ground-truth comparison.
 void print_ground_truth(const std::string& path, const slam2d::LocalizationTruthErrors& e) {
   if (e.translation_m.empty()) return;
-  double mean = 0.0, max = 0.0;
-  for (const double t : e.translation_m) {
-    mean += t / static_cast<double>(e.translation_m.size());
-    max = std::max(max, t);
-  }
+  // The same statistics as report.json's ground_truth (eval's, evo's definitions).
+  const eval::Statistics s = eval::compute_statistics(e.translation_m);
   std::printf("against %s: %zu localised scans compared, translation error mean %.3f m, max %.3f m; %zu of %zu "
               "relocalisations off by more than 0.3 m or 3 degrees\n",
-              path.c_str(), e.translation_m.size(), mean, max, e.wrong_relocalisations, e.relocalisations_compared);
+              path.c_str(), e.translation_m.size(), s.mean, s.max, e.wrong_relocalisations, e.relocalisations_compared);
 }
 
 /// The options in effect: slam2d's --config and --set on the matching, then the dedicated flags.
