@@ -32,6 +32,19 @@ PACKAGES=(
   libopencv-dev        # vision/vslam: FAST, rotated BRIEF, PnP RANSAC, undistortion (imgcodecs only in tests)
   libpng-dev           # vision/image_file: reading the PNG images, writing features.png
   libjpeg-dev          # vision/image_file: reading JPEG images (libjpeg62-turbo)
+  liblz4-dev           # bag: lz4-compressed chunks (ROS 1 bags, MCAP)
+  libzstd-dev          # bag: zstd-compressed chunks (MCAP)
+  libsqlite3-dev       # bag: rosbag2 SQLite3 storage (.db3)
+  python3-rosbag       # tests/bag/fixtures: independent ROS 1 bag writer/reader for the bag tests
+  python3-sensor-msgs  # tests/bag/fixtures: ROS 1 sensor_msgs classes for the independent writer
+  python3-nav-msgs     # tests/bag/fixtures: ROS 1 nav_msgs classes (Odometry reference)
+  python3-geometry-msgs # tests/bag/fixtures: ROS 1 geometry_msgs classes (TransformStamped, poses)
+  python3-tf2-msgs     # tests/bag/fixtures: ROS 1 tf2_msgs/TFMessage for /tf_static
+  xz-utils             # tests/bag/fixtures/mcap/make_mcap.mjs reads the .pcd.xz scans with `xz`
+  # Node.js 20 + npm (tests/bag/fixtures/mcap, independent MCAP writer/reader) are NOT listed: here
+  # they come from NodeSource's `nodejs` package, which Conflicts/Provides `npm`; Debian's nodejs
+  # (18) and npm would conflict with it. tests/bag/fixtures/make_all.sh skips the MCAP fixtures
+  # when node or npm is missing.
 )
 # `install_deps.sh --bench` adds the registration peers of bench/registration_vs_peers.cpp. They
 # pull in about 400 packages (Qt, Java, VTK), too many for every build, and only that benchmark

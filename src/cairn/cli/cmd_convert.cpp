@@ -1,7 +1,11 @@
-// `cairn convert IN OUT`: between pose-graph formats, or between trajectory formats.
+// `cairn convert IN OUT`: between pose-graph formats, or between trajectory formats; a bag into a
+// folder of the formats cairn reads (bag/extract.hpp).
 
+#include <cstdio>
 #include <iostream>
 
+#include "cairn/bag/bag.hpp"
+#include "cairn/bag/extract.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/trajectory_files.hpp"
@@ -19,9 +23,34 @@ struct ConvertFlags {
   std::string times;
   std::string out_times;
   GraphReadFlags graph;
+  std::vector<std::string> topics;
+  bool overwrite = false;
 };
 
+/// `cairn convert BAG DIR` (or `cairn convert BAG --to DIR`): every sensor topic into DIR.
+int convert_bag(const ConvertFlags& flags) {
+  const std::string& dir = flags.output.empty() ? flags.to : flags.output;
+  if (dir.empty()) throw UsageError("cairn convert BAG DIR: name the output folder");
+  if (!flags.output.empty() && !flags.to.empty()) throw UsageError("a bag converts into a folder: give DIR or --to DIR, not both");
+  bag::ExtractOptions options;
+  options.topics = flags.topics;
+  options.overwrite = flags.overwrite;
+  const bag::ExtractReport report = bag::extract_bag(flags.input, dir, options);
+  for (const bag::ExtractedTopic& t : report.topics) {
+    if (t.output.empty()) {
+      std::printf("  %-36s %-32s skipped: %s\n", t.topic.c_str(), t.type.c_str(), t.skipped_because.c_str());
+    } else {
+      std::printf("  %-36s %-32s %zu messages -> %s\n", t.topic.c_str(), t.type.c_str(), t.messages, t.output.c_str());
+    }
+  }
+  std::printf("wrote %zu messages to %s\n", report.messages, dir.c_str());
+  return 0;
+}
+
 int convert(const ConvertFlags& flags) {
+  if (flags.from.empty() && bag::is_bag(flags.input)) return convert_bag(flags);
+  if (!flags.topics.empty() || flags.overwrite) throw UsageError("--topic and --overwrite go with a bag");
+  if (flags.output.empty()) throw UsageError("OUT is required");
   claim_standard_output(flags.output);
   claim_standard_output(flags.out_times);
   if (!flags.out_times.empty() && io::is_standard_output(flags.output) && io::is_standard_output(flags.out_times)) {
@@ -84,13 +113,16 @@ int convert(const ConvertFlags& flags) {
 
 Runner register_convert(CLI::App& app) {
   auto flags = std::make_shared<ConvertFlags>();
-  app.add_option("IN", flags->input, "Input pose graph or trajectory")->required();
-  app.add_option("OUT", flags->output, "Output file; its format follows its extension unless --to is given")
+  app.add_option("IN", flags->input, "Input pose graph, trajectory, or bag (ROS 1 .bag, .mcap, rosbag2 .db3 or folder)")
       ->required();
+  app.add_option("OUT", flags->output,
+                 "Output file; its format follows its extension unless --to is given. For a bag: the output folder");
   app.add_option("--from", flags->from, "Input format: g2o, toro, tum, kitti, euroc (default: detected)");
   app.add_option("--to", flags->to, "Output format: g2o, toro, tum, kitti, euroc (default: by extension)");
   app.add_option("--times", flags->times, "KITTI input: times file (one time in seconds per pose)");
   app.add_option("--out-times", flags->out_times, "KITTI output: also write the times to this file");
+  app.add_option("--topic", flags->topics, "Bag input: extract only this topic (repeatable)");
+  app.add_flag("--overwrite", flags->overwrite, "Bag input: write into a folder that already holds files");
   flags->graph.add_to(app);
   return [flags]() { return convert(*flags); };
 }

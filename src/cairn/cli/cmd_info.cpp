@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cairn/bag/bag.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/trajectory_files.hpp"
@@ -214,7 +215,7 @@ int info_carmen(const InfoFlags& flags) {
 
 Runner register_info(CLI::App& app) {
   auto flags = std::make_shared<InfoFlags>();
-  app.add_option("FILE", flags->path, "Pose graph (.g2o, .graph), trajectory (TUM, KITTI, EuRoC .csv) or CARMEN log (.clf, .log, also .gz/.bz2)")
+  app.add_option("FILE", flags->path, "Pose graph (.g2o, .graph), trajectory (TUM, KITTI, EuRoC .csv), CARMEN log (.clf, .log, also .gz/.bz2), or a bag: ROS 1 .bag, .mcap, rosbag2 .db3 or folder")
       ->required();
   app.add_option("--format", flags->format, "Override the format: g2o, toro, tum, kitti, euroc, carmen");
   app.add_option("--times", flags->times, "KITTI times file (one time in seconds per pose)");
@@ -222,6 +223,7 @@ Runner register_info(CLI::App& app) {
   flags->graph.add_to(app);
   return [flags]() {
     claim_standard_output(flags->json);
+    if (flags->format.empty() && bag::is_bag(flags->path)) return info_bag(flags->path, flags->json);
     const io::FileFormat format = resolve_format(flags->path, flags->format, "--format");
     if (!flags->times.empty() && format != io::FileFormat::kKitti) {
       throw UsageError("--times goes with a KITTI trajectory, and " + flags->path + " is " + std::string(io::to_string(format)));

@@ -189,7 +189,7 @@ int localize2d_command(const Localize2dFlags& flags) {
 
 Runner register_localize2d(CLI::App& app) {
   auto flags = std::make_shared<Localize2dFlags>();
-  app.add_option("LOG", flags->log, "CARMEN log (.clf/.log, also .gz/.bz2)");
+  app.add_option("LOG", flags->log, "CARMEN log (.clf/.log, also .gz/.bz2), or a bag with a sensor_msgs/LaserScan topic (ROS 1 .bag, .mcap, rosbag2 .db3 or folder)");
   app.add_option("--map", flags->map, "Map file written by cairn slam2d --save-map");
   app.add_option("--out", flags->out, "Output directory: map.png, trajectory.tum, scans.csv, report.json");
   app.add_option("--ground-truth", flags->ground_truth,

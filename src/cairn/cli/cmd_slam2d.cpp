@@ -207,7 +207,7 @@ int slam2d_command(const Slam2dFlags& flags) {
 
 Runner register_slam2d(CLI::App& app) {
   auto flags = std::make_shared<Slam2dFlags>();
-  app.add_option("LOG", flags->log, "CARMEN log (.clf/.log, also .gz/.bz2)");
+  app.add_option("LOG", flags->log, "CARMEN log (.clf/.log, also .gz/.bz2), or a bag with a sensor_msgs/LaserScan topic (ROS 1 .bag, .mcap, rosbag2 .db3 or folder)");
   app.add_option("--out", flags->out, "Output directory: map.pgm/.yaml/.png, trajectory.tum, graph.g2o, corrected.clf, report.json");
   app.add_option("--config", flags->config, "YAML configuration (every key optional; see docs/configuration.md)");
   app.add_option("--preset", flags->preset, "Starting configuration: default (SICK LMS-class, 180-361 beams over 180 degrees), short-range (360-degree scanners up to 12 m, 2-3 cm noise)")

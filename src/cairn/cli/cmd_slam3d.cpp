@@ -11,6 +11,7 @@
 #include <optional>
 #include <unistd.h>
 
+#include "cairn/bag/bag.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/slam3d_flags.hpp"
@@ -24,6 +25,7 @@
 #include "cairn/lidar3d/config.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/run_outputs.hpp"
+#include "cairn/lidar3d/scan_reader.hpp"
 #include "cairn/lidar3d/scan_sequence.hpp"
 #include "cairn/lidar3d/slam.hpp"
 #include "cairn/lidar3d/slam_run.hpp"
@@ -31,11 +33,18 @@
 namespace cairn::cli {
 namespace {
 
-/// The scans (the first --max-scans) and their times.
+/// The scans (the first --max-scans) and their times: files with --times, or a bag's PointCloud2
+/// topic with its header stamps.
 lidar3d::ScanSequence read_sequence(const Slam3dFlags& flags) {
+  const std::size_t max_scans = flags.max_scans > 0 ? static_cast<std::size_t>(flags.max_scans) : 0;
+  if (flags.scans.size() == 1 && bag::is_bag(flags.scans.front())) {
+    if (!flags.times.empty()) throw UsageError("--times goes with scan files: a bag's scans carry their stamps");
+    return lidar3d::make_bag_scan_sequence(flags.scans.front(), flags.cloud_topic, max_scans);
+  }
+  if (!flags.cloud_topic.empty()) throw UsageError("--cloud-topic goes with a bag, and the scans are files");
   lidar3d::ScanSequence sequence = lidar3d::make_scan_sequence(flags.scans, "", 1);
   std::size_t n = sequence.files.size();
-  if (flags.max_scans > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_scans));
+  if (max_scans > 0) n = std::min<std::size_t>(n, max_scans);
   sequence.files.resize(n);
   if (!flags.times.empty()) {
     sequence.times_s = lidar3d::read_scan_times(flags.times, flags.times_column, n);
@@ -62,9 +71,10 @@ std::vector<core::SE3> read_ground_truth(const Slam3dFlags& flags, std::size_t n
 
 /// Reads and feeds the scans one at a time, recording them in `run`, with health changes and
 /// progress on stderr, until the last or an interrupt. Returns whether interrupted.
-bool feed_scans(const Slam3dFlags& flags, const lidar3d::ScanSequence& sequence, lidar3d::LidarSlam& slam,
+bool feed_scans(const Slam3dFlags& flags, lidar3d::ScanSequence& sequence, lidar3d::LidarSlam& slam,
                 lidar3d::SlamRun& run) {
   const std::size_t n = sequence.files.size();
+  lidar3d::ScanReader reader(sequence);
   const bool tty_progress = !flags.quiet && !flags.progress && isatty(fileno(stderr));
   lidar3d::Health last_health = lidar3d::Health::kOk;
   std::size_t processed = 0;
@@ -72,7 +82,7 @@ bool feed_scans(const Slam3dFlags& flags, const lidar3d::ScanSequence& sequence,
     const auto read_start = core::Clock::now();
     io::PointCloud cloud;
     try {
-      cloud = io::read_point_cloud(sequence.files[k]);
+      cloud = reader.read(k);
     } catch (const io::ParseError& e) {
       if (!flags.lenient) throw;
       run.add_skipped(sequence.files[k], e.what());
@@ -156,7 +166,7 @@ int slam3d_command(const Slam3dFlags& flags) {
   }
   if (!(flags.map_voxel_m > 0.0) || !std::isfinite(flags.map_voxel_m)) throw std::invalid_argument("--map-voxel must be > 0");
   if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
-  const lidar3d::ScanSequence sequence = read_sequence(flags);
+  lidar3d::ScanSequence sequence = read_sequence(flags);
   const std::vector<core::SE3> ground_truth = read_ground_truth(flags, sequence.files.size());
   if (!flags.quiet && !sequence.times_from_file) {
     std::fprintf(stderr, "cairn slam3d: no --times: scans taken as 0.1 s apart (the motion prediction assumes a steady rate)\n");

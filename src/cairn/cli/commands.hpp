@@ -18,6 +18,8 @@ namespace cairn::cli {
 using Runner = std::function<int()>;
 
 Runner register_info(CLI::App& app);
+/// `cairn info BAG` (info_bag.cpp): prints what a bag holds; `json` as for --json.
+int info_bag(const std::string& path, const std::string& json);
 Runner register_convert(CLI::App& app);
 Runner register_optimize(CLI::App& app);
 Runner register_simulate(CLI::App& app);
@@ -49,11 +51,17 @@ struct LogReplayFlags {
   bool quiet = false;
   bool progress = false;
   bool overwrite = false;
+  std::string scan_topic;
+  std::string odometry_topic;
 
   void add_to(CLI::App& command);
   /// The CARMEN log at `path` with --lenient applied. Throws io::ParseError when it holds no laser
   /// record (FLASER, RLASER, ROBOTLASER1).
+  /// A bag (bag::is_bag) is read through bag::read_laser_log with --scan-topic and --odom-topic.
   io::CarmenLog read_log(const std::string& path, io::CarmenReadReport* report) const;
+
+ private:
+  io::CarmenLog read_bag(const std::string& path, io::CarmenReadReport* report) const;
 };
 
 /// A flag combination that does nothing, or a flag value the input cannot honour, found before

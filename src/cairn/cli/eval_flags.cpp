@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cairn/bag/pose_topic.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/trajectory_files.hpp"
@@ -19,6 +20,10 @@ namespace {
 eval::MatrixTrajectory read_matrices(const std::string& path, const std::string& own_format,
                                      const std::string& shared_format, const char* flag_name,
                                      const std::string& times) {
+  if (const auto bag_topic = bag::split_bag_topic(path)) {  // BAG:/topic, as evo's `bag` mode
+    if (!times.empty()) throw io::ParseError(times, 0, "a times file goes with a KITTI trajectory, not a bag topic");
+    return eval::MatrixTrajectory(bag::read_pose_topic(bag_topic->first, bag_topic->second));
+  }
   const std::string& flag = own_format.empty() ? shared_format : own_format;
   const io::FileFormat format = resolve_format(path, flag, flag_name);
   if (io::kind_of(format) != io::FileKind::kTrajectory) {
@@ -54,6 +59,7 @@ eval::MatrixTrajectory read_eval_estimate(const EvalFlags& f) {
 }
 
 eval::MatrixTrajectory read_relations_estimate(const EvalFlags& f) {
+  if (bag::split_bag_topic(f.estimate)) return read_eval_estimate(f);
   const std::string& flag = f.estimate_format.empty() ? f.format : f.estimate_format;
   const io::FileFormat format = resolve_format(f.estimate, flag, "--est-format");
   if (format != io::FileFormat::kCarmen) return read_eval_estimate(f);
@@ -84,11 +90,11 @@ void add_eval_common_flags(CLI::App& command, EvalFlags& f, bool relations) {
   if (relations) {
     command.add_option("RELATIONS", f.reference, "Relations file: 't_i t_j x y z roll pitch yaw' per line")->required();
   } else {
-    command.add_option("GT", f.reference, "Reference (ground-truth) trajectory: TUM, KITTI or EuRoC")->required();
+    command.add_option("GT", f.reference, "Reference (ground-truth) trajectory: TUM, KITTI or EuRoC, or BAG:/topic (Odometry, PoseStamped, PoseWithCovarianceStamped or TransformStamped)")->required();
   }
   command.add_option("EST", f.estimate,
                      relations ? "Estimate: TUM, KITTI (with --est-times) or EuRoC trajectory, or a corrected CARMEN log"
-                               : "Estimated trajectory: TUM, KITTI or EuRoC")
+                               : "Estimated trajectory: TUM, KITTI or EuRoC, or BAG:/topic")
       ->required();
   command.add_option("--format", f.format, "Format of both trajectories: tum, kitti, euroc (default: from the name)")
       ->check(CLI::IsMember({"tum", "kitti", "euroc"}));

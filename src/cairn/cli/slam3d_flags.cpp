@@ -48,7 +48,7 @@ lidar3d::LidarSlamOptions slam3d_options(const Slam3dFlags& flags) {
 void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
   CLI::Option* scans =
       app.add_option("SCANS", flags.scans,
-                     "A folder of scans (.pcd/.ply/.bin, optionally .gz/.bz2/.xz; natural name order) or scan files in order")
+                     "A folder of scans (.pcd/.ply/.bin, optionally .gz/.bz2/.xz; natural name order), scan files in order, or a bag with a sensor_msgs/PointCloud2 topic (ROS 1 .bag, .mcap, rosbag2 .db3 or folder)")
           ->required();
   app.add_option("--out", flags.out, "Output directory: trajectory.tum, trajectory.kitti, map.ply, map.png, report.json");
   app.add_option("--preset", flags.preset,
@@ -60,6 +60,7 @@ void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
   // CLI11 runs a flag's callback before it checks requirements: with --print-config, SCANS may be left out.
   app.add_flag_callback("--print-config", [&flags, scans] { flags.print_config = true; scans->required(false); },
                         "Print the configuration in effect (YAML) and exit unless SCANS are given");
+  app.add_option("--cloud-topic", flags.cloud_topic, "Bag input: the sensor_msgs/PointCloud2 topic (default: the only one)");
   app.add_option("--times", flags.times, "Table with one row per scan holding its time in seconds (e.g. KITTI times.txt)");
   app.add_option("--times-column", flags.times_column, "Column of --times holding the time (1-based)")->check(checks::count(10000))->capture_default_str();
   app.add_option("--ground-truth", flags.ground_truth,

@@ -19,6 +19,7 @@ struct Slam3dFlags {
   std::string config;
   std::vector<std::string> set;
   std::string times;
+  std::string cloud_topic;
   int times_column = 1;
   std::string ground_truth;
   std::string ground_truth_format;

@@ -1,5 +1,7 @@
 #include "cairn/lidar3d/scan_sequence.hpp"
 
+#include "cairn/bag/point_cloud_stream.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -104,6 +106,18 @@ std::vector<double> read_scan_times(const std::string& times_path, int column, s
                                                       " scans, found " + std::to_string(times.size()));
   }
   return times;
+}
+
+ScanSequence make_bag_scan_sequence(const std::string& path, const std::string& topic, std::size_t max_scans) {
+  const bag::PointCloudStream stream(path, topic);
+  ScanSequence sequence;
+  sequence.bag = path;
+  sequence.bag_topic = stream.topic();
+  std::size_t n = stream.size();
+  if (max_scans > 0) n = std::min(n, max_scans);
+  for (std::size_t k = 0; k < n; ++k) sequence.files.push_back(path + " " + sequence.bag_topic + " #" + std::to_string(k));
+  sequence.times_from_file = true;  // the header stamps
+  return sequence;
 }
 
 ScanSequence make_scan_sequence(const std::vector<std::string>& paths, const std::string& times_path, int column,

@@ -16,11 +16,16 @@
 namespace cairn::lidar3d {
 
 struct ScanSequence {
+  /// The scan files; for a bag, one label per scan ("<bag> /points #k").
   std::vector<std::string> files;
   /// One per file, seconds, strictly increasing.
   std::vector<double> times_s;
   /// False when the times were made up (no table).
   bool times_from_file = false;
+  /// Set when the scans are a bag's sensor_msgs/PointCloud2 topic (make_bag_scan_sequence): the
+  /// bag and the topic; `times_s` then fills as the scans are read (their header stamps).
+  std::string bag;
+  std::string bag_topic;
 };
 
 /// The scan files of `paths` (one folder, or files). Throws ParseError for a missing path, an
@@ -35,5 +40,9 @@ std::vector<double> read_scan_times(const std::string& times_path, int column, s
 /// list_scans, then read_scan_times if `times_path` is not empty (or times k * default_period_s).
 ScanSequence make_scan_sequence(const std::vector<std::string>& paths, const std::string& times_path, int column,
                                 double default_period_s = 0.1);
+
+/// The first `max_scans` (0: all) PointCloud2 messages of `topic` ("" = the only such topic) in
+/// the bag at `path` (any format bag::Bag opens). Throws io::ParseError.
+ScanSequence make_bag_scan_sequence(const std::string& path, const std::string& topic, std::size_t max_scans);
 
 }  // namespace cairn::lidar3d
