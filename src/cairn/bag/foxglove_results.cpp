@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "cairn/bag/mcap_writer.hpp"
+#include "cairn/io/output_file.hpp"
 
 namespace cairn::bag {
 namespace {
@@ -74,11 +75,6 @@ void check(const FoxgloveResults& r) {
   if (!r.health.empty() && r.health.size() != r.stamps_ns.size()) {
     throw std::invalid_argument("write_foxglove_mcap: health and poses differ in number");
   }
-  for (const auto& [a, b] : r.loop_closures) {
-    if (a >= r.T_frame_body.size() || b >= r.T_frame_body.size()) {
-      throw std::invalid_argument("write_foxglove_mcap: a loop closure names a pose that does not exist");
-    }
-  }
 }
 
 json point_cloud_json(const FoxgloveResults& r, std::int64_t t0) {
@@ -111,10 +107,7 @@ json grid_json(const FoxgloveResults& r, std::int64_t t0) {
 json loops_json(const FoxgloveResults& r, std::int64_t t0) {
   json points = json::array();
   for (const auto& [a, b] : r.loop_closures) {
-    for (const std::size_t i : {a, b}) {
-      const Eigen::Vector3d p = r.T_frame_body[i].translation();
-      points.push_back({{"x", p.x()}, {"y", p.y()}, {"z", p.z()}});
-    }
+    for (const Eigen::Vector3d& p : {a, b}) points.push_back({{"x", p.x()}, {"y", p.y()}, {"z", p.z()}});
   }
   json line = {{"type", 2},  // LINE_LIST
                {"pose", identity_pose()},
@@ -175,6 +168,10 @@ void write_foxglove_mcap(std::ostream& out, const FoxgloveResults& r) {
     }
   }
   channels.finish();
+}
+
+void write_foxglove_mcap(const std::string& path, const FoxgloveResults& results) {
+  io::write_output(path, [&](std::ostream& out) { write_foxglove_mcap(out, results); });
 }
 
 }  // namespace cairn::bag

@@ -44,13 +44,15 @@ struct FoxgloveResults {
   std::vector<std::string> health;
   std::vector<Eigen::Vector3f> map_points;
   std::optional<OccupancyGrid> grid;
-  /// Accepted loop closures, as indices into the poses.
-  std::vector<std::pair<std::size_t, std::size_t>> loop_closures;
+  /// Accepted loop closures, as the positions of their two ends in `frame_id`.
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> loop_closures;
 };
 
 /// Writes `results` as MCAP to `out`. Throws std::invalid_argument when the poses and stamps (or
-/// health) differ in number or a loop closure names a pose that does not exist; std::runtime_error
-/// when the stream fails.
+/// health) differ in number; std::runtime_error when the stream fails.
 void write_foxglove_mcap(std::ostream& out, const FoxgloveResults& results);
+
+/// write_foxglove_mcap into the file `path`, whole or not at all (io::write_output).
+void write_foxglove_mcap(const std::string& path, const FoxgloveResults& results);
 
 }  // namespace cairn::bag

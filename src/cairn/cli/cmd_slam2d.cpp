@@ -23,6 +23,7 @@
 #include "cairn/io/parse_error.hpp"
 #include "cairn/io/trajectory.hpp"
 #include "cairn/slam2d/config.hpp"
+#include "cairn/slam2d/foxglove_output.hpp"
 #include "cairn/slam2d/map_file.hpp"
 #include "cairn/slam2d/outputs.hpp"
 #include "cairn/slam2d/slam.hpp"
@@ -38,6 +39,7 @@ struct Slam2dFlags : LogReplayFlags {
   std::string preset = "default";
   std::string relations;
   std::string save_map;
+  std::string mcap;
   std::vector<std::string> set;
   bool print_config = false;
 };
@@ -67,6 +69,16 @@ void check_save_map(const Slam2dFlags& flags) {
   std::vector<std::string> names;
   for (const std::string& path : slam2d::output_files("").all()) names.push_back(std::filesystem::path(path).filename().string());
   io::check_file_outside_directory("--save-map", flags.save_map, "--out", flags.out, names);
+}
+
+/// --mcap must name a file outside --out, not standard output: refused before the work.
+void check_mcap(const Slam2dFlags& flags) {
+  if (flags.mcap.empty()) return;
+  if (io::is_standard_output(flags.mcap)) throw std::invalid_argument("--mcap needs a file: MCAP is binary");
+  io::resolve_output(flags.mcap);
+  std::vector<std::string> names;
+  for (const std::string& path : slam2d::output_files("").all()) names.push_back(std::filesystem::path(path).filename().string());
+  io::check_file_outside_directory("--mcap", flags.mcap, "--out", flags.out, names);
 }
 
 /// Feeds the first `n` scans to `slam` until the last or a signal, printing health changes and
@@ -139,6 +151,7 @@ void print_summary(const slam2d::Slam2dSummary& summary, std::size_t used, doubl
   std::printf("wrote map.png, map.pgm, map.yaml, trajectory.tum, scans.csv, graph.g2o, corrected.clf, report.json to %s%s\n",
               flags.out.c_str(), stopped ? " (interrupted: the result so far)" : "");
   if (saved_map) std::printf("wrote the map for reuse (cairn localize2d --map) to %s\n", flags.save_map.c_str());
+  if (!flags.mcap.empty()) std::printf("wrote the results for Foxglove (MCAP) to %s\n", flags.mcap.c_str());
 }
 
 int slam2d_command(const Slam2dFlags& flags) {
@@ -152,6 +165,7 @@ int slam2d_command(const Slam2dFlags& flags) {
   std::string error;
   if (!options.is_valid(&error)) throw std::invalid_argument("invalid configuration: " + error);
   check_save_map(flags);
+  check_mcap(flags);
   // Refuse a directory of another run before the work, not after it.
   io::OutputDirectory out(flags.out, flags.overwrite);
   options.should_stop = stop_on_signal();
@@ -195,6 +209,7 @@ int slam2d_command(const Slam2dFlags& flags) {
   io::write_output(files.report, [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
   if (map_file) map_file->commit();
+  if (!flags.mcap.empty()) slam2d::write_foxglove_mcap(flags.mcap, slam, options);
   if (!flags.quiet) print_summary(slam.summary(), used, data_s, total_s, scans_per_second, stopped, map_file != nullptr, flags);
   if (stopped) {
     if (flags.quiet) std::fprintf(stderr, "cairn slam2d: wrote the result so far to %s\n", flags.out.c_str());
@@ -214,6 +229,8 @@ Runner register_slam2d(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--set", flags->set, "Override one key: section.key=value (repeatable)");
   app.add_option("--relations", flags->relations, "Freiburg relations file: print the relations metric at the end");
+  app.add_option("--mcap", flags->mcap,
+                 "Also write the trajectory, health, occupancy grid and loop closures as MCAP for Foxglove");
   app.add_option("--save-map", flags->save_map,
                  "Also write the finished map (submaps, grids, poses) for cairn localize2d --map (docs/formats.md)");
   app.add_flag("--print-config", flags->print_config, "Print the configuration in effect (YAML) and exit unless LOG is given");

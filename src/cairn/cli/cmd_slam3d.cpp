@@ -23,6 +23,7 @@
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/io/trajectory.hpp"
 #include "cairn/lidar3d/config.hpp"
+#include "cairn/lidar3d/foxglove_output.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/run_outputs.hpp"
 #include "cairn/lidar3d/scan_reader.hpp"
@@ -166,6 +167,12 @@ int slam3d_command(const Slam3dFlags& flags) {
   }
   if (!(flags.map_voxel_m > 0.0) || !std::isfinite(flags.map_voxel_m)) throw std::invalid_argument("--map-voxel must be > 0");
   if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
+  if (!flags.mcap.empty()) {
+    if (io::is_standard_output(flags.mcap)) throw std::invalid_argument("--mcap needs a file: MCAP is binary");
+    io::resolve_output(flags.mcap);
+    io::check_file_outside_directory("--mcap", flags.mcap, "--out", flags.out,
+                                     {"trajectory.tum", "trajectory.kitti", "map.ply", "map.png", "report.json"});
+  }
   lidar3d::ScanSequence sequence = read_sequence(flags);
   const std::vector<core::SE3> ground_truth = read_ground_truth(flags, sequence.files.size());
   if (!flags.quiet && !sequence.times_from_file) {
@@ -186,6 +193,7 @@ int slam3d_command(const Slam3dFlags& flags) {
   const lidar3d::SlamRunInputs inputs{flags.scans, flags.times, flags.preset, flags.ground_truth};
   const std::optional<lidar3d::TrajectoryErrors> errors =
       lidar3d::write_run_outputs(out, inputs, sequence, slam, run, ground_truth, flags.picture_px, total_s, stopped);
+  if (!flags.mcap.empty()) lidar3d::write_foxglove_mcap(flags.mcap, slam, run);
   if (!flags.quiet) print_summary(flags, slam, run, errors, total_s, stopped);
   return stopped ? interrupted_exit_status() : 0;
 }

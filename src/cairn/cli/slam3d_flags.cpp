@@ -60,6 +60,7 @@ void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
   // CLI11 runs a flag's callback before it checks requirements: with --print-config, SCANS may be left out.
   app.add_flag_callback("--print-config", [&flags, scans] { flags.print_config = true; scans->required(false); },
                         "Print the configuration in effect (YAML) and exit unless SCANS are given");
+  app.add_option("--mcap", flags.mcap, "Also write the trajectory, health, map and loop closures as MCAP for Foxglove");
   app.add_option("--cloud-topic", flags.cloud_topic, "Bag input: the sensor_msgs/PointCloud2 topic (default: the only one)");
   app.add_option("--times", flags.times, "Table with one row per scan holding its time in seconds (e.g. KITTI times.txt)");
   app.add_option("--times-column", flags.times_column, "Column of --times holding the time (1-based)")->check(checks::count(10000))->capture_default_str();

@@ -20,6 +20,7 @@ struct Slam3dFlags {
   std::vector<std::string> set;
   std::string times;
   std::string cloud_topic;
+  std::string mcap;
   int times_column = 1;
   std::string ground_truth;
   std::string ground_truth_format;
