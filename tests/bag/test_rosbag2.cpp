@@ -129,7 +129,7 @@ std::string as_schema_text(const Value& v) {
     case Value::Kind::kBool: return v.as_bool() ? "true" : "false";
     case Value::Kind::kInt: return std::to_string(v.as_int());
     case Value::Kind::kUInt: return std::to_string(v.as_uint());
-    case Value::Kind::kString: return v.text();
+    case Value::Kind::kString: return std::string(v.text());
     default: {
       std::ostringstream o;
       o << v.number();

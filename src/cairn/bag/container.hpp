@@ -49,6 +49,9 @@ struct Message {
   /// Receive (log) time, nanoseconds since the Unix epoch.
   std::int64_t log_time_ns = 0;
   std::span<const std::uint8_t> data;
+  /// When set, owns the bytes `data` points into (a decompressed chunk): holding a copy keeps
+  /// them valid after next(), so a decoded image or cloud can refer to them without a copy.
+  std::shared_ptr<const void> owner;
   /// Where the record starts in its file (for error messages), or, inside a compressed chunk, the
   /// offset of that chunk.
   std::uint64_t file_offset = 0;

@@ -16,8 +16,8 @@ namespace {
 class Decoder {
  public:
   Decoder(const SchemaSet& schemas, std::span<const std::uint8_t> bytes, Serialization serialization,
-          const std::string& where)
-      : schemas_(schemas), bytes_(bytes), cdr_(serialization == Serialization::kCdr), where_(where) {}
+          const std::string& where, std::shared_ptr<const void> owner)
+      : schemas_(schemas), bytes_(bytes), cdr_(serialization == Serialization::kCdr), where_(where), owner_(std::move(owner)) {}
 
   Value run() {
     if (cdr_) read_encapsulation();
@@ -31,6 +31,8 @@ class Decoder {
 
  private:
   static constexpr int kMaxDepth = 64;
+  /// Byte arrays this long or longer refer to the owner's bytes; shorter ones are copied.
+  static constexpr std::size_t kViewAtLeast = 4096;
 
   void read_encapsulation() {
     require(4, "the CDR encapsulation header");
@@ -80,9 +82,10 @@ class Decoder {
 
   Value read_bytes(std::size_t count, const Field& field) {
     if (count > bytes_.size() - position_) fail_count(field, count);
-    std::string raw(reinterpret_cast<const char*>(bytes_.data() + position_), count);
+    const std::string_view view(reinterpret_cast<const char*>(bytes_.data() + position_), count);
     position_ += count;
-    return Value::bytes(std::move(raw));
+    if (owner_ && count >= kViewAtLeast) return Value::bytes_view(owner_, view);
+    return Value::bytes(std::string(view));
   }
 
   Value read_element(const Field& field, int depth) {
@@ -191,13 +194,14 @@ class Decoder {
   bool swap_ = false;
   std::size_t position_ = 0;
   std::size_t origin_ = 0;
+  std::shared_ptr<const void> owner_;
 };
 
 }  // namespace
 
 Value deserialize(const SchemaSet& schemas, std::span<const std::uint8_t> bytes, Serialization serialization,
-                  const std::string& where) {
-  return Decoder(schemas, bytes, serialization, where).run();
+                  const std::string& where, std::shared_ptr<const void> owner) {
+  return Decoder(schemas, bytes, serialization, where, std::move(owner)).run();
 }
 
 }  // namespace cairn::bag

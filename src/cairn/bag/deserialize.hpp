@@ -14,6 +14,7 @@
 /// ROS 1 message: io::ParseError naming `where` and the byte offset inside the message.
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 
@@ -26,7 +27,9 @@ enum class Serialization : std::uint8_t { kRos1, kCdr };
 
 /// Decodes `bytes` as the root type of `schemas`. `where` names the message in errors
 /// ("bag.bag: /scan message at byte 4211").
+/// `owner`, when set, keeps `bytes` alive: uint8 arrays (an image's, a cloud's data) then refer to
+/// them instead of being copied.
 Value deserialize(const SchemaSet& schemas, std::span<const std::uint8_t> bytes, Serialization serialization,
-                  const std::string& where);
+                  const std::string& where, std::shared_ptr<const void> owner = nullptr);
 
 }  // namespace cairn::bag

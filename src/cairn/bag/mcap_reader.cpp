@@ -1154,6 +1154,7 @@ bool McapMessageStream::next(Message* message) {
   message->connection = top.connection;
   message->log_time_ns = top.log_time_ns;
   message->data = top.data;
+  message->owner = current_;
   message->file_offset = top.file_offset;
   ++emitted_[top.connection];
   return true;

@@ -57,7 +57,7 @@ Value MessageDecoder::decode(const BagMessage& message) {
   }
   const std::string where = file + ": " + connection.topic + " message at " + std::to_string(message.message.log_time_ns) +
                             " ns (record at byte " + std::to_string(message.message.file_offset) + ")";
-  return deserialize(*found.schemas, message.message.data, found.serialization, where);
+  return deserialize(*found.schemas, message.message.data, found.serialization, where, message.message.owner);
 }
 
 std::string MessageDecoder::type(std::size_t topic) const { return normalize_type(bag_.topics().at(topic).type); }

@@ -63,7 +63,7 @@ FieldLayout find_field(const std::vector<FieldLayout>& fields, std::initializer_
 std::vector<FieldLayout> read_fields(const Value& message, std::size_t point_step) {
   std::vector<FieldLayout> fields;
   for (const Value& field : message["fields"].items()) {
-    FieldLayout layout{field["name"].text(), static_cast<std::size_t>(field["offset"].as_uint()),
+    FieldLayout layout{std::string(field["name"].text()), static_cast<std::size_t>(field["offset"].as_uint()),
                        field["datatype"].as_uint(), true};
     const std::size_t size = datatype_size(layout.datatype);
     if (size == 0) {
@@ -104,7 +104,7 @@ io::PointCloud to_point_cloud(const Value& message, PointCloud2Report* report) {
   const std::size_t point_step = static_cast<std::size_t>(message["point_step"].as_uint());
   const std::uint64_t row_step = message["row_step"].as_uint();
   const bool big_endian = message["is_bigendian"].as_bool();
-  const std::string& data = message["data"].text();
+  const std::string_view data = message["data"].text();
   if (point_step == 0 && height * width > 0) throw std::runtime_error("point_step is 0");
   if (width > 0 && (row_step < width * point_step || height > data.size() / std::max<std::uint64_t>(row_step, 1) + 1 ||
                     (height > 0 && (height - 1) * row_step + width * point_step > data.size()))) {

@@ -136,16 +136,23 @@ class BagFile {
 
   /// The `bytes` bytes at `offset`; throws when the file ends before them.
   Bytes read(std::uint64_t offset, std::uint64_t bytes, const char* what) {
+    Bytes out;
+    read_into(offset, bytes, what, &out);
+    return out;
+  }
+
+  /// As read(), into `out`, whose memory is reused (a recycled chunk buffer: no fresh pages).
+  void read_into(std::uint64_t offset, std::uint64_t bytes, const char* what, Bytes* buffer) {
     if (!fits(offset, bytes)) {
       fail(path_, offset, std::string(what) + " needs " + std::to_string(bytes) + " bytes, the " +
                               std::to_string(size_) + "-byte file ends before them");
     }
-    Bytes out(static_cast<std::size_t>(bytes));
+    Bytes& out = *buffer;
+    out.resize(static_cast<std::size_t>(bytes));
     stream_.clear();
     stream_.seekg(static_cast<std::streamoff>(offset));
     stream_.read(reinterpret_cast<char*>(out.data()), static_cast<std::streamsize>(bytes));
     if (!stream_) fail(path_, offset, std::string("read error in ") + what);
-    return out;
   }
 
  private:
@@ -947,7 +954,7 @@ LayoutBuilder read_layout(BagFile& file, const BagHeader& header) {
 /// are in the order they were written, which need not be time order.
 struct OpenBlock {
   const Block* block = nullptr;
-  Bytes data;
+  std::shared_ptr<Bytes> data;  ///< shared with the messages handed out (Message::owner)
   std::vector<RawMessage> messages;
   std::size_t next = 0;
 };
@@ -976,11 +983,16 @@ void check_block_messages(const BagLayout& layout, const Block& block, std::vect
   }
 }
 
-OpenBlock load_block(BagFile& file, const BagLayout& layout, const Block& block, const std::vector<bool>& wanted) {
+/// Reads and checks a block. `spare`: a buffer no message refers to any more, reused for the stored
+/// bytes (or null).
+OpenBlock load_block(BagFile& file, const BagLayout& layout, const Block& block, const std::vector<bool>& wanted,
+                     std::shared_ptr<Bytes> spare) {
   OpenBlock open;
   open.block = &block;
-  open.data = decompress(block, file.read(block.data_offset, block.data_bytes, "chunk data"), file.path());
-  std::vector<RawMessage> messages = parse_block_records(block, open.data, file.path(), false).messages;
+  Bytes stored = spare ? std::move(*spare) : Bytes();
+  file.read_into(block.data_offset, block.data_bytes, "chunk data", &stored);
+  open.data = std::make_shared<Bytes>(decompress(block, std::move(stored), file.path()));
+  std::vector<RawMessage> messages = parse_block_records(block, *open.data, file.path(), false).messages;
   check_block_messages(layout, block, messages);
   for (const RawMessage& message : messages) {
     if (wanted.empty() || wanted[message.connection]) open.messages.push_back(message);
@@ -1003,7 +1015,7 @@ class Ros1MessageStream final : public MessageStream {
   }
 
   bool next(Message* message) override {
-    retired_.clear();  // the previous message's data stays valid until this call
+    recycle_retired();  // the previous message's data stays valid until this call
     while (next_pending_ < pending_.size() &&
            (heads_.empty() || layout_->blocks[pending_[next_pending_]].start_ns <= heads_.top().time_ns)) {
       open(layout_->blocks[pending_[next_pending_++]]);
@@ -1015,7 +1027,8 @@ class Ros1MessageStream final : public MessageStream {
     const RawMessage& raw = block.messages[block.next++];
     message->connection = raw.connection;
     message->log_time_ns = raw.time_ns;
-    message->data = ByteView(block.data).subspan(static_cast<std::size_t>(raw.data_position),
+    message->owner = block.data;
+    message->data = ByteView(*block.data).subspan(static_cast<std::size_t>(raw.data_position),
                                                  static_cast<std::size_t>(raw.data_bytes));
     message->file_offset = block.block->message_offset(raw.position);
     if (block.next < block.messages.size()) {
@@ -1045,7 +1058,7 @@ class Ros1MessageStream final : public MessageStream {
                        [&](const auto& count) { return wanted_[layout_->index_of.at(count.first)]; });
   }
   void open(const Block& block) {
-    OpenBlock loaded = load_block(file_, *layout_, block, wanted_);
+    OpenBlock loaded = load_block(file_, *layout_, block, wanted_, take_spare());
     if (loaded.messages.empty()) return;
     open_.push_back(std::move(loaded));
     push_head(std::prev(open_.end()));
@@ -1062,6 +1075,29 @@ class Ros1MessageStream final : public MessageStream {
   std::size_t next_pending_ = 0;
   std::list<OpenBlock> open_;
   std::list<OpenBlock> retired_;  ///< emptied blocks, freed on the next call
+  /// Buffers of emptied blocks, reused for the next loads once nothing refers to them (the caller's
+  /// last Message and decoded values may for a while): a chunk's memory is then reused instead of
+  /// faulted in afresh, the cost that dominated reading. At most kSpares are kept.
+  std::vector<std::shared_ptr<Bytes>> spares_;
+  static constexpr std::size_t kSpares = 3;
+
+  void recycle_retired() {
+    for (OpenBlock& block : retired_) {
+      if (block.data && spares_.size() < kSpares) spares_.push_back(std::move(block.data));
+    }
+    retired_.clear();
+  }
+
+  std::shared_ptr<Bytes> take_spare() {
+    for (auto it = spares_.begin(); it != spares_.end(); ++it) {
+      if (it->use_count() == 1) {
+        std::shared_ptr<Bytes> spare = std::move(*it);
+        spares_.erase(it);
+        return spare;
+      }
+    }
+    return nullptr;
+  }
   std::priority_queue<Head, std::vector<Head>, Later> heads_;  ///< each open block's next message
 };
 

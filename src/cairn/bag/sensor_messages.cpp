@@ -140,7 +140,7 @@ Image to_image(const Value& m) {
   out.encoding = m["encoding"].text();
   out.is_bigendian = m["is_bigendian"].as_bool();
   out.step = static_cast<std::uint32_t>(m["step"].as_uint());
-  out.data = m["data"].text();
+  out.data = std::string(m["data"].text());
   return out;
 }
 
@@ -148,7 +148,7 @@ CompressedImage to_compressed_image(const Value& m) {
   CompressedImage out;
   out.header = to_header(m["header"]);
   out.format = m["format"].text();
-  out.data = m["data"].text();
+  out.data = std::string(m["data"].text());
   return out;
 }
 

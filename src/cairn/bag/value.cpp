@@ -61,6 +61,14 @@ Value Value::bytes(std::string raw) {
   v.text_ = std::move(raw);
   return v;
 }
+Value Value::bytes_view(std::shared_ptr<const void> owner, std::string_view bytes) {
+  Value v;
+  v.kind_ = Kind::kBytes;
+  v.owner_ = std::move(owner);
+  v.view_ = bytes;
+  return v;
+}
+
 Value Value::array(std::vector<Value> items) {
   Value v;
   v.kind_ = Kind::kArray;
@@ -106,9 +114,9 @@ bool Value::as_bool() const {
   wrong_kind(kind_, "bool");
 }
 
-const std::string& Value::text() const {
+std::string_view Value::text() const {
   if (kind_ != Kind::kString && kind_ != Kind::kBytes) wrong_kind(kind_, "string");
-  return text_;
+  return owner_ ? view_ : std::string_view(text_);
 }
 
 const std::vector<Value>& Value::items() const {
@@ -137,8 +145,9 @@ const Value& Value::operator[](std::string_view name) const {
 std::vector<double> Value::numbers() const {
   std::vector<double> out;
   if (kind_ == Kind::kBytes) {
-    out.reserve(text_.size());
-    for (const char c : text_) out.push_back(static_cast<double>(static_cast<unsigned char>(c)));
+    const std::string_view bytes = text();
+    out.reserve(bytes.size());
+    for (const char c : bytes) out.push_back(static_cast<double>(static_cast<unsigned char>(c)));
     return out;
   }
   if (kind_ != Kind::kArray) wrong_kind(kind_, "array of numbers");

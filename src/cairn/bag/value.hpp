@@ -27,6 +27,9 @@ class Value {
   static Value floating(double f);
   static Value string(std::string text);
   static Value bytes(std::string raw);
+  /// Bytes left where they are (an image's or a cloud's data inside a bag's chunk), kept valid by
+  /// `owner`: no copy.
+  static Value bytes_view(std::shared_ptr<const void> owner, std::string_view bytes);
   static Value array(std::vector<Value> items);
   /// The value keeps `schema` alive (it outlives the decoder that made it).
   static Value message(std::shared_ptr<const MessageSchema> schema, std::vector<Value> fields);
@@ -39,8 +42,8 @@ class Value {
   std::int64_t as_int() const;
   std::uint64_t as_uint() const;
   bool as_bool() const;
-  /// kString or kBytes.
-  const std::string& text() const;
+  /// kString or kBytes (valid as long as the value).
+  std::string_view text() const;
   /// kArray elements or kMessage fields (in the schema's order).
   const std::vector<Value>& items() const;
   /// The field `name` of a message; throws std::runtime_error when there is none.
@@ -61,6 +64,8 @@ class Value {
     double f_;
   };
   std::string text_;
+  std::shared_ptr<const void> owner_;  ///< kBytes by view: keeps view_ valid
+  std::string_view view_;
   std::vector<Value> items_;
   std::shared_ptr<const MessageSchema> schema_;
 };
