@@ -94,6 +94,27 @@ TEST(BagCli, Slam2dRunsOnTheRealLaserScanBagAndItsMcapReadsBackInMcapCore) {
   EXPECT_EQ(channels["/health"].first, "foxglove.Log");
 }
 
+TEST(BagCli, Localize2dOnTheBagInTheMapSlam2dSavedFromIt) {
+  CAIRN_REQUIRE_DATA("bags/scan_tools_laser_scan_matcher_demo.bag");
+  const fs::path map_run = scratch() / "slam2d_for_map";
+  const fs::path map = scratch() / "scan_tools.cmap";
+  const fs::path out = scratch() / "localize2d";
+  fs::remove_all(map_run);
+  fs::remove_all(out);
+  fs::remove(map);
+  const std::string bag = data("bags/scan_tools_laser_scan_matcher_demo.bag");
+  ASSERT_EQ(run("slam2d " + bag + " -q --out '" + map_run.string() + "' --save-map '" + map.string() + "'").status, 0);
+  const CliResult r = run("localize2d " + bag + " --map '" + map.string() + "' -q --out '" + out.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  // Against the SLAM trajectory of the same scans: the localiser places them where the map was built.
+  const CliResult e = run("eval ape '" + (map_run / "trajectory.tum").string() + "' '" + (out / "trajectory.tum").string() +
+                          "' --align none --json -");
+  ASSERT_EQ(e.status, 0) << e.err;
+  const nlohmann::json j = nlohmann::json::parse(e.out);
+  EXPECT_GE(j["association"]["pairs"].get<int>(), 340);
+  EXPECT_LT(j["statistics"]["rmse"].get<double>(), 0.10);
+}
+
 /// slam3d on a bag of the first 10 KITTI key frames (every point) against the folder run of the
 /// same files with the same times: the trajectory files must be byte-identical.
 void expect_slam3d_bag_equals_folder(const std::string& bag) {
