@@ -1,5 +1,7 @@
 #include "cairn/bag/mcap_reader.hpp"
 
+#include "cairn/bag/mcap_format.hpp"
+
 #include <lz4frame.h>
 #include <zlib.h>
 #include <zstd.h>
@@ -26,27 +28,10 @@
 namespace cairn::bag {
 namespace {
 
-// "Records": opcodes 0x01-0x0F are the spec's; 0x00 is invalid; anything else is skipped.
-namespace op {
-constexpr std::uint8_t kHeader = 0x01;
-constexpr std::uint8_t kFooter = 0x02;
-constexpr std::uint8_t kSchema = 0x03;
-constexpr std::uint8_t kChannel = 0x04;
-constexpr std::uint8_t kMessage = 0x05;
-constexpr std::uint8_t kChunk = 0x06;
-constexpr std::uint8_t kMessageIndex = 0x07;
-constexpr std::uint8_t kChunkIndex = 0x08;
-constexpr std::uint8_t kAttachment = 0x09;
-constexpr std::uint8_t kAttachmentIndex = 0x0A;
-constexpr std::uint8_t kStatistics = 0x0B;
-constexpr std::uint8_t kMetadata = 0x0C;
-constexpr std::uint8_t kMetadataIndex = 0x0D;
-constexpr std::uint8_t kSummaryOffset = 0x0E;
-constexpr std::uint8_t kDataEnd = 0x0F;
-}  // namespace op
+namespace op = mcap::op;
+using mcap::crc32_of;
+using mcap::kMagic;
 
-// "Magic": 0x89 M C A P <major version '0'> \r \n, at the start and at the end of the file.
-constexpr std::array<std::uint8_t, 8> kMagic = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 constexpr std::uint64_t kMagicBytes = kMagic.size();
 // "Records": <opcode u8><content length u64><content>.
 constexpr std::uint64_t kRecordPrefixBytes = 9;
@@ -102,15 +87,6 @@ std::string attachments_and_metadata(std::uint64_t attachments, std::uint64_t me
          " (not exposed by cairn)";
 }
 
-std::uint32_t crc32_of(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0) {
-  uLong value = crc;
-  for (std::size_t at = 0; at < bytes.size();) {
-    const std::size_t piece = std::min<std::size_t>(bytes.size() - at, std::size_t{1} << 30);
-    value = crc32(value, bytes.data() + at, static_cast<uInt>(piece));
-    at += piece;
-  }
-  return static_cast<std::uint32_t>(value);
-}
 
 // ---------------------------------------------------------------------------------------------
 // The file: random-access reads that are checked against its size before anything is allocated.

@@ -1,5 +1,7 @@
 #include "cairn/bag/mcap_writer.hpp"
 
+#include "cairn/bag/mcap_format.hpp"
+
 #include <lz4frame.h>
 #include <zlib.h>
 #include <zstd.h>
@@ -18,23 +20,10 @@
 namespace cairn::bag {
 namespace {
 
-// "Records" opcodes.
-namespace op {
-constexpr std::uint8_t kHeader = 0x01;
-constexpr std::uint8_t kFooter = 0x02;
-constexpr std::uint8_t kSchema = 0x03;
-constexpr std::uint8_t kChannel = 0x04;
-constexpr std::uint8_t kMessage = 0x05;
-constexpr std::uint8_t kChunk = 0x06;
-constexpr std::uint8_t kMessageIndex = 0x07;
-constexpr std::uint8_t kChunkIndex = 0x08;
-constexpr std::uint8_t kStatistics = 0x0B;
-constexpr std::uint8_t kSummaryOffset = 0x0E;
-constexpr std::uint8_t kDataEnd = 0x0F;
-}  // namespace op
+namespace op = mcap::op;
+using mcap::crc32_of;
+using mcap::kMagic;
 
-// "Magic".
-constexpr std::array<std::uint8_t, 8> kMagic = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 // "Message": channel_id u16, sequence u32, log_time u64, publish_time u64, then the data.
 constexpr std::uint64_t kMessageFixedBytes = 2 + 4 + 8 + 8;
 
@@ -77,15 +66,6 @@ void put_u16_u64_map(std::vector<std::uint8_t>& out, const std::map<std::uint16_
   put_map_bytes(out, entries);
 }
 
-std::uint32_t crc32_of(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0) {
-  uLong value = crc;
-  for (std::size_t at = 0; at < bytes.size();) {
-    const std::size_t piece = std::min<std::size_t>(bytes.size() - at, std::size_t{1} << 30);
-    value = crc32(value, bytes.data() + at, static_cast<uInt>(piece));
-    at += piece;
-  }
-  return static_cast<std::uint32_t>(value);
-}
 
 void validate(const McapWriterOptions& options) {
   std::string problems;
