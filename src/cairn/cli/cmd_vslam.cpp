@@ -1,8 +1,9 @@
 // `cairn vslam FOLDER --out DIR`: stereo (KITTI odometry layout) or RGB-D (TUM layout) visual
 // SLAM, fed one frame at a time through the interface a robot would use (vslam/visual_slam.hpp).
-// The images are prepared by vslam/image_input.hpp; the files, the evaluation against ground truth
-// and report.json are vslam/outputs.hpp's; the options' keys (--config, --set, --print-config) are
-// vslam/config.hpp's.
+// The images are prepared by vslam/image_input.hpp, or, for `cairn vslam BAG`, read from the bag's
+// image topics by vslam/bag_images.hpp and bag_frame_reader.hpp; the files, the evaluation against
+// ground truth and report.json are vslam/outputs.hpp's; the options' keys (--config, --set,
+// --print-config) are vslam/config.hpp's.
 
 #include <algorithm>
 #include <chrono>
@@ -14,7 +15,9 @@
 #include <stdexcept>
 #include <string>
 #include <unistd.h>
+#include <utility>
 
+#include "cairn/bag/bag.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/vslam_flags.hpp"
@@ -24,6 +27,8 @@
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/io/output_file.hpp"
 #include "cairn/io/trajectory.hpp"
+#include "cairn/vslam/bag_frame_reader.hpp"
+#include "cairn/vslam/bag_images.hpp"
 #include "cairn/vslam/config.hpp"
 #include "cairn/vslam/evaluation.hpp"
 #include "cairn/vslam/image_input.hpp"
@@ -41,12 +46,60 @@ io::ImageSequence read_sequence(const std::string& folder) {
                               : io::read_tum_rgbd(folder);
 }
 
-/// The camera: an EuRoC pair's own (rectified), --calib, --camera or the dataset's; refused when
-/// missing, given twice, or stereo without a baseline. Returns the EuRoC pair's rectifier.
-std::optional<vision::StereoRectifier> resolve_calibration(io::ImageSequence& seq, const VslamFlags& flags) {
+/// What a run reads: a dataset folder, or a bag's image topics.
+struct Input {
+  io::ImageSequence folder;
+  std::optional<vslam::BagImages> bag;
+  io::ImageSequence& sequence() { return bag ? bag->sequence : folder; }
+  const io::ImageSequence& sequence() const { return bag ? bag->sequence : folder; }
+};
+
+/// The first flag given that only a bag input takes ("" when none).
+std::string bag_flag_given(const VslamFlags& flags) {
+  const std::pair<const char*, bool> bag_flags[] = {
+      {"--left-topic", !flags.left_topic.empty()},           {"--right-topic", !flags.right_topic.empty()},
+      {"--image-topic", !flags.image_topic.empty()},         {"--depth-topic", !flags.depth_topic.empty()},
+      {"--camera-info-topic", !flags.camera_info_topic.empty()},
+      {"--right-camera-info-topic", !flags.right_camera_info_topic.empty()},
+      {"--depth-scale", flags.depth_scale > 0.0}};
+  for (const auto& [name, given] : bag_flags) {
+    if (given) return name;
+  }
+  return "";
+}
+
+/// The topics named and the depth scale: --depth-scale, else the --calib file's depth_units_per_m.
+vslam::BagImageOptions bag_options(const VslamFlags& flags) {
+  vslam::BagImageOptions options;
+  options.topics = {flags.left_topic,        flags.right_topic,       flags.image_topic,
+                    flags.depth_topic,       flags.camera_info_topic, flags.right_camera_info_topic};
+  if (std::string why; !options.topics.is_valid(&why)) throw UsageError(why);
+  options.calibration_given = !flags.calib.empty() || !flags.camera.empty();
+  options.depth_units_per_m = flags.depth_scale;
+  if (!(options.depth_units_per_m > 0.0) && !flags.calib.empty()) {
+    options.depth_units_per_m = io::read_calibration_yaml(flags.calib).depth_units_per_m;
+  }
+  return options;
+}
+
+Input read_input(const VslamFlags& flags) {
+  Input input;
+  if (bag::is_bag(flags.folder)) {
+    input.bag = vslam::read_bag_images(flags.folder, bag_options(flags));
+    return input;
+  }
+  if (const std::string flag = bag_flag_given(flags); !flag.empty()) {
+    throw UsageError(flag + " goes with a bag input, and " + flags.folder + " is not a bag");
+  }
+  input.folder = read_sequence(flags.folder);
+  return input;
+}
+
+/// A folder's camera: an EuRoC pair's own (rectified), --calib, --camera or the dataset's; refused
+/// when missing or given twice. Returns the EuRoC pair's rectifier.
+std::optional<vision::StereoRectifier> resolve_folder_calibration(io::ImageSequence& seq, const VslamFlags& flags) {
   if (seq.rig && (!flags.calib.empty() || !flags.camera.empty())) throw std::invalid_argument("an EuRoC folder brings its own calibration: no --camera or --calib");
   std::optional<vision::StereoRectifier> rectifier = vslam::rectify_calibration(seq);
-  if (!flags.calib.empty() && !flags.camera.empty()) throw std::invalid_argument("give --camera or --calib, not both");
   if (!flags.calib.empty()) {
     io::CameraCalibration c = io::read_calibration_yaml(flags.calib);
     if (seq.kind == io::SequenceKind::kStereo && !(c.baseline_m > 0.0)) c.baseline_m = seq.calibration.baseline_m;
@@ -59,11 +112,52 @@ std::optional<vision::StereoRectifier> resolve_calibration(io::ImageSequence& se
     }
     throw std::invalid_argument("a " + seq.layout + " folder has no calibration: give --camera tum-fr1|tum-fr2|tum-fr3 or --calib FILE");
   }
+  return rectifier;
+}
+
+/// A bag's camera: its CameraInfo's (read_bag_images refused a bag without one unless --calib or
+/// --camera is given), or --calib / --camera over it. The bag's image size, stereo baseline (when
+/// the file gives none) and depth scale stay: the depth images are made in the bag's units.
+void resolve_bag_calibration(io::ImageSequence& seq, const VslamFlags& flags) {
+  if (flags.calib.empty() && flags.camera.empty()) return;
+  const io::CameraCalibration from_bag = seq.calibration;
+  io::CameraCalibration c = !flags.calib.empty() ? io::read_calibration_yaml(flags.calib) : io::tum_calibration_preset(flags.camera);
+  if (!(c.baseline_m > 0.0)) c.baseline_m = from_bag.baseline_m;
+  if (c.width == 0 || c.height == 0) {
+    c.width = from_bag.width;
+    c.height = from_bag.height;
+  }
+  if (seq.kind == io::SequenceKind::kRgbd) {
+    c.depth_units_per_m = from_bag.depth_units_per_m;
+    if (!(c.virtual_baseline_m > 0.0)) c.virtual_baseline_m = vslam::kRgbdBaselineTimesFxPx / c.fx;
+  }
+  seq.calibration = c;
+}
+
+/// The camera (above); refused when given twice, or stereo without a baseline. Returns an EuRoC
+/// pair's rectifier.
+std::optional<vision::StereoRectifier> resolve_calibration(Input& input, const VslamFlags& flags) {
+  if (!flags.calib.empty() && !flags.camera.empty()) throw std::invalid_argument("give --camera or --calib, not both");
+  io::ImageSequence& seq = input.sequence();
+  std::optional<vision::StereoRectifier> rectifier;
+  if (input.bag) {
+    resolve_bag_calibration(seq, flags);
+  } else {
+    rectifier = resolve_folder_calibration(seq, flags);
+  }
   if (seq.kind == io::SequenceKind::kStereo && !flags.mono && !(seq.calibration.baseline_m > 0.0)) {
     throw std::invalid_argument("stereo images need the baseline between the rectified cameras: baseline_m in " +
                                 (flags.calib.empty() ? std::string("the calibration") : flags.calib) + " (or --mono for the left images only)");
   }
   return rectifier;
+}
+
+/// Where the calibration came from, for messages and report.json.
+std::string calibration_source(const Input& input, const VslamFlags& flags) {
+  if (!flags.calib.empty()) return flags.calib;
+  if (!flags.camera.empty()) return "preset " + flags.camera;
+  if (input.bag) return input.bag->calibration_source;
+  return "dataset";
 }
 
 /// --ground-truth, else the dataset's (EuRoC's moved from the body to the rectified left camera).
@@ -76,9 +170,11 @@ vslam::GroundTruth resolve_ground_truth(const io::ImageSequence& seq, const Vsla
 }
 
 /// Refuses an implausible calibration before any work, naming where it came from.
-void check_calibration(const io::ImageSequence& seq, const VslamFlags& flags) {
+void check_calibration(const Input& input, const VslamFlags& flags) {
+  const io::ImageSequence& seq = input.sequence();
   const std::string source = !flags.calib.empty()    ? flags.calib
                              : !flags.camera.empty() ? "--camera " + flags.camera
+                             : input.bag             ? seq.folder + " (" + input.bag->calibration_source + ")"
                                                      : seq.layout == "kitti" ? seq.folder + "/calib.txt"
                                                      : seq.folder + " (its calibration)";
   vslam::check_calibration_plausible(seq, seq.kind == io::SequenceKind::kStereo && !flags.mono, source);
@@ -122,7 +218,7 @@ void print_input(const io::ImageSequence& seq, io::SequenceKind kind, std::size_
 }
 
 /// Feeds frames 0 .. n-1 to `slam` until the last or a signal, printing health changes and progress.
-vslam::RunRecord run_frames(vslam::VisualSlam& slam, vslam::FrameReader& reader, const io::ImageSequence& seq, std::size_t n,
+vslam::RunRecord run_frames(vslam::VisualSlam& slam, vslam::FrameSource& reader, const io::ImageSequence& seq, std::size_t n,
                             std::size_t feature_frame, const VslamFlags& flags) {
   vslam::RunRecord run;
   run.features.frame = feature_frame;
@@ -197,13 +293,14 @@ int vslam_command(const VslamFlags& flags) {
     return 0;
   }
   if (flags.out.empty() && !flags.print_config) throw std::invalid_argument("--out DIR is required");
-  io::ImageSequence seq = read_sequence(flags.folder);
-  const std::optional<vision::StereoRectifier> rectifier = resolve_calibration(seq, flags);
+  Input input = read_input(flags);
+  io::ImageSequence& seq = input.sequence();
+  const std::optional<vision::StereoRectifier> rectifier = resolve_calibration(input, flags);
   const io::SequenceKind kind = flags.mono ? io::SequenceKind::kMonocular : seq.kind;
   std::size_t n = seq.frames.size();
   if (flags.max_frames > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_frames));
   const vslam::GroundTruth ground_truth = resolve_ground_truth(seq, flags, rectifier);
-  check_calibration(seq, flags);
+  check_calibration(input, flags);
   const vslam::VisualSlamOptions options = make_options(flags, seq);
   if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
   if (!flags.quiet) print_input(seq, kind, n, flags);
@@ -215,10 +312,16 @@ int vslam_command(const VslamFlags& flags) {
     throw UsageError("--feature-frame " + std::to_string(flags.feature_frame) + ": this run has " + std::to_string(n) +
                      " frames (0 to " + std::to_string(n - 1) + ")");
   }
-  vslam::FrameReader reader(seq, kind, rectifier ? &*rectifier : nullptr);
-  const vslam::RunRecord run = run_frames(slam, reader, seq, n, feature_frame, flags);
-  const std::string calibration_source = !flags.calib.empty() ? flags.calib : (!flags.camera.empty() ? "preset " + flags.camera : "dataset");
-  const vslam::WrittenOutputs written = vslam::write_outputs(out, slam, {seq, kind, calibration_source, flags.vocabulary}, run, ground_truth);
+  std::unique_ptr<vslam::FrameSource> reader;
+  if (input.bag) {
+    reader = std::make_unique<vslam::BagFrameReader>(*input.bag, kind);
+  } else {
+    reader = std::make_unique<vslam::FrameReader>(seq, kind, rectifier ? &*rectifier : nullptr);
+  }
+  const vslam::RunRecord run = run_frames(slam, *reader, seq, n, feature_frame, flags);
+  const vslam::RunInput run_input{seq, kind, calibration_source(input, flags), flags.vocabulary,
+                                  input.bag ? input.bag->topics : std::vector<std::pair<std::string, std::string>>{}};
+  const vslam::WrittenOutputs written = vslam::write_outputs(out, slam, run_input, run, ground_truth);
   out.commit();
   if (!flags.quiet) print_summary(slam.summary(), run, written, flags);
   return run.interrupted ? interrupted_exit_status() : 0;

@@ -10,7 +10,7 @@ namespace cairn::cli {
 
 void add_vslam_flags(CLI::App& command, VslamFlags& flags) {
   CLI::App* cmd = &command;
-  CLI::Option* folder = cmd->add_option("folder", flags.folder, "KITTI odometry folder (calib.txt, image_0/1 or image_l/r), EuRoC MAV folder (mav0/cam0, cam1), TUM RGB-D folder, or a plain folder: images (monocular) or left/ and right/ (rectified stereo), with --calib")->required();
+  CLI::Option* folder = cmd->add_option("folder", flags.folder, "KITTI odometry folder (calib.txt, image_0/1 or image_l/r), EuRoC MAV folder (mav0/cam0, cam1), TUM RGB-D folder, a plain folder: images (monocular) or left/ and right/ (rectified stereo), with --calib; or a bag (ROS 1 .bag, .mcap, rosbag2 .db3 or folder) with image topics and CameraInfo")->required();
   cmd->add_option("--out", flags.out, "Output directory (trajectory.tum/.kitti, keyframes.tum, map_points.ply, frames.csv, report.json, trajectory.png, features.png)");
   cmd->add_option("--camera", flags.camera, "Calibration preset for TUM RGB-D: tum-fr1, tum-fr2, tum-fr3");
   cmd->add_option("--calib", flags.calib, "Calibration YAML (fx, fy, cx, cy, k1..k3, p1, p2, baseline_m, depth_units_per_m, virtual_baseline_m)");
@@ -31,6 +31,15 @@ void add_vslam_flags(CLI::App& command, VslamFlags& flags) {
   cmd->add_flag("-q,--quiet", flags.quiet, "No progress or summary");
   cmd->add_flag("--progress", flags.progress, "Progress lines even when stderr is not a terminal");
   cmd->add_flag("--overwrite", flags.overwrite, "Replace an existing output directory's files");
+  // A bag input: vslam/bag_topics.hpp and bag_images.hpp.
+  cmd->add_option("--left-topic", flags.left_topic, "Bag input: the left images of a rectified stereo pair (sensor_msgs/Image or CompressedImage), with --right-topic (default: chosen from the bag's image topics)");
+  cmd->add_option("--right-topic", flags.right_topic, "Bag input: the right images of the stereo pair, stamped as the left ones");
+  cmd->add_option("--image-topic", flags.image_topic, "Bag input: the colour or grey images: RGB-D with --depth-topic, else monocular");
+  cmd->add_option("--depth-topic", flags.depth_topic, "Bag input: the depth images registered to --image-topic (16UC1 or 32FC1), paired within 0.02 s");
+  cmd->add_option("--camera-info-topic", flags.camera_info_topic, "Bag input: the left or colour camera's sensor_msgs/CameraInfo (default: camera_info beside the image topic)");
+  cmd->add_option("--right-camera-info-topic", flags.right_camera_info_topic, "Bag input: the right camera's CameraInfo (default: camera_info beside the right topic)");
+  cmd->add_option("--depth-scale", flags.depth_scale, "Bag input: depth units per metre (default REP 118's: 1000 for 16UC1 millimetres, 1 for 32FC1 metres; TUM RGB-D's values: 5000)")
+      ->check(checks::positive());
 }
 
 }  // namespace cairn::cli

@@ -26,10 +26,19 @@ struct VslamFlags {
   bool quiet = false;
   bool progress = false;
   bool overwrite = false;
+  // A bag input (cairn vslam BAG, vslam/bag_images.hpp): the topics (empty: chosen from the bag)
+  // and the depth scale (0: REP 118's). Given with a folder, they are a usage error.
+  std::string left_topic;
+  std::string right_topic;
+  std::string image_topic;
+  std::string depth_topic;
+  std::string camera_info_topic;
+  std::string right_camera_info_topic;
+  double depth_scale = 0.0;
 };
 
-/// Registers every flag of `cairn vslam` on `command`, storing into `flags`. FOLDER is required
-/// unless --print-config is given.
+/// Registers every flag of `cairn vslam` on `command`, storing into `flags`. FOLDER (a dataset
+/// folder or a bag) is required unless --print-config is given.
 void add_vslam_flags(CLI::App& command, VslamFlags& flags);
 
 }  // namespace cairn::cli

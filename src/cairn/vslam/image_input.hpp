@@ -38,15 +38,24 @@ struct FrameImages {
   double read_s = 0.0;  ///< decoding and rectifying them
 };
 
+/// Where a run's frames come from, one at a time: image files (FrameReader) or a bag's image
+/// topics (vslam/bag_frame_reader.hpp).
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  /// The images of frame `frame_index`. Throws io::ParseError for an image that cannot be read.
+  virtual FrameImages read(std::size_t frame_index) = 0;
+};
+
 /// Decodes a sequence's frames one at a time. Every image must have the size of the calibration
 /// (when it gives one) or else of the first image (vision::read_gray_image throws otherwise).
-class FrameReader {
+class FrameReader final : public FrameSource {
  public:
   /// `kind`: what is tracked, the sequence's kind or kMonocular (the left or colour images only).
   /// `sequence` and `rectifier` (null for a rectified pair) must outlive the reader.
   FrameReader(const io::ImageSequence& sequence, io::SequenceKind kind, const vision::StereoRectifier* rectifier);
   /// The images of sequence.frames[frame_index].
-  FrameImages read(std::size_t frame_index);
+  FrameImages read(std::size_t frame_index) override;
 
  private:
   const io::ImageSequence& sequence_;

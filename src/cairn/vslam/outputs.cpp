@@ -121,19 +121,25 @@ std::string trajectory_png(const std::string& folder, const io::Trajectory& traj
 
 nlohmann::json input_json(const RunInput& input, std::size_t frames_processed) {
   const io::ImageSequence& seq = input.sequence;
-  return {{"folder", seq.folder},
-          {"layout", seq.layout},
-          {"kind", std::string(io::to_string(input.kind))},
-          {"frames_listed", seq.frames.size()},
-          {"frames_processed", frames_processed},
-          {"times_from_file", seq.times_from_file},
-          {"notes", seq.notes},
-          {"calibration",
-           {{"fx", seq.calibration.fx}, {"fy", seq.calibration.fy}, {"cx", seq.calibration.cx}, {"cy", seq.calibration.cy},
-            {"distortion", {seq.calibration.k1, seq.calibration.k2, seq.calibration.p1, seq.calibration.p2, seq.calibration.k3}},
-            {"baseline_m", seq.calibration.baseline_m}, {"virtual_baseline_m", seq.calibration.virtual_baseline_m},
-            {"depth_units_per_m", seq.calibration.depth_units_per_m},
-            {"source", input.calibration_source}}}};
+  nlohmann::json json = {{"folder", seq.folder},
+                         {"layout", seq.layout},
+                         {"kind", std::string(io::to_string(input.kind))},
+                         {"frames_listed", seq.frames.size()},
+                         {"frames_processed", frames_processed},
+                         {"times_from_file", seq.times_from_file},
+                         {"notes", seq.notes},
+                         {"calibration",
+                          {{"fx", seq.calibration.fx}, {"fy", seq.calibration.fy}, {"cx", seq.calibration.cx}, {"cy", seq.calibration.cy},
+                           {"distortion", {seq.calibration.k1, seq.calibration.k2, seq.calibration.p1, seq.calibration.p2, seq.calibration.k3}},
+                           {"baseline_m", seq.calibration.baseline_m}, {"virtual_baseline_m", seq.calibration.virtual_baseline_m},
+                           {"depth_units_per_m", seq.calibration.depth_units_per_m},
+                           {"source", input.calibration_source}}}};
+  if (!input.topics.empty()) {
+    json["bag"] = seq.folder;
+    json["topics"] = nlohmann::json::object();
+    for (const auto& [role, topic] : input.topics) json["topics"][role] = topic;
+  }
+  return json;
 }
 
 nlohmann::json summary_json(const VisualSlamSummary& s, std::size_t map_points, bool interrupted) {

@@ -24,6 +24,7 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cairn/io/image_sequence.hpp"
@@ -39,6 +40,9 @@ struct RunInput {
   io::SequenceKind kind;              ///< as tracked (kMonocular for the left images of a stereo pair)
   std::string calibration_source;     ///< the calibration file, "preset <name>" or "dataset"
   std::string vocabulary_path;        ///< empty: none
+  /// A bag's topics read, role and topic ({"left", "/stereo/left/image_raw"}, ...: BagImages::
+  /// topics); empty for a folder. report.json's input then says "bag" and lists them.
+  std::vector<std::pair<std::string, std::string>> topics = {};
 };
 
 /// The frame drawn in features.png.
