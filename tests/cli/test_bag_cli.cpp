@@ -115,6 +115,26 @@ TEST(BagCli, Localize2dOnTheBagInTheMapSlam2dSavedFromIt) {
   EXPECT_LT(j["statistics"]["rmse"].get<double>(), 0.10);
 }
 
+TEST(BagCli, VslamOnAnRgbdBagWritesItsMcapForFoxglove) {
+  REQUIRE_FIXTURE("frames20/tum_rgbd.bag");
+  REQUIRE_FIXTURE("kitti_points.mcap.json");  // @mcap/core installed
+  const fs::path out = scratch() / "vslam";
+  const fs::path mcap = scratch() / "vslam.mcap";
+  fs::remove_all(out);
+  const CliResult r = run("vslam '" + (fixtures() / "frames20/tum_rgbd.bag").string() + "' --depth-scale 5000 -q --out '" +
+                          out.string() + "' --mcap '" + mcap.string() + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string reader = std::string(CAIRN_SOURCE_DIR) + "/tests/bag/fixtures/mcap/read_mcap.mjs";
+  const CliResult read = cairn::test::run_command("node", "'" + reader + "' '" + mcap.string() + "'", scratch() / "node.txt");
+  ASSERT_EQ(read.status, 0) << read.err;
+  const nlohmann::json j = nlohmann::json::parse(read.out);
+  std::map<std::string, std::uint64_t> counts;
+  for (const auto& c : j["channels"]) counts[c["topic"].get<std::string>()] = c["messageCount"].get<std::uint64_t>();
+  EXPECT_EQ(counts["/pose"], lines_of(out / "trajectory.tum"));
+  EXPECT_EQ(counts["/pose"], 20u);
+  EXPECT_EQ(counts["/map"], 1u);
+}
+
 /// slam3d on a bag of the first 10 KITTI key frames (every point) against the folder run of the
 /// same files with the same times: the trajectory files must be byte-identical.
 void expect_slam3d_bag_equals_folder(const std::string& bag) {

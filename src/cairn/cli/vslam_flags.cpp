@@ -11,6 +11,7 @@ namespace cairn::cli {
 void add_vslam_flags(CLI::App& command, VslamFlags& flags) {
   CLI::App* cmd = &command;
   CLI::Option* folder = cmd->add_option("folder", flags.folder, "KITTI odometry folder (calib.txt, image_0/1 or image_l/r), EuRoC MAV folder (mav0/cam0, cam1), TUM RGB-D folder, a plain folder: images (monocular) or left/ and right/ (rectified stereo), with --calib; or a bag (ROS 1 .bag, .mcap, rosbag2 .db3 or folder) with image topics and CameraInfo")->required();
+  cmd->add_option("--mcap", flags.mcap, "Also write the trajectory, health and map points as MCAP for Foxglove");
   cmd->add_option("--out", flags.out, "Output directory (trajectory.tum/.kitti, keyframes.tum, map_points.ply, frames.csv, report.json, trajectory.png, features.png)");
   cmd->add_option("--camera", flags.camera, "Calibration preset for TUM RGB-D: tum-fr1, tum-fr2, tum-fr3");
   cmd->add_option("--calib", flags.calib, "Calibration YAML (fx, fy, cx, cy, k1..k3, p1, p2, baseline_m, depth_units_per_m, virtual_baseline_m)");

@@ -10,6 +10,7 @@ namespace cairn::cli {
 
 struct VslamFlags {
   std::string folder;
+  std::string mcap;
   std::string out;
   std::string camera;
   std::string calib;
