@@ -382,7 +382,9 @@ Block chunk_block(const FileRecord& record, std::string_view file) {
 /// (so an overrun shows), so that a size field that lies costs only what the data really expands to.
 class OutputBuffer {
  public:
-  OutputBuffer(std::uint64_t limit, std::uint64_t input_bytes) : limit_(limit) {
+  /// `recycled`: memory to reuse (its contents are overwritten), or empty.
+  OutputBuffer(std::uint64_t limit, std::uint64_t input_bytes, Bytes recycled = {})
+      : limit_(limit), bytes_(std::move(recycled)) {
     bytes_.resize(static_cast<std::size_t>(std::min(limit + 1, std::max<std::uint64_t>(4 * input_bytes, 1 << 16))));
   }
   /// Makes room for more output; false once the output exceeds the limit.
@@ -426,7 +428,7 @@ struct ChunkSite {
   }
 };
 
-Bytes decompress_bz2(ByteView input, const ChunkSite& site) {
+Bytes decompress_bz2(ByteView input, const ChunkSite& site, Bytes recycled) {
   bz_stream stream{};
   if (BZ2_bzDecompressInit(&stream, 0, 0) != BZ_OK) site.fail_here("libbz2 cannot start a decoder");
   struct End {
@@ -435,7 +437,7 @@ Bytes decompress_bz2(ByteView input, const ChunkSite& site) {
   } end{&stream};
   stream.next_in = const_cast<char*>(reinterpret_cast<const char*>(input.data()));
   stream.avail_in = static_cast<unsigned int>(input.size());  // data_len is a uint32
-  OutputBuffer out(site.block.size, input.size());
+  OutputBuffer out(site.block.size, input.size(), std::move(recycled));
   for (;;) {
     if (!out.grow()) break;
     const auto room = static_cast<unsigned int>(std::min<std::size_t>(out.free_bytes(), UINT_MAX));
@@ -453,14 +455,14 @@ Bytes decompress_bz2(ByteView input, const ChunkSite& site) {
   return out.take();
 }
 
-Bytes decompress_lz4(ByteView input, const ChunkSite& site) {
+Bytes decompress_lz4(ByteView input, const ChunkSite& site, Bytes recycled) {
   LZ4F_dctx* context = nullptr;
   if (LZ4F_isError(LZ4F_createDecompressionContext(&context, LZ4F_VERSION))) site.fail_here("liblz4 cannot start a decoder");
   struct Free {
     LZ4F_dctx* context;
     ~Free() { LZ4F_freeDecompressionContext(context); }
   } free_context{context};
-  OutputBuffer out(site.block.size, input.size());
+  OutputBuffer out(site.block.size, input.size(), std::move(recycled));
   std::size_t consumed = 0;
   std::size_t frame_left = 1;  // LZ4F_decompress returns 0 once the frame is complete
   while (frame_left != 0 && out.grow()) {
@@ -478,10 +480,16 @@ Bytes decompress_lz4(ByteView input, const ChunkSite& site) {
 }
 
 /// The block's data, decompressed; its length is the chunk's size field.
-Bytes decompress(const Block& block, Bytes stored, std::string_view file) {
+/// The chunk's records. `stored` is consumed; `recycled` (memory to reuse for the output of a
+/// compressed chunk) may be empty; `spent` receives the input buffer of a compressed chunk for reuse.
+Bytes decompress(const Block& block, Bytes stored, std::string_view file, Bytes recycled = {}, Bytes* spent = nullptr) {
   const ChunkSite site{file, block};
-  if (block.compression == "bz2") return decompress_bz2(stored, site);
-  if (block.compression == "lz4") return decompress_lz4(stored, site);
+  if (block.compressed()) {
+    Bytes out = block.compression == "bz2" ? decompress_bz2(stored, site, std::move(recycled))
+                                           : decompress_lz4(stored, site, std::move(recycled));
+    if (spent != nullptr) *spent = std::move(stored);
+    return out;
+  }
   site.check_size(stored.size());
   return stored;
 }
@@ -983,15 +991,42 @@ void check_block_messages(const BagLayout& layout, const Block& block, std::vect
   }
 }
 
-/// Reads and checks a block. `spare`: a buffer no message refers to any more, reused for the stored
-/// bytes (or null).
+/// Buffers of emptied blocks, reused for the next loads once nothing refers to them (the caller's
+/// last Message and decoded values may for a while): a chunk's memory is then reused instead of
+/// faulted in afresh and zeroed, the costs that dominated reading. At most kSpares are kept.
+class BufferPool {
+ public:
+  void give(std::shared_ptr<Bytes> buffer) {
+    if (buffer && spares_.size() < kSpares) spares_.push_back(std::move(buffer));
+  }
+  /// A buffer nothing else refers to (its contents are garbage), or an empty one.
+  Bytes take() {
+    for (auto it = spares_.begin(); it != spares_.end(); ++it) {
+      if (it->use_count() == 1) {
+        Bytes bytes = std::move(**it);
+        spares_.erase(it);
+        return bytes;
+      }
+    }
+    return {};
+  }
+
+ private:
+  static constexpr std::size_t kSpares = 4;
+  std::vector<std::shared_ptr<Bytes>> spares_;
+};
+
+/// Reads and checks a block, with buffers from `pool` (the input of a compressed chunk goes back).
 OpenBlock load_block(BagFile& file, const BagLayout& layout, const Block& block, const std::vector<bool>& wanted,
-                     std::shared_ptr<Bytes> spare) {
+                     BufferPool& pool) {
   OpenBlock open;
   open.block = &block;
-  Bytes stored = spare ? std::move(*spare) : Bytes();
+  Bytes stored = pool.take();
   file.read_into(block.data_offset, block.data_bytes, "chunk data", &stored);
-  open.data = std::make_shared<Bytes>(decompress(block, std::move(stored), file.path()));
+  Bytes spent;
+  open.data = std::make_shared<Bytes>(
+      decompress(block, std::move(stored), file.path(), block.compressed() ? pool.take() : Bytes{}, &spent));
+  if (!spent.empty()) pool.give(std::make_shared<Bytes>(std::move(spent)));
   std::vector<RawMessage> messages = parse_block_records(block, *open.data, file.path(), false).messages;
   check_block_messages(layout, block, messages);
   for (const RawMessage& message : messages) {
@@ -1058,7 +1093,7 @@ class Ros1MessageStream final : public MessageStream {
                        [&](const auto& count) { return wanted_[layout_->index_of.at(count.first)]; });
   }
   void open(const Block& block) {
-    OpenBlock loaded = load_block(file_, *layout_, block, wanted_, take_spare());
+    OpenBlock loaded = load_block(file_, *layout_, block, wanted_, pool_);
     if (loaded.messages.empty()) return;
     open_.push_back(std::move(loaded));
     push_head(std::prev(open_.end()));
@@ -1075,28 +1110,11 @@ class Ros1MessageStream final : public MessageStream {
   std::size_t next_pending_ = 0;
   std::list<OpenBlock> open_;
   std::list<OpenBlock> retired_;  ///< emptied blocks, freed on the next call
-  /// Buffers of emptied blocks, reused for the next loads once nothing refers to them (the caller's
-  /// last Message and decoded values may for a while): a chunk's memory is then reused instead of
-  /// faulted in afresh, the cost that dominated reading. At most kSpares are kept.
-  std::vector<std::shared_ptr<Bytes>> spares_;
-  static constexpr std::size_t kSpares = 3;
+  BufferPool pool_;
 
   void recycle_retired() {
-    for (OpenBlock& block : retired_) {
-      if (block.data && spares_.size() < kSpares) spares_.push_back(std::move(block.data));
-    }
+    for (OpenBlock& block : retired_) pool_.give(std::move(block.data));
     retired_.clear();
-  }
-
-  std::shared_ptr<Bytes> take_spare() {
-    for (auto it = spares_.begin(); it != spares_.end(); ++it) {
-      if (it->use_count() == 1) {
-        std::shared_ptr<Bytes> spare = std::move(*it);
-        spares_.erase(it);
-        return spare;
-      }
-    }
-    return nullptr;
   }
   std::priority_queue<Head, std::vector<Head>, Later> heads_;  ///< each open block's next message
 };
