@@ -47,6 +47,7 @@ class Decoder {
   }
 
   Value read_message(std::shared_ptr<const MessageSchema> shared_schema, int depth) {
+    count_value();
     const MessageSchema& schema = *shared_schema;
     if (depth > kMaxDepth) fail("messages nested more than 64 deep in " + schema.type);
     std::vector<Value> fields;
@@ -89,6 +90,7 @@ class Decoder {
   }
 
   Value read_element(const Field& field, int depth) {
+    count_value();
     switch (field.primitive) {
       case Primitive::kBool: return Value::boolean(read_unsigned(1) != 0);
       case Primitive::kUInt8:
@@ -162,6 +164,15 @@ class Decoder {
     return static_cast<std::int64_t>(raw << shift) >> shift;  // sign-extend
   }
 
+  /// A definition can make bytes decode to exponentially many values (ROS 1 empty messages in
+  /// nested fixed arrays take no byte): refuse more values than the message could plausibly hold.
+  void count_value() {
+    if (++values_ > value_budget_) {
+      fail("the definition makes this " + std::to_string(bytes_.size()) + "-byte message decode to more than " +
+           std::to_string(value_budget_) + " values (nested arrays of empty messages?)");
+    }
+  }
+
   void align(std::size_t size) {
     if (!cdr_ || size <= 1) return;
     const std::size_t offset = (position_ - origin_) % size;
@@ -195,6 +206,8 @@ class Decoder {
   std::size_t position_ = 0;
   std::size_t origin_ = 0;
   std::shared_ptr<const void> owner_;
+  std::size_t values_ = 0;
+  std::size_t value_budget_ = 16 * bytes_.size() + 4096;
 };
 
 }  // namespace

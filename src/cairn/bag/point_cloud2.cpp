@@ -51,6 +51,13 @@ double read_field(const unsigned char* point, const FieldLayout& field, bool big
   }
 }
 
+std::uint16_t ring_of(double value, const std::string& field) {
+  if (!(value >= 0.0 && value <= 65535.0)) {
+    throw std::runtime_error("PointField '" + field + "' holds " + std::to_string(value) + ", not a ring number 0..65535");
+  }
+  return static_cast<std::uint16_t>(value);
+}
+
 FieldLayout find_field(const std::vector<FieldLayout>& fields, std::initializer_list<const char*> names) {
   for (const char* name : names) {
     for (const FieldLayout& field : fields) {
@@ -60,10 +67,17 @@ FieldLayout find_field(const std::vector<FieldLayout>& fields, std::initializer_
   return {};
 }
 
+/// A uint32 field of the message (a bag's own definition may declare it wider): refused above 2^32 - 1.
+std::uint64_t uint32_field(const Value& message, const char* name) {
+  const std::uint64_t value = message[name].as_uint();
+  if (value > UINT32_MAX) throw std::runtime_error(std::string(name) + " is " + std::to_string(value) + ", beyond uint32");
+  return value;
+}
+
 std::vector<FieldLayout> read_fields(const Value& message, std::size_t point_step) {
   std::vector<FieldLayout> fields;
   for (const Value& field : message["fields"].items()) {
-    FieldLayout layout{std::string(field["name"].text()), static_cast<std::size_t>(field["offset"].as_uint()),
+    FieldLayout layout{std::string(field["name"].text()), static_cast<std::size_t>(uint32_field(field, "offset")),
                        field["datatype"].as_uint(), true};
     const std::size_t size = datatype_size(layout.datatype);
     if (size == 0) {
@@ -99,10 +113,10 @@ io::PointCloud to_point_cloud(const Value& message, PointCloud2Report* report) {
   PointCloud2Report& r = report != nullptr ? *report : local;
   r = {};
   r.header = to_header(message["header"]);
-  const std::uint64_t height = message["height"].as_uint();
-  const std::uint64_t width = message["width"].as_uint();
-  const std::size_t point_step = static_cast<std::size_t>(message["point_step"].as_uint());
-  const std::uint64_t row_step = message["row_step"].as_uint();
+  const std::uint64_t height = uint32_field(message, "height");
+  const std::uint64_t width = uint32_field(message, "width");
+  const std::size_t point_step = static_cast<std::size_t>(uint32_field(message, "point_step"));
+  const std::uint64_t row_step = uint32_field(message, "row_step");
   const bool big_endian = message["is_bigendian"].as_bool();
   const std::string_view data = message["data"].text();
   if (point_step == 0 && height * width > 0) throw std::runtime_error("point_step is 0");
@@ -139,7 +153,7 @@ io::PointCloud to_point_cloud(const Value& message, PointCloud2Report* report) {
       }
       cloud.points.push_back(p.cast<float>());
       if (intensity.present) cloud.intensity.push_back(static_cast<float>(read_field(point, intensity, big_endian)));
-      if (ring.present) cloud.ring.push_back(static_cast<std::uint16_t>(read_field(point, ring, big_endian)));
+      if (ring.present) cloud.ring.push_back(ring_of(read_field(point, ring, big_endian), ring.name));
       if (time.present) {
         const double raw = read_field(point, time, big_endian);
         if (!have_conversion) conversion = time_conversion(time, raw, stamp_s);

@@ -368,6 +368,12 @@ Block chunk_block(const FileRecord& record, std::string_view file) {
     fail(file, record.offset, "chunk compression " + quoted(block.compression) +
                                   " is not supported: expected none, bz2 or lz4");
   }
+  // A compressed chunk is decompressed whole: refuse to allocate more than 1 GiB for one, as the
+  // MCAP reader does (rosbag writes chunks of 768 KiB by default).
+  if (block.compressed() && block.size > (std::uint64_t{1} << 30)) {
+    fail(file, record.offset, block.compression + " chunk: its size field says " + std::to_string(block.size) +
+                                  " bytes uncompressed, more than the 1 GiB cairn decompresses at once");
+  }
   if (!block.compressed() && block.size != block.data_bytes) {
     fail(file, record.offset, "uncompressed chunk: its size field says " + std::to_string(block.size) +
                                   " bytes, its data_len " + std::to_string(block.data_bytes));

@@ -42,7 +42,13 @@ std::int64_t time_ns(const Value& time) {
   const std::int64_t seconds = time["sec"].as_int();
   const Value* nanoseconds = time.find("nanosec");
   const std::int64_t nsec = nanoseconds != nullptr ? nanoseconds->as_int() : time["nsec"].as_int();
-  return seconds * 1'000'000'000 + nsec;
+  std::int64_t ns = 0;
+  // A bag's own definition may declare 64-bit seconds: refuse a time int64 nanoseconds cannot hold.
+  if (__builtin_mul_overflow(seconds, std::int64_t{1'000'000'000}, &ns) || __builtin_add_overflow(ns, nsec, &ns)) {
+    throw std::runtime_error("time " + std::to_string(seconds) + " s + " + std::to_string(nsec) +
+                             " ns is beyond what int64 nanoseconds hold");
+  }
+  return ns;
 }
 
 Header to_header(const Value& header) {

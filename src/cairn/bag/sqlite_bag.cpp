@@ -4,7 +4,10 @@
 
 #include <cstring>
 #include <filesystem>
+#include <climits>
+#include <cstdint>
 #include <map>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -30,15 +33,20 @@ std::string column_text(sqlite3_stmt* statement, int column) {
 class SqliteStream final : public MessageStream {
  public:
   SqliteStream(Database database, Statement statement, std::map<std::int64_t, std::size_t> index_of_topic,
-               std::string path)
+               std::vector<std::uint64_t> expected, std::string path)
       : database_(std::move(database)),
         statement_(std::move(statement)),
         index_of_topic_(std::move(index_of_topic)),
+        expected_(std::move(expected)),
+        streamed_(expected_.size(), 0),
         path_(std::move(path)) {}
 
   bool next(Message* message) override {
     const int status = sqlite3_step(statement_.get());
-    if (status == SQLITE_DONE) return false;
+    if (status == SQLITE_DONE) {
+      check_counts();
+      return false;
+    }
     if (status != SQLITE_ROW) {
       throw io::ParseError(path_, 0, std::string("reading the messages table: ") + sqlite3_errmsg(database_.get()));
     }
@@ -49,7 +57,17 @@ class SqliteStream final : public MessageStream {
                                          " names topic_id " + std::to_string(topic_id) + ", which the topics table lacks");
     }
     message->connection = it->second;
+    if (sqlite3_column_type(statement_.get(), 1) != SQLITE_INTEGER) {
+      throw io::ParseError(path_, 0, "message row " + std::to_string(sqlite3_column_int64(statement_.get(), 3)) +
+                                         ": the timestamp is not an integer (nanoseconds)");
+    }
     message->log_time_ns = sqlite3_column_int64(statement_.get(), 1);
+    if (message->log_time_ns < last_ns_) {
+      throw io::ParseError(path_, 0, "message row " + std::to_string(sqlite3_column_int64(statement_.get(), 3)) +
+                                         " comes out of timestamp order (a damaged timestamp index?)");
+    }
+    last_ns_ = message->log_time_ns;
+    ++streamed_[it->second];
     const void* blob = sqlite3_column_blob(statement_.get(), 2);
     const int size = sqlite3_column_bytes(statement_.get(), 2);
     message->data = std::span<const std::uint8_t>(static_cast<const std::uint8_t*>(blob), static_cast<std::size_t>(size));
@@ -58,9 +76,27 @@ class SqliteStream final : public MessageStream {
   }
 
  private:
+  /// Every wanted topic streamed as many rows as the count at open (a damaged index drops rows).
+  void check_counts() const {
+    for (std::size_t i = 0; i < expected_.size(); ++i) {
+      if (expected_[i] != kNotWanted && streamed_[i] != expected_[i]) {
+        throw io::ParseError(path_, 0, "topic " + std::to_string(i) + " streamed " + std::to_string(streamed_[i]) +
+                                           " messages, the messages table counts " + std::to_string(expected_[i]) +
+                                           " (a damaged timestamp index?)");
+      }
+    }
+  }
+
+ public:
+  static constexpr std::uint64_t kNotWanted = UINT64_MAX;
+
+ private:
   Database database_;
   Statement statement_;
   std::map<std::int64_t, std::size_t> index_of_topic_;
+  std::vector<std::uint64_t> expected_;  ///< per connection; kNotWanted when not streamed
+  std::vector<std::uint64_t> streamed_;
+  std::int64_t last_ns_ = INT64_MIN;
   std::string path_;
 };
 
@@ -89,8 +125,13 @@ class SqliteBag final : public Container {
     Database database = open_database();  // a stream reads on its own connection
     Statement statement = prepare(database.get(), sql);
     std::map<std::int64_t, std::size_t> index_of_topic;
-    for (std::size_t i = 0; i < connections_.size(); ++i) index_of_topic[connections_[i].id] = i;
-    return std::make_unique<SqliteStream>(std::move(database), std::move(statement), std::move(index_of_topic), path_);
+    std::vector<std::uint64_t> expected(connections_.size(), SqliteStream::kNotWanted);
+    for (std::size_t i = 0; i < connections_.size(); ++i) {
+      index_of_topic[connections_[i].id] = i;
+      if (wanted.empty() || (i < wanted.size() && wanted[i])) expected[i] = summary_.connections[i].messages;
+    }
+    return std::make_unique<SqliteStream>(std::move(database), std::move(statement), std::move(index_of_topic),
+                                          std::move(expected), path_);
   }
 
  private:
@@ -139,9 +180,15 @@ class SqliteBag final : public Container {
     summary_.file_bytes = std::filesystem::file_size(path_);
     Statement statement = prepare(database_.get(), "SELECT id, name, type, serialization_format FROM topics ORDER BY id");
     int status = SQLITE_ROW;
+    std::set<std::int64_t> ids;
     while ((status = sqlite3_step(statement.get())) == SQLITE_ROW) {
+      const std::int64_t id = sqlite3_column_int64(statement.get(), 0);
+      if (sqlite3_column_type(statement.get(), 0) != SQLITE_INTEGER || id < 0 || id > UINT32_MAX || !ids.insert(id).second) {
+        throw io::ParseError(path_, 0, "topics table: id " + std::to_string(id) +
+                                           " is not a unique integer id (rosbag2 numbers its topics 1, 2, ...)");
+      }
       Connection connection;
-      connection.id = static_cast<std::uint32_t>(sqlite3_column_int64(statement.get(), 0));
+      connection.id = static_cast<std::uint32_t>(id);
       connection.topic = column_text(statement.get(), 1);
       connection.type = column_text(statement.get(), 2);
       connection.encoding = column_text(statement.get(), 3);
