@@ -194,19 +194,10 @@ class PoseWriter final : public TopicWriter {
  public:
   PoseWriter(std::string base, std::string type) : path_(std::move(base) + ".tum"), type_(std::move(type)) {}
   void write(const Value& m) override {
-    Eigen::Vector3d p;
-    Eigen::Quaterniond q;
-    std::int64_t stamp_ns = 0;
-    if (type_ == "nav_msgs/Odometry") {
-      const Odometry o = to_odometry(m);
-      p = o.position, q = o.orientation, stamp_ns = o.header.stamp_ns;
-    } else {
-      const Value& pose = type_ == "geometry_msgs/PoseWithCovarianceStamped" ? m["pose"]["pose"] : m["pose"];
-      stamp_ns = to_header(m["header"]).stamp_ns;
-      p = {pose["position"]["x"].number(), pose["position"]["y"].number(), pose["position"]["z"].number()};
-      q = Eigen::Quaterniond(pose["orientation"]["w"].number(), pose["orientation"]["x"].number(),
-                             pose["orientation"]["y"].number(), pose["orientation"]["z"].number());
-    }
+    const StampedPose pose = pose_of(type_, m);
+    const std::int64_t stamp_ns = pose.stamp_ns;
+    const Eigen::Vector3d& p = pose.position;
+    const Eigen::Quaterniond& q = pose.orientation;
     if (!trajectory_.stamps.empty() && stamp_ns <= trajectory_.stamps.back().nanoseconds()) return;  // TUM: increasing
     if (q.norm() < 1e-9 || !p.allFinite()) return;
     trajectory_.stamps.push_back(core::Timestamp::from_nanoseconds(stamp_ns));

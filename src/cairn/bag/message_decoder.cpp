@@ -55,9 +55,15 @@ Value MessageDecoder::decode(const BagMessage& message) {
   if (found.schemas == nullptr) {
     throw io::ParseError(file, 0, "topic " + connection.topic + " (" + connection.type + "): " + found.problem);
   }
-  const std::string where = file + ": " + connection.topic + " message at " + std::to_string(message.message.log_time_ns) +
-                            " ns (record at byte " + std::to_string(message.message.file_offset) + ")";
-  return deserialize(*found.schemas, message.message.data, found.serialization, where, message.message.owner);
+  // Name the message only when it fails: this runs once per message.
+  static const std::string kUnnamed;
+  try {
+    return deserialize(*found.schemas, message.message.data, found.serialization, kUnnamed, message.message.owner);
+  } catch (const io::ParseError& e) {
+    throw io::ParseError(file + ": " + connection.topic + " message at " + std::to_string(message.message.log_time_ns) +
+                             " ns (record at byte " + std::to_string(message.message.file_offset) + ")",
+                         0, e.detail());
+  }
 }
 
 std::string MessageDecoder::type(std::size_t topic) const { return normalize_type(bag_.topics().at(topic).type); }

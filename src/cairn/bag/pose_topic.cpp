@@ -10,14 +10,6 @@
 #include "cairn/io/parse_error.hpp"
 
 namespace cairn::bag {
-namespace {
-
-struct StampedPose {
-  std::int64_t stamp_ns = 0;
-  Eigen::Vector3d position;
-  Eigen::Quaterniond orientation;
-};
-
 StampedPose pose_of(const std::string& type, const Value& m) {
   if (type == "nav_msgs/Odometry") {
     const Odometry o = to_odometry(m);
@@ -34,8 +26,6 @@ StampedPose pose_of(const std::string& type, const Value& m) {
   return {header.stamp_ns, {p["x"].number(), p["y"].number(), p["z"].number()},
           Eigen::Quaterniond(q["w"].number(), q["x"].number(), q["y"].number(), q["z"].number())};
 }
-
-}  // namespace
 
 io::Trajectory read_pose_topic(const std::string& path, const std::string& topic_name) {
   Bag bag = Bag::open(path);

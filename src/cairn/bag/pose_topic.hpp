@@ -8,6 +8,9 @@
 ///
 /// Also the `BAG:/topic` form the command line takes for a trajectory argument.
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <utility>
@@ -15,6 +18,19 @@
 #include "cairn/io/trajectory.hpp"
 
 namespace cairn::bag {
+
+class Value;
+
+/// One pose message: its header stamp and T_frame_child as position and (unnormalised) quaternion.
+struct StampedPose {
+  std::int64_t stamp_ns = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+};
+
+/// The pose of a decoded nav_msgs/Odometry, geometry_msgs/TransformStamped, PoseStamped or
+/// PoseWithCovarianceStamped (`type` normalised). Throws std::runtime_error for a missing field.
+StampedPose pose_of(const std::string& type, const Value& message);
 
 /// Reads `topic` of the bag at `path`. Throws io::ParseError (no such topic, a type that holds no
 /// pose, stamps that do not increase, a quaternion of norm 0 or a non-finite value).
