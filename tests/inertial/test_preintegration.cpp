@@ -93,22 +93,25 @@ TEST(ImuFactor, JacobiansMatchNumericOnRandomCases) {
     const Vector3 rate = random3(15.0);
     const int samples = 5 + static_cast<int>(rng() % 60);
     for (int k = 0; k < samples; ++k) pim.integrate(rate + random3(2.0), random3(20.0), 0.005);
-    const ImuFactor factor(pim, gravity_z_up());
+    // Every other trial with gravity a variable (a random gravity vector of about 9.8 m/s^2).
+    const bool gravity_variable = trial % 2 == 1;
+    const ImuFactor factor = gravity_variable ? ImuFactor::with_gravity_variable(pim) : ImuFactor(pim, gravity_z_up());
+    Vector3 gravity = random3(1.0).normalized() * 9.8;
     double pose_i[7], pose_j[7];
     backend::se3_to_values(random_pose(), pose_i);
     backend::se3_to_values(random_pose(), pose_j);
     Vector3 v_i = random3(5.0), v_j = random3(5.0);
     BiasValues bias = to_values(pim.bias_linearisation()) + (BiasValues() << random3(0.01), random3(0.1)).finished();
-    double* values[5] = {pose_i, v_i.data(), pose_j, v_j.data(), bias.data()};
-    const backend::Manifold* manifolds[5] = {&backend::se3_manifold(), &backend::euclidean_manifold(3),
+    double* values[6] = {pose_i, v_i.data(), pose_j, v_j.data(), bias.data(), gravity.data()};
+    const backend::Manifold* manifolds[6] = {&backend::se3_manifold(), &backend::euclidean_manifold(3),
                                              &backend::se3_manifold(), &backend::euclidean_manifold(3),
-                                             &backend::euclidean_manifold(6)};
+                                             &backend::euclidean_manifold(6), &backend::euclidean_manifold(3)};
     Eigen::Matrix<double, 9, 6, Eigen::RowMajor> J0, J2, J4;
-    Eigen::Matrix<double, 9, 3, Eigen::RowMajor> J1, J3;
-    double* jacobians[5] = {J0.data(), J1.data(), J2.data(), J3.data(), J4.data()};
+    Eigen::Matrix<double, 9, 3, Eigen::RowMajor> J1, J3, J5;
+    double* jacobians[6] = {J0.data(), J1.data(), J2.data(), J3.data(), J4.data(), J5.data()};
     Vector9 r;
     ASSERT_TRUE(factor.evaluate(values, r.data(), jacobians));
-    for (int var = 0; var < 5; ++var) {
+    for (int var = 0; var < (gravity_variable ? 6 : 5); ++var) {
       const int n = manifolds[var]->tangent_size();
       const int ambient = manifolds[var]->ambient_size();
       for (int col = 0; col < n; ++col) {
@@ -222,6 +225,53 @@ TEST(ImuFactor, SolveRecoversStatesFromPerturbedStart) {
     EXPECT_LT(e.position_m, 2e-2) << k;
     EXPECT_LT(e.velocity_mps, 2e-2) << k;
   }
+}
+
+// The LiDAR odometry factor (a pose measured through an extrinsic) and the gravity magnitude
+// factor against central differences.
+TEST(PosePriorFactor, JacobianThroughAnExtrinsicMatchesNumeric) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto random6 = [&]() -> Vector6 { return (Vector6() << u(rng), u(rng), u(rng), u(rng), u(rng), u(rng)).finished(); };
+  for (int trial = 0; trial < 200; ++trial) {
+    const core::SE3 T_body_sensor = core::SE3::exp(random6());
+    const core::SE3 T_world_body = core::SE3::exp(3.0 * random6());
+    const core::SE3 Z = T_world_body * T_body_sensor * core::SE3::exp(0.3 * random6());
+    Matrix6 A = Matrix6::Random();
+    const PosePriorFactor factor(Z, A * A.transpose() + Matrix6::Identity(), T_body_sensor);
+    double pose[7];
+    backend::se3_to_values(T_world_body, pose);
+    const double* values[1] = {pose};
+    Eigen::Matrix<double, 6, 6, Eigen::RowMajor> J;
+    double* jacobians[1] = {J.data()};
+    Vector6 r;
+    ASSERT_TRUE(factor.evaluate(values, r.data(), jacobians));
+    for (int col = 0; col < 6; ++col) {
+      const double h = 1e-6;
+      Vector6 delta = Vector6::Zero();
+      double plus[7], minus[7];
+      delta[col] = h;
+      backend::se3_manifold().plus(pose, delta.data(), plus);
+      delta[col] = -h;
+      backend::se3_manifold().plus(pose, delta.data(), minus);
+      Vector6 r_plus, r_minus;
+      const double* vp[1] = {plus};
+      const double* vm[1] = {minus};
+      ASSERT_TRUE(factor.evaluate(vp, r_plus.data(), nullptr));
+      ASSERT_TRUE(factor.evaluate(vm, r_minus.data(), nullptr));
+      const Vector6 numeric = (r_plus - r_minus) / (2.0 * h);
+      EXPECT_LT((numeric - J.col(col)).cwiseAbs().maxCoeff(), 1e-5 * (1.0 + numeric.cwiseAbs().maxCoeff()))
+          << "trial " << trial << " column " << col;
+    }
+  }
+  const GravityMagnitudeFactor gravity(9.81, 0.01);
+  Vector3 g(1.0, -2.0, -9.5);
+  const double* values[1] = {g.data()};
+  double r = 0.0, J[3];
+  double* jacobians[1] = {J};
+  ASSERT_TRUE(gravity.evaluate(values, &r, jacobians));
+  EXPECT_NEAR(r, (g.norm() - 9.81) / 0.01, 1e-9);
+  EXPECT_NEAR(J[2], g.z() / g.norm() / 0.01, 1e-9);
 }
 
 TEST(BiasRandomWalkFactor, WhitensByTheRandomWalkOverTheInterval) {

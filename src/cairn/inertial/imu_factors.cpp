@@ -53,6 +53,23 @@ ImuFactor::ImuFactor(PreintegratedImu preintegrated, const Vector3& gravity_worl
       gravity_world_(gravity_world),
       sqrt_information_(backend::square_root_information<9>(preintegrated_.covariance().inverse())) {}
 
+ImuFactor ImuFactor::with_gravity_variable(PreintegratedImu preintegrated) {
+  ImuFactor factor(std::move(preintegrated), Vector3::Zero());
+  factor.gravity_variable_ = true;
+  return factor;
+}
+
+bool GravityMagnitudeFactor::evaluate(const double* const* values, double* residual, double* const* jacobians) const {
+  const Eigen::Map<const Vector3> g(values[0]);
+  const double norm = g.norm();
+  if (!(norm > 0.0)) return false;
+  residual[0] = (norm - magnitude_) / sigma_;
+  if (jacobians != nullptr && jacobians[0] != nullptr) {
+    Eigen::Map<Eigen::Matrix<double, 1, 3>>{jacobians[0]} = g.transpose() / (norm * sigma_);
+  }
+  return true;
+}
+
 Vector9 ImuFactor::raw_residual(const NavState& state_i, const NavState& state_j, const ImuBias& bias_i) const {
   return residual_terms(preintegrated_, gravity_world_, state_i, state_j, bias_i).residual;
 }
@@ -61,7 +78,8 @@ bool ImuFactor::evaluate(const double* const* values, double* residual, double* 
   const NavState s_i = nav_state(values[0], values[1]);
   const NavState s_j = nav_state(values[2], values[3]);
   const ImuBias bias = bias_from_values(values[4]);
-  const ImuResidualTerms t = residual_terms(preintegrated_, gravity_world_, s_i, s_j, bias);
+  const Vector3 gravity = gravity_variable_ ? Vector3(Eigen::Map<const Vector3>(values[5])) : gravity_world_;
+  const ImuResidualTerms t = residual_terms(preintegrated_, gravity, s_i, s_j, bias);
   if (!t.residual.allFinite()) return false;
   Eigen::Map<Vector9>{residual} = sqrt_information_ * t.residual;
   if (jacobians == nullptr) return true;
@@ -108,6 +126,12 @@ bool ImuFactor::evaluate(const double* const* values, double* residual, double* 
     J.block<3, 3>(6, 3) = -pim.J_p_ba();
     Eigen::Map<RowMajor9x6>{jacobians[4]} = sqrt_information_ * J;
   }
+  if (gravity_variable_ && jacobians[5] != nullptr) {
+    Eigen::Matrix<double, 9, 3> J = Eigen::Matrix<double, 9, 3>::Zero();
+    J.block<3, 3>(3, 0) = -t.R_i_T * dt;
+    J.block<3, 3>(6, 0) = -0.5 * t.R_i_T * dt * dt;
+    Eigen::Map<RowMajor9x3>{jacobians[5]} = sqrt_information_ * J;
+  }
   return true;
 }
 
@@ -128,16 +152,20 @@ bool BiasRandomWalkFactor::evaluate(const double* const* values, double* residua
   return true;
 }
 
-PosePriorFactor::PosePriorFactor(const core::SE3& T_world_body_prior, const Matrix6& covariance)
-    : prior_(T_world_body_prior), sqrt_information_(backend::square_root_information<6>(covariance.inverse())) {}
+PosePriorFactor::PosePriorFactor(const core::SE3& Z_world_sensor, const Matrix6& covariance,
+                                 const core::SE3& T_body_sensor)
+    : measured_inverse_(Z_world_sensor.inverse()),
+      T_body_sensor_(T_body_sensor),
+      sqrt_information_(backend::square_root_information<6>(covariance.inverse())),
+      adjoint_sensor_body_(T_body_sensor.inverse().Adj()) {}
 
 bool PosePriorFactor::evaluate(const double* const* values, double* residual, double* const* jacobians) const {
   Matrix6 Jr_inv;
-  const Vector6 error = (prior_.inverse() * backend::se3_from_values(values[0])).log(Jr_inv);
+  const Vector6 error = (measured_inverse_ * backend::se3_from_values(values[0]) * T_body_sensor_).log(Jr_inv);
   Eigen::Map<Vector6>{residual} = sqrt_information_ * error;
   if (jacobians != nullptr && jacobians[0] != nullptr) {
-    // d Log(P^-1 T exp(d)) / d d = Jr^-1(error).
-    Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>{jacobians[0]} = sqrt_information_ * Jr_inv;
+    Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>{jacobians[0]} =
+        sqrt_information_ * Jr_inv * adjoint_sensor_body_;
   }
   return true;
 }

@@ -29,9 +29,14 @@ ImuBias bias_from_values(const double* values);
 
 class ImuFactor final : public backend::Factor {
  public:
+  /// Gravity held at `gravity_world`.
   ImuFactor(PreintegratedImu preintegrated, const Vector3& gravity_world);
+  /// Gravity a variable (euclidean_manifold(3), the world's gravity vector in m/s^2): the sixth
+  /// variable of evaluate(), with dr_v/dg = -R_i^T dt and dr_p/dg = -1/2 R_i^T dt^2. Pair it with a
+  /// GravityMagnitudeFactor: only its direction is left to the data.
+  static ImuFactor with_gravity_variable(PreintegratedImu preintegrated);
   int residual_size() const override { return 9; }
-  /// values: pose_i (7), velocity_i (3), pose_j (7), velocity_j (3), bias_i (6).
+  /// values: pose_i (7), velocity_i (3), pose_j (7), velocity_j (3), bias_i (6) [, gravity (3)].
   bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override;
   /// The unwhitened residual (r_R, r_v, r_p) at these states, for consistency checks (NEES).
   Vector9 raw_residual(const NavState& state_i, const NavState& state_j, const ImuBias& bias_i) const;
@@ -40,7 +45,22 @@ class ImuFactor final : public backend::Factor {
  private:
   PreintegratedImu preintegrated_;
   Vector3 gravity_world_;
+  bool gravity_variable_ = false;
   Matrix9 sqrt_information_;
+};
+
+/// r = (|g| - g0) / sigma on a gravity variable (euclidean_manifold(3)): keeps the magnitude known
+/// while the direction is estimated (gravity refinement as in VINS-Mono's initialisation, Qin et
+/// al., T-RO 2018, Sec. V-B-3, on the 2-sphere there; here as a soft constraint).
+class GravityMagnitudeFactor final : public backend::Factor {
+ public:
+  GravityMagnitudeFactor(double magnitude_mps2, double sigma_mps2) : magnitude_(magnitude_mps2), sigma_(sigma_mps2) {}
+  int residual_size() const override { return 1; }
+  bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override;
+
+ private:
+  double magnitude_;
+  double sigma_;
 };
 
 class BiasRandomWalkFactor final : public backend::Factor {
@@ -54,16 +74,23 @@ class BiasRandomWalkFactor final : public backend::Factor {
   Eigen::Matrix<double, 6, 1> inverse_sigma_;
 };
 
-/// r = S Log(T_prior^-1 T) on (rho, phi) (se3_manifold's order), S = Sigma^-1/2.
+/// A measured pose of a sensor rigidly mounted on the body: r = S Log(Z^-1 T_world_body T_body_sensor)
+/// on (rho, phi) (se3_manifold's order), S = Sigma^-1/2, Sigma the measurement's covariance in the
+/// sensor frame (right perturbation of Z). With T_body_sensor the identity it is a prior on the
+/// body's pose; with a LiDAR's extrinsic it is LIO-SAM's LiDAR odometry factor. The Jacobian is
+/// S Jr^-1(r) Adj(T_body_sensor^-1) (T exp(d) X = T X exp(Adj(X^-1) d)).
 class PosePriorFactor final : public backend::Factor {
  public:
-  PosePriorFactor(const core::SE3& T_world_body_prior, const Matrix6& covariance);
+  PosePriorFactor(const core::SE3& Z_world_sensor, const Matrix6& covariance,
+                  const core::SE3& T_body_sensor = core::SE3());
   int residual_size() const override { return 6; }
   bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override;
 
  private:
-  core::SE3 prior_;
+  core::SE3 measured_inverse_;
+  core::SE3 T_body_sensor_;
   Matrix6 sqrt_information_;
+  Matrix6 adjoint_sensor_body_;
 };
 
 /// r = S (x - x_prior) for a Euclidean variable of size N (velocity: 3, bias: 6).

@@ -87,7 +87,8 @@ class PreintegratedImu {
 /// Integrates the samples over [from, to] into `preintegrated`, each sample held until the next
 /// one (zero-order hold) and the first and last pieces cut at `from` and `to`. Returns false, leaving
 /// `preintegrated` unchanged, when the samples do not cover the interval: no sample at or before
-/// `from`, or none at or after `to`. Precondition: samples sorted by stamp, from < to.
+/// `from`, or none at or after `to`, or to < from (from == to integrates nothing and returns true).
+/// Precondition: samples sorted by stamp.
 bool integrate_interval(const std::vector<ImuSample>& samples, core::Timestamp from, core::Timestamp to,
                         PreintegratedImu& preintegrated);
 
