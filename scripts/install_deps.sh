@@ -35,6 +35,7 @@ PACKAGES=(
   liblz4-dev           # bag: lz4-compressed chunks (ROS 1 bags, MCAP)
   libzstd-dev          # bag: zstd-compressed chunks (MCAP)
   libsqlite3-dev       # bag: rosbag2 SQLite3 storage (.db3)
+  libgeographiclib-dev # gnss: geodetic <-> local east-north-up (LocalCartesian, WGS84)
   python3-rosbag       # tests/bag/fixtures: independent ROS 1 bag writer/reader for the bag tests
   python3-sensor-msgs  # tests/bag/fixtures: ROS 1 sensor_msgs classes for the independent writer
   python3-nav-msgs     # tests/bag/fixtures: ROS 1 nav_msgs classes (Odometry reference)
