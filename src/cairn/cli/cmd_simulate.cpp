@@ -118,6 +118,15 @@ int simulate_command(const SimulateFlags& flags) {
       std::printf("\n%zu points in %zu clouds; %zu camera observations of %zu lamps; %zu true loop-closure pairs\n",
                   cloud_points, result.clouds.size(), result.camera_observations.size(), result.world_3d.landmarks.size(),
                   result.true_loops.size());
+      if (scenario.imu_enabled) {
+        std::printf("IMU (%s): %zu samples at %.0f Hz\n", scenario.imu_preset.c_str(), result.imu.samples.size(),
+                    scenario.imu.rate_hz);
+      }
+      if (result.spin) {
+        std::printf("spin on the spot: %.2f-%.2f s, %.0f deg at up to %.0f deg/s\n", result.spin->start_time_s,
+                    result.spin->end_time_s, result.spin->angle_rad * 180.0 / std::numbers::pi,
+                    result.spin->peak_yaw_rate_rad_s * 180.0 / std::numbers::pi);
+      }
       if (result.passage_scans && result.passage_scans->any_inside) {
         std::printf("%s: scans %zu-%zu inside\n", result.passage_scans->passage.kind.c_str(),
                     result.passage_scans->first_inside, result.passage_scans->last_inside);
@@ -162,7 +171,7 @@ Runner register_simulate(CLI::App& app) {
   auto flags = std::make_shared<SimulateFlags>();
   app.add_option("SCENARIO", flags->scenario, "office, office-people, corridor-aliasing, open-hall, loop-building, landmarks, "
                  "building-yard, outdoor-stretch, kidnapping, long-absence, second-session, street-3d, street-3d-loops, "
-                 "garage-3d or tunnel-3d");
+                 "garage-3d, tunnel-3d or tunnel-spin-3d");
   app.add_option("--seed", flags->seed, "Seed of every random draw; the same seed gives the same bytes")
       ->capture_default_str();
   app.add_option("--out", flags->out, "Output directory (created if missing; must be empty unless --overwrite)");

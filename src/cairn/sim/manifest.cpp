@@ -9,6 +9,7 @@
 #include <variant>
 
 #include "cairn/io/parse_error.hpp"
+#include "cairn/sim/imu_outputs.hpp"
 
 namespace cairn::sim {
 namespace {
@@ -155,7 +156,7 @@ std::vector<std::string> apply_assignments(Scenario& scenario, const std::vector
   std::vector<std::string> problems;
   std::vector<std::string> sorted = assignments;
   std::stable_partition(sorted.begin(), sorted.end(),
-                        [](const std::string& a) { return a.starts_with("lidar3d.model="); });
+                        [](const std::string& a) { return a.starts_with("lidar3d.model=") || a.starts_with("imu.preset="); });
   for (const auto& assignment : sorted) {
     const auto equals = assignment.find('=');
     if (equals == std::string::npos) {
@@ -267,7 +268,29 @@ nlohmann::json manifest_json(const SimulationResult& result, Scenario& scenario,
       if (p.any_blind) passage["out_of_range_of_both_ends_scans"] = {p.first_blind, p.last_blind};
       truth["passage"] = passage;
     }
+    if (result.spin) {
+      const SpinEvent& spin = *result.spin;
+      std::size_t first_scan = result.scan_samples.size();
+      std::size_t last_scan = 0;
+      for (std::size_t i = 0; i < result.scan_samples.size(); ++i) {
+        // A sweep covers [scan_samples[i], scan_samples[i + 1]): those that overlap the spin.
+        const std::size_t begin = result.scan_samples[i];
+        const std::size_t end = i + 1 < result.scan_samples.size() ? result.scan_samples[i + 1] : result.truth.size();
+        if (begin < spin.last_sample && end > spin.first_sample) {
+          first_scan = std::min(first_scan, i);
+          last_scan = i;
+        }
+      }
+      truth["spin"] = {{"time_s", {spin.start_time_s, spin.end_time_s}},
+                       {"samples", {spin.first_sample, spin.last_sample}},
+                       {"position_world", {spin.position_world.x(), spin.position_world.y(), 0.0}},
+                       {"angle_rad", spin.angle_rad},
+                       {"peak_yaw_rate_rad_s", spin.peak_yaw_rate_rad_s},
+                       {"note", "a turn on the spot counter-clockwise; at rest at both ends"}};
+      if (first_scan <= last_scan) truth["spin"]["scans"] = {first_scan, last_scan};
+    }
     manifest["ground_truth"] = truth;
+    if (scenario.imu_enabled) manifest["imu"] = imu_manifest(result, scenario);
   }
   if (result.mission) manifest["ground_truth"] = mission_json(*result.mission);
   manifest["files"] = file_list;

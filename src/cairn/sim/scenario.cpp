@@ -13,7 +13,9 @@
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/trajectory.hpp"
 #include "cairn/sim/carmen_log.hpp"
+#include "cairn/sim/imu_outputs.hpp"
 #include "cairn/sim/landmark_files.hpp"
+#include "cairn/sim/planar_kinematics.hpp"
 #include "cairn/sim/random.hpp"
 #include "cairn/sim/ray_cast.hpp"
 #include "cairn/sim/render.hpp"
@@ -24,7 +26,25 @@ namespace cairn::sim {
 namespace {
 
 /// Sub-stream numbers for Random::derive_seed: one per consumer of randomness.
-enum Stream : std::uint64_t { kOdometryStream = 1, kLidarStream = 2, kLandmarkStream = 3, kGraphStream = 4, kRelationsStream = 5 };
+enum Stream : std::uint64_t {
+  kOdometryStream = 1,
+  kLidarStream = 2,
+  kLandmarkStream = 3,
+  kGraphStream = 4,
+  kRelationsStream = 5,
+  kImuStream = 6
+};
+
+/// Applies the named IMU preset's noise, rates, ranges and bias sigmas (time offset and seed stay).
+void apply_imu_preset(const std::string& name, ImuSimulationOptions& imu) {
+  const std::optional<ImuSimulationOptions> preset = imu_preset(name);
+  if (!preset) return;  // is_valid reports the name
+  const double time_offset_s = imu.time_offset_s;
+  const std::optional<inertial::ImuBias> initial_bias = imu.initial_bias;
+  imu = *preset;
+  imu.time_offset_s = time_offset_s;
+  imu.initial_bias = initial_bias;
+}
 
 /// `period / sample` as a whole number of samples, or 0 when it is not one (to 1e-6).
 std::int64_t whole_steps(double period_s, double sample_s) {
@@ -209,6 +229,34 @@ void check_kidnap_time(const Scenario& s, const WorldWithRoute& built, std::vect
   }
 }
 
+/// The simulated IMU's parameters (3D worlds): imu.preset first (apply_assignments applies it
+/// before the other imu.* settings, whatever their order).
+void add_imu_parameters(Scenario& s, std::vector<Parameter>& out) {
+  ImuSimulationOptions& imu = s.imu;
+  out.push_back(Parameter{"imu.enabled", "", "simulate the IMU (imu0/, state_groundtruth_estimate0/, lidar0/sensor.yaml)",
+                          &s.imu_enabled});
+  out.push_back(Parameter{"imu.preset", "", "IMU preset: adis16448 (EuRoC) or consumer-mems (MPU-9250 class); sets noise, "
+                          "rate, ranges and bias sigmas (other imu.* settings override it)",
+                          &s.imu_preset, imu_preset_names(), [&s] { apply_imu_preset(s.imu_preset, s.imu); }});
+  const auto add = [&](const char* name, const char* unit, const char* description, double* field) {
+    out.push_back(Parameter{name, unit, description, field});
+  };
+  add("imu.rate_hz", "Hz", "samples per second", &imu.rate_hz);
+  add("imu.gyro_noise_density", "rad/s/sqrt(Hz)", "gyro white noise density (0: none)", &imu.noise.gyro_noise_density);
+  add("imu.gyro_random_walk", "rad/s^2/sqrt(Hz)", "gyro bias random walk (0: none)", &imu.noise.gyro_random_walk);
+  add("imu.accel_noise_density", "m/s^2/sqrt(Hz)", "accelerometer white noise density (0: none)",
+      &imu.noise.accel_noise_density);
+  add("imu.accel_random_walk", "m/s^3/sqrt(Hz)", "accelerometer bias random walk (0: none)", &imu.noise.accel_random_walk);
+  add("imu.initial_gyro_bias_sigma_rad_s", "rad/s", "sigma of each axis of the drawn initial gyro bias",
+      &imu.initial_gyro_bias_sigma_rad_s);
+  add("imu.initial_accel_bias_sigma_mps2", "m/s^2", "sigma of each axis of the drawn initial accelerometer bias",
+      &imu.initial_accel_bias_sigma_mps2);
+  add("imu.gyro_saturation_rad_s", "rad/s", "gyro range: readings clipped to +-this (0: none)", &imu.gyro_saturation_rad_s);
+  add("imu.accel_saturation_mps2", "m/s^2", "accelerometer range: readings clipped to +-this (0: none)",
+      &imu.accel_saturation_mps2);
+  add("imu.time_offset_s", "s", "IMU clock minus true time: imu0/data.csv stamps are true time + this", &imu.time_offset_s);
+}
+
 }  // namespace
 
 bool Scenario::is_valid(std::string* why) const {
@@ -338,6 +386,17 @@ bool Scenario::is_valid(std::string* why) const {
       if (lidar3d_model != "vlp16" && lidar3d_model != "hdl64") problems.push_back("lidar3d.model must be vlp16 or hdl64");
       if (lidar3d_format != "kitti" && lidar3d_format != "pcd") problems.push_back("lidar3d.format must be kitti or pcd");
       if (!camera.is_valid(&text)) problems.push_back("camera: " + text);
+      if (imu_enabled) {
+        if (!imu.is_valid(&text)) problems.push_back("imu: " + text);
+        const auto presets = imu_preset_names();
+        if (std::find(presets.begin(), presets.end(), imu_preset) == presets.end()) {
+          problems.push_back("imu.preset must be adis16448 or consumer-mems");
+        }
+      }
+      if (spin_stop_enabled) {
+        if (!spin_stop.is_valid(&text)) problems.push_back("spin: " + text);
+        if (trajectory.laps != 1) problems.push_back("spin: the route with a spin stop is driven once: trajectory.laps must be 1");
+      }
       if (trajectory.sample_period_s > 0.0) {
         if (whole_steps(lidar3d.period_s, trajectory.sample_period_s) == 0) {
           problems.push_back("lidar3d.period_s must be a whole multiple of trajectory.sample_period_s");
@@ -358,6 +417,10 @@ bool Scenario::is_valid(std::string* why) const {
                          " m long (laps x lap length): at most 20000 m");
     }
     if (problems.empty() && kidnap_enabled) check_kidnap_time(*this, built, problems);
+    if (problems.empty() && spin_stop_enabled && !(spin_stop.at_m < lap_m - 1.0 && !built.closed_route)) {
+      problems.push_back(found("spin.at_m must be at least 1 m short of the route's end (" +
+                                   std::to_string(static_cast<long>(lap_m)) + " m)", spin_stop.at_m));
+    }
   }
   if (why != nullptr) {
     why->clear();
@@ -379,7 +442,8 @@ TrajectoryOptions Scenario::effective_trajectory() const {
 std::vector<std::string> scenario_names() {
   return {"office",         "office-people",   "corridor-aliasing", "open-hall",  "loop-building",
           "landmarks",      "building-yard",   "outdoor-stretch",   "kidnapping", "long-absence",
-          "second-session", "street-3d",       "street-3d-loops",   "garage-3d",  "tunnel-3d"};
+          "second-session", "street-3d",       "street-3d-loops",   "garage-3d",  "tunnel-3d",
+          "tunnel-spin-3d"};
 }
 
 std::optional<Scenario> make_scenario(std::string_view name) {
@@ -488,6 +552,17 @@ std::optional<Scenario> make_scenario(std::string_view name) {
     s.image_pixels_per_m = 5.0;
     s.description = "Straight through a 150 m tunnel with flat walls at constant speed: scan matching is "
                     "degenerate along the axis; the scans inside are listed in the manifest";
+  } else if (name == "tunnel-spin-3d") {
+    s.world = WorldKind::kTunnel3D;
+    s.trajectory.laps = 1;
+    s.trajectory.max_speed_mps = 6.0;
+    s.trajectory.max_acceleration_mps2 = 1.5;
+    s.lidar3d_format = "pcd";
+    s.image_pixels_per_m = 5.0;
+    s.spin_stop_enabled = true;
+    s.description = "tunnel-3d with a stop in the middle of the tunnel (out of LiDAR range of both portals) for one "
+                    "full turn on the spot in 0.99 s at up to 458 deg/s, meant to defeat LiDAR-only registration and "
+                    "be carried by the IMU; the spin's times and scans are in the manifest";
   } else {
     return std::nullopt;
   }
@@ -692,6 +767,13 @@ std::vector<Parameter> parameters(Scenario& s) {
       add("tunnel.height_m", "m", "ceiling height", &s.tunnel.height_m);
       add("tunnel.approach_m", "m", "road before and after the tunnel", &s.tunnel.approach_m);
       add("tunnel.world_seed", "", "seed of the buildings, poles and trees outside", &s.tunnel.world_seed);
+      if (s.spin_stop_enabled) {
+        add("spin.at_m", "m", "where the robot stops to spin, along the route from its start", &s.spin_stop.at_m);
+        add("spin.turns", "", "full counter-clockwise turns on the spot", &s.spin_stop.turns);
+        add("spin.yaw_rate_rad_s", "rad/s", "peak yaw rate of the spin", &s.spin_stop.yaw_rate_rad_s);
+        add("spin.yaw_acceleration_rad_s2", "rad/s^2", "yaw acceleration of the spin's ramps",
+            &s.spin_stop.yaw_acceleration_rad_s2);
+      }
       break;
   }
   TrajectoryOptions& t = s.trajectory;
@@ -749,6 +831,7 @@ std::vector<Parameter> parameters(Scenario& s) {
     add("camera.period_s", "s", "time between images", &c.period_s);
     add("loops.max_distance_m", "m", "loops.txt lists scan pairs at most this far apart", &s.loop_truth.max_distance_m);
     add("loops.min_separation_s", "s", "and at least this far apart in time", &s.loop_truth.min_separation_s);
+    add_imu_parameters(s, out);
   } else {
     LidarOptions& l = s.lidar;
     add("lidar.beams", "", "number of beams", &l.beams);
@@ -867,6 +950,10 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
     std::size_t first_after = 0;
     result.truth = splice_kidnap(before, after, scenario.kidnap.time_s, &first_after);
     result.carried_samples = {first_after};
+  } else if (scenario.spin_stop_enabled) {
+    SpinEvent spin;
+    result.truth = trajectory_with_spin_stop(result.world.route, trajectory, scenario.spin_stop, &spin);
+    result.spin = spin;
   } else {
     result.truth = generate_trajectory(result.world.route, trajectory, result.world.closed_route,
                                        result.world.start_heading_rad);
@@ -896,6 +983,12 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
     const World3DWithRoute built = build_world_3d(scenario);
     if (built.passage) {
       result.passage_scans = find_passage_scans(*built.passage, T_world_lidar, times_s, scenario.lidar3d.max_range_m);
+    }
+    if (scenario.imu_enabled) {
+      ImuSimulationOptions imu = scenario.imu;
+      imu.seed = Random::derive_seed(seed, kImuStream);
+      result.imu = simulate_imu(PlanarKinematics(result.truth), result.truth.front().stamp.seconds(),
+                                result.truth.back().stamp.seconds(), imu);
     }
   } else {
     Random lidar_random(Random::derive_seed(seed, kLidarStream));
@@ -973,6 +1066,9 @@ std::vector<std::string> write_outputs(const SimulationResult& result, const Sce
     render.pixels_per_m = scenario.image_pixels_per_m;
     render.title = scenario.name + ", seed " + std::to_string(seed) + " (top view: footprints of buildings, cars, poles, trees)";
     render_png(path_of("world.png"), result.world.world, truth_points, odometry_points, render);
+    if (scenario.imu_enabled) {
+      for (const auto& name : write_imu_outputs(result, scenario, directory)) files.push_back(name);
+    }
     return files;
   }
 

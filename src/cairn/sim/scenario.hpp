@@ -22,6 +22,9 @@
 /// | street-3d-loops   | street_world (3D)           | 1    | 2nd lap reversed in another lane, traffic |
 /// | garage-3d         | garage_world (3D)           | 1    | periodic garage: aliasing, no true loops  |
 /// | tunnel-3d         | tunnel_world (3D)           | 1    | featureless straight tunnel: degeneracy   |
+/// | tunnel-spin-3d    | tunnel_world (3D)           | 1    | tunnel-3d with a 458 deg/s spin inside    |
+///
+/// The 3D worlds also carry a simulated IMU (sim/imu.hpp, on unless imu.enabled=false).
 
 #include <cstdint>
 #include <functional>
@@ -33,6 +36,7 @@
 
 #include "cairn/sim/camera.hpp"
 #include "cairn/sim/ground_truth_3d.hpp"
+#include "cairn/sim/imu.hpp"
 #include "cairn/sim/landmark_sensor.hpp"
 #include "cairn/sim/lidar_3d.hpp"
 #include "cairn/sim/lidar.hpp"
@@ -42,6 +46,7 @@
 #include "cairn/sim/passage_worlds.hpp"
 #include "cairn/sim/relations.hpp"
 #include "cairn/sim/simulated_graph.hpp"
+#include "cairn/sim/spin_stop.hpp"
 #include "cairn/sim/street_world.hpp"
 #include "cairn/sim/trajectory.hpp"
 #include "cairn/sim/world_builders.hpp"
@@ -105,6 +110,17 @@ struct Scenario {
   CameraOptions camera;
   /// Which scan pairs are listed as true loop closures (3D worlds; loops.txt).
   LoopTruthOptions loop_truth;
+  /// 3D worlds: the simulated IMU (sim/imu.hpp) and its files (imu0/, state_groundtruth_estimate0/,
+  /// lidar0/sensor.yaml). imu_preset names the last preset applied through the parameter
+  /// imu.preset ("adis16448" or "consumer-mems", applied before every other imu.* setting); the
+  /// fields of `imu`, not this name, describe the sensor. imu.seed is replaced by the run's IMU
+  /// stream of the seed.
+  bool imu_enabled = true;
+  std::string imu_preset = "adis16448";
+  ImuSimulationOptions imu;
+  /// tunnel-spin-3d: a stop for a fast spin on the spot on the (open) route (sim/spin_stop.hpp).
+  bool spin_stop_enabled = false;
+  SpinStopOptions spin_stop;
 
   TrajectoryOptions trajectory;
   /// When true, every corner sharper than 0.3 rad becomes a spin at 2.5 rad/s (8 rad/s^2):
@@ -187,6 +203,10 @@ struct SimulationResult {
   /// inside the world's passage (garage, tunnel).
   std::vector<TrueLoop> true_loops;
   std::optional<PassageScans> passage_scans;
+  /// 3D worlds with the IMU on: its samples and the true state and biases at each.
+  SimulatedImu imu;
+  /// tunnel-spin-3d: the spin on the spot.
+  std::optional<SpinEvent> spin;
   /// Ground-truth samples whose step from the previous one was a carry (kidnapping): the truth
   /// jumps there, the odometry does not.
   std::vector<std::size_t> carried_samples;
@@ -218,7 +238,9 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed);
 /// landmark_observations.csv], [segments.txt, revisits.txt, [kidnap.txt]], world.png. street-3d writes instead: velodyne/NNNNNN.bin,
 /// velodyne_times/NNNNNN.bin (or scans/NNNNNN.pcd), poses.txt, times.txt, ground_truth.tum,
 /// odometry.tum, camera_observations.csv, world_3d.txt, loops.txt, world.png (see
-/// docs/simulation.md). Throws io::ParseError when a file cannot be written.
+/// docs/simulation.md); with the IMU on, then imu0/data.csv, imu0/sensor.yaml,
+/// state_groundtruth_estimate0/data.csv and lidar0/sensor.yaml. Throws io::ParseError when a file
+/// cannot be written.
 std::vector<std::string> write_outputs(const SimulationResult& result, const Scenario& scenario, std::uint64_t seed,
                                        const std::string& directory);
 
