@@ -134,9 +134,10 @@ struct LidarOdometry::ScanWork {
   bool lost = false;
   bool map_empty = false;
   core::SE3 T_world_sensor;  ///< at the sweep's middle
+  const MotionPrior* prior = nullptr;  ///< an external prediction (add_scan's), or null
 };
 
-OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double time_s) {
+OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double time_s, const MotionPrior* prior) {
   if (!std::isfinite(time_s) || (!stamps_.empty() && !(time_s > stamps_.back()))) {
     throw std::invalid_argument("LidarOdometry::add_scan: scan times must be finite and strictly increasing");
   }
@@ -147,6 +148,7 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   result.points_read = cloud.size();
   ScanWork work;
   work.time_s = time_s;
+  work.prior = prior;
 
   choose_point_times(cloud, work, result);
   choose_front_end(cloud);
@@ -281,13 +283,18 @@ void LidarOdometry::predict(ScanWork& work) const {
     work.velocity = (poses_[n - 2].inverse() * poses_[n - 1]).log() / (times_[n - 1] - times_[n - 2]);
   }
   if (n >= 1) work.T_pred = poses_[n - 1] * core::SE3::exp(work.velocity * (work.t_mid - times_[n - 1]));
+  if (work.prior != nullptr) work.T_pred = work.prior->at(work.t_mid);
 }
 
 // 2-3. Deskew to the sweep's middle, subsample; then LOAM's features, or the dense front end's
 // points subsampled again at 1.5 v.
 void LidarOdometry::preprocess(ScanWork& work) const {
   arena_->arena.execute([&] {
-    if (work.deskew && work.n >= 2) deskew_to_sweep_middle(work);
+    if (work.deskew && work.prior != nullptr && !work.point_time.empty()) {
+      deskew_with_prior(work);
+    } else if (work.deskew && work.n >= 2) {
+      deskew_to_sweep_middle(work);
+    }
     work.frame = voxel_downsample(work.points, 0.5 * options_.voxel_size_m);
     if (work.loam) {
       work.features = extract_loam_features(work.points, work.point_ring, options_.loam);
@@ -304,6 +311,20 @@ void LidarOdometry::deskew_to_sweep_middle(ScanWork& work) const {
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
                         points[i] = core::SE3::exp(work.velocity * (static_cast<double>(work.point_time[i]) - work.tau_mid)) * points[i];
+                      }
+                    });
+}
+
+// 2. Deskew with an external prior: p taken at t moves to T(t_mid)^-1 T(t) p, T the prior's pose.
+void LidarOdometry::deskew_with_prior(ScanWork& work) const {
+  std::vector<Eigen::Vector3d>& points = work.points;
+  const core::SE3 T_mid_world = work.T_pred.inverse();
+  const double sweep_start_s = work.time_s - work.tau_0;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        const double t = sweep_start_s + static_cast<double>(work.point_time[i]);
+                        points[i] = T_mid_world * (work.prior->at(t) * points[i]);
                       }
                     });
 }
@@ -397,7 +418,11 @@ void LidarOdometry::report_pose(const ScanWork& work, OdometryScanResult& result
   const std::size_t n = work.n;
   result.T_world_sensor = work.T_world_sensor;
   result.T_world_registered = work.T_world_sensor;
-  if (work.tau_mid != work.tau_0 && n >= 1) {
+  result.registered_time_s = work.t_mid;
+  if (work.tau_mid != work.tau_0 && work.prior != nullptr) {
+    // The prior's motion from the middle to the stamp.
+    result.T_world_sensor = work.T_world_sensor * (work.T_pred.inverse() * work.prior->at(work.time_s));
+  } else if (work.tau_mid != work.tau_0 && n >= 1) {
     const Eigen::Matrix<double, 6, 1> new_velocity =
         (poses_[n - 1].inverse() * work.T_world_sensor).log() / (work.t_mid - times_[n - 1]);
     result.T_world_sensor = work.T_world_sensor * core::SE3::exp(new_velocity * (work.tau_0 - work.tau_mid));

@@ -57,6 +57,7 @@
 #include "cairn/core/se3.hpp"
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/lidar3d/loam_features.hpp"
+#include "cairn/lidar3d/motion_prior.hpp"
 #include "cairn/lidar3d/registration.hpp"
 #include "cairn/lidar3d/voxel_hash_map.hpp"
 
@@ -159,6 +160,8 @@ struct OdometryScanResult {
   double time_s = 0.0;
   /// The sensor at the scan's timestamp.
   core::SE3 T_world_sensor;
+  /// The instant of T_world_registered (the sweep's middle; the stamp when not deskewed), seconds.
+  double registered_time_s = 0.0;
   /// The sensor at the sweep's middle, where the scan was registered: the frame of
   /// LidarOdometry::last_frame_points(). Equals T_world_sensor when the scan was not deskewed
   /// or its stamp is the middle (KITTI).
@@ -192,7 +195,10 @@ class LidarOdometry {
 
   /// Processes one scan taken at `time_s` (seconds, any origin, strictly increasing; throws
   /// std::invalid_argument otherwise). The first scan defines the world frame (identity pose).
-  OdometryScanResult add_scan(const io::PointCloud& cloud, double time_s);
+  /// With a `prior` (motion_prior.hpp; it must cover the sweep) the prediction is the prior's pose
+  /// at the registration instant, every point is deskewed by the prior's pose at its own time, and
+  /// the first scan takes the prior's pose (an IMU's gravity-aligned frame) instead of the identity.
+  OdometryScanResult add_scan(const io::PointCloud& cloud, double time_s, const MotionPrior* prior = nullptr);
 
   const VoxelHashMap& local_map() const { return map_; }
   /// The last scan's points as they went into the map (corrected, deskewed, cropped, subsampled at
@@ -219,6 +225,7 @@ class LidarOdometry {
   void predict(ScanWork& work) const;
   void preprocess(ScanWork& work) const;
   void deskew_to_sweep_middle(ScanWork& work) const;
+  void deskew_with_prior(ScanWork& work) const;
   double adaptive_threshold() const;
   void register_to_map(ScanWork& work, OdometryScanResult& result);
   RegistrationResult register_loam(const ScanWork& work) const;

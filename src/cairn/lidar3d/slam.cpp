@@ -382,10 +382,11 @@ LidarSlam::LidarSlam(const LidarSlamOptions& options) : options_(options) {
 
 LidarSlam::~LidarSlam() = default;
 
-SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s) {
+SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s, const MotionPrior* prior) {
   Impl& m = *impl_;
   SlamScanResult result;
-  result.odometry = m.odometry.add_scan(cloud, time_s);
+  result.odometry = m.odometry.add_scan(cloud, time_s, prior);
+  result.T_odom_registered = result.odometry.T_world_registered;
   // Keyframes live at the registered instant (their points' frame); scans report their stamp.
   const core::SE3& T_odom = result.odometry.T_world_registered;
   const core::SE3 T_odom_stamp = result.odometry.T_world_sensor;

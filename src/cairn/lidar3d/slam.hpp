@@ -125,6 +125,9 @@ struct LidarSlamSummary {
 
 struct SlamScanResult {
   OdometryScanResult odometry;
+  /// The registered pose in the odometry's own frame (before loop closures moved it): what an
+  /// external predictor such as the IMU fusion works in.
+  core::SE3 T_odom_registered;
   bool keyframe = false;
 };
 
@@ -137,7 +140,7 @@ class LidarSlam {
   LidarSlam& operator=(const LidarSlam&) = delete;
 
   /// As LidarOdometry::add_scan, then keyframe and loop-closure work.
-  SlamScanResult add_scan(const io::PointCloud& cloud, double time_s);
+  SlamScanResult add_scan(const io::PointCloud& cloud, double time_s, const MotionPrior* prior = nullptr);
   /// The final GNC over the loop closures (if enabled). Call once after the last scan.
   void finish();
 
