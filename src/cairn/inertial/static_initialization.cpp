@@ -1,6 +1,8 @@
 #include "cairn/inertial/static_initialization.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 #include <sstream>
 
 #include "cairn/core/problems.hpp"
@@ -10,11 +12,9 @@ namespace cairn::inertial {
 bool StaticInitializationOptions::is_valid(std::string* why) const {
   core::Problems problems;
   if (!(std::isfinite(window_s) && window_s > 0.0)) problems.add("window_s must be finite and > 0");
-  if (!(std::isfinite(gyro_std_max_rad_s) && gyro_std_max_rad_s > 0.0)) {
-    problems.add("gyro_std_max_rad_s must be finite and > 0");
-  }
-  if (!(std::isfinite(accel_std_max_mps2) && accel_std_max_mps2 > 0.0)) {
-    problems.add("accel_std_max_mps2 must be finite and > 0");
+  for (const auto& [value, name] : {std::pair{block_s, "block_s"}, std::pair{gyro_block_spread_max_rad_s, "gyro_block_spread_max_rad_s"},
+                                     std::pair{accel_block_spread_max_mps2, "accel_block_spread_max_mps2"}}) {
+    if (!(std::isfinite(value) && value > 0.0)) problems.add(std::string(name) + " must be finite and > 0");
   }
   if (!(std::isfinite(gravity_mps2) && gravity_mps2 > 0.0)) problems.add("gravity_mps2 must be finite and > 0");
   return problems.report(why);
@@ -42,6 +42,37 @@ void window_moments(const std::vector<ImuSample>& samples, std::size_t count, St
   result.gyro_bias_sigma_rad_s = result.gyro_std_rad_s / std::sqrt(n);
 }
 
+/// Largest |block mean - window mean| over blocks of block_s seconds and the three axes, for the
+/// gyro and the accelerometer; and whether every block mean lies within its limit: the option's,
+/// or 4 standard errors of a block mean (the axis' standard deviation / sqrt(block samples)) when
+/// vibration makes that larger.
+bool block_spreads(const std::vector<ImuSample>& samples, std::size_t count, const StaticInitializationOptions& options,
+                   StaticInitialization& result) {
+  const std::int64_t block_ns = std::max<std::int64_t>(1, std::llround(options.block_s * 1e9));
+  bool still = true;
+  std::size_t begin = 0;
+  while (begin < count) {
+    std::size_t end = begin;
+    Vector3 gyro = Vector3::Zero(), accel = Vector3::Zero();
+    while (end < count && samples[end].stamp.nanoseconds() - samples[begin].stamp.nanoseconds() < block_ns) {
+      gyro += samples[end].gyro_rad_s;
+      accel += samples[end].accel_mps2;
+      ++end;
+    }
+    const double n = static_cast<double>(end - begin);
+    const Vector3 gyro_off = (gyro / n - result.gyro_bias_rad_s).cwiseAbs();
+    const Vector3 accel_off = (accel / n - result.mean_accel_mps2).cwiseAbs();
+    result.gyro_block_spread_rad_s = std::max(result.gyro_block_spread_rad_s, gyro_off.maxCoeff());
+    result.accel_block_spread_mps2 = std::max(result.accel_block_spread_mps2, accel_off.maxCoeff());
+    for (int a = 0; a < 3; ++a) {
+      still = still && gyro_off[a] <= std::max(options.gyro_block_spread_max_rad_s, 4.0 * result.gyro_std_rad_s[a] / std::sqrt(n));
+      still = still && accel_off[a] <= std::max(options.accel_block_spread_max_mps2, 4.0 * result.accel_std_mps2[a] / std::sqrt(n));
+    }
+    begin = end;
+  }
+  return still;
+}
+
 }  // namespace
 
 StaticInitialization initialize_static(const std::vector<ImuSample>& samples,
@@ -64,13 +95,12 @@ StaticInitialization initialize_static(const std::vector<ImuSample>& samples,
     return result;
   }
   window_moments(samples, count, result);
-  const double gyro_std = result.gyro_std_rad_s.maxCoeff();
-  const double accel_std = result.accel_std_mps2.maxCoeff();
-  if (gyro_std > options.gyro_std_max_rad_s || accel_std > options.accel_std_max_mps2) {
+  if (!block_spreads(samples, count, options, result)) {
     std::ostringstream why;
-    why << "the IMU is not still in the first " << options.window_s << " s: gyro std " << gyro_std
-        << " rad/s (limit " << options.gyro_std_max_rad_s << "), accel std " << accel_std << " m/s^2 (limit "
-        << options.accel_std_max_mps2 << ")";
+    why << "the IMU is not still in the first " << options.window_s << " s: its " << options.block_s
+        << " s means move by up to " << result.gyro_block_spread_rad_s << " rad/s (limit "
+        << options.gyro_block_spread_max_rad_s << ") and " << result.accel_block_spread_mps2 << " m/s^2 (limit "
+        << options.accel_block_spread_max_mps2 << "; or 4 standard errors of a block mean, when larger)";
     result.message = why.str();
     return result;
   }

@@ -17,12 +17,18 @@ namespace cairn::inertial {
 struct StaticInitializationOptions {
   /// Length of the window, seconds from the first sample, > 0.
   double window_s = 2.0;
-  /// The window counts as still when the standard deviation of every gyro axis is below this
-  /// (rad/s, > 0) and of every accelerometer axis below accel_std_max_mps2 (m/s^2, > 0). The
-  /// defaults leave room for a running engine or rotor vibration (EuRoC's MAV on the ground:
-  /// 0.005 rad/s, 0.05 m/s^2 at rest).
-  double gyro_std_max_rad_s = 0.02;
-  double accel_std_max_mps2 = 0.2;
+  /// The window counts as still when the means of its blocks of block_s seconds agree with the
+  /// window's mean to within gyro_block_spread_max_rad_s (every gyro axis) and
+  /// accel_block_spread_max_mps2 (every accelerometer axis). Block means, not the samples' spread:
+  /// a multirotor's spinning rotors or an idling engine shake the IMU (EuRoC's MAV on the ground:
+  /// 0.04 rad/s and 0.57 m/s^2 standard deviation over its first 5 s) without moving it, while a
+  /// motion changes the mean from block to block. A limit below 4 standard errors of a block mean
+  /// (the axis' standard deviation / sqrt(block samples)) is raised to that, so vibration alone never
+  /// fails the test. Constant acceleration looks like a tilt and
+  /// cannot be told from stillness by the IMU alone. All > 0.
+  double block_s = 0.25;
+  double gyro_block_spread_max_rad_s = 0.01;
+  double accel_block_spread_max_mps2 = 0.1;
   /// Magnitude of gravity, m/s^2 (> 0).
   double gravity_mps2 = kStandardGravity;
   bool is_valid(std::string* why) const;
@@ -39,6 +45,9 @@ struct StaticInitialization {
   Vector3 mean_accel_mps2 = Vector3::Zero();
   Vector3 gyro_std_rad_s = Vector3::Zero();
   Vector3 accel_std_mps2 = Vector3::Zero();
+  /// Largest |block mean - window mean| over blocks and axes (the stillness test).
+  double gyro_block_spread_rad_s = 0.0;
+  double accel_block_spread_mps2 = 0.0;
   /// Roll and pitch from gravity, yaw 0: R_world_body with R * mean_accel / |mean_accel| = +z.
   core::SO3 R_world_body;
   /// |mean accel| - g: the accelerometer bias along gravity, m/s^2.
