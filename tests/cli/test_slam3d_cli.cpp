@@ -168,7 +168,8 @@ TEST(Slam3dCli, AShortGroundTruthAndBadOptionsAreRefused) {
   EXPECT_NE(r.err.find("--metric"), std::string::npos) << r.err;
 }
 
-// The configuration (lidar3d/config.hpp): --print-config lists every key of LidarSlamOptions, and
+// The configuration (lidar3d/config.hpp): --print-config lists every key of LidarSlamOptions and of
+// the LiDAR-inertial fusion (InertialFusionOptions, section imu), and
 // what it prints reads back through --config to the same text, with every key read from the file
 // (the printed file starts from another preset and still gives the same configuration).
 TEST(Slam3dCli, PrintConfigListsEveryKeyAndReadsBack) {
@@ -188,8 +189,10 @@ TEST(Slam3dCli, PrintConfigListsEveryKeyAndReadsBack) {
     }
   }
   // One key per field: LidarOdometryOptions 12 (with threads), RegistrationOptions 5,
-  // LoamFeatureOptions 9, health 5, keyframes 2, ScanContextOptions 10, loop closure 14, back end 7.
-  EXPECT_EQ(keys.size(), 64u) << defaults.out;
+  // LoamFeatureOptions 9, health 5, keyframes 2, ScanContextOptions 10, loop closure 14, back end 7;
+  // InertialFusionOptions 15 (11 of its own, 4 of its static initialisation; noise and T_imu_lidar
+  // come from files).
+  EXPECT_EQ(keys.size(), 79u) << defaults.out;
   for (const char* key : {"odometry.front_end", "odometry.deskew", "odometry.voxel_size_m", "odometry.threads",
                           "registration.metric", "registration.remap_degenerate_directions", "loam.neighbours",
                           "loam.less_flat_voxel_m", "health.min_scan_points", "health.lost_rms_max_correspondence_fraction",

@@ -65,7 +65,7 @@ int count_health(const SimRun& r, Health health) {
   return n;
 }
 
-TEST(LidarInertialSimulation, CarriesTheTunnelFarBetterThanLidarOnly) {
+TEST(LidarInertialSimulation, CarriesTheTunnelWithoutLosingAScan) {
   const sim::Scenario scenario = *sim::make_scenario("tunnel-3d");
   const SimRun lio = run_scenario(scenario, 1, true);
   const SimRun lidar = run_scenario(scenario, 1, false);
@@ -80,12 +80,11 @@ TEST(LidarInertialSimulation, CarriesTheTunnelFarBetterThanLidarOnly) {
   for (const auto& scan : lio.scans) fused += scan.inertial ? 1 : 0;
   // The last sweep ends after the simulated IMU's last sample, so that scan has no prediction.
   EXPECT_GE(fused, static_cast<int>(lio.scans.size()) - 1);
-  // Issue 38 asks for 1 % of the distance; measured 1.5 % (seed 1), against 5.9 % LiDAR-only. The
-  // IMU alone carries the 24 s the registration cannot see along the axis, where the simulated
-  // accelerometer bias random walk (EuRoC's 3e-3 m/s^3/sqrt(Hz)) alone gives a 1-sigma position
-  // error of rw t^2.5 / sqrt(20) = 1.9 m. See docs/lidar3d.md, "LiDAR-inertial".
-  EXPECT_LE(e_lio.end_point_error_m, 0.02 * path);
-  EXPECT_LT(e_lio.end_point_error_m, 0.5 * e_lidar.end_point_error_m);
+  // Issue 38 asks for 1 % of the distance. Measured (seed 1, this test) 0.82 %, against 5.9 %
+  // LiDAR-only; but seeds 2 and 3 give 5.7 % and 8.0 % (LiDAR-only 14.4 % and 3.6 %), so neither
+  // the 1 % nor "better than LiDAR-only" holds in general and neither is asserted here:
+  // docs/lidar3d.md, "LiDAR-inertial". What holds on every seed is asserted: nothing lost, the axis
+  // named, the IMU carrying it.
   EXPECT_EQ(count_health(lio, Health::kLost), 0);
   // Out of range of both portals the registration still names the axis it cannot see; the IMU carries it.
   const sim::PassageScans& p = *lio.simulation.passage_scans;
@@ -95,6 +94,65 @@ TEST(LidarInertialSimulation, CarriesTheTunnelFarBetterThanLidarOnly) {
     degenerate += lio.scans[k].inertial && lio.scans[k].inertial->degenerate ? 1 : 0;
   }
   EXPECT_GE(degenerate, blind * 9 / 10);
+}
+
+/// The rotation error (deg) of the estimated motion from scan a to scan b against the truth's.
+double relative_rotation_error_deg(const SimRun& r, std::size_t a, std::size_t b) {
+  const core::SE3 truth = r.truth_at_stamps[a].inverse() * r.truth_at_stamps[b];
+  const core::SE3 estimate = r.trajectory[a].inverse() * r.trajectory[b];
+  return (truth.so3().inverse() * estimate.so3()).angle() * 180.0 / M_PI;
+}
+
+// A 360 deg turn on the spot in 0.99 s (peak 458 deg/s) inside the tunnel: the IMU predicts each
+// sweep's rotation and deskews it, so the registration starts near the truth.
+TEST(LidarInertialSimulation, TracksAFastSpinInTheTunnel) {
+  const sim::Scenario scenario = *sim::make_scenario("tunnel-spin-3d");
+  const SimRun lio = run_scenario(scenario, 1, true);
+  const SimRun lidar = run_scenario(scenario, 1, false);
+  ASSERT_TRUE(lio.simulation.spin.has_value());
+  const sim::SpinEvent& spin = *lio.simulation.spin;
+  // The scans around the spin: the last before it starts and the first after it ends.
+  std::size_t before = 0, after = lio.scans.size() - 1;
+  for (std::size_t k = 0; k < lio.scans.size(); ++k) {
+    const double t = lio.scans[k].slam.odometry.time_s;
+    if (t <= spin.start_time_s) before = k;
+    if (t >= spin.end_time_s + 0.1 && after == lio.scans.size() - 1) after = k;
+  }
+  int lio_lost = 0, lidar_lost = 0;
+  for (std::size_t k = before; k <= after; ++k) {
+    lio_lost += lio.scans[k].slam.odometry.health == Health::kLost ? 1 : 0;
+    lidar_lost += lidar.scans[k].slam.odometry.health == Health::kLost ? 1 : 0;
+  }
+  const double lio_error = relative_rotation_error_deg(lio, before, after);
+  const double lidar_error = relative_rotation_error_deg(lidar, before, after);
+  const TrajectoryErrors e_lio = evaluate_trajectory(lio.truth_at_stamps, lio.trajectory);
+  const TrajectoryErrors e_lidar = evaluate_trajectory(lidar.truth_at_stamps, lidar.trajectory);
+  std::printf("tunnel-spin-3d seed 1, spin of %.0f deg peaking at %.0f deg/s, scans %zu-%zu: LiDAR-inertial rotation error "
+              "across it %.2f deg, %d lost, end-point error %.2f m; LiDAR-only %.2f deg, %d lost, end-point error %.2f m\n",
+              spin.angle_rad * 180.0 / M_PI, spin.peak_yaw_rate_rad_s * 180.0 / M_PI, before, after, lio_error, lio_lost,
+              e_lio.end_point_error_m, lidar_error, lidar_lost, e_lidar.end_point_error_m);
+  EXPECT_GE(spin.peak_yaw_rate_rad_s, 2.0 * M_PI);
+  EXPECT_EQ(lio_lost, 0);
+  EXPECT_LT(lio_error, 1.0);
+  // The stop and the spin lengthen the stretch the registration cannot see along the axis: measured
+  // 10.1 m (4.4 %) at the end, against 187 m LiDAR-only (docs/lidar3d.md).
+  EXPECT_LT(e_lio.end_point_error_m, 0.1 * e_lidar.end_point_error_m);
+}
+
+// The street with loops (turns, loop closures): the IMU must not make it worse.
+TEST(LidarInertialSimulation, StreetWithLoopsNoWorseThanLidarOnly) {
+  const sim::Scenario scenario = *sim::make_scenario("street-3d-loops");
+  const SimRun lio = run_scenario(scenario, 1, true);
+  const SimRun lidar = run_scenario(scenario, 1, false);
+  const TrajectoryErrors e_lio = evaluate_trajectory(lio.truth_at_stamps, lio.trajectory);
+  const TrajectoryErrors e_lidar = evaluate_trajectory(lidar.truth_at_stamps, lidar.trajectory);
+  std::printf("street-3d-loops seed 1: LiDAR-inertial ATE %.3f m, end-point %.3f m, %zu loops; LiDAR-only ATE %.3f m, "
+              "end-point %.3f m, %zu loops\n",
+              e_lio.ate_rmse_m.value_or(-1.0), e_lio.end_point_error_m, lio.summary.loops_accepted,
+              e_lidar.ate_rmse_m.value_or(-1.0), e_lidar.end_point_error_m, lidar.summary.loops_accepted);
+  ASSERT_TRUE(e_lio.ate_rmse_m && e_lidar.ate_rmse_m);
+  EXPECT_LE(*e_lio.ate_rmse_m, *e_lidar.ate_rmse_m * 1.05 + 0.01);
+  EXPECT_EQ(count_health(lio, Health::kLost), 0);
 }
 
 }  // namespace

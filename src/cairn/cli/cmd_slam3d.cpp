@@ -1,8 +1,10 @@
 // `cairn slam3d SCANS --out DIR`: 3D LiDAR SLAM on a folder (or list) of scans, fed one scan
-// at a time through the same streaming interface a robot would use (lidar3d/odometry.hpp). The
-// run's record, outputs and report are the library's (lidar3d/slam_run.hpp, run_outputs.hpp), and
-// so is the description of every option (lidar3d/config.hpp); the flags and the options they stand
-// for are in slam3d_flags.cpp.
+// at a time through the same streaming interface a robot would use (lidar3d/odometry.hpp); with
+// --imu (or --imu-topic), LiDAR-inertial SLAM (lidar3d/lidar_inertial_slam.hpp) over the same scans,
+// every IMU sample given first. The run's record, outputs and report are the library's
+// (lidar3d/slam_run.hpp, run_outputs.hpp, inertial_outputs.hpp), and so are the description of every
+// option (lidar3d/config.hpp) and the reading of the IMU (lidar3d/inertial_input.hpp); the flags and
+// the options they stand for are in slam3d_flags.cpp.
 
 #include <algorithm>
 #include <cmath>
@@ -24,6 +26,8 @@
 #include "cairn/io/trajectory.hpp"
 #include "cairn/lidar3d/config.hpp"
 #include "cairn/lidar3d/foxglove_output.hpp"
+#include "cairn/lidar3d/inertial_outputs.hpp"
+#include "cairn/lidar3d/lidar_inertial_slam.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/run_outputs.hpp"
 #include "cairn/lidar3d/scan_reader.hpp"
@@ -70,10 +74,24 @@ std::vector<core::SE3> read_ground_truth(const Slam3dFlags& flags, std::size_t n
   return ground_truth;
 }
 
+/// LidarSlam, or LiDAR-inertial SLAM over it when the run has an IMU (every sample given at once).
+struct Pipeline {
+  lidar3d::LidarSlam& slam;
+  std::optional<lidar3d::LidarInertialSlam> inertial;
+  lidar3d::InertialRun* inertial_run = nullptr;
+
+  lidar3d::SlamScanResult add_scan(std::size_t k, const io::PointCloud& cloud, double time_s) {
+    if (!inertial) return slam.add_scan(cloud, time_s);
+    lidar3d::LidarInertialScan scan = inertial->add_scan(cloud, time_s);
+    inertial_run->add_scan(k, scan.inertial);
+    return scan.slam;
+  }
+};
+
 /// Reads and feeds the scans one at a time, recording them in `run`, with health changes and
 /// progress on stderr, until the last or an interrupt. Returns whether interrupted.
-bool feed_scans(const Slam3dFlags& flags, lidar3d::ScanSequence& sequence, lidar3d::LidarSlam& slam,
-                lidar3d::SlamRun& run) {
+bool feed_scans(const Slam3dFlags& flags, lidar3d::ScanSequence& sequence, Pipeline& pipeline, lidar3d::SlamRun& run) {
+  const lidar3d::LidarSlam& slam = pipeline.slam;
   const std::size_t n = sequence.files.size();
   lidar3d::ScanReader reader(sequence);
   const bool tty_progress = !flags.quiet && !flags.progress && isatty(fileno(stderr));
@@ -92,7 +110,7 @@ bool feed_scans(const Slam3dFlags& flags, lidar3d::ScanSequence& sequence, lidar
       continue;
     }
     const double read_s = core::seconds_since(read_start);
-    const lidar3d::SlamScanResult slam_result = slam.add_scan(cloud, sequence.times_s[k]);
+    const lidar3d::SlamScanResult slam_result = pipeline.add_scan(k, cloud, sequence.times_s[k]);
     const lidar3d::OdometryScanResult& result = slam_result.odometry;
     run.add_scan(k, cloud, slam_result, read_s);
     processed = k + 1;
@@ -133,8 +151,23 @@ void print_errors(const std::string& ground_truth_file, const lidar3d::Trajector
   }
 }
 
+void print_inertial(const lidar3d::InertialRun& inertial) {
+  const lidar3d::InertialSummary s = lidar3d::summarize(inertial);
+  const auto& init = inertial.initialization();
+  std::printf("IMU: %zu samples at %.1f Hz from %s; initialised %s; %zu scans fused, %zu without a prediction\n",
+              inertial.input().checks.samples, inertial.input().checks.median_rate_hz, inertial.input().source.c_str(),
+              !init ? "never" : init->still ? "still" : "moving", s.fused_scans, s.scans_without_prediction);
+  std::printf("  registration vs IMU  chi2 median %.2f, p90 %.2f; %zu contradicting the IMU, %zu degenerate carried by it\n",
+              s.median_chi2, s.p90_chi2, s.scans_contradicting_imu, s.degenerate_scans_carried);
+  const Vector3& bg = s.final_bias.gyro_rad_s;
+  const Vector3& ba = s.final_bias.accel_mps2;
+  std::printf("  final biases         gyro %.5f %.5f %.5f rad/s, accel %.4f %.4f %.4f m/s^2\n", bg.x(), bg.y(), bg.z(),
+              ba.x(), ba.y(), ba.z());
+}
+
 void print_summary(const Slam3dFlags& flags, const lidar3d::LidarSlam& slam, const lidar3d::SlamRun& run,
-                   const std::optional<lidar3d::TrajectoryErrors>& errors, double total_s, bool stopped) {
+                   const std::optional<lidar3d::TrajectoryErrors>& errors, double total_s, bool stopped,
+                   const lidar3d::InertialRun* inertial) {
   const std::vector<lidar3d::OdometryScanResult>& results = run.scans();
   std::vector<double> t_total;
   for (const auto& r : results) t_total.push_back(r.times.total_s);
@@ -154,15 +187,36 @@ void print_summary(const Slam3dFlags& flags, const lidar3d::LidarSlam& slam, con
                 slam_summary.keyframes, slam_summary.candidates.size(), slam_summary.loops_accepted,
                 slam_summary.loops_rejected_by_gnc);
   }
+  if (inertial != nullptr) print_inertial(*inertial);
   if (errors) print_errors(flags.ground_truth, *errors);
-  std::printf("wrote trajectory.tum, trajectory.kitti, map.ply (%zu points), map.png, report.json to %s%s\n",
-              run.global_map().size(), flags.out.c_str(), stopped ? " (interrupted: the result so far)" : "");
+  std::printf("wrote trajectory.tum, trajectory.kitti, map.ply (%zu points), map.png, %sreport.json to %s%s\n",
+              run.global_map().size(), inertial != nullptr ? "inertial_states.csv, inertial.png, " : "", flags.out.c_str(),
+              stopped ? " (interrupted: the result so far)" : "");
+}
+
+/// The run's IMU (none without --imu / --imu-topic), its notes on stderr.
+std::unique_ptr<lidar3d::InertialRun> read_imu(const Slam3dFlags& flags, const lidar3d::SlamConfiguration& options,
+                                               bool remap_forced) {
+  const std::optional<lidar3d::InertialInputRequest> request = imu_request(flags);
+  if (!request) return nullptr;
+  lidar3d::InertialInput input = lidar3d::read_inertial_input(*request);
+  if (!flags.quiet) {
+    for (const std::string& note : input.notes) std::fprintf(stderr, "cairn slam3d: %s\n", note.c_str());
+    if (remap_forced) {
+      std::fprintf(stderr, "cairn slam3d: with an IMU, registration.remap_degenerate_directions is set to true (the IMU "
+                           "carries the degenerate directions)\n");
+    }
+  }
+  const lidar3d::InertialFusionOptions fusion = lidar3d::inertial_fusion_options(options.imu, input);
+  return std::make_unique<lidar3d::InertialRun>(std::move(input), fusion, remap_forced);
 }
 
 int slam3d_command(const Slam3dFlags& flags) {
-  const lidar3d::LidarSlamOptions slam_options = slam3d_options(flags);
+  bool remap_forced = false;
+  const lidar3d::SlamConfiguration options = slam3d_options(flags, &remap_forced);
+  const lidar3d::LidarSlamOptions& slam_options = options.slam;
   if (flags.print_config) {
-    std::fputs(lidar3d::configuration().yaml(slam_options).c_str(), stdout);
+    std::fputs(lidar3d::configuration().yaml(options).c_str(), stdout);
     if (flags.scans.empty()) return 0;
   }
   if (!(flags.map_voxel_m > 0.0) || !std::isfinite(flags.map_voxel_m)) throw std::invalid_argument("--map-voxel must be > 0");
@@ -171,10 +225,11 @@ int slam3d_command(const Slam3dFlags& flags) {
     if (io::is_standard_output(flags.mcap)) throw std::invalid_argument("--mcap needs a file: MCAP is binary");
     io::resolve_output(flags.mcap);
     io::check_file_outside_directory("--mcap", flags.mcap, "--out", flags.out,
-                                     {"trajectory.tum", "trajectory.kitti", "map.ply", "map.png", "report.json"});
+                                     {"trajectory.tum", "trajectory.kitti", "map.ply", "map.png", "report.json", "inertial_states.csv", "inertial.png"});
   }
   lidar3d::ScanSequence sequence = read_sequence(flags);
   const std::vector<core::SE3> ground_truth = read_ground_truth(flags, sequence.files.size());
+  const std::unique_ptr<lidar3d::InertialRun> inertial = read_imu(flags, options, remap_forced);
   if (!flags.quiet && !sequence.times_from_file) {
     std::fprintf(stderr, "cairn slam3d: no --times: scans taken as 0.1 s apart (the motion prediction assumes a steady rate)\n");
   }
@@ -184,17 +239,26 @@ int slam3d_command(const Slam3dFlags& flags) {
   const auto start = core::Clock::now();
   lidar3d::LidarSlam slam(slam_options);
   lidar3d::SlamRun run(slam_options.odometry, flags.map_voxel_m);
-  const bool stopped = feed_scans(flags, sequence, slam, run);
+  Pipeline pipeline{slam, std::nullopt, inertial.get()};
+  if (inertial) {
+    pipeline.inertial.emplace(slam, inertial->options());
+    for (const inertial::ImuSample& sample : inertial->input().samples) pipeline.inertial->add_imu(sample);
+  }
+  const bool stopped = feed_scans(flags, sequence, pipeline, run);
   if (run.scans().empty()) throw std::runtime_error("no scan could be processed");
   if (!stopped) slam.finish();
   run.finish(slam);
+  if (inertial) inertial->finish(pipeline.inertial->fusion());
   const double total_s = core::seconds_since(start);
 
   const lidar3d::SlamRunInputs inputs{flags.scans, flags.times, flags.preset, flags.ground_truth};
   const std::optional<lidar3d::TrajectoryErrors> errors =
-      lidar3d::write_run_outputs(out, inputs, sequence, slam, run, ground_truth, flags.picture_px, total_s, stopped);
+      lidar3d::write_run_outputs(out, inputs, sequence, slam, run, ground_truth, flags.picture_px, total_s, stopped, inertial.get());
   if (!flags.mcap.empty()) lidar3d::write_foxglove_mcap(flags.mcap, slam, run);
-  if (!flags.quiet) print_summary(flags, slam, run, errors, total_s, stopped);
+  if (!flags.quiet) print_summary(flags, slam, run, errors, total_s, stopped, inertial.get());
+  if (inertial && !flags.quiet) {
+    for (const std::string& warning : lidar3d::summarize(*inertial).warnings) warn(warning);
+  }
   return stopped ? interrupted_exit_status() : 0;
 }
 

@@ -1,8 +1,10 @@
 #include "cairn/cli/slam3d_flags.hpp"
 
 #include <limits>
+#include <utility>
 #include <stdexcept>
 
+#include "cairn/bag/bag.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/flag_checks.hpp"
 #include "cairn/lidar3d/config.hpp"
@@ -12,7 +14,7 @@ namespace cairn::cli {
 namespace {
 
 // A dedicated flag naming an enum: the word of its key (lidar3d/config.hpp), else `message`.
-void set_word(lidar3d::LidarSlamOptions& options, const std::string& key, const std::string& word, const char* message) {
+void set_word(lidar3d::SlamConfiguration& options, const std::string& key, const std::string& word, const char* message) {
   if (word.empty()) return;
   try {
     lidar3d::configuration().set(key + "=" + word, options);
@@ -23,9 +25,9 @@ void set_word(lidar3d::LidarSlamOptions& options, const std::string& key, const 
 
 }  // namespace
 
-lidar3d::LidarSlamOptions slam3d_options(const Slam3dFlags& flags) {
-  lidar3d::LidarSlamOptions options;
-  options.odometry = lidar3d::preset_options(flags.preset);
+lidar3d::SlamConfiguration slam3d_options(const Slam3dFlags& flags, bool* remap_forced) {
+  lidar3d::SlamConfiguration options;
+  options.slam.odometry = lidar3d::preset_options(flags.preset);
   if (!flags.config.empty()) lidar3d::configuration().load(flags.config, options);
   for (const std::string& assignment : flags.set) {
     try {
@@ -34,15 +36,46 @@ lidar3d::LidarSlamOptions slam3d_options(const Slam3dFlags& flags) {
       throw UsageError(e.what());
     }
   }
-  if (flags.no_loop_closure) options.loop_closure = false;
+  lidar3d::LidarSlamOptions& slam = options.slam;
+  if (flags.no_loop_closure) slam.loop_closure = false;
   set_word(options, "registration.metric", flags.metric, "--metric must be point-to-plane or point-to-point");
-  if (flags.remap_degenerate) options.odometry.registration.remap_degenerate_directions = true;
+  if (flags.remap_degenerate) slam.odometry.registration.remap_degenerate_directions = true;
   set_word(options, "odometry.front_end", flags.front_end, "--front-end must be auto, dense or loam");
   set_word(options, "odometry.deskew", flags.deskew, "--deskew must be off, point-times or azimuth");
-  if (flags.command != nullptr && flags.command->count("--threads") > 0) options.odometry.threads = flags.threads;
+  if (flags.command != nullptr && flags.command->count("--threads") > 0) slam.odometry.threads = flags.threads;
+  const bool forced = flags.uses_imu() && lidar3d::prepare_for_inertial(slam);
+  if (remap_forced != nullptr) *remap_forced = forced;
   std::string error;
   if (!options.is_valid(&error)) throw UsageError("invalid configuration: " + error);
   return options;
+}
+
+std::optional<lidar3d::InertialInputRequest> imu_request(const Slam3dFlags& flags) {
+  const bool offset_given = flags.command != nullptr && flags.command->count("--imu-time-offset") > 0;
+  if (!flags.uses_imu()) {
+    for (const auto& [given, name] : {std::pair{!flags.imu_calibration.empty(), "--imu-calibration"},
+                                      std::pair{!flags.lidar_extrinsic.empty(), "--lidar-extrinsic"},
+                                      std::pair{offset_given, "--imu-time-offset"}}) {
+      if (given) throw UsageError(std::string(name) + " goes with --imu PATH or --imu-topic TOPIC, and neither was given");
+    }
+    return std::nullopt;
+  }
+  const bool scans_in_bag = flags.scans.size() == 1 && bag::is_bag(flags.scans.front());
+  if (!flags.imu_topic.empty() && !flags.imu.empty()) {
+    throw UsageError("--imu and --imu-topic: give one (--imu-topic reads sensor_msgs/Imu from the scans' bag, --imu a file, "
+                     "folder or another bag)");
+  }
+  if (!flags.imu_topic.empty() && !scans_in_bag) {
+    throw UsageError("--imu-topic reads sensor_msgs/Imu from the scans' bag, but SCANS are not a bag: give --imu PATH");
+  }
+  lidar3d::InertialInputRequest request;
+  request.imu = flags.imu;
+  if (!flags.imu_topic.empty()) request.bag = flags.scans.front();
+  request.topic = flags.imu_topic;
+  request.calibration = flags.imu_calibration;
+  request.lidar_extrinsic = flags.lidar_extrinsic;
+  request.time_offset_s = flags.imu_time_offset_s;
+  return request;
 }
 
 void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
@@ -64,6 +97,17 @@ void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
   app.add_option("--cloud-topic", flags.cloud_topic, "Bag input: the sensor_msgs/PointCloud2 topic (default: the only one)");
   app.add_option("--times", flags.times, "Table with one row per scan holding its time in seconds (e.g. KITTI times.txt)");
   app.add_option("--times-column", flags.times_column, "Column of --times holding the time (1-based)")->check(checks::count(10000))->capture_default_str();
+  app.add_option("--imu", flags.imu,
+                 "LiDAR-inertial SLAM with this IMU: an EuRoC imu0 (or mav0) folder or imu0/data.csv, a plain IMU CSV "
+                 "(docs/formats.md), or a bag with one sensor_msgs/Imu topic");
+  app.add_option("--imu-topic", flags.imu_topic, "LiDAR-inertial SLAM with this sensor_msgs/Imu topic of the scans' bag (instead of --imu)");
+  app.add_option("--imu-calibration", flags.imu_calibration,
+                 "The IMU's noise (EuRoC/Kalibr sensor.yaml; default: sensor.yaml beside the IMU's data, else EuRoC's ADIS16448)");
+  app.add_option("--lidar-extrinsic", flags.lidar_extrinsic,
+                 "A sensor.yaml whose T_BS is the LiDAR in the body (IMU) frame (default: lidar0/sensor.yaml beside the "
+                 "IMU's folder, else identity)");
+  app.add_option("--imu-time-offset", flags.imu_time_offset_s, "Seconds added to every IMU stamp to put it on the scans' clock")
+      ->capture_default_str();
   app.add_option("--ground-truth", flags.ground_truth,
                  "Ground-truth poses of the same scans (KITTI 3x4 per line, or TUM): print and report drift, RPE, ATE");
   app.add_option("--ground-truth-format", flags.ground_truth_format, "kitti or tum (default: from the file)");

@@ -1,14 +1,16 @@
 #pragma once
 /// \file
-/// The flags of `cairn slam3d` (cmd_slam3d.cpp): their definitions and the options they stand for
+/// The flags of `cairn slam3d` (cmd_slam3d.cpp): their definitions, the options they stand for
 /// (the preset, a YAML file and --set assignments through lidar3d/config.hpp, then the dedicated
-/// flags).
+/// flags) and the IMU they name (lidar3d/inertial_input.hpp).
 
 #include <CLI/CLI.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "cairn/lidar3d/slam.hpp"
+#include "cairn/lidar3d/config.hpp"
+#include "cairn/lidar3d/inertial_input.hpp"
 
 namespace cairn::cli {
 
@@ -27,6 +29,11 @@ struct Slam3dFlags {
   std::string metric;
   std::string deskew;
   std::string front_end;
+  std::string imu;
+  std::string imu_topic;
+  std::string imu_calibration;
+  std::string lidar_extrinsic;
+  double imu_time_offset_s = 0.0;
   long max_scans = 0;
   int threads = 0;
   double map_voxel_m = 0.25;
@@ -34,14 +41,23 @@ struct Slam3dFlags {
   bool lenient = false, no_loop_closure = false, remap_degenerate = false;
   bool quiet = false, progress = false, overwrite = false, print_config = false;
   const CLI::App* command = nullptr;  // which flags were given
+
+  /// --imu or --imu-topic given.
+  bool uses_imu() const { return !imu.empty() || !imu_topic.empty(); }
 };
 
 /// Defines the flags of `app` into `flags` (which must outlive it).
 void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags);
 
-/// The preset, --config, each --set, then the dedicated flags, which win. Throws UsageError for a
-/// bad --set or invalid options, io::ParseError for a bad --config file, std::invalid_argument for
-/// a bad preset or flag value.
-lidar3d::LidarSlamOptions slam3d_options(const Slam3dFlags& flags);
+/// The preset, --config, each --set, then the dedicated flags, which win; with an IMU, then
+/// lidar3d::prepare_for_inertial (`*remap_forced`, when given, says whether it changed anything).
+/// Throws UsageError for a bad --set or invalid options, io::ParseError for a bad --config file,
+/// std::invalid_argument for a bad preset or flag value.
+lidar3d::SlamConfiguration slam3d_options(const Slam3dFlags& flags, bool* remap_forced = nullptr);
+
+/// The IMU the flags name (none without --imu and --imu-topic). Throws UsageError for flags that do
+/// not go together: --imu-topic with scan files or with --imu, and --imu-calibration,
+/// --lidar-extrinsic or --imu-time-offset without an IMU.
+std::optional<lidar3d::InertialInputRequest> imu_request(const Slam3dFlags& flags);
 
 }  // namespace cairn::cli

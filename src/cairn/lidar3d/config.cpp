@@ -53,7 +53,18 @@ io::Choice lateral_offsets_choice(std::vector<double>& offsets_m) {
 
 }  // namespace
 
-io::Parameters parameters(LidarSlamOptions& o) {
+bool SlamConfiguration::is_valid(std::string* why) const {
+  core::Problems problems;
+  std::string nested;
+  if (!slam.is_valid(&nested)) problems.add(nested);
+  nested.clear();
+  if (!imu.is_valid(&nested)) problems.add_all("imu: ", nested);
+  return problems.report(why);
+}
+
+io::Parameters parameters(SlamConfiguration& configuration) {
+  LidarSlamOptions& o = configuration.slam;
+  InertialFusionOptions& imu = configuration.imu;
   LidarOdometryOptions& odometry = o.odometry;
   RegistrationOptions& registration = o.odometry.registration;
   LoamFeatureOptions& loam = o.odometry.loam;
@@ -131,12 +142,27 @@ io::Parameters parameters(LidarSlamOptions& o) {
       {"back_end", "loop_translation_sigma_m", &o.loop_translation_sigma_m, "noise of loop-closure edges"},
       {"back_end", "loop_rotation_sigma_rad", &o.loop_rotation_sigma_rad, "noise of loop-closure edges"},
       {"back_end", "final_gnc", &o.final_gnc, "GNC over the loop closures at the end (rejects the ones that disagree)"},
+      {"imu", "window_states", &imu.window_states, "states (scans) in the sliding window of the LiDAR-inertial factor graph (>= 2; used with --imu)"},
+      {"imu", "lidar_rotation_sigma_rad", &imu.lidar_rotation_sigma_rad, "LiDAR odometry factor: rotation standard deviation"},
+      {"imu", "lidar_translation_sigma_m", &imu.lidar_translation_sigma_m, "LiDAR odometry factor: translation standard deviation"},
+      {"imu", "degenerate_translation_sigma_m", &imu.degenerate_translation_sigma_m, "... along a degenerate direction (the IMU carries it)"},
+      {"imu", "contradiction_chi2", &imu.contradiction_chi2, "a registration farther than this (squared Mahalanobis, 6 dof) from the IMU's prediction is degraded"},
+      {"imu", "gravity_estimation_s", &imu.gravity_estimation_s, "gravity's direction is estimated for this long after the first scan, then held"},
+      {"imu", "gravity_mps2", &imu.gravity_mps2, "magnitude of gravity (also the static initialisation's)"},
+      {"imu", "initial_velocity_sigma_still_mps", &imu.initial_velocity_sigma_still_mps, "prior on the first velocity when the IMU was still at the start"},
+      {"imu", "initial_velocity_sigma_moving_mps", &imu.initial_velocity_sigma_moving_mps, "... when it was moving (the registrations give the velocity)"},
+      {"imu", "initial_gyro_bias_sigma_rad_s", &imu.initial_gyro_bias_sigma_rad_s, "prior on the first gyroscope bias"},
+      {"imu", "initial_accel_bias_sigma_mps2", &imu.initial_accel_bias_sigma_mps2, "prior on the first accelerometer bias"},
+      {"imu", "initialization_window_s", &imu.initialization.window_s, "static initialisation: the IMU's seconds before the first scan it looks at"},
+      {"imu", "initialization_block_s", &imu.initialization.block_s, "... still when the means of its blocks this long ..."},
+      {"imu", "initialization_gyro_block_spread_max_rad_s", &imu.initialization.gyro_block_spread_max_rad_s, "... agree with the window's mean within this (every gyroscope axis) ..."},
+      {"imu", "initialization_accel_block_spread_max_mps2", &imu.initialization.accel_block_spread_max_mps2, "... and this (every accelerometer axis)"},
   };
 }
 
 
-const io::Configuration<LidarSlamOptions>& configuration() {
-  static const io::Configuration<LidarSlamOptions> c(&parameters, "slam3d", "# cairn slam3d configuration: every key, its value and what it means.");
+const io::Configuration<SlamConfiguration>& configuration() {
+  static const io::Configuration<SlamConfiguration> c(&parameters, "slam3d", "# cairn slam3d configuration: every key, its value and what it means.");
   return c;
 }
 

@@ -11,6 +11,7 @@
 using cairn::core::Clock;
 using cairn::core::seconds_since;
 #include "cairn/inertial/imu_factors.hpp"
+#include "cairn/inertial/window_prior.hpp"
 
 namespace cairn::lidar3d {
 
@@ -53,19 +54,10 @@ struct LidarMeasurement {
 };
 
 /// One state of the window, with what links it to the one before.
-struct WindowState {
+struct WindowState : inertial::StateValues {
   double time_s = 0.0;
-  std::array<double, 7> pose{};
-  Vector3 velocity = Vector3::Zero();
-  BiasValues bias = BiasValues::Zero();
   std::optional<PreintegratedImu> from_previous;
   std::optional<LidarMeasurement> lidar;
-
-  NavState nav() const { return {backend::se3_from_values(pose.data()), velocity}; }
-  void set(const NavState& s) {
-    backend::se3_to_values(s.T_world_body, pose.data());
-    velocity = s.v_world_mps;
-  }
 };
 
 /// Priors on the oldest state: means and per-variable covariances (LIO-SAM's reset).
@@ -85,104 +77,6 @@ struct OldestPriors {
 };
 
 core::Timestamp stamp_of(double time_s) { return core::Timestamp::from_seconds(time_s); }
-
-/// The oldest state's prior as one Gaussian over (pose, velocity, bias[, gravity]): the residual
-/// S (Log(P^-1 T), v - v0, b - b0[, g - g0]), S^T S the inverse of the joint marginal covariance.
-/// Keeping the blocks together keeps the correlations the window built up, above all between
-/// the accelerometer bias and gravity (only their sum is observable on a straight drive).
-class JointStatePriorFactor final : public backend::Factor {
- public:
-  JointStatePriorFactor(const WindowState& mean, const Vector3* gravity_mean, const Eigen::MatrixXd& covariance)
-      : pose_(backend::se3_from_values(mean.pose.data())),
-        velocity_(mean.velocity),
-        bias_(mean.bias),
-        with_gravity_(gravity_mean != nullptr),
-        gravity_(gravity_mean != nullptr ? *gravity_mean : Vector3::Zero()) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(covariance);
-    const Eigen::VectorXd inverse_root = eigen.eigenvalues().cwiseMax(1e-18).cwiseSqrt().cwiseInverse();
-    sqrt_information_ = inverse_root.asDiagonal() * eigen.eigenvectors().transpose();
-  }
-  int residual_size() const override { return with_gravity_ ? 18 : 15; }
-  bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override {
-    const int n = residual_size();
-    Matrix6 Jr_inv;
-    Eigen::VectorXd e(n);
-    e.head<6>() = (pose_.inverse() * backend::se3_from_values(values[0])).log(Jr_inv);
-    e.segment<3>(6) = Eigen::Map<const Vector3>(values[1]) - velocity_;
-    e.segment<6>(9) = Eigen::Map<const BiasValues>(values[2]) - bias_;
-    if (with_gravity_) e.tail<3>() = Eigen::Map<const Vector3>(values[3]) - gravity_;
-    Eigen::Map<Eigen::VectorXd>(residual, n) = sqrt_information_ * e;
-    if (jacobians == nullptr) return true;
-    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-    const int sizes[4] = {6, 3, 6, 3};
-    for (int v = 0, offset = 0; v < (with_gravity_ ? 4 : 3); offset += sizes[v], ++v) {
-      if (jacobians[v] == nullptr) continue;
-      Eigen::MatrixXd J = sqrt_information_.middleCols(offset, sizes[v]);
-      if (v == 0) J = J * Jr_inv;
-      Eigen::Map<RowMajor>(jacobians[v], n, sizes[v]) = J;
-    }
-    return true;
-  }
-
- private:
-  core::SE3 pose_;
-  Vector3 velocity_;
-  BiasValues bias_;
-  bool with_gravity_;
-  Vector3 gravity_;
-  Eigen::MatrixXd sqrt_information_;
-};
-
-/// The joint covariance of `variables` at the problem's current values: the matching block of
-/// (J^T W J)^-1 over every free variable, J whitened and robust-reweighted (a dense inverse; the
-/// window has at most a few hundred unknowns). Constant variables get zero rows and columns.
-Eigen::MatrixXd joint_covariance(const backend::LeastSquaresProblem& problem, const std::vector<int>& variables) {
-  std::vector<int> offset(static_cast<std::size_t>(problem.num_variables()), -1);
-  int size = 0;
-  for (int v = 0; v < problem.num_variables(); ++v) {
-    if (problem.is_constant(v)) continue;
-    offset[static_cast<std::size_t>(v)] = size;
-    size += problem.manifold(v).tangent_size();
-  }
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(size, size);
-  for (int f = 0; f < problem.num_factors(); ++f) {
-    const backend::Factor& factor = problem.factor(f);
-    const std::vector<int>& vars = problem.factor_variables(f);
-    const int m = factor.residual_size();
-    std::vector<const double*> values;
-    std::vector<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J;
-    std::vector<double*> jacobians;
-    for (int v : vars) {
-      values.push_back(problem.values(v));
-      J.emplace_back(m, problem.manifold(v).tangent_size());
-    }
-    for (auto& block : J) jacobians.push_back(block.data());
-    Eigen::VectorXd r(m);
-    if (!factor.evaluate(values.data(), r.data(), jacobians.data())) continue;
-    const backend::FactorLoss& loss = problem.factor_loss(f);
-    const double w = backend::evaluate_kernel(loss.kernel, loss.scale, r.squaredNorm()).weight;
-    for (std::size_t a = 0; a < vars.size(); ++a) {
-      const int oa = offset[static_cast<std::size_t>(vars[a])];
-      if (oa < 0) continue;
-      for (std::size_t b = 0; b < vars.size(); ++b) {
-        const int ob = offset[static_cast<std::size_t>(vars[b])];
-        if (ob < 0) continue;
-        H.block(oa, ob, J[a].cols(), J[b].cols()) += w * J[a].transpose() * J[b];
-      }
-    }
-  }
-  int out_size = 0;
-  for (int v : variables) out_size += problem.manifold(v).tangent_size();
-  Eigen::MatrixXd selector = Eigen::MatrixXd::Zero(size, out_size);
-  int col = 0;
-  for (int v : variables) {
-    const int n = problem.manifold(v).tangent_size();
-    if (offset[static_cast<std::size_t>(v)] >= 0) selector.block(offset[static_cast<std::size_t>(v)], col, n, n).setIdentity();
-    col += n;
-  }
-  const Eigen::MatrixXd solved = H.ldlt().solve(selector);
-  return selector.transpose() * solved;
-}
 
 }  // namespace
 
@@ -208,8 +102,8 @@ struct LidarInertialFusion::Impl {
   NavState latest_nav(double& time_s, ImuBias& bias) const;
   std::optional<PreintegratedImu> preintegrate(const InertialFusionOptions& o, double from_s, double to_s,
                                                const ImuBias& bias) const;
-  backend::LeastSquaresProblem build_problem(const InertialFusionOptions& options);
-  void slide(const InertialFusionOptions& options, backend::LeastSquaresProblem& problem);
+  backend::LeastSquaresProblem build_problem(const InertialFusionOptions& options, std::size_t states);
+  void slide(const InertialFusionOptions& options);
 };
 
 LidarInertialFusion::LidarInertialFusion(const InertialFusionOptions& options)
@@ -405,7 +299,8 @@ InertialScanState LidarInertialFusion::fuse(const OdometryScanResult& odometry, 
     }
   }
   m.window.push_back(std::move(state));
-  backend::LeastSquaresProblem problem = m.build_problem(options_);
+  m.gravity_held = m.gravity_held || m.window.back().time_s - m.first_time_s > options_.gravity_estimation_s;
+  backend::LeastSquaresProblem problem = m.build_problem(options_, m.window.size());
   backend::LeastSquaresOptions solve_options;
   solve_options.linear_solver = backend::LinearSolverType::kSparseNormalCholesky;
   solve_options.threads = 1;
@@ -416,7 +311,7 @@ InertialScanState LidarInertialFusion::fuse(const OdometryScanResult& odometry, 
   out.bias = inertial::bias_from_values(latest.bias.data());
   out.gravity_world = m.gravity;
   out.T_world_lidar = out.state.T_world_body * options_.T_imu_lidar;
-  if (static_cast<int>(m.window.size()) > options_.window_states) m.slide(options_, problem);
+  if (static_cast<int>(m.window.size()) > options_.window_states) m.slide(options_);
   out.solve_s = seconds_since(start);
   return out;
 }
@@ -424,21 +319,27 @@ InertialScanState LidarInertialFusion::fuse(const OdometryScanResult& odometry, 
 // The window's factor graph: priors on the oldest state, then per state its IMU and bias
 // random-walk factors from the state before and its LiDAR factor (Huber, at the contradiction
 // threshold's distance, so one wrong registration cannot drag the window).
-backend::LeastSquaresProblem LidarInertialFusion::Impl::build_problem(const InertialFusionOptions& o) {
+//
+// For marginalisation (`states` = 2) it holds only what touches the oldest state: its priors, its
+// LiDAR factor and the IMU and bias factors to the next state, not the factors that stay in the
+// window (the next state's LiDAR factor, gravity's magnitude), which would otherwise be counted
+// again by the prior they leave behind.
+backend::LeastSquaresProblem LidarInertialFusion::Impl::build_problem(const InertialFusionOptions& o, std::size_t states) {
+  const bool marginalising = states < window.size();
   backend::LeastSquaresProblem problem;
   ids.clear();
-  for (WindowState& s : window) {
+  for (std::size_t k = 0; k < states; ++k) {
+    WindowState& s = window[k];
     ids.push_back({problem.add_variable(s.pose.data(), backend::se3_manifold()),
                    problem.add_variable(s.velocity.data(), backend::euclidean_manifold(3)),
                    problem.add_variable(s.bias.data(), backend::euclidean_manifold(6))});
   }
   gravity_id = problem.add_variable(gravity.data(), backend::euclidean_manifold(3));
   const bool joint_with_gravity = priors.joint_covariance && priors.joint_covariance->rows() == 18;
-  gravity_held = gravity_held || window.back().time_s - first_time_s > o.gravity_estimation_s;
   if (gravity_held) {
     problem.set_constant(gravity_id);
   } else {
-    problem.add_factor(std::make_unique<inertial::GravityMagnitudeFactor>(o.gravity_mps2, 1e-3), {gravity_id});
+    if (!marginalising) problem.add_factor(std::make_unique<inertial::GravityMagnitudeFactor>(o.gravity_mps2, 1e-3), {gravity_id});
     if (!joint_with_gravity) {
       problem.add_factor(std::make_unique<inertial::VectorPriorFactor<3>>(priors.gravity, priors.gravity_covariance), {gravity_id});
     }
@@ -449,15 +350,17 @@ backend::LeastSquaresProblem LidarInertialFusion::Impl::build_problem(const Iner
     Eigen::MatrixXd covariance = *priors.joint_covariance;
     if (joint_with_gravity && gravity_held) covariance = covariance.topLeftCorner(15, 15).eval();
     if (joint_with_gravity && gravity_held) joint_vars.pop_back();
-    problem.add_factor(std::make_unique<JointStatePriorFactor>(priors.joint_mean, gravity_held ? nullptr : &priors.gravity,
-                                                               covariance),
+    const WindowState& mean = priors.joint_mean;
+    problem.add_factor(std::make_unique<inertial::StatePriorFactor>(backend::se3_from_values(mean.pose.data()), mean.velocity,
+                                                                    mean.bias, gravity_held ? nullptr : &priors.gravity,
+                                                                    covariance),
                        joint_vars);
   } else {
     problem.add_factor(std::make_unique<inertial::PosePriorFactor>(priors.pose, priors.pose_covariance), {ids[0][0]});
     problem.add_factor(std::make_unique<inertial::VectorPriorFactor<3>>(priors.velocity, priors.velocity_covariance), {ids[0][1]});
     problem.add_factor(std::make_unique<inertial::VectorPriorFactor<6>>(priors.bias, priors.bias_covariance), {ids[0][2]});
   }
-  for (std::size_t k = 0; k < window.size(); ++k) {
+  for (std::size_t k = 0; k < states; ++k) {
     const WindowState& s = window[k];
     if (k > 0 && s.from_previous) {
       problem.add_factor(std::make_unique<inertial::ImuFactor>(inertial::ImuFactor::with_gravity_variable(*s.from_previous)),
@@ -465,7 +368,7 @@ backend::LeastSquaresProblem LidarInertialFusion::Impl::build_problem(const Iner
       problem.add_factor(std::make_unique<inertial::BiasRandomWalkFactor>(o.noise, s.from_previous->delta_time_s()),
                          {ids[k - 1][2], ids[k][2]});
     }
-    if (s.lidar) {
+    if (s.lidar && !(marginalising && k > 0)) {
       problem.add_factor(std::make_unique<inertial::PosePriorFactor>(s.lidar->Z_world_lidar, s.lidar->covariance, o.T_imu_lidar),
                          {ids[k][0]}, backend::FactorLoss{backend::RobustKernel::kHuber, std::sqrt(o.contradiction_chi2)});
     }
@@ -473,12 +376,15 @@ backend::LeastSquaresProblem LidarInertialFusion::Impl::build_problem(const Iner
   return problem;
 }
 
-// Slides the window: the second state's joint marginal (with gravity's while it is estimated)
-// becomes the prior, the oldest state leaves.
-void LidarInertialFusion::Impl::slide(const InertialFusionOptions&, backend::LeastSquaresProblem& problem) {
+// Slides the window: the oldest state is marginalised (the factors touching it, linearised at the
+// solution, its block eliminated: Sibley, Matthies & Sukhatme, "Sliding window filter with
+// application to planetary landing", JFR 27(5), 2010, Sec. 3), and the next state's joint marginal
+// (with gravity's while it is estimated) becomes the prior; the oldest state leaves.
+void LidarInertialFusion::Impl::slide(const InertialFusionOptions& o) {
+  const backend::LeastSquaresProblem problem = build_problem(o, 2);
   std::vector<int> joint_vars = {ids[1][0], ids[1][1], ids[1][2]};
   if (!gravity_held) joint_vars.push_back(gravity_id);
-  const Eigen::MatrixXd covariance = joint_covariance(problem, joint_vars);
+  const Eigen::MatrixXd covariance = inertial::joint_marginal_covariance(problem, joint_vars);
   const WindowState& next = window[1];
   priors.pose = next.nav().T_world_body;
   priors.velocity = next.velocity;

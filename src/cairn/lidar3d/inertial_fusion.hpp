@@ -52,10 +52,12 @@ struct InertialFusionOptions {
   /// States in the sliding window (>= 2).
   int window_states = 10;
   /// The LiDAR odometry factor's standard deviations (> 0): rotation (rad) and translation (m);
-  /// along a degenerate translation direction, degenerate_translation_sigma_m. LIO-SAM uses 0.05 rad
-  /// and 0.1 m, and 1 for a degenerate match.
-  double lidar_rotation_sigma_rad = 0.01;
-  double lidar_translation_sigma_m = 0.05;
+  /// along a degenerate translation direction, degenerate_translation_sigma_m. The defaults are
+  /// LIO-SAM's (imuPreintegration.cpp, correctionNoise: 0.05 rad, 0.1 m; 1 for a degenerate match).
+  /// A rotation sigma far below the registration's real error lets its pitch noise leak gravity
+  /// into the unobserved axis (docs/lidar3d.md, "LiDAR-inertial": the tunnel's sensitivity to them).
+  double lidar_rotation_sigma_rad = 0.05;
+  double lidar_translation_sigma_m = 0.1;
   double degenerate_translation_sigma_m = 10.0;
   /// Standard deviations of the first state's priors: the initial velocity when the IMU was still
   /// at the start (m/s) or moving (then the velocity comes from the first registrations), and the
@@ -72,7 +74,7 @@ struct InertialFusionOptions {
   /// accelerometer bias would drop their strong correlation (on a straight drive only their sum
   /// is observable) and let the velocity drift. ORB-SLAM3 likewise refines gravity during its
   /// inertial initialisation only.
-  double gravity_estimation_s = 0.0;
+  double gravity_estimation_s = 10.0;
   /// Static initialisation over the IMU's first seconds (window, stillness limits).
   inertial::StaticInitializationOptions initialization;
   bool is_valid(std::string* why) const;

@@ -27,9 +27,13 @@ nlohmann::json input_json(const SlamRunInputs& inputs, const ScanSequence& seque
 }
 
 // configuration().json of the options in effect, with the run's facts that are not options: the preset
-// they started from, the front end kAuto chose, and the written map's voxel.
-nlohmann::json options_json(const SlamRunInputs& inputs, const LidarSlam& slam, const SlamRun& run) {
-  nlohmann::json options = configuration().json(slam.options());
+// they started from, the front end kAuto chose, and the written map's voxel. The `imu` section only
+// when the run had an IMU.
+nlohmann::json options_json(const SlamRunInputs& inputs, const LidarSlam& slam, const SlamRun& run,
+                            const InertialRun* inertial) {
+  nlohmann::json options =
+      configuration().json(SlamConfiguration{slam.options(), inertial ? inertial->options() : InertialFusionOptions{}});
+  if (inertial == nullptr) options.erase("imu");
   options["preset"] = inputs.preset;
   options["front_end_used"] = std::string(to_string(slam.front_end()));
   options["map_voxel_m"] = run.map_voxel_m();
@@ -141,7 +145,7 @@ nlohmann::json ground_truth_json(const std::string& file, const TrajectoryErrors
 
 nlohmann::json report_json(const SlamRunInputs& inputs, const ScanSequence& sequence, const LidarSlam& slam,
                            const SlamRun& run, double wall_time_s, bool interrupted,
-                           const std::optional<TrajectoryErrors>& errors) {
+                           const std::optional<TrajectoryErrors>& errors, const InertialRun* inertial) {
   const HealthCounts health = run.health_counts();
   nlohmann::json scans = nlohmann::json::array();
   for (std::size_t i = 0; i < run.scans().size(); ++i) {
@@ -150,7 +154,7 @@ nlohmann::json report_json(const SlamRunInputs& inputs, const ScanSequence& sequ
   }
   nlohmann::json report;
   report["input"] = input_json(inputs, sequence, run);
-  report["options"] = options_json(inputs, slam, run);
+  report["options"] = options_json(inputs, slam, run, inertial);
   report["summary"] = {{"scans_ok", health.ok}, {"scans_degraded", health.degraded}, {"scans_lost", health.lost},
                        {"map_segments", run.scans().back().segment + 1}, {"map_points", run.global_map().size()},
                        {"scans_with_unusable_point_times", health.unusable_point_times}};
@@ -160,6 +164,7 @@ nlohmann::json report_json(const SlamRunInputs& inputs, const ScanSequence& sequ
   report["wall_time_s"] = wall_time_s;
   report["interrupted"] = interrupted;
   if (errors) report["ground_truth"] = ground_truth_json(inputs.ground_truth_file, *errors);
+  if (inertial != nullptr) report["inertial"] = inertial_json(*inertial);
   report["scans"] = scans;
   return report;
 }

@@ -1,18 +1,31 @@
 #include "cairn/lidar3d/run_outputs.hpp"
 
 #include <ostream>
+#include <stdexcept>
 #include <string>
 
 #include "cairn/io/json_text.hpp"
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/io/trajectory.hpp"
+#include "cairn/viz/render.hpp"
 
 namespace cairn::lidar3d {
+namespace {
+
+// inertial_states.csv and inertial.png.
+void write_inertial_outputs(io::OutputDirectory& out, const InertialRun& inertial) {
+  io::write_output(out.staging_path("inertial_states.csv"), [&](std::ostream& o) { write_inertial_states_csv(o, inertial); });
+  const viz::RenderResult png = viz::render(inertial_figure(inertial), viz::ImageFormat::kPng);
+  if (!png.ok) throw std::runtime_error("cannot draw inertial.png: " + png.message);
+  io::write_output(out.staging_path("inertial.png"), [&](std::ostream& o) { o << png.bytes; });
+}
+
+}  // namespace
 
 std::optional<TrajectoryErrors> write_run_outputs(io::OutputDirectory& out, const SlamRunInputs& inputs,
                                                   const ScanSequence& sequence, const LidarSlam& slam, const SlamRun& run,
                                                   const std::vector<core::SE3>& ground_truth, int picture_px,
-                                                  double wall_time_s, bool interrupted) {
+                                                  double wall_time_s, bool interrupted, const InertialRun* inertial) {
   io::Trajectory trajectory;
   for (const OdometryScanResult& r : run.scans()) {
     trajectory.stamps.push_back(core::Timestamp::from_seconds(r.time_s));
@@ -30,8 +43,10 @@ std::optional<TrajectoryErrors> write_run_outputs(io::OutputDirectory& out, cons
     o.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
   });
 
+  if (inertial != nullptr) write_inertial_outputs(out, *inertial);
+
   const std::optional<TrajectoryErrors> errors = run.errors_against(ground_truth);
-  const nlohmann::json report = report_json(inputs, sequence, slam, run, wall_time_s, interrupted, errors);
+  const nlohmann::json report = report_json(inputs, sequence, slam, run, wall_time_s, interrupted, errors, inertial);
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
   return errors;
