@@ -102,6 +102,11 @@ struct LidarInertialFusion::Impl {
   NavState latest_nav(double& time_s, ImuBias& bias) const;
   std::optional<PreintegratedImu> preintegrate(const InertialFusionOptions& o, double from_s, double to_s,
                                                const ImuBias& bias) const;
+  void restart_window(const InertialFusionOptions& options, const WindowState& state, bool imu_covered);
+  void add_lidar_measurement(const InertialFusionOptions& options, const OdometryScanResult& odometry,
+                             const core::SE3& T_odom_lidar, const PreintegratedImu& pim, const NavState& state_k,
+                             const NavState& predicted, WindowState& state, InertialScanState& out) const;
+  void solve_window(const InertialFusionOptions& options, InertialScanState& out);
   backend::LeastSquaresProblem build_problem(const InertialFusionOptions& options, std::size_t states);
   void slide(const InertialFusionOptions& options);
 };
@@ -243,6 +248,67 @@ Matrix6 prediction_covariance(const PreintegratedImu& pim, const NavState& state
 
 }  // namespace
 
+// Restarts the window at `state` (the first scan, or after the IMU stopped covering the scans):
+// tight priors on its pose, the velocity's by whether the IMU started still, the biases' and
+// gravity's from the initialisation.
+void LidarInertialFusion::Impl::restart_window(const InertialFusionOptions& o, const WindowState& state, bool imu_covered) {
+  if (window.empty()) first_time_s = state.time_s;
+  window.clear();
+  priors = OldestPriors{};
+  priors.pose = state.nav().T_world_body;
+  priors.pose_covariance = Matrix6::Identity() * 1e-8;
+  priors.velocity = state.velocity;
+  const double v_sigma = initialization.still && imu_covered ? o.initial_velocity_sigma_still_mps
+                                                             : o.initial_velocity_sigma_moving_mps;
+  priors.velocity_covariance = Matrix3::Identity() * v_sigma * v_sigma;
+  priors.bias = state.bias;
+  Eigen::Matrix<double, 6, 1> bias_sigma;
+  bias_sigma << Vector3::Constant(o.initial_gyro_bias_sigma_rad_s), Vector3::Constant(o.initial_accel_bias_sigma_mps2);
+  priors.bias_covariance = bias_sigma.cwiseAbs2().asDiagonal();
+  // Gravity's direction: from the still window to the accelerometer bias' level, otherwise loose
+  // (the first registrations' accelerations tell it apart from the biases).
+  priors.gravity = gravity;
+  const double g_sigma = initialization.still ? o.initial_accel_bias_sigma_mps2 : 0.25 * o.gravity_mps2;
+  priors.gravity_covariance = Matrix3::Identity() * g_sigma * g_sigma;
+}
+
+// The registered pose as the new state's LiDAR factor (none for a lost scan), and how far it lies
+// from the IMU's prediction (the contradiction test).
+void LidarInertialFusion::Impl::add_lidar_measurement(const InertialFusionOptions& o, const OdometryScanResult& odometry,
+                                                      const core::SE3& T_odom_lidar, const PreintegratedImu& pim,
+                                                      const NavState& state_k, const NavState& predicted, WindowState& state,
+                                                      InertialScanState& out) const {
+  const bool registered = odometry.health != Health::kLost && odometry.registration.correspondences > 0;
+  if (!registered) return;
+  const Matrix6 lidar_cov = lidar_covariance(o, odometry, T_odom_lidar);
+  state.lidar = LidarMeasurement{T_odom_lidar, lidar_cov};
+  const core::SE3 T_pred_lidar = predicted.T_world_body * o.T_imu_lidar;
+  const Vector6 r = (T_odom_lidar.inverse() * T_pred_lidar).log();
+  const Matrix6 total = lidar_cov + prediction_covariance(pim, state_k, T_pred_lidar);
+  out.imu_lidar_chi2 = r.dot(total.ldlt().solve(r));
+  out.contradicts_imu = out.imu_lidar_chi2 > o.contradiction_chi2;
+  out.lidar_used = true;
+  out.degenerate = odometry.registration.degenerate_directions > 0;
+}
+
+// Solves the window (a few LM iterations from the prediction) and returns the latest state.
+void LidarInertialFusion::Impl::solve_window(const InertialFusionOptions& o, InertialScanState& out) {
+  gravity_held = gravity_held || window.back().time_s - first_time_s > o.gravity_estimation_s;
+  backend::LeastSquaresProblem problem = build_problem(o, window.size());
+  backend::LeastSquaresOptions solve_options;
+  solve_options.linear_solver = backend::LinearSolverType::kSparseNormalCholesky;
+  solve_options.threads = 1;
+  solve_options.max_iterations = 10;
+  backend::solve(problem, solve_options);
+  const WindowState& latest = window.back();
+  out.state = latest.nav();
+  out.bias = inertial::bias_from_values(latest.bias.data());
+  out.gravity_world = gravity;
+  out.T_world_lidar = out.state.T_world_body * o.T_imu_lidar;
+}
+
+// Per scan: preintegrate to the registration instant, predict, add the state with its LiDAR
+// factor (or restart the window), solve, slide.
 InertialScanState LidarInertialFusion::fuse(const OdometryScanResult& odometry, const core::SE3& T_odom_lidar) {
   Impl& m = *impl_;
   const auto start = Clock::now();
@@ -251,66 +317,23 @@ InertialScanState LidarInertialFusion::fuse(const OdometryScanResult& odometry, 
   double t_k = 0.0;
   ImuBias bias_k;
   const NavState state_k = m.latest_nav(t_k, bias_k);
-  std::optional<PreintegratedImu> pim = m.preintegrate(options_, t_k, out.time_s, bias_k);
-  const Vector3 gravity = m.gravity;
-  const core::SE3 T_lidar_imu = options_.T_imu_lidar.inverse();
-
+  const std::optional<PreintegratedImu> pim = m.preintegrate(options_, t_k, out.time_s, bias_k);
   WindowState state;
   state.time_s = out.time_s;
   state.bias = inertial::to_values(bias_k);
-  const bool first = m.window.empty() || !pim;
-  if (first) {
-    // The window (re)starts here: the registered pose (the prior's at the first scan), the IMU's
-    // velocity when it covered the interval.
-    state.set(NavState{T_odom_lidar * T_lidar_imu, pim ? pim->predict(state_k, bias_k, gravity).v_world_mps : Vector3::Zero()});
-    if (m.window.empty()) m.first_time_s = out.time_s;
-    m.window.clear();
-    m.priors = OldestPriors{};
-    m.priors.pose = state.nav().T_world_body;
-    m.priors.pose_covariance = Matrix6::Identity() * 1e-8;
-    m.priors.velocity = state.velocity;
-    const double v_sigma = m.initialization.still && pim ? options_.initial_velocity_sigma_still_mps
-                                                         : options_.initial_velocity_sigma_moving_mps;
-    m.priors.velocity_covariance = Matrix3::Identity() * v_sigma * v_sigma;
-    m.priors.bias = state.bias;
-    Eigen::Matrix<double, 6, 1> bias_sigma;
-    bias_sigma << Vector3::Constant(options_.initial_gyro_bias_sigma_rad_s), Vector3::Constant(options_.initial_accel_bias_sigma_mps2);
-    m.priors.bias_covariance = bias_sigma.cwiseAbs2().asDiagonal();
-    // Gravity's direction: from the still window to the accelerometer bias' level, otherwise loose
-    // (the first registrations' accelerations tell it apart from the biases).
-    m.priors.gravity = m.gravity;
-    const double g_sigma = m.initialization.still ? options_.initial_accel_bias_sigma_mps2 : 0.25 * options_.gravity_mps2;
-    m.priors.gravity_covariance = Matrix3::Identity() * g_sigma * g_sigma;
+  if (m.window.empty() || !pim) {
+    // The registered pose (the prior's at the first scan), the IMU's velocity when it covered the interval.
+    const Vector3 v = pim ? pim->predict(state_k, bias_k, m.gravity).v_world_mps : Vector3::Zero();
+    state.set(NavState{T_odom_lidar * options_.T_imu_lidar.inverse(), v});
+    m.restart_window(options_, state, pim.has_value());
   } else {
-    const NavState predicted = pim->predict(state_k, bias_k, gravity);
+    const NavState predicted = pim->predict(state_k, bias_k, m.gravity);
     state.set(predicted);
     state.from_previous = pim;
-    const bool registered = odometry.health != Health::kLost && odometry.registration.correspondences > 0;
-    if (registered) {
-      const Matrix6 lidar_cov = lidar_covariance(options_, odometry, T_odom_lidar);
-      state.lidar = LidarMeasurement{T_odom_lidar, lidar_cov};
-      const core::SE3 T_pred_lidar = predicted.T_world_body * options_.T_imu_lidar;
-      const Vector6 r = (T_odom_lidar.inverse() * T_pred_lidar).log();
-      const Matrix6 total = lidar_cov + prediction_covariance(*pim, state_k, T_pred_lidar);
-      out.imu_lidar_chi2 = r.dot(total.ldlt().solve(r));
-      out.contradicts_imu = out.imu_lidar_chi2 > options_.contradiction_chi2;
-      out.lidar_used = true;
-      out.degenerate = odometry.registration.degenerate_directions > 0;
-    }
+    m.add_lidar_measurement(options_, odometry, T_odom_lidar, *pim, state_k, predicted, state, out);
   }
   m.window.push_back(std::move(state));
-  m.gravity_held = m.gravity_held || m.window.back().time_s - m.first_time_s > options_.gravity_estimation_s;
-  backend::LeastSquaresProblem problem = m.build_problem(options_, m.window.size());
-  backend::LeastSquaresOptions solve_options;
-  solve_options.linear_solver = backend::LinearSolverType::kSparseNormalCholesky;
-  solve_options.threads = 1;
-  solve_options.max_iterations = 10;
-  backend::solve(problem, solve_options);
-  const WindowState& latest = m.window.back();
-  out.state = latest.nav();
-  out.bias = inertial::bias_from_values(latest.bias.data());
-  out.gravity_world = m.gravity;
-  out.T_world_lidar = out.state.T_world_body * options_.T_imu_lidar;
+  m.solve_window(options_, out);
   if (static_cast<int>(m.window.size()) > options_.window_states) m.slide(options_);
   out.solve_s = seconds_since(start);
   return out;
