@@ -104,8 +104,8 @@ TEST(Slam3dImuCli, TunnelWithImuWritesInertialOutputsAndEndsCloserThanLidarOnly)
   const double e_lidar = lidar["ground_truth"]["end_point_error_m"].get<double>();
   const double path = report["ground_truth"]["path_length_m"].get<double>();
   std::printf("tunnel-3d, LOAM: end-point error with the IMU %.2f m, LiDAR-only %.2f m, of %.0f m\n", e_imu, e_lidar, path);
-  // A regression guard on this deterministic run (seed 1: 1.9 m against 13.6 m), not a claim about
-  // tunnels in general: seed 3 ends worse with the IMU than without (docs/lidar3d.md).
+  // A regression guard on this deterministic run (seed 1: 2.3 m against 13.6 m), not a claim about
+  // tunnels in general: seeds 3 and 4 end worse with the IMU than without (docs/lidar3d.md).
   EXPECT_LT(e_imu, 0.5 * e_lidar);
   EXPECT_LT(e_imu, 0.03 * path);
 

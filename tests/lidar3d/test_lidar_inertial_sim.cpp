@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -22,6 +23,7 @@ struct SimRun {
   std::vector<core::SE3> trajectory;       ///< the final estimate at the stamps
   sim::SimulationResult simulation;
   LidarSlamSummary summary;
+  std::optional<InertialInitialization> initialization;  ///< with the IMU
 };
 
 /// Runs LiDAR-only (with_imu false) or LiDAR-inertial SLAM on a simulated scenario.
@@ -54,6 +56,7 @@ SimRun run_scenario(const sim::Scenario& scenario, std::uint64_t seed, bool with
     out.truth_at_stamps.push_back(sim::lidar_pose(s.truth[s.scan_samples[k]].T_world_body, scenario.lidar3d));
   }
   slam.finish();
+  if (with_imu && lio.fusion().initialized()) out.initialization = lio.fusion().initialization();
   out.trajectory = slam.trajectory();
   out.summary = slam.summary();
   return out;
@@ -80,9 +83,9 @@ TEST(LidarInertialSimulation, CarriesTheTunnelWithoutLosingAScan) {
   for (const auto& scan : lio.scans) fused += scan.inertial ? 1 : 0;
   // The last sweep ends after the simulated IMU's last sample, so that scan has no prediction.
   EXPECT_GE(fused, static_cast<int>(lio.scans.size()) - 1);
-  // Issue 38 asks for 1 % of the distance. Measured (seed 1, this test) 0.82 %, against 5.9 %
-  // LiDAR-only; but seeds 2 and 3 give 5.7 % and 8.0 % (LiDAR-only 14.4 % and 3.6 %), so neither
-  // the 1 % nor "better than LiDAR-only" holds in general and neither is asserted here:
+  // Issue 38 asks for 1 % of the distance. Measured (seed 1, this test) 0.98 %, against 5.9 %
+  // LiDAR-only; but seeds 2-5 give 6.1, 4.0, 13.2 and 7.9 % (LiDAR-only 14.4, 3.6, 6.9 and 9.6 %), so
+  // neither the 1 % nor "better than LiDAR-only" holds in general and neither is asserted here:
   // docs/lidar3d.md, "LiDAR-inertial". What holds on every seed is asserted: nothing lost, the axis
   // named, the IMU carrying it.
   EXPECT_EQ(count_health(lio, Health::kLost), 0);
@@ -94,6 +97,33 @@ TEST(LidarInertialSimulation, CarriesTheTunnelWithoutLosingAScan) {
     degenerate += lio.scans[k].inertial && lio.scans[k].inertial->degenerate ? 1 : 0;
   }
   EXPECT_GE(degenerate, blind * 9 / 10);
+}
+
+// tunnel-3d starts from a standstill at 1.5 m/s^2 at the IMU's first sample: over the static
+// window the IMU's block means agree (a constant acceleration reads as a 8.7 deg tilt), only the
+// LiDAR sees the motion. The stillness must be withdrawn and gravity found by the window.
+TEST(LidarInertialSimulation, ConstantAccelerationAtTheStartIsNotTakenForATilt) {
+  const sim::Scenario scenario = *sim::make_scenario("tunnel-3d");
+  const SimRun lio = run_scenario(scenario, 2, true);
+  const sim::SimulationResult& s = lio.simulation;
+  // The truth: moving within the IMU's first second.
+  ASSERT_GT((s.truth[s.scan_samples[10]].T_world_body.translation() - s.truth[s.scan_samples[0]].T_world_body.translation()).norm(), 0.5);
+  ASSERT_TRUE(lio.initialization.has_value());
+  EXPECT_FALSE(lio.initialization->still);
+  EXPECT_TRUE(lio.initialization->overruled_by_lidar) << lio.initialization->message;
+  // Gravity (z down in the simulator's world) in the estimate's world, through the first scan's
+  // pose, against the window's final estimate.
+  // (the last sweep ends after the IMU's last sample: the last fused state is the one before)
+  const auto last = std::find_if(lio.scans.rbegin(), lio.scans.rend(), [](const LidarInertialScan& x) { return x.inertial.has_value(); });
+  ASSERT_TRUE(lio.scans.front().inertial && last != lio.scans.rend());
+  const Matrix3 R_estimate_truth =
+      lio.scans.front().inertial->T_world_lidar.so3().matrix() * lio.truth_at_stamps.front().so3().inverse().matrix();
+  const Vector3 gravity_truth = R_estimate_truth * Vector3(0.0, 0.0, -1.0);
+  const Vector3 gravity_estimate = last->inertial->gravity_world.normalized();
+  const double tilt_deg = std::acos(std::clamp(gravity_truth.dot(gravity_estimate), -1.0, 1.0)) * 180.0 / M_PI;
+  std::printf("tunnel-3d seed 2: gravity's direction off by %.2f deg (%s)\n", tilt_deg, lio.initialization->message.c_str());
+  // An accelerometer bias of b tilts gravity by up to b / g (EuRoC's ADIS16448: ~0.1 m/s^2, 0.6 deg).
+  EXPECT_LT(tilt_deg, 1.0);
 }
 
 /// The rotation error (deg) of the estimated motion from scan a to scan b against the truth's.

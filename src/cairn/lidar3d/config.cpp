@@ -157,6 +157,7 @@ io::Parameters parameters(SlamConfiguration& configuration) {
       {"imu", "initialization_block_s", &imu.initialization.block_s, "... still when the means of its blocks this long ..."},
       {"imu", "initialization_gyro_block_spread_max_rad_s", &imu.initialization.gyro_block_spread_max_rad_s, "... agree with the window's mean within this (every gyroscope axis) ..."},
       {"imu", "initialization_accel_block_spread_max_mps2", &imu.initialization.accel_block_spread_max_mps2, "... and this (every accelerometer axis)"},
+      {"imu", "initialization_lidar_motion_max_m", &imu.still_lidar_motion_max_m, "... and the LiDAR moved less than this in the window (a constant acceleration reads as a tilt to the IMU)"},
   };
 }
 

@@ -2,6 +2,8 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "cairn/backend/least_squares.hpp"
@@ -33,6 +35,7 @@ bool InertialFusionOptions::is_valid(std::string* why) const {
   positive(initial_gyro_bias_sigma_rad_s, "initial_gyro_bias_sigma_rad_s");
   positive(initial_accel_bias_sigma_mps2, "initial_accel_bias_sigma_mps2");
   positive(contradiction_chi2, "contradiction_chi2");
+  positive(still_lidar_motion_max_m, "still_lidar_motion_max_m");
   if (window_states < 2) problems.add("window_states must be >= 2");
   if (!(std::isfinite(gravity_estimation_s) && gravity_estimation_s >= 0.0)) {
     problems.add("gravity_estimation_s must be finite and >= 0");
@@ -94,6 +97,10 @@ struct LidarInertialFusion::Impl {
   Vector3 gravity = Vector3::Zero();
   double first_time_s = 0.0;
   bool gravity_held = false;
+  /// The static window's end when it overlaps the scans (the IMU started with them), else -inf;
+  /// and the first scan's registered LiDAR position, for the LiDAR's stillness check.
+  double static_window_end_s = -std::numeric_limits<double>::infinity();
+  Vector3 first_lidar_position = Vector3::Zero();
   /// Variable indices of the last solve, per window state (pose, velocity, bias), and gravity's.
   std::vector<std::array<int, 3>> ids;
   int gravity_id = -1;
@@ -106,6 +113,7 @@ struct LidarInertialFusion::Impl {
   void add_lidar_measurement(const InertialFusionOptions& options, const OdometryScanResult& odometry,
                              const core::SE3& T_odom_lidar, const PreintegratedImu& pim, const NavState& state_k,
                              const NavState& predicted, WindowState& state, InertialScanState& out) const;
+  void check_stillness_with_lidar(const InertialFusionOptions& options, const WindowState& state);
   void solve_window(const InertialFusionOptions& options, InertialScanState& out);
   backend::LeastSquaresProblem build_problem(const InertialFusionOptions& options, std::size_t states);
   void slide(const InertialFusionOptions& options);
@@ -144,6 +152,7 @@ void LidarInertialFusion::Impl::initialize(const InertialFusionOptions& options,
     for (const auto& s : imu) {
       if (s.stamp.seconds() - imu.front().stamp.seconds() <= options.initialization.window_s) before.push_back(s);
     }
+    if (!imu.empty()) static_window_end_s = imu.front().stamp.seconds() + options.initialization.window_s;
   }
   initialization.statics = inertial::initialize_static(before, options.initialization);
   initialization.still = initialization.statics.ok;
@@ -252,7 +261,10 @@ Matrix6 prediction_covariance(const PreintegratedImu& pim, const NavState& state
 // tight priors on its pose, the velocity's by whether the IMU started still, the biases' and
 // gravity's from the initialisation.
 void LidarInertialFusion::Impl::restart_window(const InertialFusionOptions& o, const WindowState& state, bool imu_covered) {
-  if (window.empty()) first_time_s = state.time_s;
+  if (window.empty()) {
+    first_time_s = state.time_s;
+    first_lidar_position = (state.nav().T_world_body * o.T_imu_lidar).translation();
+  }
   window.clear();
   priors = OldestPriors{};
   priors.pose = state.nav().T_world_body;
@@ -289,6 +301,27 @@ void LidarInertialFusion::Impl::add_lidar_measurement(const InertialFusionOption
   out.contradicts_imu = out.imu_lidar_chi2 > o.contradiction_chi2;
   out.lidar_used = true;
   out.degenerate = odometry.registration.degenerate_directions > 0;
+}
+
+// The LiDAR's view of the static window: a scan registered inside it, farther than
+// still_lidar_motion_max_m from the first, means the sensor moved while the IMU looked still. The
+// stillness is withdrawn and the oldest state's velocity and gravity priors loosened to the moving
+// start's (restart_window), while they are still per-variable (before the window first slides).
+void LidarInertialFusion::Impl::check_stillness_with_lidar(const InertialFusionOptions& o, const WindowState& state) {
+  if (!initialization.still || !state.lidar || state.time_s > static_window_end_s || priors.joint_covariance) return;
+  const double moved_m = (state.lidar->Z_world_lidar.translation() - first_lidar_position).norm();
+  if (!(moved_m > o.still_lidar_motion_max_m)) return;
+  initialization.still = false;
+  initialization.overruled_by_lidar = true;
+  char message[200];
+  std::snprintf(message, sizeof message,
+                "the IMU looked still over its first %.2f s but the LiDAR moved %.3f m by %.2f s: a constant "
+                "acceleration, not gravity; the tilt is left to the window",
+                o.initialization.window_s, moved_m, state.time_s - first_time_s);
+  initialization.message = message;
+  priors.velocity_covariance = Matrix3::Identity() * o.initial_velocity_sigma_moving_mps * o.initial_velocity_sigma_moving_mps;
+  const double g_sigma = 0.25 * o.gravity_mps2;
+  priors.gravity_covariance = Matrix3::Identity() * g_sigma * g_sigma;
 }
 
 // Solves the window (a few LM iterations from the prediction) and returns the latest state.
@@ -331,6 +364,7 @@ InertialScanState LidarInertialFusion::fuse(const OdometryScanResult& odometry, 
     state.set(predicted);
     state.from_previous = pim;
     m.add_lidar_measurement(options_, odometry, T_odom_lidar, *pim, state_k, predicted, state, out);
+    m.check_stillness_with_lidar(options_, state);
   }
   m.window.push_back(std::move(state));
   m.solve_window(options_, out);

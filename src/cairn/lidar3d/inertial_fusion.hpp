@@ -77,6 +77,11 @@ struct InertialFusionOptions {
   double gravity_estimation_s = 10.0;
   /// Static initialisation over the IMU's first seconds (window, stillness limits).
   inertial::StaticInitializationOptions initialization;
+  /// When the static window overlaps the scans, the LiDAR must agree that the sensor was still: a
+  /// registered translation beyond this from the first scan within the window (m, > 0) overrules
+  /// the IMU's stillness test (a constant acceleration reads like a tilt to an IMU alone: the
+  /// block means agree and only |mean accel| - g, which a bias also explains, shows it).
+  double still_lidar_motion_max_m = 0.05;
   bool is_valid(std::string* why) const;
 };
 
@@ -84,6 +89,9 @@ struct InertialFusionOptions {
 struct InertialInitialization {
   bool still = false;     ///< static initialisation succeeded (gyro bias and tilt from a still window)
   std::string message;    ///< why it was not still, when !still
+  /// The IMU's test passed but the LiDAR moved during the static window (the tilt is then wrong by
+  /// the acceleration's share: gravity's direction is left to the window, as when moving).
+  bool overruled_by_lidar = false;
   inertial::StaticInitialization statics;
 };
 

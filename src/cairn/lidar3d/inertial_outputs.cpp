@@ -58,6 +58,7 @@ nlohmann::json initialization_json(const InertialRun& run) {
   if (!run.initialization()) return nullptr;
   const InertialInitialization& init = *run.initialization();
   return {{"still", init.still},
+          {"overruled_by_lidar", init.overruled_by_lidar},
           {"message", init.message},
           {"window_samples", init.statics.samples},
           {"window_s", {init.statics.start_s, init.statics.end_s}},
