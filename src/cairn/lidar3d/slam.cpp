@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "cairn/backend/keyframe_graph.hpp"
@@ -47,6 +48,10 @@ struct Edge {
   bool loop = false;
   bool weak = false;
   int candidate = -1;  ///< index into summary.candidates for loop edges
+  /// Odometry edges: the translation direction (unit, in the `from` keyframe's frame) a scan since
+  /// `from` could not see (zero when none), or every direction.
+  Vector3 degenerate_direction = Vector3::Zero();
+  bool degenerate_everywhere = false;
 };
 
 struct Verification {
@@ -99,6 +104,10 @@ bool LidarSlamOptions::is_valid(std::string* error) const {
       !positive(loop_translation_sigma_m) || !positive(loop_rotation_sigma_rad)) {
     fail("pose-graph sigmas must be > 0");
   }
+  nested.clear();
+  if (!gnss.is_valid(&nested)) {
+    problems.add_all("gnss: ", nested);
+  }
   return problems.report(error);
 }
 
@@ -116,7 +125,14 @@ struct LidarSlam::Impl {
   std::vector<Keyframe> keyframes;
   std::vector<Edge> edges;
   std::vector<core::SE3> scan_T_odom;
+  std::vector<double> scan_time_s;
   std::vector<int> scan_anchor;
+  std::vector<core::SE3> keyframe_T_odom;  ///< per keyframe, its T_odom_sensor (for placing fixes)
+  /// Since the last keyframe: a translation direction the registration could not see (odometry
+  /// frame, zero when none), or every one.
+  Vector3 degenerate_direction_odom = Vector3::Zero();
+  bool degenerate_everywhere = false;
+  std::optional<GnssAnchoring> gnss;
   double path_m = 0.0;
 
   core::SE3 T_world_from_odom(const core::SE3& T_odom) const {
@@ -166,7 +182,23 @@ struct LidarSlam::Impl {
     return best;
   }
 
-  io::PoseGraph3D graph() const {
+  // The odometry edge's information; with `degenerate_sigma_m` > 0, loose along a direction the
+  // odometry could not see between the keyframes (the IMU, or the constant-velocity guess, carried it).
+  Eigen::Matrix<double, 6, 6> odometry_information(const Edge& e, double degenerate_sigma_m) const {
+    if (degenerate_sigma_m <= 0.0 || (!e.degenerate_everywhere && e.degenerate_direction.isZero())) {
+      return information(options.odometry_translation_sigma_m, options.odometry_rotation_sigma_rad);
+    }
+    const double s2 = options.odometry_translation_sigma_m * options.odometry_translation_sigma_m;
+    const double d2 = std::max(degenerate_sigma_m * degenerate_sigma_m, s2);
+    Eigen::Matrix3d translation = e.degenerate_everywhere ? Eigen::Matrix3d(Eigen::Matrix3d::Identity() * d2)
+                                                          : Eigen::Matrix3d(Eigen::Matrix3d::Identity() * s2 +
+                                                                            (d2 - s2) * e.degenerate_direction * e.degenerate_direction.transpose());
+    Eigen::Matrix<double, 6, 6> info = information(options.odometry_translation_sigma_m, options.odometry_rotation_sigma_rad);
+    info.topLeftCorner<3, 3>() = translation.inverse();
+    return info;
+  }
+
+  io::PoseGraph3D graph(double degenerate_sigma_m = 0.0) const {
     io::PoseGraph3D graph;
     for (std::size_t k = 0; k < keyframes.size(); ++k) graph.vertices.push_back({static_cast<std::int64_t>(k), keyframes[k].T_world_sensor});
     for (const Edge& e : edges) {
@@ -176,7 +208,7 @@ struct LidarSlam::Impl {
       edge.T_from_to = e.T_from_to;
       edge.information = e.loop   ? information(options.loop_translation_sigma_m, options.loop_rotation_sigma_rad)
                          : e.weak ? information(options.segment_break_translation_sigma_m, options.segment_break_rotation_sigma_rad)
-                                  : information(options.odometry_translation_sigma_m, options.odometry_rotation_sigma_rad);
+                                  : odometry_information(e, degenerate_sigma_m);
       graph.edges.push_back(edge);
     }
     graph.fixed.push_back(0);
@@ -206,6 +238,40 @@ struct LidarSlam::Impl {
     for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k].T_world_sensor = problem.T_world_pose[k];
     ++summary.optimizations;
     summary.optimization_s += seconds_since(start);
+    if (gnss && gnss->aligned()) solve_with_gnss();
+  }
+
+  std::vector<core::SE3> keyframe_world_poses() const {
+    std::vector<core::SE3> poses;
+    poses.reserve(keyframes.size());
+    for (const Keyframe& kf : keyframes) poses.push_back(kf.T_world_sensor);
+    return poses;
+  }
+
+  // The graph with the GNSS factors (gnss_anchoring.hpp), its poses written back.
+  void solve_with_gnss() {
+    if (keyframes.size() < 2) return;
+    backend::Problem3D problem = backend::make_problem(graph(gnss->options().degenerate_edge_sigma_m), "slam3d pose graph");
+    gnss->solve(problem);
+    for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k].T_world_sensor = problem.T_world_pose[k];
+  }
+
+  // The fixes up to this scan placed on their keyframes; the alignment tried at a new keyframe
+  // until it succeeds, then the graph solved with them every solve_every_keyframes keyframes.
+  void anchor_to_gnss(bool new_keyframe) {
+    gnss->place_fixes(scan_time_s, scan_T_odom, scan_anchor, keyframe_T_odom);
+    if (!new_keyframe) return;
+    if (!gnss->aligned() && !gnss->try_align(keyframe_world_poses())) return;
+    if (gnss->solve_due(keyframes.size())) solve_with_gnss();
+  }
+
+  void note_degeneracy(const RegistrationResult& registration) {
+    if (registration.degenerate_directions >= 2) degenerate_everywhere = true;
+    if (registration.degenerate_directions == 1) {
+      const Vector3 d = registration.weakest_direction.head<3>().normalized();
+      if (!degenerate_direction_odom.isZero() && std::abs(d.dot(degenerate_direction_odom)) < 0.9) degenerate_everywhere = true;
+      degenerate_direction_odom = d;
+    }
   }
 
   // Odometry path length up to this scan, and the scan's odometry pose (at its stamp).
@@ -241,8 +307,14 @@ struct LidarSlam::Impl {
     const int id = static_cast<int>(keyframes.size());
     if (!keyframes.empty()) {
       const Keyframe& last = keyframes.back();
-      edges.push_back({id - 1, id, last.T_odom_sensor.inverse() * T_odom, false, last.segment != kf.segment, -1});
+      Edge edge{id - 1, id, last.T_odom_sensor.inverse() * T_odom, false, last.segment != kf.segment, -1};
+      edge.degenerate_direction = last.T_odom_sensor.so3().inverse() * degenerate_direction_odom;
+      edge.degenerate_everywhere = degenerate_everywhere;
+      edges.push_back(edge);
     }
+    keyframe_T_odom.push_back(kf.T_odom_sensor);
+    degenerate_direction_odom.setZero();
+    degenerate_everywhere = false;
     keyframes.push_back(std::move(kf));
     return id;
   }
@@ -391,6 +463,7 @@ SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s, c
   const core::SE3& T_odom = result.odometry.T_world_registered;
   const core::SE3 T_odom_stamp = result.odometry.T_world_sensor;
   m.track_path(T_odom_stamp);
+  m.note_degeneracy(result.odometry.registration);
   if (m.is_keyframe(T_odom, result.odometry.segment) && !m.odometry.last_frame_points().empty()) {
     const int id = m.add_keyframe(time_s, T_odom, result.odometry.segment);
     result.keyframe = true;
@@ -398,6 +471,8 @@ SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s, c
     if (options_.loop_closure) m.close_loops(id, summary_);
   }
   m.scan_anchor.push_back(m.keyframes.empty() ? -1 : static_cast<int>(m.keyframes.size()) - 1);
+  m.scan_time_s.push_back(time_s);
+  if (m.gnss) m.anchor_to_gnss(result.keyframe);
   if (!m.keyframes.empty()) {
     result.odometry.T_world_sensor = m.T_world_from_odom(T_odom_stamp);
     result.odometry.T_world_registered = m.T_world_from_odom(T_odom);
@@ -408,7 +483,15 @@ SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s, c
 void LidarSlam::finish() {
   Impl& m = *impl_;
   if (options_.final_gnc && summary_.loops_accepted > 0) m.optimize(true, summary_);
+  if (m.gnss && (m.gnss->aligned() || m.gnss->try_align(m.keyframe_world_poses()))) m.solve_with_gnss();
 }
+
+void LidarSlam::add_gnss(const gnss::GnssFix& fix) {
+  if (!impl_->gnss) impl_->gnss.emplace(options_.gnss);
+  impl_->gnss->add_fix(fix);
+}
+
+const GnssAnchoring* LidarSlam::gnss() const { return impl_->gnss ? &*impl_->gnss : nullptr; }
 
 std::vector<core::SE3> LidarSlam::trajectory() const {
   const Impl& m = *impl_;

@@ -32,6 +32,8 @@
 ///    A false loop closure is the worst failure; every candidate is reported with the reason it
 ///    was accepted or rejected. Accepted loops trigger a least-squares solve of the graph; at
 ///    finish() GNC (backend/gnc.hpp) has the last word over all loop closures.
+///  - GNSS (add_gnss): fixes as position factors on the keyframes once yaw is observable, solved
+///    with the graph every few keyframes, at loop closures and at the end (gnss_anchoring.hpp).
 ///  - Scan poses: each scan keeps its odometry pose relative to the keyframe before it.
 
 #include <Eigen/Core>
@@ -41,6 +43,7 @@
 
 #include "cairn/core/se3.hpp"
 #include "cairn/io/point_cloud.hpp"
+#include "cairn/lidar3d/gnss_anchoring.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/scan_context.hpp"
 
@@ -84,6 +87,8 @@ struct LidarSlamOptions {
   double loop_translation_sigma_m = 0.1;
   double loop_rotation_sigma_rad = 0.01;
   bool final_gnc = true;
+  /// GNSS fixes as position factors on the keyframes (used only when add_gnss is called).
+  GnssAnchoringOptions gnss;
 
   bool is_valid(std::string* error) const;
 };
@@ -141,8 +146,16 @@ class LidarSlam {
 
   /// As LidarOdometry::add_scan, then keyframe and loop-closure work.
   SlamScanResult add_scan(const io::PointCloud& cloud, double time_s, const MotionPrior* prior = nullptr);
-  /// The final GNC over the loop closures (if enabled). Call once after the last scan.
+  /// The final GNC over the loop closures (if enabled), then the graph with its GNSS factors (when
+  /// fixes were given). Call once after the last scan.
   void finish();
+
+  /// A GNSS fix (gnss_anchoring.hpp), in time order, on the scans' clock: give each before the
+  /// scans that follow it (it is placed once a scan at or after its time has been added). The
+  /// first fix starts the GNSS anchoring with `options().gnss`.
+  void add_gnss(const gnss::GnssFix& fix);
+  /// The GNSS anchoring, once a fix was given.
+  const GnssAnchoring* gnss() const;
 
   /// T_world_sensor of every scan so far, after the latest pose-graph solve.
   std::vector<core::SE3> trajectory() const;
