@@ -191,8 +191,8 @@ TEST(Slam3dCli, PrintConfigListsEveryKeyAndReadsBack) {
   // One key per field: LidarOdometryOptions 12 (with threads), RegistrationOptions 5,
   // LoamFeatureOptions 9, health 5, keyframes 2, ScanContextOptions 10, loop closure 14, back end 7;
   // InertialFusionOptions 16 (12 of its own, 4 of its static initialisation; noise and T_imu_lidar
-  // come from files).
-  EXPECT_EQ(keys.size(), 80u) << defaults.out;
+  // come from files); GnssAnchoringOptions 9 (the lever arm is a flag).
+  EXPECT_EQ(keys.size(), 89u) << defaults.out;
   for (const char* key : {"odometry.front_end", "odometry.deskew", "odometry.voxel_size_m", "odometry.threads",
                           "registration.metric", "registration.remap_degenerate_directions", "loam.neighbours",
                           "loam.less_flat_voxel_m", "health.min_scan_points", "health.lost_rms_max_correspondence_fraction",

@@ -74,13 +74,19 @@ std::vector<core::SE3> read_ground_truth(const Slam3dFlags& flags, std::size_t n
   return ground_truth;
 }
 
-/// LidarSlam, or LiDAR-inertial SLAM over it when the run has an IMU (every sample given at once).
+/// LidarSlam, or LiDAR-inertial SLAM over it when the run has an IMU (every sample given at once);
+/// the GNSS fixes up to each scan's time given before it.
 struct Pipeline {
   lidar3d::LidarSlam& slam;
   std::optional<lidar3d::LidarInertialSlam> inertial;
   lidar3d::InertialRun* inertial_run = nullptr;
+  const std::vector<gnss::GnssFix>* fixes = nullptr;
+  std::size_t next_fix = 0;
 
   lidar3d::SlamScanResult add_scan(std::size_t k, const io::PointCloud& cloud, double time_s) {
+    for (; fixes != nullptr && next_fix < fixes->size() && (*fixes)[next_fix].stamp.seconds() <= time_s; ++next_fix) {
+      slam.add_gnss((*fixes)[next_fix]);
+    }
     if (!inertial) return slam.add_scan(cloud, time_s);
     lidar3d::LidarInertialScan scan = inertial->add_scan(cloud, time_s);
     inertial_run->add_scan(k, scan.inertial);
@@ -165,6 +171,18 @@ void print_inertial(const lidar3d::InertialRun& inertial) {
               ba.x(), ba.y(), ba.z());
 }
 
+void print_gnss(const lidar3d::GnssAnchoring& gnss) {
+  const lidar3d::GnssAnchoringSummary& s = gnss.summary();
+  std::printf("GNSS: %zu fixes, %zu placed on keyframes, %zu used, %zu outliers (chi2 > %.1f)", s.fixes, s.placed, s.used,
+              s.outliers, s.outlier_chi2);
+  if (s.aligned) {
+    std::printf("; aligned at %.1f s (yaw %.2f deg, path spread %.1f m)\n", s.alignment_time_s,
+                s.T_enu_world.so3().log().z() * 180.0 / M_PI, s.alignment.spread_m);
+  } else {
+    std::printf("; never aligned (%s): no GNSS factor used\n", s.alignment.message.empty() ? "no fix placed" : s.alignment.message.c_str());
+  }
+}
+
 void print_summary(const Slam3dFlags& flags, const lidar3d::LidarSlam& slam, const lidar3d::SlamRun& run,
                    const std::optional<lidar3d::TrajectoryErrors>& errors, double total_s, bool stopped,
                    const lidar3d::InertialRun* inertial) {
@@ -188,10 +206,13 @@ void print_summary(const Slam3dFlags& flags, const lidar3d::LidarSlam& slam, con
                 slam_summary.loops_rejected_by_gnc);
   }
   if (inertial != nullptr) print_inertial(*inertial);
+  if (slam.gnss() != nullptr) print_gnss(*slam.gnss());
   if (errors) print_errors(flags.ground_truth, *errors);
-  std::printf("wrote trajectory.tum, trajectory.kitti, map.ply (%zu points), map.png, %sreport.json to %s%s\n",
-              run.global_map().size(), inertial != nullptr ? "inertial_states.csv, inertial.png, " : "", flags.out.c_str(),
-              stopped ? " (interrupted: the result so far)" : "");
+  const bool enu = slam.gnss() != nullptr && slam.gnss()->aligned();
+  std::printf("wrote trajectory.tum, trajectory.kitti, %smap.ply (%zu points), map.png, %s%sreport.json to %s%s\n",
+              enu ? "trajectory_enu.tum, " : "", run.global_map().size(),
+              inertial != nullptr ? "inertial_states.csv, inertial.png, " : "", slam.gnss() != nullptr ? "gnss_fixes.csv, " : "",
+              flags.out.c_str(), stopped ? " (interrupted: the result so far)" : "");
 }
 
 /// The run's IMU (none without --imu / --imu-topic), its notes on stderr.
@@ -225,11 +246,17 @@ int slam3d_command(const Slam3dFlags& flags) {
     if (io::is_standard_output(flags.mcap)) throw std::invalid_argument("--mcap needs a file: MCAP is binary");
     io::resolve_output(flags.mcap);
     io::check_file_outside_directory("--mcap", flags.mcap, "--out", flags.out,
-                                     {"trajectory.tum", "trajectory.kitti", "map.ply", "map.png", "report.json", "inertial_states.csv", "inertial.png"});
+                                     {"trajectory.tum", "trajectory.kitti", "map.ply", "map.png", "report.json", "inertial_states.csv", "inertial.png",
+                                      "gnss_fixes.csv", "trajectory_enu.tum"});
   }
   lidar3d::ScanSequence sequence = read_sequence(flags);
   const std::vector<core::SE3> ground_truth = read_ground_truth(flags, sequence.files.size());
   const std::unique_ptr<lidar3d::InertialRun> inertial = read_imu(flags, options, remap_forced);
+  std::vector<std::string> gnss_notes;
+  const std::vector<gnss::GnssFix> fixes = read_gnss_fixes(flags, &gnss_notes);
+  if (!flags.quiet) {
+    for (const std::string& note : gnss_notes) std::fprintf(stderr, "cairn slam3d: %s\n", note.c_str());
+  }
   if (!flags.quiet && !sequence.times_from_file) {
     std::fprintf(stderr, "cairn slam3d: no --times: scans taken as 0.1 s apart (the motion prediction assumes a steady rate)\n");
   }
@@ -239,7 +266,7 @@ int slam3d_command(const Slam3dFlags& flags) {
   const auto start = core::Clock::now();
   lidar3d::LidarSlam slam(slam_options);
   lidar3d::SlamRun run(slam_options.odometry, flags.map_voxel_m);
-  Pipeline pipeline{slam, std::nullopt, inertial.get()};
+  Pipeline pipeline{slam, std::nullopt, inertial.get(), fixes.empty() ? nullptr : &fixes, 0};
   if (inertial) {
     pipeline.inertial.emplace(slam, inertial->options());
     for (const inertial::ImuSample& sample : inertial->input().samples) pipeline.inertial->add_imu(sample);

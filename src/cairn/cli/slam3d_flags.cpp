@@ -7,6 +7,7 @@
 #include "cairn/bag/bag.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/flag_checks.hpp"
+#include "cairn/gnss/gnss_reader.hpp"
 #include "cairn/lidar3d/config.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 
@@ -43,6 +44,10 @@ lidar3d::SlamConfiguration slam3d_options(const Slam3dFlags& flags, bool* remap_
   set_word(options, "odometry.front_end", flags.front_end, "--front-end must be auto, dense or loam");
   set_word(options, "odometry.deskew", flags.deskew, "--deskew must be off, point-times or azimuth");
   if (flags.command != nullptr && flags.command->count("--threads") > 0) slam.odometry.threads = flags.threads;
+  if (!flags.gnss_lever_arm_m.empty()) {
+    if (!flags.uses_gnss()) throw UsageError("--gnss-lever-arm goes with --gnss PATH or --gnss-topic TOPIC, and neither was given");
+    slam.gnss.factor.lever_arm_body_m = Vector3(flags.gnss_lever_arm_m[0], flags.gnss_lever_arm_m[1], flags.gnss_lever_arm_m[2]);
+  }
   const bool forced = flags.uses_imu() && lidar3d::prepare_for_inertial(slam);
   if (remap_forced != nullptr) *remap_forced = forced;
   std::string error;
@@ -78,6 +83,34 @@ std::optional<lidar3d::InertialInputRequest> imu_request(const Slam3dFlags& flag
   return request;
 }
 
+std::vector<gnss::GnssFix> read_gnss_fixes(const Slam3dFlags& flags, std::vector<std::string>* notes) {
+  if (!flags.uses_gnss()) return {};
+  const bool gnss_is_bag = !flags.gnss.empty() && bag::is_bag(flags.gnss);
+  const bool scans_in_bag = flags.scans.size() == 1 && bag::is_bag(flags.scans.front());
+  if (!flags.gnss_topic.empty() && !flags.gnss.empty() && !gnss_is_bag) {
+    throw UsageError("--gnss-topic names a sensor_msgs/NavSatFix topic of a bag, but --gnss is not a bag (a CSV needs no topic)");
+  }
+  if (!flags.gnss_topic.empty() && flags.gnss.empty() && !scans_in_bag) {
+    throw UsageError("--gnss-topic reads sensor_msgs/NavSatFix from the scans' bag, but SCANS are not a bag: give --gnss PATH");
+  }
+  gnss::GnssReadReport report;
+  std::vector<gnss::GnssFix> fixes;
+  if (gnss_is_bag || flags.gnss.empty()) {
+    fixes = gnss::read_gnss_bag(flags.gnss.empty() ? flags.scans.front() : flags.gnss, flags.gnss_topic, &report);
+  } else {
+    fixes = gnss::read_gnss_csv(flags.gnss, &report);
+  }
+  if (notes != nullptr) {
+    if (report.dropped_no_fix + report.dropped_not_finite + report.dropped_out_of_order > 0) {
+      notes->push_back(std::to_string(report.dropped_no_fix + report.dropped_not_finite + report.dropped_out_of_order) +
+                       " GNSS records dropped (no fix, NaN or out of order; the first: " + report.first_dropped + ")");
+    }
+    for (const std::string& w : report.warnings) notes->push_back(w);
+    if (fixes.empty()) notes->push_back("no usable GNSS fix: the run goes without GNSS");
+  }
+  return fixes;
+}
+
 void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
   CLI::Option* scans =
       app.add_option("SCANS", flags.scans,
@@ -108,6 +141,14 @@ void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
                  "IMU's folder, else identity)");
   app.add_option("--imu-time-offset", flags.imu_time_offset_s, "Seconds added to every IMU stamp to put it on the scans' clock")
       ->capture_default_str();
+  app.add_option("--gnss", flags.gnss,
+                 "GNSS fixes as position factors on the keyframes: a CSV (docs/formats.md, \"GNSS fixes\") or a bag with "
+                 "sensor_msgs/NavSatFix, on the scans' clock");
+  app.add_option("--gnss-topic", flags.gnss_topic,
+                 "The sensor_msgs/NavSatFix topic (of the --gnss bag, or of the scans' bag without --gnss)");
+  app.add_option("--gnss-lever-arm", flags.gnss_lever_arm_m, "The GNSS antenna in the LiDAR's frame, metres: X,Y,Z (default 0,0,0)")
+      ->expected(3)
+      ->delimiter(',');
   app.add_option("--ground-truth", flags.ground_truth,
                  "Ground-truth poses of the same scans (KITTI 3x4 per line, or TUM): print and report drift, RPE, ATE");
   app.add_option("--ground-truth-format", flags.ground_truth_format, "kitti or tum (default: from the file)");

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "cairn/gnss/gnss_fix.hpp"
 #include "cairn/lidar3d/config.hpp"
 #include "cairn/lidar3d/inertial_input.hpp"
 
@@ -34,6 +35,9 @@ struct Slam3dFlags {
   std::string imu_calibration;
   std::string lidar_extrinsic;
   double imu_time_offset_s = 0.0;
+  std::string gnss;
+  std::string gnss_topic;
+  std::vector<double> gnss_lever_arm_m;  ///< empty, or x, y, z: the antenna in the LiDAR's frame
   long max_scans = 0;
   int threads = 0;
   double map_voxel_m = 0.25;
@@ -44,6 +48,8 @@ struct Slam3dFlags {
 
   /// --imu or --imu-topic given.
   bool uses_imu() const { return !imu.empty() || !imu_topic.empty(); }
+  /// --gnss or --gnss-topic given.
+  bool uses_gnss() const { return !gnss.empty() || !gnss_topic.empty(); }
 };
 
 /// Defines the flags of `app` into `flags` (which must outlive it).
@@ -54,6 +60,13 @@ void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags);
 /// Throws UsageError for a bad --set or invalid options, io::ParseError for a bad --config file,
 /// std::invalid_argument for a bad preset or flag value.
 lidar3d::SlamConfiguration slam3d_options(const Slam3dFlags& flags, bool* remap_forced = nullptr);
+
+/// The GNSS fixes the flags name (none without --gnss and --gnss-topic): --gnss a CSV
+/// (docs/formats.md, "GNSS fixes") or a bag, --gnss-topic its NavSatFix topic (of the --gnss bag,
+/// else of the scans' bag). Throws UsageError for flags that do not go together (--gnss-topic
+/// with a CSV or without any bag, --gnss-lever-arm without GNSS), io::ParseError for a bad file.
+/// The reader's notes (dropped fixes, warnings) go to `notes`.
+std::vector<gnss::GnssFix> read_gnss_fixes(const Slam3dFlags& flags, std::vector<std::string>* notes);
 
 /// The IMU the flags name (none without --imu and --imu-topic). Throws UsageError for flags that do
 /// not go together: --imu-topic with scan files or with --imu, and --imu-calibration,

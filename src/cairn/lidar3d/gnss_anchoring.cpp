@@ -138,22 +138,37 @@ void GnssAnchoring::place_fixes(const std::vector<double>& scan_time_s, const st
   }
 }
 
+void GnssAnchoring::set_world_up(const Vector3& up_world) {
+  if (up_world.allFinite() && up_world.norm() > 0.0) up_world_ = up_world.normalized();
+}
+
+// R_level: the smallest rotation taking the world's up to +z.
+core::SO3 GnssAnchoring::level_rotation() const {
+  const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(up_world_, Vector3::UnitZ());
+  return core::SO3(q.normalized());
+}
+
 bool GnssAnchoring::try_align(const std::vector<core::SE3>& T_world_keyframe) {
   if (summary_.aligned) return true;
+  const core::SO3 R_level = level_rotation();
   std::vector<Vector3> p_world, p_enu;
   double last_time_s = 0.0;
   for (const GnssFixResult& fix : fixes_) {
     if (fix.keyframe < 0 || fix.keyframe >= static_cast<int>(T_world_keyframe.size())) continue;
-    p_world.push_back(T_world_keyframe[static_cast<std::size_t>(fix.keyframe)] * fix.antenna_keyframe_m);
+    p_world.push_back(R_level * (T_world_keyframe[static_cast<std::size_t>(fix.keyframe)] * fix.antenna_keyframe_m));
     p_enu.push_back(fix.p_enu_m);
     last_time_s = fix.time_s;
   }
   gnss::YawAlignment alignment = gnss::align_world_to_enu(p_world, p_enu, options_.alignment);
-  if (!alignment.ok()) return false;
+  if (!alignment.ok()) {
+    summary_.alignment = alignment;  // why not yet
+    return false;
+  }
   summary_.aligned = true;
   summary_.alignment = alignment;
   summary_.alignment_time_s = last_time_s;
-  summary_.T_enu_world = alignment.T_enu_world;
+  T_enu_level_ = alignment.T_enu_world;
+  summary_.T_enu_world = T_enu_level_ * core::SE3(R_level, Vector3::Zero());
   return true;
 }
 
@@ -186,11 +201,11 @@ void GnssAnchoring::solve(backend::Problem3D& graph) {
       problem.add_factor(std::make_unique<backend::RelativePoseFactor>(edge),
                          {ids[static_cast<std::size_t>(edge.i)], ids[static_cast<std::size_t>(edge.j)]});
     }
-    // Roll and pitch of the world held at the fit's (zero); yaw and translation free.
+    // Roll and pitch of the world held at R_level's; yaw and translation free.
     constexpr double kFree = 1e3;
     Eigen::Matrix<double, 6, 1> sigmas;
     sigmas << kFree, kFree, kFree, options_.world_tilt_sigma_rad, options_.world_tilt_sigma_rad, kFree;
-    problem.add_factor(std::make_unique<inertial::PosePriorFactor>(summary_.alignment.T_enu_world,
+    problem.add_factor(std::make_unique<inertial::PosePriorFactor>(T_enu_level_ * core::SE3(level_rotation(), Vector3::Zero()),
                                                                    Matrix6(sigmas.cwiseAbs2().asDiagonal())),
                        {world_id});
     for (const std::size_t i : used) {

@@ -14,11 +14,13 @@
 ///
 /// with Cauchy's kernel (gnss/gnss_factor.hpp says why: a 10-50 m jump pulls almost nothing).
 ///
-/// The world-to-ENU transform: the SLAM's world is its first keyframe's frame (gravity-aligned
-/// when the IMU initialised it). gnss::align_world_to_enu fits its yaw and translation to the
-/// placed fixes once the path has spread `alignment.min_spread_m` (gnss/gnss_yaw.hpp); from then on
+/// The world-to-ENU transform: the SLAM's world is its first keyframe's frame; which way is up in
+/// it comes from set_world_up (LiDAR-inertial SLAM gives the IMU fusion's gravity estimate: a world
+/// whose initial tilt was wrong, as after a start in motion, is not level), default +z.
+/// gnss::align_world_to_enu fits yaw and translation to the placed fixes, levelled by R_level (up
+/// to +z), once the path has spread `alignment.min_spread_m` (gnss/gnss_yaw.hpp); from then on
 /// T_enu_world is a variable of the graph (yaw and translation free, roll and pitch held by a prior
-/// of `world_tilt_sigma_rad` at the fit's zero), so a heading the short first stretch got slightly
+/// of `world_tilt_sigma_rad` at R_level's), so a heading the short first stretch got slightly
 /// wrong is refined by the whole path instead of bending the graph. The first keyframe stays
 /// fixed: it holds the world's gauge.
 ///
@@ -84,7 +86,7 @@ struct GnssFixResult {
 struct GnssAnchoringSummary {
   std::size_t fixes = 0, placed = 0, used = 0, outliers = 0;
   bool aligned = false;
-  gnss::YawAlignment alignment;       ///< the fit that started the GNSS factors
+  gnss::YawAlignment alignment;       ///< the fit that started the GNSS factors (before: the last refusal)
   double alignment_time_s = 0.0;      ///< the fix time at which it succeeded
   std::optional<gnss::GeodeticPosition> enu_origin;  ///< the first fix: the ENU frame's origin
   core::SE3 T_enu_world;              ///< after the latest solve
@@ -107,6 +109,9 @@ class GnssAnchoring {
   void place_fixes(const std::vector<double>& scan_time_s, const std::vector<core::SE3>& T_odom_scan,
                    const std::vector<int>& scan_keyframe, const std::vector<core::SE3>& T_odom_keyframe);
 
+  /// The world's up direction (any non-zero vector; normalised), for the alignment and the tilt prior.
+  void set_world_up(const Vector3& up_world);
+
   /// Tries the alignment (until it succeeds) with the keyframes' world poses; true once aligned.
   bool try_align(const std::vector<core::SE3>& T_world_keyframe);
   bool aligned() const { return summary_.aligned; }
@@ -128,6 +133,9 @@ class GnssAnchoring {
   std::vector<GnssFixResult> fixes_;
   std::size_t next_to_place_ = 0;
   std::size_t keyframes_at_last_solve_ = 0;
+  Vector3 up_world_ = Vector3::UnitZ();
+  core::SE3 T_enu_level_;  ///< the alignment's fit in the levelled world (yaw and translation)
+  core::SO3 level_rotation() const;
   GnssAnchoringSummary summary_;
 };
 

@@ -16,6 +16,7 @@ LidarInertialScan LidarInertialSlam::add_scan(const io::PointCloud& cloud, doubl
   InertialScanState state = fusion_.fuse(scan.slam.odometry, scan.slam.T_odom_registered);
   OdometryScanResult& odometry = scan.slam.odometry;
   if (state.contradicts_imu && odometry.health == Health::kOk) odometry.health = Health::kDegraded;
+  slam_.set_world_up(-state.gravity_world);  // the odometry's world is the SLAM's (its first keyframe's)
   states_.push_back(state);
   scan.inertial = std::move(state);
   return scan;

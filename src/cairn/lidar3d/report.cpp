@@ -1,6 +1,7 @@
 #include "cairn/lidar3d/report.hpp"
 #include "cairn/eval/spread.hpp"
 #include "cairn/lidar3d/config.hpp"
+#include "cairn/lidar3d/gnss_outputs.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -28,12 +29,18 @@ nlohmann::json input_json(const SlamRunInputs& inputs, const ScanSequence& seque
 
 // configuration().json of the options in effect, with the run's facts that are not options: the preset
 // they started from, the front end kAuto chose, and the written map's voxel. The `imu` section only
-// when the run had an IMU.
+// when the run had an IMU, the `gnss` section (with the lever arm) only when it had fixes.
 nlohmann::json options_json(const SlamRunInputs& inputs, const LidarSlam& slam, const SlamRun& run,
                             const InertialRun* inertial) {
   nlohmann::json options =
       configuration().json(SlamConfiguration{slam.options(), inertial ? inertial->options() : InertialFusionOptions{}});
   if (inertial == nullptr) options.erase("imu");
+  if (slam.gnss() == nullptr) {
+    options.erase("gnss");
+  } else {
+    options["gnss"]["lever_arm_lidar_m"] = {slam.options().gnss.factor.lever_arm_body_m.x(), slam.options().gnss.factor.lever_arm_body_m.y(),
+                                            slam.options().gnss.factor.lever_arm_body_m.z()};
+  }
   options["preset"] = inputs.preset;
   options["front_end_used"] = std::string(to_string(slam.front_end()));
   options["map_voxel_m"] = run.map_voxel_m();
@@ -165,6 +172,7 @@ nlohmann::json report_json(const SlamRunInputs& inputs, const ScanSequence& sequ
   report["interrupted"] = interrupted;
   if (errors) report["ground_truth"] = ground_truth_json(inputs.ground_truth_file, *errors);
   if (inertial != nullptr) report["inertial"] = inertial_json(*inertial);
+  if (slam.gnss() != nullptr) report["gnss"] = gnss_json(*slam.gnss());
   report["scans"] = scans;
   return report;
 }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cairn/io/json_text.hpp"
+#include "cairn/lidar3d/gnss_outputs.hpp"
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/io/trajectory.hpp"
 #include "cairn/viz/render.hpp"
@@ -44,6 +45,13 @@ std::optional<TrajectoryErrors> write_run_outputs(io::OutputDirectory& out, cons
   });
 
   if (inertial != nullptr) write_inertial_outputs(out, *inertial);
+  if (slam.gnss() != nullptr) {
+    io::write_output(out.staging_path("gnss_fixes.csv"), [&](std::ostream& o) { write_gnss_fixes_csv(o, *slam.gnss()); });
+    if (slam.gnss()->aligned()) {
+      io::write_output(out.staging_path("trajectory_enu.tum"),
+                       [&](std::ostream& o) { io::write_tum(o, enu_trajectory(*slam.gnss(), trajectory)); });
+    }
+  }
 
   const std::optional<TrajectoryErrors> errors = run.errors_against(ground_truth);
   const nlohmann::json report = report_json(inputs, sequence, slam, run, wall_time_s, interrupted, errors, inertial);

@@ -133,6 +133,7 @@ struct LidarSlam::Impl {
   Vector3 degenerate_direction_odom = Vector3::Zero();
   bool degenerate_everywhere = false;
   std::optional<GnssAnchoring> gnss;
+  Vector3 up_world = Vector3::UnitZ();
   double path_m = 0.0;
 
   core::SE3 T_world_from_odom(const core::SE3& T_odom) const {
@@ -487,8 +488,16 @@ void LidarSlam::finish() {
 }
 
 void LidarSlam::add_gnss(const gnss::GnssFix& fix) {
-  if (!impl_->gnss) impl_->gnss.emplace(options_.gnss);
+  if (!impl_->gnss) {
+    impl_->gnss.emplace(options_.gnss);
+    impl_->gnss->set_world_up(impl_->up_world);
+  }
   impl_->gnss->add_fix(fix);
+}
+
+void LidarSlam::set_world_up(const Vector3& up_world) {
+  impl_->up_world = up_world;
+  if (impl_->gnss) impl_->gnss->set_world_up(up_world);
 }
 
 const GnssAnchoring* LidarSlam::gnss() const { return impl_->gnss ? &*impl_->gnss : nullptr; }

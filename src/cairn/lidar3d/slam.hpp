@@ -154,6 +154,9 @@ class LidarSlam {
   /// scans that follow it (it is placed once a scan at or after its time has been added). The
   /// first fix starts the GNSS anchoring with `options().gnss`.
   void add_gnss(const gnss::GnssFix& fix);
+  /// Which way is up in the world (for GNSS: GnssAnchoring::set_world_up); LiDAR-inertial SLAM
+  /// gives its gravity estimate after every scan. Default +z.
+  void set_world_up(const Vector3& up_world);
   /// The GNSS anchoring, once a fix was given.
   const GnssAnchoring* gnss() const;
 
