@@ -122,6 +122,12 @@ int simulate_command(const SimulateFlags& flags) {
         std::printf("IMU (%s): %zu samples at %.0f Hz\n", scenario.imu_preset.c_str(), result.imu.samples.size(),
                     scenario.imu.rate_hz);
       }
+      if (scenario.gnss_enabled) {
+        std::size_t jumps = 0;
+        for (const bool o : result.gnss.outlier) jumps += o ? 1 : 0;
+        std::printf("GNSS: %zu fixes at %.0f Hz (%zu jumps, %zu epochs without sky)\n", result.gnss.fixes.size(),
+                    scenario.gnss.rate_hz, jumps, result.gnss.blocked_without_sky);
+      }
       if (result.spin) {
         std::printf("spin on the spot: %.2f-%.2f s, %.0f deg at up to %.0f deg/s\n", result.spin->start_time_s,
                     result.spin->end_time_s, result.spin->angle_rad * 180.0 / std::numbers::pi,

@@ -84,7 +84,12 @@ SimulatedGnss simulate_gnss_receiver(const std::vector<core::Timestamp>& stamps,
       ++out.dropped_in_dropouts;
       continue;
     }
-    const Vector3 p_true = options.T_enu_world * (interpolate(stamps, T_world_body, time_ns) * options.lever_arm_body_m);
+    const Vector3 p_world = interpolate(stamps, T_world_body, time_ns) * options.lever_arm_body_m;
+    if (options.sky_visible && !options.sky_visible(p_world)) {
+      ++out.blocked_without_sky;
+      continue;
+    }
+    const Vector3 p_true = options.T_enu_world * p_world;
     const Vector3 p_measured = p_true + white + (is_outlier ? Vector3(jump_m * direction) : Vector3::Zero());
     const gnss::GeodeticPosition position = frame.reverse(p_measured);
     gnss::GnssFix fix;

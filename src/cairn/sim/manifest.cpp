@@ -9,6 +9,7 @@
 #include <variant>
 
 #include "cairn/io/parse_error.hpp"
+#include "cairn/sim/gnss_outputs.hpp"
 #include "cairn/sim/imu_outputs.hpp"
 
 namespace cairn::sim {
@@ -291,6 +292,7 @@ nlohmann::json manifest_json(const SimulationResult& result, Scenario& scenario,
     }
     manifest["ground_truth"] = truth;
     if (scenario.imu_enabled) manifest["imu"] = imu_manifest(result, scenario);
+    if (scenario.gnss_enabled) manifest["gnss"] = gnss_manifest(result, scenario);
   }
   if (result.mission) manifest["ground_truth"] = mission_json(*result.mission);
   manifest["files"] = file_list;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 #include "cairn/core/assert.hpp"
@@ -13,6 +14,7 @@
 #include "cairn/io/number_format.hpp"
 #include "cairn/io/trajectory.hpp"
 #include "cairn/sim/carmen_log.hpp"
+#include "cairn/sim/gnss_outputs.hpp"
 #include "cairn/sim/imu_outputs.hpp"
 #include "cairn/sim/landmark_files.hpp"
 #include "cairn/sim/planar_kinematics.hpp"
@@ -32,7 +34,8 @@ enum Stream : std::uint64_t {
   kLandmarkStream = 3,
   kGraphStream = 4,
   kRelationsStream = 5,
-  kImuStream = 6
+  kImuStream = 6,
+  kGnssStream = 7
 };
 
 /// Applies the named IMU preset's noise, rates, ranges and bias sigmas (time offset and seed stay).
@@ -257,6 +260,69 @@ void add_imu_parameters(Scenario& s, std::vector<Parameter>& out) {
   add("imu.time_offset_s", "s", "IMU clock minus true time: imu0/data.csv stamps are true time + this", &imu.time_offset_s);
 }
 
+/// The simulated GNSS receiver's parameters (3D worlds).
+void add_gnss_parameters(Scenario& s, std::vector<Parameter>& out) {
+  GnssReceiverOptions& gnss = s.gnss;
+  const auto add = [&](const char* name, const char* unit, const char* description, auto* field) {
+    out.push_back(Parameter{name, unit, description, field});
+  };
+  add("gnss.enabled", "", "simulate the GNSS receiver at the LiDAR's origin (gnss/fixes.csv, gnss/truth.csv)",
+      &s.gnss_enabled);
+  add("gnss.rate_hz", "Hz", "fixes per second", &gnss.rate_hz);
+  add("gnss.sigma_horizontal_m", "m", "Gaussian noise of east and north (> 0)", &gnss.sigma_horizontal_m);
+  add("gnss.sigma_vertical_m", "m", "Gaussian noise of up (> 0)", &gnss.sigma_vertical_m);
+  add("gnss.outlier_fraction", "", "fraction of fixes that jump (0-1)", &gnss.outlier_fraction);
+  add("gnss.outlier_min_m", "m", "smallest jump, in a uniformly random 3D direction", &gnss.outlier_min_m);
+  add("gnss.outlier_max_m", "m", "largest jump", &gnss.outlier_max_m);
+  add("gnss.world_yaw_deg", "deg", "the world's x axis is this far counter-clockwise from east: T_enu_world = R_z(yaw)",
+      &s.gnss_world_yaw_deg);
+  add("gnss.dropout_start_s", "s", "start of a window without fixes, seconds from the first stamp (0 and 0: none)",
+      &s.gnss_dropout_start_s);
+  add("gnss.dropout_end_s", "s", "its end (exclusive)", &s.gnss_dropout_end_s);
+}
+
+/// True when `p_world_m` projects on the passage's axis between its entry (0) and its exit
+/// (length_m): the rule of find_passage_scans.
+bool inside_passage(const Passage3D& passage, const Vector3& p_world_m) {
+  const double along_m = passage.axis.dot(p_world_m.head<2>() - passage.entry);
+  return along_m >= 0.0 && along_m <= passage.length_m;
+}
+
+/// The GNSS receiver of a 3D run: fixes of the LiDAR's origin along the whole ground truth, none
+/// inside the world's tunnel. Needs result.truth and result.passage_scans.
+SimulatedGnss simulate_scenario_gnss(const Scenario& scenario, std::uint64_t gnss_seed, const SimulationResult& result) {
+  GnssReceiverOptions options = scenario.effective_gnss();
+  options.seed = gnss_seed;
+  if (result.passage_scans && result.passage_scans->passage.kind == "tunnel") {
+    options.sky_visible = [tunnel = result.passage_scans->passage](const Vector3& p_world_m) {
+      return !inside_passage(tunnel, p_world_m);
+    };
+  }
+  std::vector<core::Timestamp> stamps;
+  std::vector<core::SE3> T_world_lidar;
+  for (const TrajectorySample& sample : result.truth) {
+    stamps.push_back(sample.stamp);
+    T_world_lidar.push_back(lidar_pose(sample.T_world_body, scenario.lidar3d));
+  }
+  return simulate_gnss_receiver(stamps, T_world_lidar, options);
+}
+
+/// The GNSS settings' rules (3D worlds with the GNSS on); the receiver's own checks name its fields.
+void check_gnss(const Scenario& s, std::vector<std::string>& problems) {
+  GnssReceiverOptions receiver = s.effective_gnss();
+  receiver.dropouts_s.clear();  // reported below, by the parameters' names
+  std::string text;
+  if (!receiver.is_valid(&text)) problems.push_back("gnss: " + text);
+  if (!(s.gnss_world_yaw_deg >= -360.0 && s.gnss_world_yaw_deg <= 360.0)) {
+    problems.push_back(found("gnss.world_yaw_deg must be in [-360, 360]", s.gnss_world_yaw_deg));
+  }
+  const bool no_dropout = s.gnss_dropout_start_s == 0.0 && s.gnss_dropout_end_s == 0.0;
+  if (!no_dropout && !(s.gnss_dropout_start_s >= 0.0 && s.gnss_dropout_start_s < s.gnss_dropout_end_s &&
+                       std::isfinite(s.gnss_dropout_end_s))) {
+    problems.push_back("gnss.dropout_start_s and gnss.dropout_end_s must be 0 and 0 (no dropout) or satisfy 0 <= start < end");
+  }
+}
+
 }  // namespace
 
 bool Scenario::is_valid(std::string* why) const {
@@ -393,6 +459,7 @@ bool Scenario::is_valid(std::string* why) const {
           problems.push_back("imu.preset must be adis16448 or consumer-mems");
         }
       }
+      if (gnss_enabled) check_gnss(*this, problems);
       if (spin_stop_enabled) {
         if (!spin_stop.is_valid(&text)) problems.push_back("spin: " + text);
         if (trajectory.laps != 1) problems.push_back("spin: the route with a spin stop is driven once: trajectory.laps must be 1");
@@ -435,6 +502,16 @@ TrajectoryOptions Scenario::effective_trajectory() const {
     options.max_arc_turn_rad = 0.3;
     options.spin_yaw_rate_rad_s = 2.5;
     options.spin_yaw_acceleration_rad_s2 = 8.0;
+  }
+  return options;
+}
+
+GnssReceiverOptions Scenario::effective_gnss() const {
+  GnssReceiverOptions options = gnss;
+  const double yaw_rad = gnss_world_yaw_deg * std::numbers::pi / 180.0;
+  options.T_enu_world = core::SE3(Quaternion(Eigen::AngleAxisd(yaw_rad, Vector3::UnitZ())), Vector3::Zero());
+  if (gnss_dropout_start_s != 0.0 || gnss_dropout_end_s != 0.0) {
+    options.dropouts_s.emplace_back(gnss_dropout_start_s, gnss_dropout_end_s);
   }
   return options;
 }
@@ -832,6 +909,7 @@ std::vector<Parameter> parameters(Scenario& s) {
     add("loops.max_distance_m", "m", "loops.txt lists scan pairs at most this far apart", &s.loop_truth.max_distance_m);
     add("loops.min_separation_s", "s", "and at least this far apart in time", &s.loop_truth.min_separation_s);
     add_imu_parameters(s, out);
+    add_gnss_parameters(s, out);
   } else {
     LidarOptions& l = s.lidar;
     add("lidar.beams", "", "number of beams", &l.beams);
@@ -990,6 +1068,7 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed) {
       result.imu = simulate_imu(PlanarKinematics(result.truth), result.truth.front().stamp.seconds(),
                                 result.truth.back().stamp.seconds(), imu);
     }
+    if (scenario.gnss_enabled) result.gnss = simulate_scenario_gnss(scenario, Random::derive_seed(seed, kGnssStream), result);
   } else {
     Random lidar_random(Random::derive_seed(seed, kLidarStream));
     const core::SE2 T_body_laser = scenario.lidar.T_body_laser();
@@ -1068,6 +1147,9 @@ std::vector<std::string> write_outputs(const SimulationResult& result, const Sce
     render_png(path_of("world.png"), result.world.world, truth_points, odometry_points, render);
     if (scenario.imu_enabled) {
       for (const auto& name : write_imu_outputs(result, scenario, directory)) files.push_back(name);
+    }
+    if (scenario.gnss_enabled) {
+      for (const auto& name : write_gnss_outputs(result, scenario, directory)) files.push_back(name);
     }
     return files;
   }

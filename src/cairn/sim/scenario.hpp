@@ -24,7 +24,9 @@
 /// | tunnel-3d         | tunnel_world (3D)           | 1    | featureless straight tunnel: degeneracy   |
 /// | tunnel-spin-3d    | tunnel_world (3D)           | 1    | tunnel-3d with a 458 deg/s spin inside    |
 ///
-/// The 3D worlds also carry a simulated IMU (sim/imu.hpp, on unless imu.enabled=false).
+/// The 3D worlds also carry a simulated IMU (sim/imu.hpp, on unless imu.enabled=false) and a
+/// simulated GNSS receiver at the LiDAR (sim/gnss_receiver.hpp, on unless gnss.enabled=false;
+/// no fix inside a tunnel).
 
 #include <cstdint>
 #include <functional>
@@ -35,6 +37,7 @@
 #include <vector>
 
 #include "cairn/sim/camera.hpp"
+#include "cairn/sim/gnss_receiver.hpp"
 #include "cairn/sim/ground_truth_3d.hpp"
 #include "cairn/sim/imu.hpp"
 #include "cairn/sim/landmark_sensor.hpp"
@@ -118,6 +121,20 @@ struct Scenario {
   bool imu_enabled = true;
   std::string imu_preset = "adis16448";
   ImuSimulationOptions imu;
+  /// 3D worlds: the simulated GNSS receiver (sim/gnss_receiver.hpp) and its files (gnss/). The
+  /// antenna is the LiDAR's origin: the receiver is given T_world_lidar, so gnss.lever_arm_body_m
+  /// is in the LiDAR frame (default 0). gnss.T_enu_world and gnss.dropouts_s come from the two
+  /// settings below (effective_gnss()); gnss.seed is replaced by the run's GNSS stream of the
+  /// seed and gnss.sky_visible by the world's tunnel (no fix inside it).
+  bool gnss_enabled = true;
+  GnssReceiverOptions gnss;
+  /// The world's x axis is this many degrees counter-clockwise from east: T_enu_world =
+  /// R_z(gnss_world_yaw_deg), in [-360, 360].
+  double gnss_world_yaw_deg = 30.0;
+  /// One dropout window, seconds from the first stamp: [start, end) with 0 <= start < end, or
+  /// 0 and 0 (default) for none.
+  double gnss_dropout_start_s = 0.0;
+  double gnss_dropout_end_s = 0.0;
   /// tunnel-spin-3d: a stop for a fast spin on the spot on the (open) route (sim/spin_stop.hpp).
   bool spin_stop_enabled = false;
   SpinStopOptions spin_stop;
@@ -142,6 +159,8 @@ struct Scenario {
   bool is_valid(std::string* why) const;
   /// The trajectory options after `fast_turns` is applied.
   TrajectoryOptions effective_trajectory() const;
+  /// `gnss` with T_enu_world = R_z(gnss_world_yaw_deg) and the dropout window (if any) applied.
+  GnssReceiverOptions effective_gnss() const;
   /// Whether the run writes the mission ground truth (segments.txt, revisits.txt, kidnap.txt and
   /// the manifest's ground_truth): building-yard, outdoor-stretch, kidnapping, long-absence,
   /// second-session.
@@ -205,6 +224,8 @@ struct SimulationResult {
   std::optional<PassageScans> passage_scans;
   /// 3D worlds with the IMU on: its samples and the true state and biases at each.
   SimulatedImu imu;
+  /// 3D worlds with the GNSS on: the fixes and their truth (ENU at gnss.origin); true time.
+  SimulatedGnss gnss;
   /// tunnel-spin-3d: the spin on the spot.
   std::optional<SpinEvent> spin;
   /// Ground-truth samples whose step from the previous one was a carry (kidnapping): the truth
@@ -239,8 +260,8 @@ SimulationResult simulate(const Scenario& scenario, std::uint64_t seed);
 /// velodyne_times/NNNNNN.bin (or scans/NNNNNN.pcd), poses.txt, times.txt, ground_truth.tum,
 /// odometry.tum, camera_observations.csv, world_3d.txt, loops.txt, world.png (see
 /// docs/simulation.md); with the IMU on, then imu0/data.csv, imu0/sensor.yaml,
-/// state_groundtruth_estimate0/data.csv and lidar0/sensor.yaml. Throws io::ParseError when a file
-/// cannot be written.
+/// state_groundtruth_estimate0/data.csv and lidar0/sensor.yaml; with the GNSS on, then
+/// gnss/fixes.csv and gnss/truth.csv. Throws io::ParseError when a file cannot be written.
 std::vector<std::string> write_outputs(const SimulationResult& result, const Scenario& scenario, std::uint64_t seed,
                                        const std::string& directory);
 
