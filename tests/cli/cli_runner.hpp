@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace cairn::test {
 
@@ -33,6 +34,26 @@ inline std::string slurp(const std::filesystem::path& path) {
   s << in.rdbuf();
   return s.str();
 }
+
+/// The comma-separated fields of every line of `file` (no quoting), '#' lines left out unless
+/// `keep_comments`, empty lines always.
+inline std::vector<std::vector<std::string>> csv_rows(const std::filesystem::path& file, bool keep_comments = true) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream lines(slurp(file));
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.empty() || (!keep_comments && line[0] == '#')) continue;
+    std::vector<std::string> fields;
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) fields.push_back(cell);
+    rows.push_back(fields);
+  }
+  return rows;
+}
+
+/// `path` in single quotes, for a shell command line.
+inline std::string quoted(const std::filesystem::path& path) { return "'" + path.string() + "'"; }
 
 /// Runs `binary args` through the shell, standard error going to `stderr_path`.
 inline CliResult run_command(const std::string& binary, const std::string& args, const std::filesystem::path& stderr_path) {

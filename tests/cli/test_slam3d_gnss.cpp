@@ -22,13 +22,14 @@ namespace {
 namespace fs = std::filesystem;
 
 using Result = cairn::test::CliResult;
+using cairn::test::csv_rows;
 using cairn::test::slurp;
 
 fs::path scratch() { return cairn::test::scratch_folder("slam3d_gnss_test"); }
 
 Result cairn_run(const std::string& args) { return cairn::test::run_command(CAIRN_BINARY, args, scratch() / "stderr.txt"); }
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+std::string q(const fs::path& p) { return cairn::test::quoted(p); }
 
 // The simulated tunnel (seed 4: the seed whose IMU drifts most inside, docs/lidar3d.md) with 5 %
 // GNSS jumps, written once per test program.
@@ -48,21 +49,6 @@ std::string scans_args(const fs::path& d) {
          " --ground-truth-format kitti --no-loop-closure -q";
 }
 
-std::vector<std::vector<std::string>> csv_rows(const fs::path& file) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream lines(slurp(file));
-  std::string line;
-  while (std::getline(lines, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::vector<std::string> fields;
-    std::istringstream cells(line);
-    std::string cell;
-    while (std::getline(cells, cell, ',')) fields.push_back(cell);
-    rows.push_back(fields);
-  }
-  return rows;
-}
-
 TEST(Slam3dGnssCli, TunnelWithImuAndGnssEndsWithinAMetreAndFlagsEveryJump) {
   const fs::path out = scratch() / "o_gnss";
   fs::remove_all(out);
@@ -73,8 +59,8 @@ TEST(Slam3dGnssCli, TunnelWithImuAndGnssEndsWithinAMetreAndFlagsEveryJump) {
   for (const char* file : {"gnss_fixes.csv", "trajectory_enu.tum", "report.json"}) EXPECT_TRUE(fs::exists(out / file)) << file;
   const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
   const nlohmann::json& g = report["gnss"];
-  const auto truth = csv_rows(d / "gnss" / "truth.csv");  // header, then time_s, east_m, north_m, up_m, outlier
-  const auto fixes = csv_rows(out / "gnss_fixes.csv");     // header, then one row per fix
+  const auto truth = csv_rows(d / "gnss" / "truth.csv", false);  // header, then time_s, east_m, north_m, up_m, outlier
+  const auto fixes = csv_rows(out / "gnss_fixes.csv", false);     // header, then one row per fix
   ASSERT_GT(truth.size(), 20u);
   ASSERT_EQ(fixes.size(), truth.size());
   EXPECT_EQ(g["fixes"].get<std::size_t>(), truth.size() - 1);
@@ -149,6 +135,39 @@ TEST(Slam3dGnssCli, ABadFixFileStopsWithFileAndLineAndWritesNothing) {
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("bad_fixes.csv:6"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
+}
+
+// Fixes on another clock (here a million seconds later, as UNIX times against scans from zero)
+// fall among no scan: the run goes on without them and says why.
+TEST(Slam3dGnssCli, FixesOnAnotherClockAreNotUsedAndTheRunSaysSo) {
+  const fs::path shifted = scratch() / "shifted_fixes.csv";
+  {
+    std::istringstream lines(slurp(tunnel() / "gnss" / "fixes.csv"));
+    std::ofstream csv(shifted);
+    std::string line;
+    bool header = false;
+    while (std::getline(lines, line)) {
+      if (line.empty() || line[0] == '#' || !header) {
+        header = header || (!line.empty() && line[0] != '#');
+        csv << line << '\n';
+        continue;
+      }
+      const std::size_t comma = line.find(',');
+      csv << std::to_string(std::stod(line.substr(0, comma)) + 1e6) << line.substr(comma) << '\n';
+    }
+  }
+  const fs::path out = scratch() / "o_clock";
+  fs::remove_all(out);
+  const Result r = cairn_run("slam3d " + q(tunnel() / "scans") + " --times " + q(tunnel() / "times.txt") +
+                             " --no-loop-closure --max-scans 20 --gnss " + q(shifted) + " --out " + q(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("on the scans' clock"), std::string::npos) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["gnss"]["placed"].get<std::size_t>(), 0u);
+  EXPECT_EQ(report["gnss"]["used"].get<std::size_t>(), 0u);
+  EXPECT_FALSE(report["gnss"]["aligned"].get<bool>());
+  EXPECT_EQ(report["gnss"]["warnings"].size(), 1u);
+  EXPECT_FALSE(fs::exists(out / "trajectory_enu.tum"));
 }
 
 }  // namespace

@@ -22,13 +22,14 @@ namespace {
 namespace fs = std::filesystem;
 
 using Result = cairn::test::CliResult;
+using cairn::test::csv_rows;
 using cairn::test::slurp;
 
 fs::path scratch() { return cairn::test::scratch_folder("slam3d_imu_test"); }
 
 Result cairn_run(const std::string& args) { return cairn::test::run_command(CAIRN_BINARY, args, scratch() / "stderr.txt"); }
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+std::string q(const fs::path& p) { return cairn::test::quoted(p); }
 
 // The simulated tunnel (seed 1), written once per test program.
 const fs::path& tunnel() {
@@ -48,20 +49,6 @@ Result slam3d(const fs::path& out, const std::string& extra) {
   const fs::path d = tunnel();
   return cairn_run("slam3d " + q(d / "scans") + " --times " + q(d / "times.txt") + " --ground-truth " + q(d / "poses.txt") +
                    " --ground-truth-format kitti --no-loop-closure -q " + extra + " --out " + q(out));
-}
-
-std::vector<std::vector<std::string>> csv_rows(const fs::path& file) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream lines(slurp(file));
-  std::string line;
-  while (std::getline(lines, line)) {
-    std::vector<std::string> fields;
-    std::istringstream cells(line);
-    std::string cell;
-    while (std::getline(cells, cell, ',')) fields.push_back(cell);
-    rows.push_back(fields);
-  }
-  return rows;
 }
 
 // Lines of a EuRoC data.csv that are samples (not the '#' header).

@@ -22,32 +22,15 @@
 #include "cairn/gnss/local_frame.hpp"
 #include "cairn/sim/manifest.hpp"
 #include "cairn/sim/scenario.hpp"
+#include "scratch_directory.hpp"
 
 namespace cairn::sim {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string bytes_of(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
-
-/// A scratch directory removed at the end of the test.
-struct ScratchDirectory {
-  fs::path path;
-  explicit ScratchDirectory(const std::string& name)
-      : path(fs::temp_directory_path() / ("cairn_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~ScratchDirectory() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-};
+using test::bytes_of;
+using test::ScratchDirectory;
 
 /// Sets the named parameter of `scenario` (as `--set NAME=VALUE` does).
 void set(Scenario& scenario, const std::string& name, const std::string& value) {

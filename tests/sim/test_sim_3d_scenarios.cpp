@@ -17,6 +17,7 @@
 #include "cairn/sim/random.hpp"
 #include "cairn/sim/ray_cast_3d.hpp"
 #include "cairn/sim/scenario.hpp"
+#include "scratch_directory.hpp"
 #include "cairn/sim/street_run.hpp"
 
 namespace cairn::sim {
@@ -24,26 +25,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string bytes_of(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
-
-/// A scratch directory removed at the end of the test.
-struct ScratchDirectory {
-  fs::path path;
-  explicit ScratchDirectory(const std::string& name)
-      : path(fs::temp_directory_path() / ("cairn_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~ScratchDirectory() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-};
+using test::bytes_of;
+using test::ScratchDirectory;
 
 /// A short garage (5 bays) with a coarse LiDAR: a run in a few tens of milliseconds.
 Scenario small_garage() {

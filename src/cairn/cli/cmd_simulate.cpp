@@ -69,6 +69,58 @@ int list_scenarios(const SimulateFlags& flags) {
   return 0;
 }
 
+// The 3D worlds' lines of the summary: clouds, IMU, GNSS, the spin, the tunnel.
+void print_3d_summary(const sim::Scenario& scenario, const sim::SimulationResult& result, std::size_t cloud_points) {
+  std::printf("\n%zu points in %zu clouds; %zu camera observations of %zu lamps; %zu true loop-closure pairs\n",
+              cloud_points, result.clouds.size(), result.camera_observations.size(), result.world_3d.landmarks.size(),
+              result.true_loops.size());
+  if (scenario.imu_enabled) {
+    std::printf("IMU (%s): %zu samples at %.0f Hz\n", scenario.imu_preset.c_str(), result.imu.samples.size(),
+                scenario.imu.rate_hz);
+  }
+  if (scenario.gnss_enabled) {
+    std::size_t jumps = 0;
+    for (const bool o : result.gnss.outlier) jumps += o ? 1 : 0;
+    std::printf("GNSS: %zu fixes at %.0f Hz (%zu jumps, %zu epochs without sky)\n", result.gnss.fixes.size(),
+                scenario.gnss.rate_hz, jumps, result.gnss.blocked_without_sky);
+  }
+  if (result.spin) {
+    std::printf("spin on the spot: %.2f-%.2f s, %.0f deg at up to %.0f deg/s\n", result.spin->start_time_s,
+                result.spin->end_time_s, result.spin->angle_rad * 180.0 / std::numbers::pi,
+                result.spin->peak_yaw_rate_rad_s * 180.0 / std::numbers::pi);
+  }
+  if (result.passage_scans && result.passage_scans->any_inside) {
+    std::printf("%s: scans %zu-%zu inside\n", result.passage_scans->passage.kind.c_str(),
+                result.passage_scans->first_inside, result.passage_scans->last_inside);
+  }
+}
+
+// The 2D worlds' lines of the summary: the graph and the mission's segments, kidnap and absence.
+void print_2d_summary(const sim::SimulationResult& result, std::size_t true_loops, std::size_t false_loops) {
+  std::printf("\ngraph: %zu nodes, %zu edges (%zu true loop closures, %zu false); %zu relations\n",
+              result.graph.graph.vertices.size(), result.graph.graph.edges.size(), true_loops, false_loops,
+              result.relations.size());
+  if (result.mission) {
+    for (const auto& s : result.mission->segments) {
+      std::printf("  %s: scans %zu-%zu (%.1f-%.1f s, %.1f m), %zu with fewer than %d returns\n", s.region.c_str(),
+                  s.first_scan, s.last_scan, s.start_time_s, s.end_time_s, s.path_length_m, s.few_return_scans,
+                  result.mission->few_returns);
+    }
+    if (result.mission->kidnap) {
+      const auto& k = *result.mission->kidnap;
+      std::printf("kidnapped between %.2f s and %.2f s (scans %zu, %zu): (%.2f, %.2f) -> (%.2f, %.2f)\n",
+                  k.stamp_before.seconds(), k.stamp_after.seconds(), k.last_scan_before, k.first_scan_after,
+                  k.T_world_body_before.x(), k.T_world_body_before.y(), k.T_world_body_after.x(),
+                  k.T_world_body_after.y());
+    }
+    if (result.mission->absence) {
+      const auto& a = *result.mission->absence;
+      std::printf("away from %s for %.1f s and %.1f m (scans %zu-%zu)\n", a.region.c_str(), a.duration_s,
+                  a.path_length_m, a.left_scan, a.returned_scan);
+    }
+  }
+}
+
 int simulate_command(const SimulateFlags& flags) {
   if (flags.list) return list_scenarios(flags);
   if (flags.scenario.empty()) return usage_error("name a scenario (cairn simulate --list shows them)");
@@ -115,51 +167,9 @@ int simulate_command(const SimulateFlags& flags) {
                 result.path_length_m, result.duration_s, result.scan_samples.size(), result.odometry_samples.size());
     if (scenario.simulate_landmarks) std::printf(", %zu landmark observations", result.landmark_observations.size());
     if (scenario.is_3d()) {
-      std::printf("\n%zu points in %zu clouds; %zu camera observations of %zu lamps; %zu true loop-closure pairs\n",
-                  cloud_points, result.clouds.size(), result.camera_observations.size(), result.world_3d.landmarks.size(),
-                  result.true_loops.size());
-      if (scenario.imu_enabled) {
-        std::printf("IMU (%s): %zu samples at %.0f Hz\n", scenario.imu_preset.c_str(), result.imu.samples.size(),
-                    scenario.imu.rate_hz);
-      }
-      if (scenario.gnss_enabled) {
-        std::size_t jumps = 0;
-        for (const bool o : result.gnss.outlier) jumps += o ? 1 : 0;
-        std::printf("GNSS: %zu fixes at %.0f Hz (%zu jumps, %zu epochs without sky)\n", result.gnss.fixes.size(),
-                    scenario.gnss.rate_hz, jumps, result.gnss.blocked_without_sky);
-      }
-      if (result.spin) {
-        std::printf("spin on the spot: %.2f-%.2f s, %.0f deg at up to %.0f deg/s\n", result.spin->start_time_s,
-                    result.spin->end_time_s, result.spin->angle_rad * 180.0 / std::numbers::pi,
-                    result.spin->peak_yaw_rate_rad_s * 180.0 / std::numbers::pi);
-      }
-      if (result.passage_scans && result.passage_scans->any_inside) {
-        std::printf("%s: scans %zu-%zu inside\n", result.passage_scans->passage.kind.c_str(),
-                    result.passage_scans->first_inside, result.passage_scans->last_inside);
-      }
+      print_3d_summary(scenario, result, cloud_points);
     } else {
-      std::printf("\ngraph: %zu nodes, %zu edges (%zu true loop closures, %zu false); %zu relations\n",
-                  result.graph.graph.vertices.size(), result.graph.graph.edges.size(), true_loops, false_loops,
-                  result.relations.size());
-      if (result.mission) {
-        for (const auto& s : result.mission->segments) {
-          std::printf("  %s: scans %zu-%zu (%.1f-%.1f s, %.1f m), %zu with fewer than %d returns\n", s.region.c_str(),
-                      s.first_scan, s.last_scan, s.start_time_s, s.end_time_s, s.path_length_m, s.few_return_scans,
-                      result.mission->few_returns);
-        }
-        if (result.mission->kidnap) {
-          const auto& k = *result.mission->kidnap;
-          std::printf("kidnapped between %.2f s and %.2f s (scans %zu, %zu): (%.2f, %.2f) -> (%.2f, %.2f)\n",
-                      k.stamp_before.seconds(), k.stamp_after.seconds(), k.last_scan_before, k.first_scan_after,
-                      k.T_world_body_before.x(), k.T_world_body_before.y(), k.T_world_body_after.x(),
-                      k.T_world_body_after.y());
-        }
-        if (result.mission->absence) {
-          const auto& a = *result.mission->absence;
-          std::printf("away from %s for %.1f s and %.1f m (scans %zu-%zu)\n", a.region.c_str(), a.duration_s,
-                      a.path_length_m, a.left_scan, a.returned_scan);
-        }
-      }
+      print_2d_summary(result, true_loops, false_loops);
     }
     std::printf("dead reckoning ends %.2f m / %.2f deg off the ground truth (at most %.2f m off on the way); "
                 "%.1f %% of readings at max range\n",

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -26,6 +27,7 @@
 #include "cairn/io/trajectory.hpp"
 #include "cairn/lidar3d/config.hpp"
 #include "cairn/lidar3d/foxglove_output.hpp"
+#include "cairn/lidar3d/gnss_outputs.hpp"
 #include "cairn/lidar3d/inertial_outputs.hpp"
 #include "cairn/lidar3d/lidar_inertial_slam.hpp"
 #include "cairn/lidar3d/odometry.hpp"
@@ -83,10 +85,15 @@ struct Pipeline {
   const std::vector<gnss::GnssFix>* fixes = nullptr;
   std::size_t next_fix = 0;
 
-  lidar3d::SlamScanResult add_scan(std::size_t k, const io::PointCloud& cloud, double time_s) {
+  /// The fixes up to `time_s` (all when infinite) not given yet.
+  void add_fixes_until(double time_s) {
     for (; fixes != nullptr && next_fix < fixes->size() && (*fixes)[next_fix].stamp.seconds() <= time_s; ++next_fix) {
       slam.add_gnss((*fixes)[next_fix]);
     }
+  }
+
+  lidar3d::SlamScanResult add_scan(std::size_t k, const io::PointCloud& cloud, double time_s) {
+    add_fixes_until(time_s);
     if (!inertial) return slam.add_scan(cloud, time_s);
     lidar3d::LidarInertialScan scan = inertial->add_scan(cloud, time_s);
     inertial_run->add_scan(k, scan.inertial);
@@ -273,7 +280,10 @@ int slam3d_command(const Slam3dFlags& flags) {
   }
   const bool stopped = feed_scans(flags, sequence, pipeline, run);
   if (run.scans().empty()) throw std::runtime_error("no scan could be processed");
-  if (!stopped) slam.finish();
+  if (!stopped) {
+    pipeline.add_fixes_until(std::numeric_limits<double>::infinity());  // those after the last scan: reported as such
+    slam.finish();
+  }
   run.finish(slam);
   if (inertial) inertial->finish(pipeline.inertial->fusion());
   const double total_s = core::seconds_since(start);
@@ -285,6 +295,9 @@ int slam3d_command(const Slam3dFlags& flags) {
   if (!flags.quiet) print_summary(flags, slam, run, errors, total_s, stopped, inertial.get());
   if (inertial && !flags.quiet) {
     for (const std::string& warning : lidar3d::summarize(*inertial).warnings) warn(warning);
+  }
+  if (slam.gnss() != nullptr && !flags.quiet) {
+    for (const std::string& warning : lidar3d::gnss_warnings(*slam.gnss())) warn(warning);
   }
   return stopped ? interrupted_exit_status() : 0;
 }

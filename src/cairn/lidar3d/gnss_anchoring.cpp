@@ -172,68 +172,97 @@ bool GnssAnchoring::try_align(const std::vector<core::SE3>& T_world_keyframe) {
   return true;
 }
 
+void GnssAnchoring::finish() {
+  for (; next_to_place_ < fixes_.size(); ++next_to_place_) fixes_[next_to_place_].not_placed = "after the last scan";
+}
+
 bool GnssAnchoring::solve_due(std::size_t keyframes) const {
   return summary_.aligned && keyframes >= keyframes_at_last_solve_ + static_cast<std::size_t>(options_.solve_every_keyframes);
 }
 
+namespace {
+
+/// The variables' storage of one solve: the keyframes' poses and T_enu_world.
+struct GraphValues {
+  std::vector<std::array<double, 7>> poses;
+  std::array<double, 7> world{};
+};
+
+/// The keyframe graph with the GNSS factors of the `used` fixes under `loss`, on `values`; the
+/// world's roll and pitch held at `T_enu_world_prior`'s within `tilt_sigma_rad`, its yaw and
+/// translation free.
+backend::LeastSquaresProblem gnss_graph_problem(const backend::Problem3D& graph, GraphValues& values,
+                                                const std::vector<GnssFixResult>& fixes, const std::vector<std::size_t>& used,
+                                                const core::SE3& T_enu_world_prior, double tilt_sigma_rad,
+                                                const backend::FactorLoss& loss) {
+  backend::LeastSquaresProblem problem;
+  std::vector<int> ids;
+  for (std::size_t k = 0; k < values.poses.size(); ++k) {
+    ids.push_back(problem.add_variable(values.poses[k].data(), backend::se3_manifold()));
+    if (graph.fixed[k]) problem.set_constant(ids.back());
+  }
+  const int world_id = problem.add_variable(values.world.data(), backend::se3_manifold());
+  for (const backend::PoseEdge<core::SE3>& edge : graph.edges) {
+    problem.add_factor(std::make_unique<backend::RelativePoseFactor>(edge),
+                       {ids[static_cast<std::size_t>(edge.i)], ids[static_cast<std::size_t>(edge.j)]});
+  }
+  constexpr double kFree = 1e3;
+  Eigen::Matrix<double, 6, 1> sigmas;
+  sigmas << kFree, kFree, kFree, tilt_sigma_rad, tilt_sigma_rad, kFree;
+  problem.add_factor(std::make_unique<inertial::PosePriorFactor>(T_enu_world_prior, Matrix6(sigmas.cwiseAbs2().asDiagonal())),
+                     {world_id});
+  for (const std::size_t i : used) {
+    const GnssFixResult& fix = fixes[i];
+    const Matrix3 S = backend::square_root_information<3>(Matrix3(fix.covariance_enu_m2.inverse()));
+    problem.add_factor(std::make_unique<GnssKeyframeFactor>(fix.p_enu_m, S, fix.antenna_keyframe_m),
+                       {ids[static_cast<std::size_t>(fix.keyframe)], world_id}, loss);
+  }
+  return problem;
+}
+
+}  // namespace
+
 void GnssAnchoring::solve(backend::Problem3D& graph) {
   const auto start = core::Clock::now();
-  std::vector<std::array<double, 7>> values(graph.T_world_pose.size());
-  for (std::size_t k = 0; k < values.size(); ++k) backend::se3_to_values(graph.T_world_pose[k], values[k].data());
-  std::array<double, 7> world{};
-  backend::se3_to_values(summary_.T_enu_world, world.data());
+  GraphValues values{std::vector<std::array<double, 7>>(graph.T_world_pose.size()), {}};
+  for (std::size_t k = 0; k < values.poses.size(); ++k) backend::se3_to_values(graph.T_world_pose[k], values.poses[k].data());
+  backend::se3_to_values(summary_.T_enu_world, values.world.data());
   std::vector<std::size_t> used;
   for (std::size_t i = 0; i < fixes_.size(); ++i) {
-    fixes_[i].used = fixes_[i].keyframe >= 0 && fixes_[i].keyframe < static_cast<int>(values.size());
+    fixes_[i].used = fixes_[i].keyframe >= 0 && fixes_[i].keyframe < static_cast<int>(values.poses.size());
     if (fixes_[i].used) used.push_back(i);
   }
   // Huber (convex) first, then Cauchy from its solution (the file comment).
-  const backend::FactorLoss huber{backend::RobustKernel::kHuber, 1.345};
-  for (const backend::FactorLoss& loss : {huber, options_.factor.loss}) {
-    backend::LeastSquaresProblem problem;
-    std::vector<int> ids;
-    for (std::size_t k = 0; k < values.size(); ++k) {
-      ids.push_back(problem.add_variable(values[k].data(), backend::se3_manifold()));
-      if (graph.fixed[k]) problem.set_constant(ids.back());
-    }
-    const int world_id = problem.add_variable(world.data(), backend::se3_manifold());
-    for (const backend::PoseEdge<core::SE3>& edge : graph.edges) {
-      problem.add_factor(std::make_unique<backend::RelativePoseFactor>(edge),
-                         {ids[static_cast<std::size_t>(edge.i)], ids[static_cast<std::size_t>(edge.j)]});
-    }
-    // Roll and pitch of the world held at R_level's; yaw and translation free.
-    constexpr double kFree = 1e3;
-    Eigen::Matrix<double, 6, 1> sigmas;
-    sigmas << kFree, kFree, kFree, options_.world_tilt_sigma_rad, options_.world_tilt_sigma_rad, kFree;
-    problem.add_factor(std::make_unique<inertial::PosePriorFactor>(T_enu_level_ * core::SE3(level_rotation(), Vector3::Zero()),
-                                                                   Matrix6(sigmas.cwiseAbs2().asDiagonal())),
-                       {world_id});
-    for (const std::size_t i : used) {
-      const GnssFixResult& fix = fixes_[i];
-      const Matrix3 S = backend::square_root_information<3>(Matrix3(fix.covariance_enu_m2.inverse()));
-      problem.add_factor(std::make_unique<GnssKeyframeFactor>(fix.p_enu_m, S, fix.antenna_keyframe_m),
-                         {ids[static_cast<std::size_t>(fix.keyframe)], world_id}, loss);
-    }
-    backend::LeastSquaresOptions solve_options;
-    solve_options.linear_solver = backend::LinearSolverType::kSparseNormalCholesky;
-    solve_options.threads = 1;
-    solve_options.max_iterations = 30;
+  const core::SE3 T_enu_world_prior = T_enu_level_ * core::SE3(level_rotation(), Vector3::Zero());
+  backend::LeastSquaresOptions solve_options;
+  solve_options.linear_solver = backend::LinearSolverType::kSparseNormalCholesky;
+  solve_options.threads = 1;
+  solve_options.max_iterations = 30;
+  for (const backend::FactorLoss& loss : {backend::FactorLoss{backend::RobustKernel::kHuber, 1.345}, options_.factor.loss}) {
+    backend::LeastSquaresProblem problem =
+        gnss_graph_problem(graph, values, fixes_, used, T_enu_world_prior, options_.world_tilt_sigma_rad, loss);
     backend::solve(problem, solve_options);
   }
-  for (std::size_t k = 0; k < values.size(); ++k) graph.T_world_pose[k] = backend::se3_from_values(values[k].data());
-  summary_.T_enu_world = backend::se3_from_values(world.data());
+  for (std::size_t k = 0; k < values.poses.size(); ++k) graph.T_world_pose[k] = backend::se3_from_values(values.poses[k].data());
+  summary_.T_enu_world = backend::se3_from_values(values.world.data());
   summary_.used = used.size();
+  evaluate_fixes(graph, used);
+  keyframes_at_last_solve_ = graph.T_world_pose.size();
+  ++summary_.solves;
+  summary_.solve_s += core::seconds_since(start);
+}
+
+// Every used fix's error and chi2 at the solution, and the outliers among them.
+void GnssAnchoring::evaluate_fixes(const backend::Problem3D& graph, const std::vector<std::size_t>& used) {
   summary_.outliers = 0;
   for (const std::size_t i : used) {
     GnssFixResult& fix = fixes_[i];
-    fix.error_enu_m = summary_.T_enu_world * (graph.T_world_pose[static_cast<std::size_t>(fix.keyframe)] * fix.antenna_keyframe_m) - fix.p_enu_m;
+    const core::SE3& T_world_k = graph.T_world_pose[static_cast<std::size_t>(fix.keyframe)];
+    fix.error_enu_m = summary_.T_enu_world * (T_world_k * fix.antenna_keyframe_m) - fix.p_enu_m;
     fix.chi2 = fix.error_enu_m.dot(fix.covariance_enu_m2.ldlt().solve(fix.error_enu_m));
     fix.outlier = fix.chi2 > summary_.outlier_chi2;
     summary_.outliers += fix.outlier ? 1 : 0;
   }
-  keyframes_at_last_solve_ = graph.T_world_pose.size();
-  ++summary_.solves;
-  summary_.solve_s += core::seconds_since(start);
 }
 
 }  // namespace cairn::lidar3d

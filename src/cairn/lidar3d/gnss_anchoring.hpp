@@ -112,6 +112,9 @@ class GnssAnchoring {
   /// The world's up direction (any non-zero vector; normalised), for the alignment and the tilt prior.
   void set_world_up(const Vector3& up_world);
 
+  /// After the last scan: the fixes still waiting lie after it (not placed, and said so).
+  void finish();
+
   /// Tries the alignment (until it succeeds) with the keyframes' world poses; true once aligned.
   bool try_align(const std::vector<core::SE3>& T_world_keyframe);
   bool aligned() const { return summary_.aligned; }
@@ -136,6 +139,7 @@ class GnssAnchoring {
   Vector3 up_world_ = Vector3::UnitZ();
   core::SE3 T_enu_level_;  ///< the alignment's fit in the levelled world (yaw and translation)
   core::SO3 level_rotation() const;
+  void evaluate_fixes(const backend::Problem3D& graph, const std::vector<std::size_t>& used);
   GnssAnchoringSummary summary_;
 };
 

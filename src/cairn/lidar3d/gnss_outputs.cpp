@@ -27,6 +27,23 @@ nlohmann::json error_statistics(std::vector<double> values) {
 
 }  // namespace
 
+std::vector<std::string> gnss_warnings(const GnssAnchoring& gnss) {
+  const GnssAnchoringSummary& s = gnss.summary();
+  std::vector<std::string> warnings;
+  if (s.fixes > 0 && s.placed == 0) {
+    warnings.push_back("none of the " + std::to_string(s.fixes) + " GNSS fixes (from " + std::to_string(gnss.fixes().front().time_s) +
+                       " s to " + std::to_string(gnss.fixes().back().time_s) +
+                       " s) falls among the scans: are they on the scans' clock? (" + gnss.fixes().front().not_placed + ")");
+  } else if (s.placed > 0 && !s.aligned) {
+    warnings.push_back("the GNSS was never aligned (" + s.alignment.message + "): no fix was used");
+  }
+  if (s.used > 0 && 5 * s.outliers > s.used) {
+    warnings.push_back(std::to_string(s.outliers) + " of " + std::to_string(s.used) +
+                       " GNSS fixes are outliers: a wrong --gnss-lever-arm, clock or covariance?");
+  }
+  return warnings;
+}
+
 nlohmann::json gnss_json(const GnssAnchoring& gnss) {
   const GnssAnchoringSummary& s = gnss.summary();
   nlohmann::json j;
@@ -68,6 +85,7 @@ nlohmann::json gnss_json(const GnssAnchoring& gnss) {
   j["inlier_error_vertical"] = error_statistics(vertical);
   j["solves"] = s.solves;
   j["solve_s"] = s.solve_s;
+  j["warnings"] = gnss_warnings(gnss);
   return j;
 }
 

@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 #include <ostream>
+#include <string>
+#include <vector>
 
 #include "cairn/io/trajectory.hpp"
 #include "cairn/lidar3d/gnss_anchoring.hpp"
@@ -16,6 +18,11 @@ namespace cairn::lidar3d {
 /// origin, the outlier threshold, solve time, and horizontal / vertical error statistics of the
 /// inliers after the last solve.
 nlohmann::json gnss_json(const GnssAnchoring& gnss);
+
+/// What the user should hear about: no fix placed (another clock?), never aligned (too little
+/// motion), a large share of outliers (a wrong lever arm, frame or clock?). Also report.json's
+/// `gnss.warnings`.
+std::vector<std::string> gnss_warnings(const GnssAnchoring& gnss);
 
 /// Header then one row per fix: time_s, east_m, north_m, up_m (the fix), keyframe (-1 not placed),
 /// not_placed (why), used, outlier, chi2, error_east_m, error_north_m, error_up_m (estimate - fix).

@@ -484,7 +484,9 @@ SlamScanResult LidarSlam::add_scan(const io::PointCloud& cloud, double time_s, c
 void LidarSlam::finish() {
   Impl& m = *impl_;
   if (options_.final_gnc && summary_.loops_accepted > 0) m.optimize(true, summary_);
-  if (m.gnss && (m.gnss->aligned() || m.gnss->try_align(m.keyframe_world_poses()))) m.solve_with_gnss();
+  if (!m.gnss) return;
+  m.gnss->finish();
+  if (m.gnss->aligned() || m.gnss->try_align(m.keyframe_world_poses())) m.solve_with_gnss();
 }
 
 void LidarSlam::add_gnss(const gnss::GnssFix& fix) {

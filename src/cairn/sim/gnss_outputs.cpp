@@ -21,16 +21,6 @@ void append_fixed(std::string& out, double value, int decimals) {
   out.append(buffer, result.ptr);
 }
 
-/// The 16 numbers of a 4x4 row-major matrix.
-std::vector<double> row_major(const core::SE3& T) {
-  const Matrix4 M = T.matrix();
-  std::vector<double> out;
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) out.push_back(M(r, c));
-  }
-  return out;
-}
-
 /// gnss/fixes.csv: read_gnss_csv's layout, with the standard deviations when the fixes carry them.
 void write_fixes_csv(const std::string& path, const SimulatedGnss& gnss, bool with_std) {
   io::write_output(path, [&](std::ostream& out) {

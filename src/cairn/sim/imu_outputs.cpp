@@ -12,15 +12,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// The 16 numbers of a 4x4 row-major matrix.
-std::vector<double> row_major(const core::SE3& T) {
-  const Matrix4 M = T.matrix();
-  std::vector<double> out;
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) out.push_back(M(r, c));
-  }
-  return out;
-}
 
 nlohmann::json bias_json(const inertial::ImuBias& b) {
   return {{"gyro_rad_s", {b.gyro_rad_s.x(), b.gyro_rad_s.y(), b.gyro_rad_s.z()}},
@@ -47,6 +38,15 @@ void write_lidar_sensor_yaml(const std::string& path, const core::SE3& T_body_li
 }
 
 }  // namespace
+
+std::vector<double> row_major(const core::SE3& T) {
+  const Matrix4 M = T.matrix();
+  std::vector<double> out;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) out.push_back(M(r, c));
+  }
+  return out;
+}
 
 core::SE3 T_body_lidar(const Lidar3DOptions& lidar) { return lidar_pose(core::SE2(), lidar); }
 

@@ -18,6 +18,9 @@
 
 namespace cairn::sim {
 
+/// The 16 numbers of a 4x4 row-major matrix: how the manifests write a transform.
+std::vector<double> row_major(const core::SE3& T);
+
 /// T_body_lidar of the 3D worlds' LiDAR: mount_height_m straight above the body origin, axes
 /// parallel to the body's (sim/street_run.hpp lidar_pose).
 core::SE3 T_body_lidar(const Lidar3DOptions& lidar);
