@@ -1,11 +1,14 @@
 # Two commands: `make demo` and `make test`. Both install missing Debian packages first.
+# Also: `make install PREFIX=/opt/cairn` (default /usr/local) and `make package` (a .deb in
+# $(BUILD_DIR); docs/use_from_cpp.md).
 BUILD_DIR ?= build
+PREFIX ?= /usr/local
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 DATA_ROOT ?= $(abspath ../shared/data)
 export CAIRN_DATA_ROOT ?= $(DATA_ROOT)
 
-.PHONY: all deps configure build test demo clean fuzz
+.PHONY: all deps configure build test demo clean fuzz install package
 
 all: build
 
@@ -21,6 +24,14 @@ build: configure
 
 test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) --timeout 600
+
+install: build
+	@cmake --install $(BUILD_DIR) --prefix $(PREFIX)
+
+# cpack -G DEB (cmake/CairnPackaging.cmake): $(BUILD_DIR)/cairn_<version>_<arch>.deb.
+package: build
+	@cd $(BUILD_DIR) && cpack -G DEB
+	@ls -1 $(BUILD_DIR)/cairn_*.deb
 
 demo: build
 	@./scripts/demo.sh $(BUILD_DIR)/src/cairn/cli/cairn

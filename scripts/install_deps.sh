@@ -42,6 +42,8 @@ PACKAGES=(
   python3-geometry-msgs # tests/bag/fixtures: ROS 1 geometry_msgs classes (TransformStamped, poses)
   python3-tf2-msgs     # tests/bag/fixtures: ROS 1 tf2_msgs/TFMessage for /tf_static
   xz-utils             # tests/bag/fixtures/mcap/make_mcap.mjs reads the .pcd.xz scans with `xz`
+  help2man             # man pages (cairn.1, cairn-slam3d.1, ...) from --help, installed by `make install`
+  file                 # `make package`: CPack finds the ELF files for dpkg-shlibdeps (dpkg-dev) with it
   # Node.js 20 + npm (tests/bag/fixtures/mcap, independent MCAP writer/reader) are NOT listed: here
   # they come from NodeSource's `nodejs` package, which Conflicts/Provides `npm`; Debian's nodejs
   # (18) and npm would conflict with it. tests/bag/fixtures/make_all.sh skips the MCAP fixtures

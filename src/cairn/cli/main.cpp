@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "cairn: SLAM that tells you how good its answer is.\n"
       "Pose graphs (g2o, TORO) and trajectories (TUM, KITTI, EuRoC) in, maps and reports out."};
-  app.set_version_flag("--version", "cairn 0.1.0");
+  app.set_version_flag("--version", "cairn " CAIRN_VERSION);
   app.require_subcommand(1);
   app.fallthrough(false);
 
