@@ -242,10 +242,8 @@ core::SE3 parse_T_BS(const YamlFile& file, const YAML::Node& node) {
   return core::SE3(core::SO3::from_matrix(R), T.topRightCorner<3, 1>());
 }
 
-}  // namespace
-
-ImuCalibration read_euroc_imu_calibration(const std::filesystem::path& path) {
-  const std::string file_path = resolve_dataset_file(path, {"sensor.yaml", "imu0/sensor.yaml"}, "an IMU sensor.yaml");
+// The YAML document of `file_path` (at most kMaxCalibrationBytes), its syntax errors with their line.
+YamlFile load_yaml_file(const std::string& file_path) {
   const std::string text = io::read_maybe_compressed(file_path, kMaxCalibrationBytes);
   YamlFile file{file_path == "-" ? "standard input" : file_path, {}};
   try {
@@ -253,6 +251,27 @@ ImuCalibration read_euroc_imu_calibration(const std::filesystem::path& path) {
   } catch (const YAML::Exception& e) {
     throw io::ParseError(file.name, e.mark.line >= 0 ? static_cast<std::size_t>(e.mark.line + 1) : 0, "not valid YAML: " + e.msg);
   }
+  return file;
+}
+
+}  // namespace
+
+core::SE3 read_euroc_T_BS(const std::filesystem::path& path) {
+  std::error_code error;
+  const std::filesystem::path file_path = std::filesystem::is_directory(path, error) ? path / "sensor.yaml" : path;
+  if (!std::filesystem::is_regular_file(file_path, error)) {
+    throw io::ParseError(file_path.string(), 0, "expected a sensor.yaml with T_BS (the sensor in the body frame), found no such file");
+  }
+  const YamlFile file = load_yaml_file(file_path.string());
+  if (!file.root.IsMap() || !file.root["T_BS"]) {
+    throw io::ParseError(file.name, 0, "expected a key \"T_BS\" (the sensor in the body frame, EuRoC's sensor.yaml), found none");
+  }
+  return parse_T_BS(file, file.root["T_BS"]);
+}
+
+ImuCalibration read_euroc_imu_calibration(const std::filesystem::path& path) {
+  const std::string file_path = resolve_dataset_file(path, {"sensor.yaml", "imu0/sensor.yaml"}, "an IMU sensor.yaml");
+  YamlFile file = load_yaml_file(file_path);
   if (!file.root.IsMap()) {
     throw io::ParseError(file.name, 0, "expected a YAML map of IMU keys (gyroscope_noise_density, ..., T_BS)");
   }

@@ -55,6 +55,14 @@ void write_euroc_imu(const std::filesystem::path& path, const std::vector<ImuSam
 /// T_body_imu is the identity. Other keys (sensor_type, comment, rostopic) are ignored. OpenCV's
 /// `%YAML:1.0` first line is accepted. Errors name the key and its line.
 ImuCalibration read_euroc_imu_calibration(const std::filesystem::path& path);
+
+/// Any sensor's extrinsic from EuRoC's sensor.yaml layout (mav0/<sensor>/sensor.yaml, also the
+/// simulator's lidar0/sensor.yaml): `T_BS`, the sensor in the body frame, {rows: 4, cols: 4,
+/// data: [16 numbers, row-major]}, of the sensor.yaml at `path` (or in the folder `path`); other
+/// keys are ignored. T_BS must be rigid: last row 0 0 0 1, rotation block orthonormal to 1e-6 with
+/// det > 0. Throws io::ParseError naming the file and line for a file that is missing, not YAML,
+/// larger than 1 MiB, without T_BS, or with a bad T_BS (the same checks as the IMU's T_BS above).
+core::SE3 read_euroc_T_BS(const std::filesystem::path& path);
 /// Writes EuRoC's keys. T_BS is written as its 4x4 matrix (the format's), so its rotation reads
 /// back to rounding (about 1e-16), not bit for bit; the rate and noise values read back exactly.
 void write_euroc_imu_calibration(const std::filesystem::path& path, const ImuCalibration& calibration);

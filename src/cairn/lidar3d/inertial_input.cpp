@@ -4,7 +4,6 @@
 
 #include "cairn/inertial/euroc_files.hpp"
 #include "cairn/inertial/imu_csv.hpp"
-#include "cairn/lidar3d/sensor_extrinsic.hpp"
 
 namespace cairn::lidar3d {
 namespace {
@@ -68,7 +67,7 @@ void read_lidar_extrinsic(const InertialInputRequest& request, const fs::path& f
                           "LiDAR taken to be at the IMU (identity)");
     return;
   }
-  input.T_body_lidar = read_sensor_extrinsic(file);
+  input.T_body_lidar = inertial::read_euroc_T_BS(file);
   input.lidar_extrinsic_file = file.string();
 }
 

@@ -3,7 +3,7 @@
 /// The IMU of a `cairn slam3d --imu` run, from what the user names: the samples (EuRoC's imu0
 /// folder or data.csv, a plain IMU CSV, or sensor_msgs/Imu from a bag: inertial/imu_csv.hpp), the
 /// noise (an EuRoC/Kalibr sensor.yaml: inertial/euroc_files.hpp), the LiDAR's pose in the IMU frame
-/// (a sensor.yaml's T_BS: sensor_extrinsic.hpp) and a constant time offset, each with its default
+/// (a sensor.yaml's T_BS: inertial/euroc_files.hpp read_euroc_T_BS) and a constant time offset, each with its default
 /// found beside the IMU's files and a note saying which was taken; and the fusion's options
 /// (lidar_inertial_slam.hpp) they give.
 ///
