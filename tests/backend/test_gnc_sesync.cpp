@@ -240,16 +240,21 @@ TEST(GncRestart, UndoesWhatTheGraduationFoldedOnCity10000) {
   expect_criterion(o, "city10000 seed 4");
 }
 
+std::string case_name(const ::testing::TestParamInfo<Case>& param_info) {
+  const std::string& file = param_info.param.file;
+  return file.substr(0, file.find('.'));
+}
+
 INSTANTIATE_TEST_SUITE_P(SeSync, GncOnSeSync,
                          ::testing::Values(Case{"intel.g2o", false}, Case{"manhattan.g2o", false},
-                                           // city10000: about 2 minutes under ctest -j2 (GNC
-                                           // 20 s of it alone, least squares on the corrupted
-                                           // graph most of the rest; 2026-11-24).
-                                           Case{"sphere2500.g2o", false}, Case{"city10000.g2o", false}),
-                         [](const ::testing::TestParamInfo<Case>& param_info) {
-                           std::string name = param_info.param.file;
-                           return name.substr(0, name.find('.'));
-                         });
+                                           Case{"sphere2500.g2o", false}),
+                         case_name);
+// city10000, the whole graph: 268 s of make test's serial time (GNC about 20 s of it alone, least
+// squares on the corrupted graph most of the rest), so it is not run by make test (its restart
+// case above is). Run it with
+//   build/tests/backend/test_backend --gtest_also_run_disabled_tests --gtest_filter='DISABLED_SeSyncWhole*'
+INSTANTIATE_TEST_SUITE_P(DISABLED_SeSyncWhole, GncOnSeSync, ::testing::Values(Case{"city10000.g2o", false}),
+                         case_name);
 
 }  // namespace
 }  // namespace cairn::backend

@@ -10,6 +10,7 @@
 ///     return problems.report(why);
 ///   }
 
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
@@ -22,6 +23,10 @@ class Problems {
   /// A nested struct's problems (its is_valid's text), each prefixed with `prefix`.
   void add_all(const std::string& prefix, const std::string& joined) {
     if (!joined.empty()) add(prefix + joined);
+  }
+  /// "<name> must be finite and > 0" unless `value` is.
+  void require_positive(double value, const char* name) {
+    if (!(std::isfinite(value) && value > 0.0)) add(std::string(name) + " must be finite and > 0");
   }
   bool empty() const { return list_.empty(); }
   const std::vector<std::string>& list() const { return list_; }

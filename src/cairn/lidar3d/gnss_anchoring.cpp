@@ -19,14 +19,10 @@ bool GnssAnchoringOptions::is_valid(std::string* why) const {
   if (!factor.is_valid(&nested)) problems.add_all("factor: ", nested);
   nested.clear();
   if (!alignment.is_valid(&nested)) problems.add_all("alignment: ", nested);
-  if (!(std::isfinite(max_fix_gap_s) && max_fix_gap_s > 0.0)) problems.add("max_fix_gap_s must be finite and > 0");
+  problems.require_positive(max_fix_gap_s, "max_fix_gap_s");
   if (solve_every_keyframes < 1) problems.add("solve_every_keyframes must be >= 1");
-  if (!(std::isfinite(world_tilt_sigma_rad) && world_tilt_sigma_rad > 0.0)) {
-    problems.add("world_tilt_sigma_rad must be finite and > 0");
-  }
-  if (!(std::isfinite(degenerate_edge_sigma_m) && degenerate_edge_sigma_m > 0.0)) {
-    problems.add("degenerate_edge_sigma_m must be finite and > 0");
-  }
+  problems.require_positive(world_tilt_sigma_rad, "world_tilt_sigma_rad");
+  problems.require_positive(degenerate_edge_sigma_m, "degenerate_edge_sigma_m");
   if (!(outlier_probability > 0.0 && outlier_probability < 1.0)) problems.add("outlier_probability must be in (0, 1)");
   return problems.report(why);
 }

@@ -23,19 +23,16 @@ bool InertialFusionOptions::is_valid(std::string* why) const {
   if (!noise.is_valid(&nested)) problems.add_all("noise: ", nested);
   nested.clear();
   if (!initialization.is_valid(&nested)) problems.add_all("initialization: ", nested);
-  const auto positive = [&](double value, const char* name) {
-    if (!(std::isfinite(value) && value > 0.0)) problems.add(std::string(name) + " must be finite and > 0");
-  };
-  positive(gravity_mps2, "gravity_mps2");
-  positive(lidar_rotation_sigma_rad, "lidar_rotation_sigma_rad");
-  positive(lidar_translation_sigma_m, "lidar_translation_sigma_m");
-  positive(degenerate_translation_sigma_m, "degenerate_translation_sigma_m");
-  positive(initial_velocity_sigma_still_mps, "initial_velocity_sigma_still_mps");
-  positive(initial_velocity_sigma_moving_mps, "initial_velocity_sigma_moving_mps");
-  positive(initial_gyro_bias_sigma_rad_s, "initial_gyro_bias_sigma_rad_s");
-  positive(initial_accel_bias_sigma_mps2, "initial_accel_bias_sigma_mps2");
-  positive(contradiction_chi2, "contradiction_chi2");
-  positive(still_lidar_motion_max_m, "still_lidar_motion_max_m");
+  problems.require_positive(gravity_mps2, "gravity_mps2");
+  problems.require_positive(lidar_rotation_sigma_rad, "lidar_rotation_sigma_rad");
+  problems.require_positive(lidar_translation_sigma_m, "lidar_translation_sigma_m");
+  problems.require_positive(degenerate_translation_sigma_m, "degenerate_translation_sigma_m");
+  problems.require_positive(initial_velocity_sigma_still_mps, "initial_velocity_sigma_still_mps");
+  problems.require_positive(initial_velocity_sigma_moving_mps, "initial_velocity_sigma_moving_mps");
+  problems.require_positive(initial_gyro_bias_sigma_rad_s, "initial_gyro_bias_sigma_rad_s");
+  problems.require_positive(initial_accel_bias_sigma_mps2, "initial_accel_bias_sigma_mps2");
+  problems.require_positive(contradiction_chi2, "contradiction_chi2");
+  problems.require_positive(still_lidar_motion_max_m, "still_lidar_motion_max_m");
   if (window_states < 2) problems.add("window_states must be >= 2");
   if (!(std::isfinite(gravity_estimation_s) && gravity_estimation_s >= 0.0)) {
     problems.add("gravity_estimation_s must be finite and >= 0");

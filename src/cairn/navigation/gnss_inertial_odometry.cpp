@@ -31,18 +31,15 @@ bool GnssInertialOdometryOptions::is_valid(std::string* why) const {
   if (!yaw.is_valid(&nested)) problems.add_all("yaw: ", nested);
   nested.clear();
   if (!initialization.is_valid(&nested)) problems.add_all("initialization: ", nested);
-  const auto positive = [&](double value, const char* name) {
-    if (!(std::isfinite(value) && value > 0.0)) problems.add(std::string(name) + " must be finite and > 0");
-  };
-  positive(gravity_mps2, "gravity_mps2");
-  positive(wheel_speed_sigma_mps, "wheel_speed_sigma_mps");
-  positive(min_wheel_speed_sigma_mps, "min_wheel_speed_sigma_mps");
-  positive(nonholonomic_sigma_mps, "nonholonomic_sigma_mps");
-  positive(max_wheel_gap_s, "max_wheel_gap_s");
-  positive(initial_velocity_sigma_mps, "initial_velocity_sigma_mps");
-  positive(initial_gyro_bias_sigma_rad_s, "initial_gyro_bias_sigma_rad_s");
-  positive(initial_accel_bias_sigma_mps2, "initial_accel_bias_sigma_mps2");
-  positive(initial_tilt_sigma_rad, "initial_tilt_sigma_rad");
+  problems.require_positive(gravity_mps2, "gravity_mps2");
+  problems.require_positive(wheel_speed_sigma_mps, "wheel_speed_sigma_mps");
+  problems.require_positive(min_wheel_speed_sigma_mps, "min_wheel_speed_sigma_mps");
+  problems.require_positive(nonholonomic_sigma_mps, "nonholonomic_sigma_mps");
+  problems.require_positive(max_wheel_gap_s, "max_wheel_gap_s");
+  problems.require_positive(initial_velocity_sigma_mps, "initial_velocity_sigma_mps");
+  problems.require_positive(initial_gyro_bias_sigma_rad_s, "initial_gyro_bias_sigma_rad_s");
+  problems.require_positive(initial_accel_bias_sigma_mps2, "initial_accel_bias_sigma_mps2");
+  problems.require_positive(initial_tilt_sigma_rad, "initial_tilt_sigma_rad");
   if (!(state_period_s >= 0.01 && state_period_s <= 1.0)) problems.add("state_period_s must be in [0.01, 1]");
   if (window_states < 3) problems.add("window_states must be >= 3");
   if (!(std::isfinite(latency_s) && latency_s >= 0.0)) problems.add("latency_s must be finite and >= 0");
