@@ -37,6 +37,18 @@ libsuitesparseconfig5, libtbb12, libyaml-cpp0.7, zlib1g, libbz2-1.0, liblzma5, l
 libsqlite3-0, libpng16-16, libjpeg62-turbo, libcairo2, libgeographiclib23, libopencv-core406, \
 libopencv-imgproc406, libopencv-features2d406, libopencv-calib3d406, libopencv-video406")
 endif()
+# The Python package (python/): an extension module for this Python version (its ABI tag is in
+# the file name), which imports numpy. dpkg-shlibdeps finds its libraries, not the interpreter.
+if(CAIRN_BUILD_PYTHON)
+  math(EXPR next_minor "${Python_VERSION_MINOR} + 1")
+  set(python_depends "python3 (>= ${Python_VERSION_MAJOR}.${Python_VERSION_MINOR}), \
+python3 (<< ${Python_VERSION_MAJOR}.${next_minor}), python3-numpy")
+  if(CPACK_DEBIAN_PACKAGE_DEPENDS)
+    string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS ", ${python_depends}")
+  else()
+    set(CPACK_DEBIAN_PACKAGE_DEPENDS "${python_depends}")
+  endif()
+endif()
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS
   "libeigen3-dev, nlohmann-json3-dev, libsuitesparse-dev, libtbb-dev, libyaml-cpp-dev, zlib1g-dev, \
 libbz2-dev, liblzma-dev, liblz4-dev, libzstd-dev, libsqlite3-dev, libpng-dev, libjpeg-dev, libcairo2-dev, \

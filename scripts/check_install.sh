@@ -7,7 +7,9 @@
 #   3. examples/consumer/backend_only, configured against the prefix with OpenCV's package disabled,
 #      built and run on a pose graph: cairn::backend needs neither OpenCV nor cairo;
 #   4. the same program compiled with `pkg-config cairn-backend` instead of CMake;
-#   5. examples/consumer (backend, eval, lidar3d, io) built and run on the benchmark data.
+#   5. examples/consumer (backend, eval, lidar3d, io) built and run on the benchmark data;
+#   6. when the build has the Python package: `import cairn` from the prefix (not the build tree),
+#      optimising the same graph.
 #
 #   scripts/check_install.sh [BUILD_DIR]     (default: build)
 #
@@ -86,5 +88,17 @@ cmake -S "$ROOT/examples/consumer" -B "$WORK/consumer" "${CMAKE_ARGS[@]}" > "$WO
   || { cat "$WORK/consumer.log"; fail "configure examples/consumer"; }
 cmake --build "$WORK/consumer" > "$WORK/consumer_build.log" 2>&1 || { cat "$WORK/consumer_build.log"; fail "build examples/consumer"; }
 "$WORK/consumer/cairn_consumer" "$DATA" || fail "cairn_consumer"
+
+PYTHON_PACKAGE=$(find "$PREFIX" -path '*/cairn/__init__.py' | head -n 1)
+if grep -q '^CAIRN_BUILD_PYTHON:BOOL=ON' "$BUILD/CMakeCache.txt"; then
+  step "import cairn from the prefix"
+  [[ -n "$PYTHON_PACKAGE" ]] || fail "the Python package was not installed"
+  PYTHON=$(sed -n 's/^Python_EXECUTABLE:[A-Z]*=//p' "$BUILD/CMakeCache.txt")
+  (cd "$WORK" && PYTHONPATH="$(dirname "$(dirname "$PYTHON_PACKAGE")")" "$PYTHON" -c "
+import sys, cairn
+assert cairn.__file__.startswith('$PREFIX'), cairn.__file__
+r = cairn.optimize(sys.argv[1])
+print('cairn', cairn.__version__, 'from', cairn.__file__, ': chi2', r.chi2)" "$GRAPH") || fail "import cairn from $PREFIX"
+fi
 
 step "passed"

@@ -36,6 +36,11 @@ PACKAGES=(
   libzstd-dev          # bag: zstd-compressed chunks (MCAP)
   libsqlite3-dev       # bag: rosbag2 SQLite3 storage (.db3)
   libgeographiclib-dev # gnss: geodetic <-> local east-north-up (LocalCartesian, WGS84)
+  python3-dev          # the Python package (python/): Python.h for the extension module
+  pybind11-dev         # the Python package: C++ bindings (pybind11 2.10, its CMake package)
+  python3-numpy        # the Python package: arrays in and out
+  python3-pytest       # the Python package's tests (python/tests) in make test
+  python3-matplotlib   # examples/python: the plots
   python3-rosbag       # tests/bag/fixtures: independent ROS 1 bag writer/reader for the bag tests
   python3-sensor-msgs  # tests/bag/fixtures: ROS 1 sensor_msgs classes for the independent writer
   python3-nav-msgs     # tests/bag/fixtures: ROS 1 nav_msgs classes (Odometry reference)
