@@ -299,5 +299,5 @@ function(cairn_add_man_pages)
     COMMENT "Man pages from cairn --help (help2man)"
     VERBATIM)
   add_custom_target(cairn_man_pages ALL DEPENDS "${stamp}")
-  install(DIRECTORY "${directory}/" DESTINATION ${CMAKE_INSTALL_MANDIR}/man1 FILES_MATCHING PATTERN "*.1")
+  install(DIRECTORY "${directory}/" DESTINATION ${CMAKE_INSTALL_MANDIR}/man1 FILES_MATCHING PATTERN "*.1.gz")
 endfunction()

@@ -1,6 +1,6 @@
 # Script mode, run at build time by cairn_add_man_pages (cmake/CairnInstall.cmake):
 #   cmake -DCAIRN=<cairn> -DHELP2MAN=<help2man> -DOUT=<dir> -DVERSION=<x.y.z> -P cairn_man_pages.cmake
-# Writes OUT/cairn.1 from `cairn --help` and OUT/cairn-<command>.1 from `cairn <command> --help`
+# Writes OUT/cairn.1.gz from `cairn --help` and OUT/cairn-<command>.1.gz from `cairn <command> --help`
 # for every command `cairn --help` lists, as git names git-commit(1).
 foreach(variable CAIRN HELP2MAN OUT VERSION)
   if(NOT ${variable})
@@ -62,5 +62,11 @@ foreach(command IN LISTS commands)
            "${OUT}/bin/see_cairn.h2m")
 endforeach()
 file(REMOVE_RECURSE "${OUT}/bin")
+# Compressed, as Debian policy 12.1 wants installed man pages (man reads them as they are).
+file(GLOB pages "${OUT}/*.1")
+foreach(page IN LISTS pages)
+  file(ARCHIVE_CREATE OUTPUT "${page}.gz" PATHS "${page}" FORMAT raw COMPRESSION GZip)
+  file(REMOVE "${page}")
+endforeach()
 list(LENGTH commands count)
 message(STATUS "cairn: ${count} command man pages and cairn.1 in ${OUT}")

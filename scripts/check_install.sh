@@ -51,7 +51,7 @@ step "running the installed cairn"
 # eval runs in cairn-suite: the front must find it beside itself in the installed layout.
 "$PREFIX/bin/cairn" eval --help > /dev/null || fail "cairn eval --help (cairn-suite beside cairn)"
 if command -v help2man > /dev/null; then
-  [[ -f "$PREFIX/share/man/man1/cairn.1" && -f "$PREFIX/share/man/man1/cairn-slam3d.1" ]] || fail "man pages not installed"
+  [[ -f "$PREFIX/share/man/man1/cairn.1.gz" && -f "$PREFIX/share/man/man1/cairn-slam3d.1.gz" ]] || fail "man pages not installed"
 fi
 
 step "pkg-config files"

@@ -511,8 +511,7 @@ def umeyama(
 ) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64], float]:
     """Umeyama's least-squares similarity (IEEE PAMI 1991), as evo.core.geometry.umeyama_alignment: x and y are m x n arrays of n points (m = 2 or 3, columns are points); returns (R, t, c) with y ~ c R x + t (c = 1.0 without with_scale). Raises ValueError for wrong shapes or degenerate (coincident, collinear) points."""
 
-# Stubs of python/src/pipelines.cpp (merged into python/cairn/_cairn.pyi). `PointCloud` and
-# `ParseError` are defined elsewhere in the stub file.
+# --- The pipelines (python/src/lidar3d.cpp, slam2d.cpp, vslam.cpp) ---
 
 
 _Path = str | os.PathLike[str]

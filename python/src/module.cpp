@@ -10,5 +10,7 @@ PYBIND11_MODULE(_cairn, m) {
   cairn::python::bind_io(m);
   cairn::python::bind_backend(m);
   cairn::python::bind_eval(m);
-  cairn::python::bind_pipelines(m);
+  cairn::python::bind_lidar3d(m);
+  cairn::python::bind_slam2d(m);
+  cairn::python::bind_vslam(m);
 }

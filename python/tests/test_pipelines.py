@@ -1,4 +1,4 @@
-"""The pipelines driven from Python (python/src/pipelines.cpp) against the `cairn` command.
+"""The pipelines driven from Python (python/src/lidar3d.cpp, slam2d.cpp, vslam.cpp) against the `cairn` command.
 
 Every expected value comes from the CLI's own output files for the same input (trajectories,
 scans.csv, map.ply, map.pgm, report.json), never from the bindings: a Python loop that feeds the

@@ -1,0 +1,341 @@
+// LidarSlam in Python (bindings.hpp): fed one scan at a time, as `cairn slam3d` feeds it, and the
+// reader that gives exactly what that command feeds (scan_sequence). The GIL is released while it
+// works; each LidarSlam serialises its own calls (pipeline_support.hpp locked), so Python threads
+// may share one.
+
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bindings.hpp"
+#include "cairn/core/timer.hpp"
+#include "cairn/io/point_cloud.hpp"
+#include "cairn/lidar3d/config.hpp"
+#include "cairn/lidar3d/odometry.hpp"
+#include "cairn/lidar3d/report.hpp"
+#include "cairn/lidar3d/scan_sequence.hpp"
+#include "cairn/lidar3d/slam.hpp"
+#include "cairn/lidar3d/slam_run.hpp"
+#include "pipeline_support.hpp"
+
+namespace cairn::python {
+namespace {
+
+/// A 1-D array of `n` values (or none), converted once; ValueError naming `what` otherwise.
+template <class T>
+py::array_t<T, py::array::c_style | py::array::forcecast> vector_argument(const py::object& values, std::size_t n,
+                                                                           const char* what) {
+  auto array = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(values);
+  if (!array || array.ndim() != 1 || static_cast<std::size_t>(array.shape(0)) != n) {
+    throw_value_error(std::string(what) + ": expected a 1-D array of " + std::to_string(n) + " numbers (one per point)");
+  }
+  return array;
+}
+
+/// The preset, the file and the keys, validated as `cairn slam3d` does (slam3d_flags.cpp).
+lidar3d::SlamConfiguration lidar_configuration(const std::string& preset, const py::object& config, const py::object& set) {
+  lidar3d::SlamConfiguration options;
+  options.slam.odometry = lidar3d::preset_options(preset);
+  apply_configuration(lidar3d::configuration(), options, config, set);
+  std::string error;
+  if (!options.is_valid(&error)) throw_value_error("invalid configuration: " + error);
+  return options;
+}
+
+/// A scan from arrays: points N x 3 plus optional per-point times (seconds from the sweep's
+/// start), intensities and rings, as io::PointCloud holds them.
+io::PointCloud cloud_from_arrays(const FloatArray& points, const py::object& point_times, const py::object& intensity,
+                                 const py::object& ring) {
+  io::PointCloud cloud;
+  cloud.points = points_from_array(points, "points");
+  const std::size_t n = cloud.size();
+  if (!point_times.is_none()) {
+    const auto times = vector_argument<float>(point_times, n, "point_times");
+    cloud.time_s.assign(times.data(), times.data() + n);
+    if (!std::all_of(cloud.time_s.begin(), cloud.time_s.end(), [](float t) { return std::isfinite(t); })) {
+      throw_value_error("point_times: a value is not finite");
+    }
+  }
+  if (!intensity.is_none()) {
+    const auto values = vector_argument<float>(intensity, n, "intensity");
+    cloud.intensity.assign(values.data(), values.data() + n);
+  }
+  if (!ring.is_none()) {
+    const auto rings = vector_argument<std::int64_t>(ring, n, "ring");
+    cloud.ring.reserve(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::int64_t r = rings.data()[k];
+      if (r < 0 || r > 65535) throw_value_error("ring: value " + std::to_string(r) + " at " + std::to_string(k) + " is not in 0..65535");
+      cloud.ring.push_back(static_cast<std::uint16_t>(r));
+    }
+  }
+  return cloud;
+}
+
+nlohmann::json lidar_candidate_json(const lidar3d::LoopCandidateRecord& c) {
+  return {{"query_keyframe", c.query_keyframe},     {"candidate_keyframe", c.candidate_keyframe},
+          {"query_time_s", c.query_time_s},         {"candidate_time_s", c.candidate_time_s},
+          {"descriptor_distance", c.descriptor_distance}, {"fitness", c.fitness},
+          {"rms_m", c.rms_m},                       {"gate_translation_m", c.gate_translation_m},
+          {"gate_limit_m", c.gate_limit_m},         {"decision", c.decision},
+          {"accepted", c.accepted},                 {"rejected_by_gnc", c.rejected_by_gnc}};
+}
+
+/// Health counts, map segments and points, and the loop closure's counts, times and candidates.
+nlohmann::json lidar_summary_json(const lidar3d::LidarSlam& slam, const lidar3d::SlamRun& run) {
+  const lidar3d::HealthCounts health = run.health_counts();
+  const lidar3d::LidarSlamSummary& s = slam.summary();
+  nlohmann::json candidates = nlohmann::json::array();
+  for (const lidar3d::LoopCandidateRecord& c : s.candidates) candidates.push_back(lidar_candidate_json(c));
+  return {{"scans", run.scans().size()},
+          {"scans_ok", health.ok},
+          {"scans_degraded", health.degraded},
+          {"scans_lost", health.lost},
+          {"scans_with_unusable_point_times", health.unusable_point_times},
+          {"map_segments", run.scans().empty() ? 0 : run.scans().back().segment + 1},
+          {"map_points", run.global_map().size()},
+          {"front_end", std::string(lidar3d::to_string(slam.front_end()))},
+          {"keyframes", s.keyframes},
+          {"loop_queries", s.loop_queries},
+          {"loops_accepted", s.loops_accepted},
+          {"loops_rejected_by_gnc", s.loops_rejected_by_gnc},
+          {"optimizations", s.optimizations},
+          {"loop_search_s", s.loop_search_s},
+          {"verification_s", s.verification_s},
+          {"optimization_s", s.optimization_s},
+          {"candidates", candidates}};
+}
+
+/// LidarSlam and the record of its run (SlamRun), held together as `cairn slam3d` holds them: the
+/// run keeps the keyframes' points and assembles the global map (map.ply) at finish().
+class LidarSession {
+ public:
+  LidarSession(lidar3d::SlamConfiguration options, std::string preset, double map_voxel_m)
+      : options_(std::move(options)),
+        preset_(std::move(preset)),
+        slam_(options_.slam),
+        run_(options_.slam.odometry, map_voxel_m) {
+    sequence_.times_from_file = true;  // the caller gives every time
+  }
+
+  lidar3d::SlamScanResult add_scan(const io::PointCloud& cloud, double time_s) {
+    finite_or_throw(time_s, "time");
+    return locked(mutex_, [&] {
+      if (finished_) throw std::runtime_error("LidarSlam.finish() was called: no scan may follow it");
+      lidar3d::SlamScanResult result = slam_.add_scan(cloud, time_s);
+      // No file was read here: 0 s of reading, as the report's read_file times say.
+      run_.add_scan(sequence_.files.size(), cloud, result, 0.0);
+      sequence_.files.push_back("scan " + std::to_string(sequence_.files.size()));
+      sequence_.times_s.push_back(time_s);
+      return result;
+    });
+  }
+
+  void finish() {
+    locked(mutex_, [&] {
+      if (finished_) return;
+      if (run_.scans().empty()) throw std::runtime_error("LidarSlam.finish(): no scan was added");
+      slam_.finish();
+      run_.finish(slam_);
+      finished_ = true;
+      wall_time_s_ = core::seconds_since(start_);
+    });
+  }
+
+  py::array_t<double> trajectory() { return poses_to_array(locked(mutex_, [&] { return slam_.trajectory(); })); }
+  py::array_t<double> times() { return vector_to_array(locked(mutex_, [&] { return sequence_.times_s; })); }
+  py::array_t<double> keyframe_poses() { return poses_to_array(locked(mutex_, [&] { return slam_.keyframe_poses(); })); }
+  py::array_t<std::int64_t> keyframe_scans() { return indices_to_array(locked(mutex_, [&] { return slam_.keyframe_scans(); })); }
+
+  std::vector<std::string> health() {
+    return locked(mutex_, [&] {
+      std::vector<std::string> words;
+      for (const lidar3d::OdometryScanResult& r : run_.scans()) words.push_back(health_word(r.health));
+      return words;
+    });
+  }
+
+  py::array_t<float> map_points() {
+    return points_to_array(locked(mutex_, [&] {
+      if (!finished_) throw std::runtime_error("LidarSlam.map_points(): the global map is assembled by finish()");
+      return run_.global_map().points();
+    }));
+  }
+
+  py::object summary() { return json_to_python(locked(mutex_, [&] { return lidar_summary_json(slam_, run_); })); }
+
+  py::object report() {
+    return json_to_python(locked(mutex_, [&] {
+      if (run_.scans().empty()) throw std::runtime_error("LidarSlam.report(): no scan was added");
+      const lidar3d::SlamRunInputs inputs{{}, "", preset_, ""};
+      const double wall_s = finished_ ? wall_time_s_ : core::seconds_since(start_);
+      return lidar3d::report_json(inputs, sequence_, slam_, run_, wall_s, !finished_, std::nullopt);
+    }));
+  }
+
+  py::object config() const { return json_to_python(lidar3d::configuration().json(options_)); }
+  std::size_t scans() { return locked(mutex_, [&] { return sequence_.files.size(); }); }
+  bool finished() { return locked(mutex_, [&] { return finished_; }); }
+  std::string front_end() { return locked(mutex_, [&] { return std::string(lidar3d::to_string(slam_.front_end())); }); }
+  double map_voxel_m() const { return run_.map_voxel_m(); }
+
+ private:
+  lidar3d::SlamConfiguration options_;
+  std::string preset_;
+  lidar3d::LidarSlam slam_;
+  lidar3d::SlamRun run_;
+  lidar3d::ScanSequence sequence_;  ///< one label and time per scan added, for report()
+  bool finished_ = false;
+  core::Clock::time_point start_ = core::Clock::now();
+  double wall_time_s_ = 0.0;
+  std::mutex mutex_;
+};
+
+/// The scans and their times as `cairn slam3d SCANS [--times FILE --times-column C]
+/// [--max-scans N]` reads them (cmd_slam3d.cpp read_sequence; scan files, not bags): without a
+/// times table the scans are 0.1 s apart.
+lidar3d::ScanSequence scan_sequence(const py::object& scans, const py::object& times, int times_column, long max_scans) {
+  if (times_column < 1) throw_value_error("times_column: expected a column number >= 1");
+  if (max_scans < 0) throw_value_error("max_scans: expected >= 0 (0: all)");
+  std::vector<std::string> paths;
+  if (py::isinstance<py::str>(scans) || py::hasattr(scans, "__fspath__")) {
+    paths.push_back(fspath(scans));
+  } else {
+    for (const py::handle path : scans) paths.push_back(fspath(path));
+  }
+  const std::string times_path = times.is_none() ? std::string() : fspath(times);
+  const py::gil_scoped_release release;
+  lidar3d::ScanSequence sequence = lidar3d::make_scan_sequence(paths, "", 1);
+  std::size_t n = sequence.files.size();
+  if (max_scans > 0) n = std::min(n, static_cast<std::size_t>(max_scans));
+  sequence.files.resize(n);
+  if (!times_path.empty()) {
+    sequence.times_s = lidar3d::read_scan_times(times_path, times_column, n);
+    sequence.times_from_file = true;
+  } else {
+    sequence.times_s.resize(n);
+  }
+  return sequence;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The Python classes
+
+py::dict stage_times(double preprocess_s, double register_s, double map_s, double total_s) {
+  py::dict d;
+  d["preprocess_s"] = preprocess_s;
+  d["register_s"] = register_s;
+  d["map_s"] = map_s;
+  d["total_s"] = total_s;
+  return d;
+}
+
+void bind_lidar_result(py::module_& m) {
+  using R = lidar3d::SlamScanResult;
+  py::class_<R>(m, "LidarScanResult", "What LidarSlam.add_scan says about one scan (lidar3d::SlamScanResult).")
+      .def_property_readonly("time", [](const R& r) { return r.odometry.time_s; }, "The scan's time, seconds.")
+      .def_property_readonly("health", [](const R& r) { return health_word(r.odometry.health); },
+                             "'ok', 'degraded' (a degenerate direction, few correspondences) or 'lost' (a new map segment starts).")
+      .def_property_readonly("pose", [](const R& r) { return matrix_to_array(r.odometry.T_world_sensor.matrix()); },
+                             "T_world_scan (4 x 4) at the scan's time, as the odometry placed it (before later loop closures).")
+      .def_readonly("keyframe", &R::keyframe, "Whether the scan became a keyframe.")
+      .def_property_readonly("degenerate_axis", [](const R& r) { return r.odometry.degenerate_axis; },
+                             "The sensor axis the registration could not constrain, or ''.")
+      .def_property_readonly("segment", [](const R& r) { return r.odometry.segment; }, "Map segment (one more after each lost scan).")
+      .def_property_readonly("points_read", [](const R& r) { return r.odometry.points_read; })
+      .def_property_readonly("points_in_range", [](const R& r) { return r.odometry.points_in_range; })
+      .def_property_readonly("correspondences", [](const R& r) { return r.odometry.registration.correspondences; })
+      .def_property_readonly("rms_m", [](const R& r) { return r.odometry.registration.rms_m; }, "RMS of the correspondences, metres.")
+      .def_property_readonly("converged", [](const R& r) { return r.odometry.registration.converged; })
+      .def_property_readonly("iterations", [](const R& r) { return r.odometry.registration.iterations; })
+      .def_property_readonly("threshold_sigma_m", [](const R& r) { return r.odometry.threshold_sigma_m; },
+                             "Adaptive correspondence threshold sigma used (KISS-ICP eq. 3-4).")
+      .def_property_readonly("point_times_unusable", [](const R& r) { return r.odometry.point_times_unusable; },
+                             "The per-point times were not offsets within one sweep: the scan was not deskewed.")
+      .def_property_readonly("local_map_points", [](const R& r) { return r.odometry.local_map_points; })
+      .def_property_readonly("timings", [](const R& r) {
+            const lidar3d::OdometryStageTimes& t = r.odometry.times;
+            return stage_times(t.preprocess_s, t.register_s, t.map_s, t.total_s);
+          }, "Seconds per odometry stage: preprocess_s, register_s, map_s, total_s.")
+      .def("__repr__", [](const R& r) {
+        return "LidarScanResult(time=" + std::to_string(r.odometry.time_s) + ", health='" + health_word(r.odometry.health) +
+               "', keyframe=" + (r.keyframe ? "True" : "False") + ", segment=" + std::to_string(r.odometry.segment) + ")";
+      });
+}
+
+void bind_lidar_slam(py::module_& m) {
+  py::class_<LidarSession>(m, "LidarSlam",
+                           "3D LiDAR SLAM (lidar3d::LidarSlam with the run record SlamRun, as `cairn slam3d` holds them): "
+                           "odometry after KISS-ICP, Scan Context loop candidates verified by ICP, a pose graph with GNC.")
+      .def(py::init([](const py::object& config, const py::object& set, const std::string& preset, double map_voxel_m) {
+             if (!(map_voxel_m > 0.0) || !std::isfinite(map_voxel_m)) throw_value_error("map_voxel_m: expected a finite value > 0");
+             return std::make_unique<LidarSession>(lidar_configuration(preset, config, set), preset, map_voxel_m);
+           }),
+           py::arg("config") = py::none(), py::arg("set") = py::none(), py::kw_only(), py::arg("preset") = "default",
+           py::arg("map_voxel_m") = 0.25,
+           "The options as `cairn slam3d --preset PRESET --config CONFIG --set key=value ...` makes them ('default' or "
+           "'kitti'; keys as `cairn slam3d --print-config` lists them); map_voxel_m as --map-voxel.")
+      .def("add_scan", &LidarSession::add_scan, py::arg("cloud"), py::arg("time"),
+           "One scan (a cairn.PointCloud, e.g. from cairn.read_point_cloud) taken at `time` (seconds, strictly increasing). "
+           "Releases the GIL.")
+      .def("add_scan",
+           [](LidarSession& s, const FloatArray& points, double time, const py::object& point_times, const py::object& intensity,
+              const py::object& ring) { return s.add_scan(cloud_from_arrays(points, point_times, intensity, ring), time); },
+           py::arg("points"), py::arg("time"), py::arg("point_times") = py::none(), py::arg("intensity") = py::none(),
+           py::arg("ring") = py::none(),
+           "One scan from arrays: points N x 3 (sensor frame, metres, finite), optional per-point times (seconds from the "
+           "sweep's start), intensities and rings (N each).")
+      .def("finish", &LidarSession::finish,
+           "The final GNC over the loop closures, then the global map at the final poses. Call once after the last scan.")
+      .def("trajectory", &LidarSession::trajectory, "T_world_scan of every scan so far (N x 4 x 4), after the latest solve.")
+      .def("times", &LidarSession::times, "Every scan's time, seconds (N).")
+      .def("health", &LidarSession::health, "Every scan's health: 'ok', 'degraded' or 'lost'.")
+      .def("keyframe_poses", &LidarSession::keyframe_poses, "The keyframes' poses at their registration instant (K x 4 x 4).")
+      .def("keyframe_scans", &LidarSession::keyframe_scans, "The index (in add_scan order) of each keyframe's scan (K).")
+      .def("map_points", &LidarSession::map_points,
+           "The global map after finish(), M x 3 float32, one point per voxel of map_voxel_m: what `cairn slam3d` writes as map.ply.")
+      .def_property_readonly("summary", &LidarSession::summary, "Health counts, map segments and loop closure, as a dict.")
+      .def("report", &LidarSession::report, "report.json of `cairn slam3d` for the scans so far, as a dict.")
+      .def("config", &LidarSession::config, "The options in effect, {section: {key: value}} (report.json's \"options\").")
+      .def_property_readonly("front_end", &LidarSession::front_end, "'dense' or 'loam' (what 'auto' chose), 'auto' before the first scan.")
+      .def_property_readonly("finished", &LidarSession::finished)
+      .def_property_readonly("map_voxel_m", &LidarSession::map_voxel_m)
+      .def("__len__", &LidarSession::scans, "Scans added.");
+}
+
+void bind_scan_sequence(py::module_& m) {
+  py::class_<lidar3d::ScanSequence>(m, "ScanSequence", "Scan files and their times, in the order `cairn slam3d` reads them.")
+      .def_readonly("files", &lidar3d::ScanSequence::files)
+      .def_property_readonly("times", [](const lidar3d::ScanSequence& s) { return vector_to_array(s.times_s); }, "Seconds, one per file.")
+      .def_readonly("times_from_file", &lidar3d::ScanSequence::times_from_file, "False: made up, 0.1 s apart.")
+      .def("__len__", [](const lidar3d::ScanSequence& s) { return s.files.size(); })
+      .def("__iter__", [](const lidar3d::ScanSequence& s) {
+        return py::iter(py::module_::import("builtins").attr("zip")(py::cast(s.files), py::cast(s.times_s)));
+      }, "(file, time) pairs.");
+  m.def("scan_sequence", &scan_sequence, py::arg("scans"), py::arg("times") = py::none(), py::arg("times_column") = 1,
+        py::arg("max_scans") = 0,
+        "The scans of a folder (.pcd/.ply/.bin, optionally compressed, natural name order) or a list of files, with their "
+        "times from a table (column times_column, 1-based) or 0.1 s apart: what `cairn slam3d SCANS --times TIMES "
+        "--times-column C --max-scans N` feeds. Each file read with cairn.read_point_cloud and given to LidarSlam.add_scan "
+        "with its time reproduces that run.");
+}
+
+}  // namespace
+
+void bind_lidar3d(py::module_& m) {
+  bind_lidar_result(m);
+  bind_lidar_slam(m);
+  bind_scan_sequence(m);
+}
+
+}  // namespace cairn::python
