@@ -7,10 +7,10 @@ The scans: the shared KITTI 00 key frames (DATA_ROOT/lidar3d/kitti00_keyframes, 
   * CLI:    cairn slam3d KEY_FRAMES ... --out DIR         (its own outputs: trajectories, map.ply,
             map.png, report.json)
   * Python: cairn.scan_sequence + cairn.read_point_cloud + LidarSlam.add_scan per scan, finish(),
-            then cairn.write_trajectory(trajectory.kitti)  (the loop of examples/python/lidar_map.py)
+            then the poses saved with numpy  (the loop of examples/python/lidar_map.py)
 Both are timed as whole processes (interpreter start and imports included), and also by their own
 clock around the scans: the CLI's "N scans in T s" line and the Python loop's perf_counter. Checks
-that the two trajectory.kitti files are byte-identical. Prints a Markdown table of medians.
+that the Python poses equal the CLI's trajectory.kitti (17 significant digits) exactly. Prints a Markdown table of medians.
 
 Usage: PYTHONPATH=build/python /usr/bin/python3 bench/python_slam3d_vs_cli.py build/src/cairn/cli/cairn
        [--data DATA_ROOT] [--repeat 3]
@@ -25,8 +25,10 @@ import sys
 import tempfile
 import time
 
+import numpy
+
 PYTHON_RUN = r'''
-import sys, time, cairn
+import sys, time, cairn, numpy
 scans, times, out = sys.argv[1:4]
 start = time.perf_counter()
 sequence = cairn.scan_sequence(scans, times=times, times_column=4)
@@ -35,14 +37,16 @@ for path, stamp in sequence:
     slam.add_scan(cairn.read_point_cloud(path), stamp)
 slam.finish()
 loop_s = time.perf_counter() - start
-cairn.write_trajectory(out, cairn.Trajectory(slam.trajectory()), format="kitti")
+numpy.save(out, slam.trajectory())
 print(f"loop {loop_s:.3f}")
 '''
 
 
 def timed(command, env=None):
     start = time.perf_counter()
-    done = subprocess.run(command, check=True, capture_output=True, text=True, env=env)
+    done = subprocess.run(command, capture_output=True, text=True, env=env)
+    if done.returncode != 0:
+        sys.exit(f"{' '.join(command)} failed ({done.returncode}):\n{done.stderr}")
     return time.perf_counter() - start, done.stdout + done.stderr
 
 
@@ -58,16 +62,18 @@ def main():
     with tempfile.TemporaryDirectory() as work:
         for _ in range(arguments.repeat):
             wall, text = timed([arguments.cli, "slam3d", scans, "--preset", "kitti", "--times", times,
-                                "--times-column", "4", "--out", os.path.join(work, "cli")])
+                                "--times-column", "4", "--out", os.path.join(work, "cli"), "--overwrite"])
             loop = float(re.search(r"scans in ([0-9.]+) s", text).group(1))
             results["CLI"][0].append(wall)
             results["CLI"][1].append(loop)
-            wall, text = timed([sys.executable, "-c", PYTHON_RUN, scans, times, os.path.join(work, "python.kitti")])
+            wall, text = timed([sys.executable, "-c", PYTHON_RUN, scans, times, os.path.join(work, "python.npy")])
             results["Python"][0].append(wall)
             results["Python"][1].append(float(re.search(r"loop ([0-9.]+)", text).group(1)))
-        with open(os.path.join(work, "cli", "trajectory.kitti"), "rb") as a, open(os.path.join(work, "python.kitti"), "rb") as b:
-            identical = a.read() == b.read()
-    print(f"trajectory.kitti identical: {identical}")
+        # trajectory.kitti holds 17 significant digits: parsed, it is the CLI's poses exactly.
+        cli_poses = numpy.loadtxt(os.path.join(work, "cli", "trajectory.kitti")).reshape(-1, 3, 4)
+        python_poses = numpy.load(os.path.join(work, "python.npy"))[:, :3, :]
+        identical = cli_poses.shape == python_poses.shape and bool((cli_poses == python_poses).all())
+    print(f"poses identical to the CLI's trajectory.kitti: {identical} ({len(cli_poses)} poses)")
     print("| run | process wall [s] (median of %d) | scans loop [s] (median) |" % arguments.repeat)
     print("|---|---|---|")
     for name, (walls, loops) in results.items():
