@@ -73,7 +73,6 @@ backend::PoseGraphJobOptions job_options(const OptimizeArguments& a) {
                             {"geman-mcclure", backend::RobustKernel::kGemanMcClure},
                             {"gnc", backend::RobustKernel::kNone}});
   job.gnc = a.robust == "gnc";
-  job.gnc_options.mu_factor = 1.4;  // `cairn optimize --gnc-mu-factor`'s default
   job.solver.kernel_scale = a.robust_scale;
   job.solver.max_iterations = a.max_iterations;
   job.solver.threads = a.threads;
