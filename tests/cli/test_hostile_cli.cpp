@@ -190,6 +190,9 @@ std::vector<Command> commands() {
        "visual/kitti_extract_seq2/calib.txt"},
       {"landmarks", "landmarks", "{in} --out {out} -q", F + "/landmarks_run", true, O::kDirectory},
       {"simulate", "simulate", "landmarks --out {out} -q", "", false, O::kDirectory},
+      {"register", "register", "{in} " + D + "/lidar3d/kitti00_keyframes/key_frames/key_frame_0.pcd.xz --json {out}",
+       D + "/lidar3d/kitti00_keyframes/key_frames/key_frame_0.pcd.xz", false, O::kFile,
+       "lidar3d/kitti00_keyframes/key_frames/key_frame_0.pcd.xz"},
       {"vocabulary_train", "vocabulary train", "{in} --every 25 --out {out}", D + "/visual/kitti_extract_seq2/image_l", true,
        O::kFile, "visual/kitti_extract_seq2/image_l"},
   };

@@ -88,6 +88,7 @@ int main(int argc, char** argv) {
   add(CAIRN_SUITE(cairn::cli::register_eval), "eval", "Evaluate a trajectory: APE, RPE, KITTI t_err/r_err, relations metric; tables, JSON, plots");
   add(CAIRN_SUITE(cairn::cli::register_landmarks), "landmarks", "Landmark SLAM (EKF or graph; known, NN or JCBB association) on a simulated landmark run");
   add(cairn::cli::register_ba, "ba", "Bundle adjustment of a BAL problem (points eliminated by Schur complement)");
+  add(CAIRN_SUITE(cairn::cli::register_register), "register", "Register one point cloud onto another (GICP or point-to-plane ICP, from a guess or --global): T_target_source, fitness, degeneracy, covariance");
   add(CAIRN_SUITE(cairn::cli::register_imu), "imu", "Examine an IMU recording: rates, gaps, saturation, static initialisation, Allan deviation, preintegration against ground truth");
   add(CAIRN_SUITE(cairn::cli::register_simulate), "simulate", "Simulate a world, a trajectory and sensor logs (CARMEN, TUM, g2o, relations, PNG)");
 

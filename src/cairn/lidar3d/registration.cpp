@@ -148,6 +148,7 @@ RegistrationResult solve(const Build& build, std::size_t source_points, const co
     result.iterations = iteration + 1;
     result.correspondences = system.correspondences;
     result.planar_correspondences = system.planar;
+    result.hessian = system.H;
     result.rms_m = system.correspondences > 0
                        ? std::sqrt(system.squared_distance_sum / static_cast<double>(system.correspondences))
                        : 0.0;

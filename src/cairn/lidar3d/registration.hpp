@@ -95,6 +95,10 @@ struct RegistrationResult {
   double characteristic_length_m = 0.0;
   /// Directions solved from the prior instead of the scan (0 normally).
   int degenerate_directions = 0;
+  /// The Gauss-Newton matrix J^T W J of the last iteration (tangent translation first, the left
+  /// perturbation T_map_sensor <- exp(delta) T_map_sensor of the residuals' Jacobians [I, -[p]x]);
+  /// with the residuals' variance, the estimate's covariance (pairwise_registration.hpp).
+  Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 /// Registers `source_sensor` (points in the sensor frame) to `map`, starting at
