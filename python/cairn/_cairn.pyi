@@ -805,3 +805,7 @@ class VisualSlam:
     def calibration(self) -> CameraCalibration: ...
     @property
     def kind(self) -> str: ...
+
+def register(source: PointCloud, target: PointCloud, guess: Optional[ArrayLike] = None, *, global_: bool = False,
+             method: Literal["gicp", "icp"] = "gicp", max_distance: float = 1.0) -> dict:
+    """Registers source onto target as `cairn register` does; returns its --json dict."""

@@ -22,6 +22,7 @@
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/lidar3d/config.hpp"
 #include "cairn/lidar3d/odometry.hpp"
+#include "cairn/lidar3d/pairwise_registration.hpp"
 #include "cairn/lidar3d/report.hpp"
 #include "cairn/lidar3d/scan_sequence.hpp"
 #include "cairn/lidar3d/slam.hpp"
@@ -330,12 +331,42 @@ void bind_scan_sequence(py::module_& m) {
         "with its time reproduces that run.");
 }
 
+/// `cairn register` as a call: the result as its --json dict.
+py::object register_clouds(const io::PointCloud& source, const io::PointCloud& target,
+                           const std::optional<DoubleArray>& guess, bool global, const std::string& method,
+                           double max_distance_m) {
+  lidar3d::PairwiseRegistrationOptions options;
+  if (method != "gicp" && method != "icp") throw_value_error("method: expected 'gicp' or 'icp', found '" + method + "'");
+  options.method = method == "icp" ? lidar3d::PairwiseMethod::kPointToPlane : lidar3d::PairwiseMethod::kGicp;
+  options.max_correspondence_m = max_distance_m;
+  if (std::string why; !options.is_valid(&why)) throw_value_error(why);
+  if (global && guess) throw_value_error("global=True registers from nothing: give no guess");
+  const core::SE3 T_guess = guess ? core::SE3::from_matrix(matrix4_from_array(*guess, "guess")) : core::SE3();
+  lidar3d::PairwiseRegistrationResult result;
+  {
+    py::gil_scoped_release release;
+    result = global ? lidar3d::register_pair_globally(source, target, options)
+                    : lidar3d::register_pair(source, target, T_guess, options);
+  }
+  return json_to_python(lidar3d::pairwise_registration_json(result));
+}
+
+void bind_register(py::module_& m) {
+  m.def("register", &register_clouds, py::arg("source"), py::arg("target"), py::arg("guess") = py::none(),
+        py::kw_only(), py::arg("global_") = false, py::arg("method") = "gicp", py::arg("max_distance") = 1.0,
+        "Registers source onto target as `cairn register` does (GICP, or method='icp' for point-to-plane; from the 4 x 4 "
+        "guess T_target_source, identity without one, or from nothing with global_=True: Scan Context's yaws refined, "
+        "refused when ambiguous). Returns its --json dict: T_target_source, fitness, inlier_rmse_m, degeneracy, "
+        "covariance, accepted and refusal.");
+}
+
 }  // namespace
 
 void bind_lidar3d(py::module_& m) {
   bind_lidar_result(m);
   bind_lidar_slam(m);
   bind_scan_sequence(m);
+  bind_register(m);
 }
 
 }  // namespace cairn::python

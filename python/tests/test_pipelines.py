@@ -338,3 +338,16 @@ def test_pipelines_run_in_threads_and_serialise_shared_calls():
         thread.join()
     np.testing.assert_array_equal(a.trajectory(), sequential.trajectory())
     np.testing.assert_array_equal(b.trajectory(), sequential.trajectory())
+
+
+def test_register_equals_the_cli(data, cli, tmp_path):
+    """cairn.register and `cairn register --json` give the same transform on a KITTI pair."""
+    frames = data / "lidar3d" / "kitti00_keyframes" / "key_frames"
+    source, target = frames / "key_frame_21.pcd.xz", frames / "key_frame_20.pcd.xz"
+    run_cli(cli, "register", source, target, "--global", "--json", tmp_path / "cli.json")
+    expected = json.loads((tmp_path / "cli.json").read_text())
+    result = cairn.register(cairn.read_point_cloud(str(source)), cairn.read_point_cloud(str(target)), global_=True)
+    assert result["accepted"] and expected["accepted"]
+    np.testing.assert_array_equal(np.array(result["T_target_source"]), np.array(expected["T_target_source"]))
+    with pytest.raises(ValueError, match="method"):
+        cairn.register(cairn.read_point_cloud(str(source)), cairn.read_point_cloud(str(target)), method="ndt")
