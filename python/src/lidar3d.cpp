@@ -21,6 +21,9 @@
 #include "cairn/core/timer.hpp"
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/lidar3d/config.hpp"
+#include "cairn/lidar3d/inertial_input.hpp"
+#include "cairn/lidar3d/inertial_outputs.hpp"
+#include "cairn/lidar3d/lidar_inertial_slam.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/pairwise_registration.hpp"
 #include "cairn/lidar3d/report.hpp"
@@ -121,19 +124,23 @@ nlohmann::json lidar_summary_json(const lidar3d::LidarSlam& slam, const lidar3d:
 /// run keeps the keyframes' points and assembles the global map (map.ply) at finish().
 class LidarSession {
  public:
-  LidarSession(lidar3d::SlamConfiguration options, std::string preset, double map_voxel_m)
+  /// `imu`: the IMU as `cairn slam3d --imu ...` reads it (inertial_input.hpp), or none.
+  LidarSession(lidar3d::SlamConfiguration options, std::string preset, double map_voxel_m,
+               const std::optional<lidar3d::InertialInputRequest>& imu, bool remap_forced)
       : options_(std::move(options)),
         preset_(std::move(preset)),
         slam_(options_.slam),
         run_(options_.slam.odometry, map_voxel_m) {
     sequence_.times_from_file = true;  // the caller gives every time
+    remap_forced_ = remap_forced;
+    if (imu) start_inertial(*imu);
   }
 
   lidar3d::SlamScanResult add_scan(const io::PointCloud& cloud, double time_s) {
     finite_or_throw(time_s, "time");
     return locked(mutex_, [&] {
       if (finished_) throw std::runtime_error("LidarSlam.finish() was called: no scan may follow it");
-      lidar3d::SlamScanResult result = slam_.add_scan(cloud, time_s);
+      lidar3d::SlamScanResult result = slam_scan(cloud, time_s);
       // No file was read here: 0 s of reading, as the report's read_file times say.
       run_.add_scan(sequence_.files.size(), cloud, result, 0.0);
       sequence_.files.push_back("scan " + std::to_string(sequence_.files.size()));
@@ -148,6 +155,7 @@ class LidarSession {
       if (run_.scans().empty()) throw std::runtime_error("LidarSlam.finish(): no scan was added");
       slam_.finish();
       run_.finish(slam_);
+      if (inertial_run_) inertial_run_->finish(inertial_->fusion());
       finished_ = true;
       wall_time_s_ = core::seconds_since(start_);
     });
@@ -189,8 +197,25 @@ class LidarSession {
   bool finished() { return locked(mutex_, [&] { return finished_; }); }
   std::string front_end() { return locked(mutex_, [&] { return std::string(lidar3d::to_string(slam_.front_end())); }); }
   double map_voxel_m() const { return run_.map_voxel_m(); }
+  bool has_imu() const { return inertial_run_ != nullptr; }
 
  private:
+  /// The IMU read and its samples given to the fusion before any scan, as the CLI does.
+  void start_inertial(const lidar3d::InertialInputRequest& request) {
+    lidar3d::InertialInput input = lidar3d::read_inertial_input(request);
+    const lidar3d::InertialFusionOptions fusion = lidar3d::inertial_fusion_options(options_.imu, input);
+    inertial_run_ = std::make_unique<lidar3d::InertialRun>(std::move(input), fusion, remap_forced_);
+    inertial_.emplace(slam_, inertial_run_->options());
+    for (const inertial::ImuSample& sample : inertial_run_->input().samples) inertial_->add_imu(sample);
+  }
+
+  lidar3d::SlamScanResult slam_scan(const io::PointCloud& cloud, double time_s) {
+    if (!inertial_) return slam_.add_scan(cloud, time_s);
+    lidar3d::LidarInertialScan scan = inertial_->add_scan(cloud, time_s);
+    inertial_run_->add_scan(sequence_.files.size(), scan.inertial);
+    return scan.slam;
+  }
+
   lidar3d::SlamConfiguration options_;
   std::string preset_;
   lidar3d::LidarSlam slam_;
@@ -200,6 +225,9 @@ class LidarSession {
   core::Clock::time_point start_ = core::Clock::now();
   double wall_time_s_ = 0.0;
   std::mutex mutex_;
+  bool remap_forced_ = false;
+  std::unique_ptr<lidar3d::InertialRun> inertial_run_;
+  std::optional<lidar3d::LidarInertialSlam> inertial_;  // after slam_, which it refers to
 };
 
 /// The scans and their times as `cairn slam3d SCANS [--times FILE --times-column C]
@@ -278,14 +306,34 @@ void bind_lidar_slam(py::module_& m) {
   py::class_<LidarSession>(m, "LidarSlam",
                            "3D LiDAR SLAM (lidar3d::LidarSlam with the run record SlamRun, as `cairn slam3d` holds them): "
                            "odometry after KISS-ICP, Scan Context loop candidates verified by ICP, a pose graph with GNC.")
-      .def(py::init([](const py::object& config, const py::object& set, const std::string& preset, double map_voxel_m) {
+      .def(py::init([](const py::object& config, const py::object& set, const std::string& preset, double map_voxel_m,
+                       const std::optional<std::string>& imu, const std::string& imu_topic, const std::string& imu_calibration,
+                       const std::string& lidar_extrinsic, double imu_time_offset) {
              if (!(map_voxel_m > 0.0) || !std::isfinite(map_voxel_m)) throw_value_error("map_voxel_m: expected a finite value > 0");
-             return std::make_unique<LidarSession>(lidar_configuration(preset, config, set), preset, map_voxel_m);
+             lidar3d::SlamConfiguration options = lidar_configuration(preset, config, set);
+             std::optional<lidar3d::InertialInputRequest> request;
+             bool remap_forced = false;
+             if (imu) {
+               finite_or_throw(imu_time_offset, "imu_time_offset");
+               // A topic names a sensor_msgs/Imu topic of the bag `imu` (InertialInputRequest's bag + topic).
+               const bool topic = !imu_topic.empty();
+               request = lidar3d::InertialInputRequest{topic ? "" : *imu, topic ? *imu : "", imu_topic, imu_calibration,
+                                                       lidar_extrinsic, imu_time_offset};
+               remap_forced = lidar3d::prepare_for_inertial(options.slam);  // as slam3d_options does with --imu
+             } else if (!imu_topic.empty() || !imu_calibration.empty() || !lidar_extrinsic.empty() || imu_time_offset != 0.0) {
+               throw_value_error("imu_topic, imu_calibration, lidar_extrinsic and imu_time_offset go with imu=PATH");
+             }
+             py::gil_scoped_release release;  // reading the IMU can take a while
+             return std::make_unique<LidarSession>(std::move(options), preset, map_voxel_m, request, remap_forced);
            }),
            py::arg("config") = py::none(), py::arg("set") = py::none(), py::kw_only(), py::arg("preset") = "default",
-           py::arg("map_voxel_m") = 0.25,
+           py::arg("map_voxel_m") = 0.25, py::arg("imu") = py::none(), py::arg("imu_topic") = "",
+           py::arg("imu_calibration") = "", py::arg("lidar_extrinsic") = "", py::arg("imu_time_offset") = 0.0,
            "The options as `cairn slam3d --preset PRESET --config CONFIG --set key=value ...` makes them ('default' or "
-           "'kitti'; keys as `cairn slam3d --print-config` lists them); map_voxel_m as --map-voxel.")
+           "'kitti'; keys as `cairn slam3d --print-config` lists them); map_voxel_m as --map-voxel. With imu=PATH "
+           "(EuRoC imu0 folder or data.csv, a plain IMU CSV, or a bag with imu_topic), LiDAR-inertial SLAM as "
+           "`cairn slam3d --imu PATH [--imu-calibration] [--lidar-extrinsic] [--imu-time-offset]`.")
+      .def_property_readonly("has_imu", &LidarSession::has_imu, "Whether an IMU is fused (imu=PATH).")
       .def("add_scan", &LidarSession::add_scan, py::arg("cloud"), py::arg("time"),
            "One scan (a cairn.PointCloud, e.g. from cairn.read_point_cloud) taken at `time` (seconds, strictly increasing). "
            "Releases the GIL.")

@@ -351,3 +351,22 @@ def test_register_equals_the_cli(data, cli, tmp_path):
     np.testing.assert_array_equal(np.array(result["T_target_source"]), np.array(expected["T_target_source"]))
     with pytest.raises(ValueError, match="method"):
         cairn.register(cairn.read_point_cloud(str(source)), cairn.read_point_cloud(str(target)), method="ndt")
+
+
+def test_lidar_inertial_slam_equals_the_cli_with_imu(cli, tmp_path):
+    """LidarSlam(imu=...) gives `cairn slam3d --imu`'s trajectory on the first 40 scans of the simulated tunnel."""
+    sim = tmp_path / "tunnel"
+    run_cli(cli, "simulate", "tunnel-3d", "--seed", "1", "-q", "--out", sim)
+    scans = 40
+    run_cli(cli, "slam3d", sim / "scans", "--times", sim / "times.txt", "--max-scans", scans, "--no-loop-closure",
+            "--imu", sim / "imu0", "-q", "--out", tmp_path / "cli")
+    slam = cairn.LidarSlam(set={"loop_closure.enabled": False}, imu=str(sim / "imu0"))
+    assert slam.has_imu
+    for path, stamp in cairn.scan_sequence(str(sim / "scans"), times=str(sim / "times.txt"), max_scans=scans):
+        slam.add_scan(cairn.read_point_cloud(path), stamp)
+    slam.finish()
+    np.testing.assert_array_equal(slam.trajectory()[:, :3, :], read_kitti_poses(tmp_path / "cli" / "trajectory.kitti"))
+    with pytest.raises(ValueError, match="go with imu"):
+        cairn.LidarSlam(imu_time_offset=0.1)
+    with pytest.raises(cairn.ParseError):
+        cairn.LidarSlam(imu=str(tmp_path / "no_such_imu.csv"))
