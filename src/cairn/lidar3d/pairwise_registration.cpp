@@ -23,6 +23,8 @@ using Points = std::vector<Eigen::Vector3d>;
 
 /// The two clouds as registered: cropped to [min, max] range, one point per voxel.
 struct PreparedPair {
+  Points source_cropped;  // in range, every point: GICP's support and Scan Context read these
+  Points target_cropped;
   Points source_sensor;
   Points target_sensor;
   VoxelHashMap target_map{VoxelHashMapOptions{1.0, 20}};  // KISS-ICP's map, as the benchmark's ICP
@@ -40,8 +42,10 @@ Points crop(const io::PointCloud& cloud, double min_range_m, double max_range_m)
 
 PreparedPair prepare(const io::PointCloud& source, const io::PointCloud& target, const PairwiseRegistrationOptions& o) {
   PreparedPair pair;
-  pair.source_sensor = voxel_downsample(crop(source, o.min_range_m, o.max_range_m), o.source_voxel_m);
-  pair.target_sensor = voxel_downsample(crop(target, o.min_range_m, o.max_range_m), o.target_voxel_m);
+  pair.source_cropped = crop(source, o.min_range_m, o.max_range_m);
+  pair.target_cropped = crop(target, o.min_range_m, o.max_range_m);
+  pair.source_sensor = voxel_downsample(pair.source_cropped, o.source_voxel_m);
+  pair.target_sensor = voxel_downsample(pair.target_cropped, o.target_voxel_m);
   pair.target_map.add_points(pair.target_sensor);
   return pair;
 }
@@ -126,7 +130,7 @@ Session open_session(const io::PointCloud& source, const io::PointCloud& target,
   Session s{prepare(source, target, o), std::nullopt, std::nullopt};
   if (o.method == PairwiseMethod::kGicp && input_problem(s.pair).empty()) {
     const GicpOptions gicp;
-    Points support = voxel_downsample(crop(source, o.min_range_m, o.max_range_m), std::min(o.target_voxel_m, o.source_voxel_m));
+    Points support = voxel_downsample(s.pair.source_cropped, std::min(o.target_voxel_m, o.source_voxel_m));
     s.source_gicp.emplace(s.pair.source_sensor, std::move(support), gicp);
     s.target_gicp.emplace(s.pair.target_sensor, gicp);
   }
@@ -181,7 +185,7 @@ PairwiseRegistrationResult register_pair(const io::PointCloud& source, const io:
   const auto start = core::Clock::now();
   const Session session = open_session(source, target, options);
   PairwiseRegistrationResult result = refine_from(session, T_target_source_guess, options);
-  if (result.refusal.empty() || result.source_points >= 20) measure_constraints(session.pair, options.max_correspondence_m, result);
+  if (input_problem(session.pair).empty()) measure_constraints(session.pair, options.max_correspondence_m, result);
   result.time_s = core::seconds_since(start);
   return result;
 }
@@ -191,8 +195,8 @@ PairwiseRegistrationResult register_pair_globally(const io::PointCloud& source, 
   const auto start = core::Clock::now();
   const Session session = open_session(source, target, options);
   const ScanContextOptions sc = slam_scan_context_options();
-  const ScanContextMatch match = compare(make_scan_context(crop(source, options.min_range_m, options.max_range_m), sc),
-                                         make_scan_context(crop(target, options.min_range_m, options.max_range_m), sc), sc);
+  const ScanContextMatch match = compare(make_scan_context(session.pair.source_cropped, sc),
+                                         make_scan_context(session.pair.target_cropped, sc), sc);
   PairwiseRegistrationResult best;
   std::vector<GlobalProposal> proposals;
   for (int k = 0; k < options.global_yaw_proposals; ++k) {
@@ -220,7 +224,7 @@ PairwiseRegistrationResult register_pair_globally(const io::PointCloud& source, 
   if (best.refusal.empty() && best.fitness < options.global_min_fitness) {
     best.refusal = "fitness " + std::to_string(best.fitness) + " below " + std::to_string(options.global_min_fitness);
   }
-  if (best.source_points >= 20 && best.target_points >= 20) measure_constraints(session.pair, options.max_correspondence_m, best);
+  if (input_problem(session.pair).empty()) measure_constraints(session.pair, options.max_correspondence_m, best);
   best.time_s = core::seconds_since(start);
   return best;
 }
