@@ -41,7 +41,7 @@ fuzz: deps
 	@cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCAIRN_BUILD_FUZZERS=ON \
 	  -DCAIRN_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
 	@cmake --build build-fuzz -j $(JOBS) --target fuzz_graph fuzz_trajectory fuzz_carmen fuzz_bal fuzz_point_cloud fuzz_image_sequence \
-	  fuzz_calibration fuzz_landmarks fuzz_saved_map fuzz_ros1_bag fuzz_mcap fuzz_rosbag2_sqlite fuzz_cdr fuzz_gnss_csv fuzz_imu fuzz_transform
+	  fuzz_calibration fuzz_landmarks fuzz_saved_map fuzz_ros1_bag fuzz_mcap fuzz_rosbag2_sqlite fuzz_cdr fuzz_gnss_csv fuzz_imu fuzz_transform fuzz_map3d
 	@echo "run e.g.: build-fuzz/fuzz/fuzz_graph -max_total_time=300 fuzz/corpus/graph"
 
 clean:

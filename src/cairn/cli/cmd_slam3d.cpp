@@ -14,7 +14,6 @@
 #include <optional>
 #include <unistd.h>
 
-#include "cairn/bag/bag.hpp"
 #include "cairn/cli/commands.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/slam3d_flags.hpp"
@@ -30,8 +29,10 @@
 #include "cairn/lidar3d/gnss_outputs.hpp"
 #include "cairn/lidar3d/inertial_outputs.hpp"
 #include "cairn/lidar3d/lidar_inertial_slam.hpp"
+#include "cairn/lidar3d/map_file.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/run_outputs.hpp"
+#include "cairn/lidar3d/saved_map.hpp"
 #include "cairn/lidar3d/scan_reader.hpp"
 #include "cairn/lidar3d/scan_sequence.hpp"
 #include "cairn/lidar3d/slam.hpp"
@@ -39,28 +40,6 @@
 
 namespace cairn::cli {
 namespace {
-
-/// The scans (the first --max-scans) and their times: files with --times, or a bag's PointCloud2
-/// topic with its header stamps.
-lidar3d::ScanSequence read_sequence(const Slam3dFlags& flags) {
-  const std::size_t max_scans = flags.max_scans > 0 ? static_cast<std::size_t>(flags.max_scans) : 0;
-  if (flags.scans.size() == 1 && bag::is_bag(flags.scans.front())) {
-    if (!flags.times.empty()) throw UsageError("--times goes with scan files: a bag's scans carry their stamps");
-    return lidar3d::make_bag_scan_sequence(flags.scans.front(), flags.cloud_topic, max_scans);
-  }
-  if (!flags.cloud_topic.empty()) throw UsageError("--cloud-topic goes with a bag, and the scans are files");
-  lidar3d::ScanSequence sequence = lidar3d::make_scan_sequence(flags.scans, "", 1);
-  std::size_t n = sequence.files.size();
-  if (max_scans > 0) n = std::min<std::size_t>(n, max_scans);
-  sequence.files.resize(n);
-  if (!flags.times.empty()) {
-    sequence.times_s = lidar3d::read_scan_times(flags.times, flags.times_column, n);
-    sequence.times_from_file = true;
-  } else {
-    sequence.times_s.resize(n);
-  }
-  return sequence;
-}
 
 /// One --ground-truth pose per scan of the sequence (none without the flag).
 std::vector<core::SE3> read_ground_truth(const Slam3dFlags& flags, std::size_t n) {
@@ -220,6 +199,9 @@ void print_summary(const Slam3dFlags& flags, const lidar3d::LidarSlam& slam, con
               enu ? "trajectory_enu.tum, " : "", run.global_map().size(),
               inertial != nullptr ? "inertial_states.csv, inertial.png, " : "", slam.gnss() != nullptr ? "gnss_fixes.csv, " : "",
               flags.out.c_str(), stopped ? " (interrupted: the result so far)" : "");
+  if (!flags.save_map.empty()) {
+    std::printf("wrote the map for reuse (cairn localize3d --map) to %s\n", flags.save_map.c_str());
+  }
 }
 
 /// The run's IMU (none without --imu / --imu-topic), its notes on stderr.
@@ -256,7 +238,15 @@ int slam3d_command(const Slam3dFlags& flags) {
                                      {"trajectory.tum", "trajectory.kitti", "map.ply", "map.png", "report.json", "inertial_states.csv", "inertial.png",
                                       "gnss_fixes.csv", "trajectory_enu.tum"});
   }
-  lidar3d::ScanSequence sequence = read_sequence(flags);
+  if (!flags.save_map.empty()) {
+    if (io::is_standard_output(flags.save_map)) throw std::invalid_argument("--save-map needs a file: the map is binary");
+    io::resolve_output(flags.save_map);
+    io::check_file_outside_directory("--save-map", flags.save_map, "--out", flags.out,
+                                     {"trajectory.tum", "trajectory.kitti", "map.ply", "map.png", "report.json", "inertial_states.csv", "inertial.png",
+                                      "gnss_fixes.csv", "trajectory_enu.tum"});
+  }
+  lidar3d::ScanSequence sequence =
+      read_scan_sequence(flags.scans, flags.times, flags.times_column, flags.cloud_topic, flags.max_scans);
   const std::vector<core::SE3> ground_truth = read_ground_truth(flags, sequence.files.size());
   const std::unique_ptr<lidar3d::InertialRun> inertial = read_imu(flags, options, remap_forced);
   std::vector<std::string> gnss_notes;
@@ -292,6 +282,10 @@ int slam3d_command(const Slam3dFlags& flags) {
   const std::optional<lidar3d::TrajectoryErrors> errors =
       lidar3d::write_run_outputs(out, inputs, sequence, slam, run, ground_truth, flags.picture_px, total_s, stopped, inertial.get());
   if (!flags.mcap.empty()) lidar3d::write_foxglove_mcap(flags.mcap, slam, run);
+  if (!flags.save_map.empty()) {
+    const std::string source = flags.scans.size() == 1 ? flags.scans.front() : flags.scans.front() + " ...";
+    lidar3d::write_saved_map(flags.save_map, lidar3d::make_saved_map(slam, run, lidar3d::configuration().json(options).dump(), source));
+  }
   if (!flags.quiet) print_summary(flags, slam, run, errors, total_s, stopped, inertial.get());
   if (inertial && !flags.quiet) {
     for (const std::string& warning : lidar3d::summarize(*inertial).warnings) warn(warning);

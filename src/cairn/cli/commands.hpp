@@ -26,6 +26,7 @@ Runner register_simulate(CLI::App& app);
 Runner register_corrupt(CLI::App& app);
 Runner register_slam2d(CLI::App& app);
 Runner register_localize2d(CLI::App& app);
+Runner register_localize3d(CLI::App& app);
 Runner register_landmarks(CLI::App& app);
 Runner register_eval(CLI::App& app);
 Runner register_ba(CLI::App& app);

@@ -82,6 +82,7 @@ int main(int argc, char** argv) {
   add(cairn::cli::register_optimize, "optimize", "Optimise a pose graph (LM / GN / dog-leg, chordal initialisation)");
   add(CAIRN_SUITE(cairn::cli::register_slam2d), "slam2d", "2D LiDAR SLAM on a CARMEN log: map, trajectory, pose graph, report");
   add(CAIRN_SUITE(cairn::cli::register_localize2d), "localize2d", "Localise a CARMEN log in a map saved by slam2d --save-map: pose, health and confidence per scan, relocalisation, report");
+  add(CAIRN_SUITE(cairn::cli::register_localize3d), "localize3d", "Localise 3D LiDAR scans in a map saved by slam3d --save-map: pose, health and fit per scan, relocalisation, report");
   add(CAIRN_SUITE(cairn::cli::register_slam3d), "slam3d", "3D LiDAR SLAM on a folder of scans (KISS-ICP-style odometry, Scan Context loops verified by ICP, GNC): trajectory, map, picture, report");
   add(CAIRN_SUITE(cairn::cli::register_vslam), "vslam", "Stereo (KITTI layout) or RGB-D (TUM layout) visual SLAM on an image folder: trajectory, keyframes, map points, pictures, report");
   add(CAIRN_SUITE(cairn::cli::register_vocabulary), "vocabulary", "Train (hierarchical k-means++ on ORB descriptors) or describe a bag-of-words vocabulary for cairn vslam's place recognition");
@@ -112,7 +113,7 @@ int main(int argc, char** argv) {
   // The commands with safe points stop at the first SIGINT/SIGTERM; the others end at once.
   for (const auto& [command, run] : runners) {
     const std::string name = command->get_name();
-    if (command->parsed() && (name == "slam2d" || name == "localize2d" || name == "slam3d" || name == "vslam" || name == "optimize" ||
+    if (command->parsed() && (name == "slam2d" || name == "localize2d" || name == "localize3d" || name == "slam3d" || name == "vslam" || name == "optimize" ||
                                name == "landmarks" || name == "ba")) {
       cairn::cli::use_stop_points();
     }

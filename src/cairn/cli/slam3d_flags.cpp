@@ -1,5 +1,6 @@
 #include "cairn/cli/slam3d_flags.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <utility>
 #include <stdexcept>
@@ -111,6 +112,27 @@ std::vector<gnss::GnssFix> read_gnss_fixes(const Slam3dFlags& flags, std::vector
   return fixes;
 }
 
+lidar3d::ScanSequence read_scan_sequence(const std::vector<std::string>& scans, const std::string& times,
+                                         int times_column, const std::string& cloud_topic, long max_scans_flag) {
+  const std::size_t max_scans = max_scans_flag > 0 ? static_cast<std::size_t>(max_scans_flag) : 0;
+  if (scans.size() == 1 && bag::is_bag(scans.front())) {
+    if (!times.empty()) throw UsageError("--times goes with scan files: a bag's scans carry their stamps");
+    return lidar3d::make_bag_scan_sequence(scans.front(), cloud_topic, max_scans);
+  }
+  if (!cloud_topic.empty()) throw UsageError("--cloud-topic goes with a bag, and the scans are files");
+  lidar3d::ScanSequence sequence = lidar3d::make_scan_sequence(scans, "", 1);
+  std::size_t n = sequence.files.size();
+  if (max_scans > 0) n = std::min<std::size_t>(n, max_scans);
+  sequence.files.resize(n);
+  if (!times.empty()) {
+    sequence.times_s = lidar3d::read_scan_times(times, times_column, n);
+    sequence.times_from_file = true;
+  } else {
+    sequence.times_s.resize(n);
+  }
+  return sequence;
+}
+
 void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
   CLI::Option* scans =
       app.add_option("SCANS", flags.scans,
@@ -127,6 +149,9 @@ void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
   app.add_flag_callback("--print-config", [&flags, scans] { flags.print_config = true; scans->required(false); },
                         "Print the configuration in effect (YAML) and exit unless SCANS are given");
   app.add_option("--mcap", flags.mcap, "Also write the trajectory, health, map and loop closures as MCAP for Foxglove");
+  app.add_option("--save-map", flags.save_map,
+                 "Also write the finished map (points with normals, keyframes with Scan Context, pose graph, sensor model) "
+                 "for cairn localize3d --map (docs/formats.md, \"cairn 3D LiDAR map\")");
   app.add_option("--cloud-topic", flags.cloud_topic, "Bag input: the sensor_msgs/PointCloud2 topic (default: the only one)");
   app.add_option("--times", flags.times, "Table with one row per scan holding its time in seconds (e.g. KITTI times.txt)");
   app.add_option("--times-column", flags.times_column, "Column of --times holding the time (1-based)")->check(checks::count(10000))->capture_default_str();

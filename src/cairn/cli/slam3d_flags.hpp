@@ -12,6 +12,7 @@
 #include "cairn/gnss/gnss_fix.hpp"
 #include "cairn/lidar3d/config.hpp"
 #include "cairn/lidar3d/inertial_input.hpp"
+#include "cairn/lidar3d/scan_sequence.hpp"
 
 namespace cairn::cli {
 
@@ -24,6 +25,7 @@ struct Slam3dFlags {
   std::string times;
   std::string cloud_topic;
   std::string mcap;
+  std::string save_map;
   int times_column = 1;
   std::string ground_truth;
   std::string ground_truth_format;
@@ -51,6 +53,13 @@ struct Slam3dFlags {
   /// --gnss or --gnss-topic given.
   bool uses_gnss() const { return !gnss.empty() || !gnss_topic.empty(); }
 };
+
+/// The scans SCANS name (the first `max_scans`, 0 = all) and their times: scan files with
+/// `times` (a table, `times_column` 1-based) or 0.1 s apart, or a bag's PointCloud2 topic
+/// (`cloud_topic`, default the only one) with its header stamps. Throws UsageError for flags that
+/// do not go together (--times with a bag, --cloud-topic with files).
+lidar3d::ScanSequence read_scan_sequence(const std::vector<std::string>& scans, const std::string& times,
+                                         int times_column, const std::string& cloud_topic, long max_scans);
 
 /// Defines the flags of `app` into `flags` (which must outlive it).
 void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags);

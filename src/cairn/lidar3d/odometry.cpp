@@ -69,6 +69,12 @@ bool LidarOdometryOptions::is_valid(std::string* error) const {
   return problems.report(error);
 }
 
+Eigen::Vector3d correct_vertical_angle(const Eigen::Vector3d& p, double correction_rad) {
+  const Eigen::Vector3d axis(p.y(), -p.x(), 0.0);  // p x z
+  const double axis_norm = axis.norm();
+  return axis_norm > 0.0 ? Eigen::Vector3d(Eigen::AngleAxisd(correction_rad, axis / axis_norm) * p) : p;
+}
+
 LidarOdometryOptions preset_options(std::string_view name) {
   LidarOdometryOptions options;
   if (name == "default") return options;
@@ -242,11 +248,7 @@ void LidarOdometry::crop_and_correct(const io::PointCloud& cloud, ScanWork& work
     Eigen::Vector3d p = cloud.points[i].cast<double>();
     const double r2 = p.squaredNorm();
     if (r2 < min2 || r2 > max2) continue;
-    if (correction != 0.0) {
-      const Eigen::Vector3d axis(p.y(), -p.x(), 0.0);  // p x z
-      const double axis_norm = axis.norm();
-      if (axis_norm > 0.0) p = Eigen::AngleAxisd(correction, axis / axis_norm) * p;
-    }
+    if (correction != 0.0) p = correct_vertical_angle(p, correction);
     points.push_back(p);
     if (work.loam) point_ring.push_back((*rings)[i]);
     if (work.deskew) {

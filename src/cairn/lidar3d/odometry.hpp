@@ -139,6 +139,10 @@ struct LidarOdometryOptions {
   bool is_valid(std::string* error) const;
 };
 
+/// `p` (sensor frame) with the vertical-angle correction (LidarOdometryOptions::
+/// vertical_angle_correction_rad): turned by `correction_rad` about p x z, toward +z.
+Eigen::Vector3d correct_vertical_angle(const Eigen::Vector3d& p, double correction_rad);
+
 /// Named starting configurations: "default" (KISS-ICP's defaults with point-to-plane
 /// registration and deskew from per-point times where the files have them) and "kitti" (for
 /// KITTI's HDL-64E scans: the 0.205 deg vertical-angle correction, no deskew since KITTI's

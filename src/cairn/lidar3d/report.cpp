@@ -8,12 +8,12 @@
 #include <numeric>
 
 namespace cairn::lidar3d {
-namespace {
-
 nlohmann::json pose_json(const core::SE3& T) {
   const Eigen::Quaterniond& q = T.unit_quaternion();
   return {{"t", {T.translation().x(), T.translation().y(), T.translation().z()}}, {"q_xyzw", {q.x(), q.y(), q.z(), q.w()}}};
 }
+
+namespace {
 
 
 nlohmann::json input_json(const SlamRunInputs& inputs, const ScanSequence& sequence, const SlamRun& run) {

@@ -19,6 +19,9 @@
 
 namespace cairn::lidar3d {
 
+/// A pose as report.json writes it: {"t": [x, y, z], "q_xyzw": [x, y, z, w]}.
+nlohmann::json pose_json(const core::SE3& T);
+
 /// What the run was asked for, as the report records it.
 struct SlamRunInputs {
   std::vector<std::string> scans;  ///< the scan folder or files as given

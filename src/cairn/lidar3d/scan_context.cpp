@@ -81,6 +81,13 @@ ScanContext make_scan_context(const std::vector<Eigen::Vector3d>& points_sensor,
   return context;
 }
 
+ScanContext scan_context_from_descriptor(Eigen::MatrixXf descriptor) {
+  ScanContext context;
+  context.descriptor = std::move(descriptor);
+  finish_keys(context);
+  return context;
+}
+
 namespace {
 
 // d of eq. 5 for query column j against candidate column (j + shift) mod N_s, over the columns

@@ -122,6 +122,11 @@ struct ScanContext {
 /// Precondition: options.is_valid().
 ScanContext make_scan_context(const std::vector<Eigen::Vector3d>& points_sensor, const ScanContextOptions& options);
 
+/// The context of a stored descriptor (a saved map's keyframe, saved_map.hpp): the descriptor with
+/// its ring and sector keys recomputed exactly as make_scan_context computes them, no lateral views.
+/// Precondition: entries finite and >= 0.
+ScanContext scan_context_from_descriptor(Eigen::MatrixXf descriptor);
+
 /// Best column alignment of two descriptors.
 ///
 /// Sign convention: query column j lines up with candidate column (j + shift_sectors) mod N_s,

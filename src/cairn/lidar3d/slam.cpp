@@ -534,4 +534,18 @@ std::vector<std::size_t> LidarSlam::keyframe_scans() const {
   return out;
 }
 
+const std::vector<Eigen::Vector3d>& LidarSlam::keyframe_points(std::size_t k) const {
+  return impl_->keyframes.at(k).points_sensor;
+}
+
+int LidarSlam::keyframe_segment(std::size_t k) const { return impl_->keyframes.at(k).segment; }
+
+io::PoseGraph3D LidarSlam::pose_graph(std::vector<bool>* is_loop) const {
+  if (is_loop != nullptr) {
+    is_loop->clear();
+    for (const Edge& e : impl_->edges) is_loop->push_back(e.loop);
+  }
+  return impl_->graph();
+}
+
 }  // namespace cairn::lidar3d

@@ -43,6 +43,7 @@
 
 #include "cairn/core/se3.hpp"
 #include "cairn/io/point_cloud.hpp"
+#include "cairn/io/pose_graph.hpp"
 #include "cairn/lidar3d/gnss_anchoring.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/scan_context.hpp"
@@ -167,6 +168,14 @@ class LidarSlam {
   std::vector<core::SE3> keyframe_poses() const;
   std::vector<std::size_t> keyframe_scans() const;
   const LidarSlamSummary& summary() const { return summary_; }
+  /// Keyframe `k`'s points as the odometry put them into its map (sensor frame, registered
+  /// instant) and its map segment. Precondition: k < keyframe_poses().size().
+  const std::vector<Eigen::Vector3d>& keyframe_points(std::size_t k) const;
+  int keyframe_segment(std::size_t k) const;
+  /// The pose graph as the latest solve saw it: keyframe vertices (vertex 0 fixed), odometry
+  /// edges and the loop closures GNC kept, with their information; `is_loop`, if given, receives
+  /// per edge whether it is a loop closure.
+  io::PoseGraph3D pose_graph(std::vector<bool>* is_loop = nullptr) const;
   /// The odometry's front end in use (LidarOdometry::front_end).
   FrontEnd front_end() const;
   const LidarSlamOptions& options() const { return options_; }

@@ -5,7 +5,10 @@
 namespace cairn::lidar3d {
 
 SlamRun::SlamRun(const LidarOdometryOptions& odometry, double map_voxel_m)
-    : min_range_m_(odometry.min_range_m), max_range_m_(odometry.max_range_m), global_map_(map_voxel_m) {}
+    : min_range_m_(odometry.min_range_m),
+      max_range_m_(odometry.max_range_m),
+      vertical_angle_correction_rad_(odometry.vertical_angle_correction_rad),
+      global_map_(map_voxel_m) {}
 
 void SlamRun::add_scan(std::size_t sequence_index, const io::PointCloud& cloud, const SlamScanResult& result, double read_s) {
   read_times_s_.push_back(read_s);
@@ -15,7 +18,10 @@ void SlamRun::add_scan(std::size_t sequence_index, const io::PointCloud& cloud, 
     const double max2 = max_range_m_ * max_range_m_, min2 = min_range_m_ * min_range_m_;
     for (const Eigen::Vector3f& p : cloud.points) {
       const double r2 = p.cast<double>().squaredNorm();
-      if (r2 >= min2 && r2 <= max2) points.push_back(p.cast<double>());
+      if (r2 < min2 || r2 > max2) continue;
+      // Corrected as the odometry corrects them (KITTI's 0.205 deg), or map.ply's far points bend.
+      points.push_back(vertical_angle_correction_rad_ != 0.0 ? correct_vertical_angle(p.cast<double>(), vertical_angle_correction_rad_)
+                                                             : Eigen::Vector3d(p.cast<double>()));
     }
     keyframe_points_.push_back(voxel_downsample(points, global_map_.voxel_size_m()));
   }

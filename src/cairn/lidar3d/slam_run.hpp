@@ -37,7 +37,7 @@ struct HealthCounts {
 class SlamRun {
  public:
   /// A keyframe's points are kept between the odometry's `min_range_m` and `max_range_m` (from the
-  /// sensor), at `map_voxel_m` (> 0; throws std::invalid_argument otherwise), the voxel of the
+  /// sensor), with its vertical-angle correction, at `map_voxel_m` (> 0; throws std::invalid_argument otherwise), the voxel of the
   /// global map.
   SlamRun(const LidarOdometryOptions& odometry, double map_voxel_m);
 
@@ -72,6 +72,7 @@ class SlamRun {
  private:
   double min_range_m_;
   double max_range_m_;
+  double vertical_angle_correction_rad_;
   std::vector<OdometryScanResult> scans_;
   std::vector<std::size_t> sequence_indices_;
   std::vector<SkippedScan> skipped_;
