@@ -111,6 +111,7 @@ struct Fixtures {
   bool ready = false;
   bool carmen_ready = false;
   bool landmarks_ready = false;
+  bool map3d_ready = false;
 };
 
 Fixtures& fixtures() {
@@ -159,6 +160,13 @@ void ensure_fixtures(const std::string& text) {
     EXPECT_EQ(map.status, 0) << map.err;
     f.carmen_ready = true;
   }
+  if (text.find("map.c3dm") != std::string::npos && !f.map3d_ready && fs::exists(cairn::test::data_path("lidar3d/kitti00_keyframes/key_frames"))) {
+    // A map of the first 3 real KITTI key frames.
+    const CliResult map = run("slam3d " + q(cairn::test::data_path("lidar3d/kitti00_keyframes/key_frames")) + " --max-scans 3 --out " +
+                              q(d / "map3d_run") + " --save-map " + q(d / "map.c3dm") + " -q");
+    EXPECT_EQ(map.status, 0) << map.err;
+    f.map3d_ready = true;
+  }
   if (text.find("landmarks_run") != std::string::npos && !f.landmarks_ready) {
     const CliResult sim = run("simulate landmarks --out " + q(d / "landmarks_run") + " -q");
     EXPECT_EQ(sim.status, 0) << sim.err;
@@ -186,6 +194,8 @@ std::vector<Command> commands() {
        "laser2d/intel/intel.clf.bz2"},
       {"slam3d", "slam3d", "{in} --max-scans 2 --out {out} -q", D + "/lidar3d/kitti00_keyframes/key_frames", true, O::kDirectory,
        "lidar3d/kitti00_keyframes/key_frames"},
+      {"localize3d", "localize3d", "{in} --map " + F + "/map.c3dm --max-scans 2 --out {out} -q", D + "/lidar3d/kitti00_keyframes/key_frames",
+       true, O::kDirectory, "lidar3d/kitti00_keyframes/key_frames"},
       {"vslam", "vslam", "{in} --max-frames 2 --out {out} -q", D + "/visual/kitti_extract_seq2", true, O::kDirectory,
        "visual/kitti_extract_seq2/calib.txt"},
       {"landmarks", "landmarks", "{in} --out {out} -q", F + "/landmarks_run", true, O::kDirectory},

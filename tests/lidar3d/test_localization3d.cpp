@@ -117,11 +117,13 @@ TEST(Localization3dKitti, TheOddKeyFramesAreLocalisedInTheMapOfTheEvenOnes) {
   }
   const Localizer3dSummary& s = localizer.summary();
   std::printf("odd key frames: %zu of %zu localised (first at %zu), median %.2f cm %.3f deg, max %.2f cm %.3f deg; "
-              "tracking %.1f ms mean %.1f ms max, odometry %.1f ms mean; %zu relocalisations\n",
+              "tracking %.1f ms mean %.1f ms max, odometry %.1f ms mean; %zu relocalisations; slowest global search %.0f ms, "
+              "map built in %.2f s\n",
               localised, s.scans, s.first_localised_scan.value_or(999), 100.0 * median(translation), median(rotation),
               100.0 * *std::max_element(translation.begin(), translation.end()),
               *std::max_element(rotation.begin(), rotation.end()), 1e3 * tracking_sum_s / static_cast<double>(std::max<std::size_t>(tracked, 1)),
-              1e3 * max_tracking_s, 1e3 * odometry_sum_s / static_cast<double>(std::max<std::size_t>(tracked, 1)), s.relocalisations.size());
+              1e3 * max_tracking_s, 1e3 * odometry_sum_s / static_cast<double>(std::max<std::size_t>(tracked, 1)), s.relocalisations.size(),
+              1e3 * s.max_search_s, s.setup_s);
   EXPECT_EQ(wrong, 0u);
   EXPECT_LE(s.first_localised_scan.value_or(999), 2u) << "relocalised within 3 scans";
   EXPECT_EQ(localised + s.first_localised_scan.value_or(999), s.scans) << "every scan after the first localisation";
@@ -139,8 +141,8 @@ TEST(Localization3dKitti, StartedWithoutAPriorAtTenKeyFramesItRelocalisesWithinT
       const Localization3dResult r = localizer.add_scan(d.clouds[k], d.frames.times_s[k]);
       if (!r.localised) continue;
       const PoseError e = error_of(d, k, r.T_map_sensor);
-      std::printf("start at key frame %zu: relocalised at its scan %zu, off by %.2f cm %.3f deg\n", start, scans,
-                  100.0 * e.translation_m, e.rotation_deg);
+      std::printf("start at key frame %zu: relocalised at its scan %zu, off by %.2f cm %.3f deg; %.0f ms searching\n", start,
+                  scans, 100.0 * e.translation_m, e.rotation_deg, 1e3 * localizer.summary().total_s);
       EXPECT_LT(e.translation_m, 0.3) << "start " << start;
       EXPECT_LT(e.rotation_deg, 1.0) << "start " << start;
       ++relocalised;
