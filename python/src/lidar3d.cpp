@@ -244,17 +244,7 @@ lidar3d::ScanSequence scan_sequence(const py::object& scans, const py::object& t
   }
   const std::string times_path = times.is_none() ? std::string() : fspath(times);
   const py::gil_scoped_release release;
-  lidar3d::ScanSequence sequence = lidar3d::make_scan_sequence(paths, "", 1);
-  std::size_t n = sequence.files.size();
-  if (max_scans > 0) n = std::min(n, static_cast<std::size_t>(max_scans));
-  sequence.files.resize(n);
-  if (!times_path.empty()) {
-    sequence.times_s = lidar3d::read_scan_times(times_path, times_column, n);
-    sequence.times_from_file = true;
-  } else {
-    sequence.times_s.resize(n);
-  }
-  return sequence;
+  return lidar3d::open_scan_sequence(paths, times_path, times_column, "", static_cast<std::size_t>(max_scans));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -113,24 +113,13 @@ std::vector<gnss::GnssFix> read_gnss_fixes(const Slam3dFlags& flags, std::vector
 }
 
 lidar3d::ScanSequence read_scan_sequence(const std::vector<std::string>& scans, const std::string& times,
-                                         int times_column, const std::string& cloud_topic, long max_scans_flag) {
-  const std::size_t max_scans = max_scans_flag > 0 ? static_cast<std::size_t>(max_scans_flag) : 0;
-  if (scans.size() == 1 && bag::is_bag(scans.front())) {
-    if (!times.empty()) throw UsageError("--times goes with scan files: a bag's scans carry their stamps");
-    return lidar3d::make_bag_scan_sequence(scans.front(), cloud_topic, max_scans);
-  }
-  if (!cloud_topic.empty()) throw UsageError("--cloud-topic goes with a bag, and the scans are files");
-  lidar3d::ScanSequence sequence = lidar3d::make_scan_sequence(scans, "", 1);
-  std::size_t n = sequence.files.size();
-  if (max_scans > 0) n = std::min<std::size_t>(n, max_scans);
-  sequence.files.resize(n);
-  if (!times.empty()) {
-    sequence.times_s = lidar3d::read_scan_times(times, times_column, n);
-    sequence.times_from_file = true;
-  } else {
-    sequence.times_s.resize(n);
-  }
-  return sequence;
+                                         int times_column, const std::string& cloud_topic, long max_scans) {
+  // The combinations the library refuses, as usage errors (exit status 2) before any work.
+  const bool bag = scans.size() == 1 && bag::is_bag(scans.front());
+  if (bag && !times.empty()) throw UsageError("--times goes with scan files: a bag's scans carry their stamps");
+  if (!bag && !cloud_topic.empty()) throw UsageError("--cloud-topic goes with a bag, and the scans are files");
+  return lidar3d::open_scan_sequence(scans, times, times_column, cloud_topic,
+                                     max_scans > 0 ? static_cast<std::size_t>(max_scans) : 0);
 }
 
 void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {

@@ -1,5 +1,6 @@
 #include "cairn/lidar3d/scan_sequence.hpp"
 
+#include "cairn/bag/bag.hpp"
 #include "cairn/bag/point_cloud_stream.hpp"
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "cairn/io/file_names.hpp"
 #include "cairn/io/input_file.hpp"
@@ -129,6 +131,25 @@ ScanSequence make_scan_sequence(const std::vector<std::string>& paths, const std
     sequence.times_from_file = true;
   } else {
     for (std::size_t k = 0; k < sequence.files.size(); ++k) sequence.times_s.push_back(static_cast<double>(k) * default_period_s);
+  }
+  return sequence;
+}
+
+ScanSequence open_scan_sequence(const std::vector<std::string>& paths, const std::string& times_path, int column,
+                                const std::string& cloud_topic, std::size_t max_scans) {
+  if (paths.size() == 1 && bag::is_bag(paths.front())) {
+    if (!times_path.empty()) throw std::invalid_argument("--times goes with scan files: a bag's scans carry their stamps");
+    return make_bag_scan_sequence(paths.front(), cloud_topic, max_scans);
+  }
+  if (!cloud_topic.empty()) throw std::invalid_argument("--cloud-topic goes with a bag, and the scans are files");
+  ScanSequence sequence;
+  sequence.files = list_scans(paths);
+  if (max_scans > 0 && sequence.files.size() > max_scans) sequence.files.resize(max_scans);
+  if (!times_path.empty()) {
+    sequence.times_s = read_scan_times(times_path, column, sequence.files.size());
+    sequence.times_from_file = true;
+  } else {
+    for (std::size_t k = 0; k < sequence.files.size(); ++k) sequence.times_s.push_back(0.1 * static_cast<double>(k));
   }
   return sequence;
 }

@@ -45,4 +45,12 @@ ScanSequence make_scan_sequence(const std::vector<std::string>& paths, const std
 /// the bag at `path` (any format bag::Bag opens). Throws io::ParseError.
 ScanSequence make_bag_scan_sequence(const std::string& path, const std::string& topic, std::size_t max_scans);
 
+/// The scans a command line names, as `cairn slam3d` and `cairn localize3d` read them: one bag
+/// (bag::is_bag) gives its PointCloud2 topic `cloud_topic` ("" = the only one) with the header
+/// stamps; otherwise list_scans, cut to the first `max_scans` (0: all), with the times of
+/// `times_path` (column `column`, 1-based) or 0.1 s apart. Throws std::invalid_argument for a
+/// times table with a bag or a topic with files, io::ParseError for unreadable input.
+ScanSequence open_scan_sequence(const std::vector<std::string>& paths, const std::string& times_path, int column,
+                                const std::string& cloud_topic, std::size_t max_scans);
+
 }  // namespace cairn::lidar3d
