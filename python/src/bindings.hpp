@@ -31,7 +31,7 @@ void bind_core(py::module_& m);       // core.cpp: SO3, SE3, SE2, Sim3, errors
 void bind_io(py::module_& m);         // io.cpp: trajectories, pose graphs, point clouds, bags
 void bind_backend(py::module_& m);    // backend.cpp: optimize (pose graphs)
 void bind_eval(py::module_& m);       // eval.cpp: APE, RPE, the KITTI metric, alignment
-void bind_lidar3d(py::module_& m);    // lidar3d.cpp: LidarSlam, scan_sequence
+void bind_lidar3d(py::module_& m);    // lidar3d.cpp: LidarSlam, scan_sequence, register, Localizer3d
 void bind_slam2d(py::module_& m);     // slam2d.cpp: Slam2d, LaserScan, read_carmen_log
 void bind_vslam(py::module_& m);      // vslam.cpp: VisualSlam, CameraCalibration, image readers
 

@@ -24,9 +24,13 @@
 #include "cairn/lidar3d/inertial_input.hpp"
 #include "cairn/lidar3d/inertial_outputs.hpp"
 #include "cairn/lidar3d/lidar_inertial_slam.hpp"
+#include "cairn/lidar3d/localization.hpp"
+#include "cairn/lidar3d/localization_outputs.hpp"
+#include "cairn/lidar3d/map_file.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/pairwise_registration.hpp"
 #include "cairn/lidar3d/report.hpp"
+#include "cairn/lidar3d/saved_map.hpp"
 #include "cairn/lidar3d/scan_sequence.hpp"
 #include "cairn/lidar3d/slam.hpp"
 #include "cairn/lidar3d/slam_run.hpp"
@@ -193,6 +197,17 @@ class LidarSession {
   }
 
   py::object config() const { return json_to_python(lidar3d::configuration().json(options_)); }
+
+  /// The finished map as `cairn slam3d --save-map PATH` writes it.
+  void save_map(const std::string& path) {
+    locked(mutex_, [&] {
+      if (!finished_) throw std::runtime_error("LidarSlam.save_map(): the map is made by finish()");
+      const lidar3d::SavedMap3D map =
+          lidar3d::make_saved_map(slam_, run_, lidar3d::configuration().json(options_).dump(), "cairn.LidarSlam (Python)");
+      lidar3d::write_saved_map(path, map);
+    });
+  }
+
   std::size_t scans() { return locked(mutex_, [&] { return sequence_.files.size(); }); }
   bool finished() { return locked(mutex_, [&] { return finished_; }); }
   std::string front_end() { return locked(mutex_, [&] { return std::string(lidar3d::to_string(slam_.front_end())); }); }
@@ -229,6 +244,84 @@ class LidarSession {
   std::unique_ptr<lidar3d::InertialRun> inertial_run_;
   std::optional<lidar3d::LidarInertialSlam> inertial_;  // after slam_, which it refers to
 };
+
+/// Localizer3d with its results, one call at a time (the localiser is not thread-safe).
+class LocalizerSession {
+ public:
+  LocalizerSession(const std::string& map_path, const lidar3d::Localizer3dOptions& options)
+      : localizer_(lidar3d::read_saved_map(map_path), options) {}
+
+  py::dict add_scan(const io::PointCloud& cloud, double time_s) {
+    finite_or_throw(time_s, "time");
+    const lidar3d::Localization3dResult r = locked(mutex_, [&] {
+      results_.push_back(localizer_.add_scan(cloud, time_s));
+      return results_.back();
+    });
+    py::dict d;
+    d["state"] = std::string(lidar3d::to_string(r.state));
+    d["health"] = health_word(r.health);
+    d["localised"] = r.localised;
+    d["pose"] = r.localised ? py::object(matrix_to_array(r.T_map_sensor.matrix())) : py::object(py::none());
+    d["relocalised"] = r.relocalised;
+    d["dead_reckoning"] = r.dead_reckoning;
+    d["fitness"] = r.fitness;
+    d["inlier_rmse_m"] = r.inlier_rmse_m;
+    d["degenerate_axis"] = r.degenerate_axis;
+    d["reason"] = r.reason;
+    d["total_s"] = r.total_s;
+    return d;
+  }
+
+  py::object report() {
+    return json_to_python(locked(mutex_, [&] { return lidar3d::localization_report_json(localizer_); }));
+  }
+  py::object trajectory() {
+    const io::Trajectory t = locked(mutex_, [&] { return lidar3d::localized_trajectory(results_); });
+    std::vector<double> times;
+    for (const core::Timestamp& stamp : t.stamps) times.push_back(stamp.seconds());
+    return py::make_tuple(poses_to_array(t.poses), vector_to_array(times));
+  }
+  std::size_t scans() { return locked(mutex_, [&] { return results_.size(); }); }
+
+ private:
+  lidar3d::Localizer3d localizer_;
+  std::vector<lidar3d::Localization3dResult> results_;
+  std::mutex mutex_;
+};
+
+void bind_localizer3d(py::module_& m) {
+  py::class_<LocalizerSession>(m, "Localizer3d",
+                               "Localisation in a map saved by `cairn slam3d --save-map` or LidarSlam.save_map "
+                               "(lidar3d::Localizer3d, as `cairn localize3d` runs it); the map is never changed.")
+      .def(py::init([](const py::object& map, int confirmations, int threads) {
+             if (confirmations < 1) throw_value_error("confirmations: expected >= 1");
+             if (threads < 0) throw_value_error("threads: expected >= 0 (0: all)");
+             lidar3d::Localizer3dOptions options;
+             options.confirmations = confirmations;
+             options.threads = threads;
+             const std::string path = fspath(map);
+             const py::gil_scoped_release release;
+             return std::make_unique<LocalizerSession>(path, options);
+           }),
+           py::arg("map"), py::kw_only(), py::arg("confirmations") = 2, py::arg("threads") = 0,
+           "Reads the map (cairn.ParseError naming the file when it is damaged) and builds its search structures.")
+      .def("add_scan", &LocalizerSession::add_scan, py::arg("cloud"), py::arg("time"),
+           "Localises one scan taken at `time` (seconds, strictly increasing): a dict with state, health, localised, "
+           "pose (4 x 4 in the map frame, or None while searching), relocalised, dead_reckoning, fitness, inlier_rmse_m, "
+           "degenerate_axis, reason and total_s. Releases the GIL.")
+      .def("add_scan",
+           [](LocalizerSession& s, const FloatArray& points, double time, const py::object& point_times,
+              const py::object& intensity, const py::object& ring) {
+             return s.add_scan(cloud_from_arrays(points, point_times, intensity, ring), time);
+           },
+           py::arg("points"), py::arg("time"), py::arg("point_times") = py::none(), py::arg("intensity") = py::none(),
+           py::arg("ring") = py::none(), "One scan from arrays, as LidarSlam.add_scan takes them.")
+      .def("report", &LocalizerSession::report,
+           "report.json of `cairn localize3d` without its input fields: map, options, summary, relocalisations, attempts.")
+      .def("trajectory", &LocalizerSession::trajectory,
+           "The localised scans: (poses K x 4 x 4 in the map frame, times K), what trajectory.tum holds.")
+      .def("__len__", &LocalizerSession::scans, "Scans added.");
+}
 
 /// The scans and their times as `cairn slam3d SCANS [--times FILE --times-column C]
 /// [--max-scans N]` reads them (cmd_slam3d.cpp read_sequence; scan files, not bags): without a
@@ -346,6 +439,8 @@ void bind_lidar_slam(py::module_& m) {
       .def_property_readonly("summary", &LidarSession::summary, "Health counts, map segments and loop closure, as a dict.")
       .def("report", &LidarSession::report, "report.json of `cairn slam3d` for the scans so far, as a dict.")
       .def("config", &LidarSession::config, "The options in effect, {section: {key: value}} (report.json's \"options\").")
+      .def("save_map", [](LidarSession& s, const py::object& path) { s.save_map(fspath(path)); }, py::arg("path"),
+           "After finish(): the map for cairn.Localizer3d and `cairn localize3d --map`, as `cairn slam3d --save-map` writes it.")
       .def_property_readonly("front_end", &LidarSession::front_end, "'dense' or 'loam' (what 'auto' chose), 'auto' before the first scan.")
       .def_property_readonly("finished", &LidarSession::finished)
       .def_property_readonly("map_voxel_m", &LidarSession::map_voxel_m)
@@ -405,6 +500,7 @@ void bind_lidar3d(py::module_& m) {
   bind_lidar_slam(m);
   bind_scan_sequence(m);
   bind_register(m);
+  bind_localizer3d(m);
 }
 
 }  // namespace cairn::python

@@ -370,3 +370,37 @@ def test_lidar_inertial_slam_equals_the_cli_with_imu(cli, tmp_path):
         cairn.LidarSlam(imu_time_offset=0.1)
     with pytest.raises(cairn.ParseError):
         cairn.LidarSlam(imu=str(tmp_path / "no_such_imu.csv"))
+
+
+def test_localize3d_from_python_equals_the_cli(kitti_keyframes, cli, tmp_path):
+    """A map saved by LidarSlam.save_map serves `cairn localize3d`, and Localizer3d gives its poses exactly."""
+    scans, times = kitti_keyframes / "key_frames", kitti_keyframes / "keyframes.txt"
+    sequence = list(cairn.scan_sequence(scans, times=times, times_column=4, max_scans=KITTI_SCANS))
+    slam = cairn.LidarSlam(preset="kitti")
+    for path, stamp in sequence:
+        slam.add_scan(cairn.read_point_cloud(path), stamp)
+    with pytest.raises(RuntimeError, match="finish"):
+        slam.save_map(tmp_path / "early.c3dm")
+    slam.finish()
+    slam.save_map(tmp_path / "map.c3dm")
+    # Scans 8-14 of the mapped stretch, as files given one by one, with their KITTI times.
+    files = [path for path, _ in sequence[8:]]
+    (tmp_path / "times.txt").write_text("".join(f"{stamp!r}\n" for _, stamp in sequence[8:]))
+    run_cli(cli, "localize3d", *files, "--map", tmp_path / "map.c3dm", "--times", tmp_path / "times.txt",
+            "--out", tmp_path / "cli", "-q")
+    rows = read_csv(tmp_path / "cli" / "scans.csv")
+    localizer = cairn.Localizer3d(tmp_path / "map.c3dm")
+    for (path, stamp), row in zip(sequence[8:], rows):
+        result = localizer.add_scan(cairn.read_point_cloud(path), stamp)
+        assert result["localised"] == (row["localised"] == "1")
+        assert result["health"] == row["health"]
+        if result["localised"]:
+            pose = result["pose"]
+            np.testing.assert_array_equal(pose[:3, 3], [float(row["x"]), float(row["y"]), float(row["z"])])
+    assert len(localizer) == len(rows) == len(files)
+    poses, stamps = localizer.trajectory()
+    assert poses.shape[0] == stamps.shape[0] >= len(files) - 2  # relocalised within the first 3 scans
+    assert localizer.report()["summary"]["localised"] == poses.shape[0]
+    (tmp_path / "cut.c3dm").write_bytes((tmp_path / "map.c3dm").read_bytes()[:1000])
+    with pytest.raises(cairn.ParseError, match="cut.c3dm"):
+        cairn.Localizer3d(tmp_path / "cut.c3dm")
