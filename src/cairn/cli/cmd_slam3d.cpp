@@ -236,14 +236,14 @@ int slam3d_command(const Slam3dFlags& flags) {
     io::resolve_output(flags.mcap);
     io::check_file_outside_directory("--mcap", flags.mcap, "--out", flags.out,
                                      {"trajectory.tum", "trajectory.kitti", "map.ply", "map.png", "report.json", "inertial_states.csv", "inertial.png",
-                                      "gnss_fixes.csv", "trajectory_enu.tum"});
+                                      "gnss_fixes.csv", "trajectory_enu.tum", "dynamic.ply"});
   }
   if (!flags.save_map.empty()) {
     if (io::is_standard_output(flags.save_map)) throw std::invalid_argument("--save-map needs a file: the map is binary");
     io::resolve_output(flags.save_map);
     io::check_file_outside_directory("--save-map", flags.save_map, "--out", flags.out,
                                      {"trajectory.tum", "trajectory.kitti", "map.ply", "map.png", "report.json", "inertial_states.csv", "inertial.png",
-                                      "gnss_fixes.csv", "trajectory_enu.tum"});
+                                      "gnss_fixes.csv", "trajectory_enu.tum", "dynamic.ply"});
   }
   lidar3d::ScanSequence sequence =
       read_scan_sequence(flags.scans, flags.times, flags.times_column, flags.cloud_topic, flags.max_scans);
@@ -275,6 +275,7 @@ int slam3d_command(const Slam3dFlags& flags) {
     slam.finish();
   }
   run.finish(slam);
+  if (flags.remove_dynamic) run.remove_dynamic_points(slam, lidar3d::DynamicPointOptions{});
   if (inertial) inertial->finish(pipeline.inertial->fusion());
   const double total_s = core::seconds_since(start);
 

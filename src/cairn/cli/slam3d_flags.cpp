@@ -178,6 +178,9 @@ void add_slam3d_flags(CLI::App& app, Slam3dFlags& flags) {
   app.add_flag("--remap-degenerate", flags.remap_degenerate,
                "Dense front end: solve degenerate directions from the motion prediction only (Zhang et al. 2016's "
                "remapping; the loam front end always does)");
+  app.add_flag("--remove-dynamic", flags.remove_dynamic,
+               "Leave points seen on something that moved out of map.ply and --save-map's map (free-space carving over "
+               "the keyframes); they go to dynamic.ply");
   app.add_flag("--no-loop-closure", flags.no_loop_closure, "Odometry only: no Scan Context search, no pose graph");
   app.add_flag("--lenient", flags.lenient, "Skip scans that cannot be read (listed in the report) instead of stopping");
   app.add_flag("-q,--quiet", flags.quiet, "Print nothing on success");

@@ -44,7 +44,7 @@ struct Slam3dFlags {
   int threads = 0;
   double map_voxel_m = 0.25;
   int picture_px = 1600;
-  bool lenient = false, no_loop_closure = false, remap_degenerate = false;
+  bool lenient = false, no_loop_closure = false, remap_degenerate = false, remove_dynamic = false;
   bool quiet = false, progress = false, overwrite = false, print_config = false;
   const CLI::App* command = nullptr;  // which flags were given
 

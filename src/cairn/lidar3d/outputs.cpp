@@ -42,6 +42,14 @@ void GlobalMap::add_scan(const std::vector<Eigen::Vector3d>& points_sensor, cons
 
 std::vector<Eigen::Vector3f> GlobalMap::points() const { return points_; }
 
+std::vector<Eigen::Vector3f> GlobalMap::remove(const std::vector<bool>& flags) {
+  if (flags.size() != points_.size()) throw std::invalid_argument("GlobalMap::remove: one flag per point expected");
+  std::vector<Eigen::Vector3f> kept, removed;
+  for (std::size_t i = 0; i < points_.size(); ++i) (flags[i] ? removed : kept).push_back(points_[i]);
+  points_ = std::move(kept);
+  return removed;
+}
+
 TrajectoryErrors evaluate_trajectory(const std::vector<core::SE3>& ground_truth, const std::vector<core::SE3>& estimate) {
   if (ground_truth.size() != estimate.size()) {
     throw std::invalid_argument("the ground truth has " + std::to_string(ground_truth.size()) + " poses for " +

@@ -27,7 +27,10 @@ class GlobalMap {
   /// Adds the points of one scan (sensor frame) at `T_world_sensor`.
   void add_scan(const std::vector<Eigen::Vector3d>& points_sensor, const core::SE3& T_world_sensor);
   std::vector<Eigen::Vector3f> points() const;
-  std::size_t size() const { return voxels_.size(); }
+  /// Takes out the points whose flag is set (one flag per point, in points() order) and returns
+  /// them; their voxels stay taken (a later scan does not refill them).
+  std::vector<Eigen::Vector3f> remove(const std::vector<bool>& flags);
+  std::size_t size() const { return points_.size(); }
   double voxel_size_m() const { return voxel_size_m_; }
 
  private:

@@ -165,6 +165,11 @@ nlohmann::json report_json(const SlamRunInputs& inputs, const ScanSequence& sequ
   report["summary"] = {{"scans_ok", health.ok}, {"scans_degraded", health.degraded}, {"scans_lost", health.lost},
                        {"map_segments", run.scans().back().segment + 1}, {"map_points", run.global_map().size()},
                        {"scans_with_unusable_point_times", health.unusable_point_times}};
+  if (run.dynamic_options()) {
+    const DynamicPointSummary& d = run.dynamic_summary();
+    report["dynamic_points"] = {{"removed", d.dynamic}, {"of", d.points}, {"rays", d.rays},
+                                {"ground_exempt", d.ground_exempt}, {"time_s", d.time_s}};
+  }
   report["health_events"] = health_events_json(run);
   report["loop_closure"] = loop_closure_json(slam);
   report["time_per_scan_ms"] = time_per_scan_json(run);

@@ -38,6 +38,11 @@ std::optional<TrajectoryErrors> write_run_outputs(io::OutputDirectory& out, cons
   io::write_output(out.staging_path("map.ply"), [&](std::ostream& o) {
     io::write_ply(o, map_points, "cairn slam3d map, voxel " + std::to_string(run.map_voxel_m()) + " m, world frame = first scan");
   });
+  if (run.dynamic_options()) {
+    io::write_output(out.staging_path("dynamic.ply"), [&](std::ostream& o) {
+      io::write_ply(o, run.dynamic_points(), "cairn slam3d: points seen on something that moved, left out of map.ply");
+    });
+  }
   const std::vector<unsigned char> png =
       render_top_down(map_points, run.scans(), run.ground_truth_of_scans(ground_truth), picture_px);
   io::write_output(out.staging_path("map.png"), [&](std::ostream& o) {

@@ -79,6 +79,15 @@ SavedMap3D make_saved_map(const LidarSlam& slam, const SlamRun& run, const std::
     map.keyframes.push_back(std::move(kf));
   }
   map.points_world = points.points();
+  if (run.dynamic_options()) {
+    // The run's maps leave out what moved: so does the saved one (the same rays, its own points).
+    const std::vector<bool> dynamic = find_dynamic_points(map.points_world, keyframe_rays(slam), *run.dynamic_options());
+    std::vector<Eigen::Vector3f> kept;
+    for (std::size_t i = 0; i < map.points_world.size(); ++i) {
+      if (!dynamic[i]) kept.push_back(map.points_world[i]);
+    }
+    map.points_world = std::move(kept);
+  }
   map.normals_world = estimate_normals(map.points_world, o.voxel_size_m);
   std::vector<bool> is_loop;
   const io::PoseGraph3D graph = slam.pose_graph(&is_loop);

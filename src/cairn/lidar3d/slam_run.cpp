@@ -41,6 +41,19 @@ void SlamRun::finish(const LidarSlam& slam) {
   }
 }
 
+void SlamRun::remove_dynamic_points(const LidarSlam& slam, const DynamicPointOptions& options) {
+  const std::vector<bool> flags = find_dynamic_points(global_map_.points(), keyframe_rays(slam), options, &dynamic_summary_);
+  dynamic_points_ = global_map_.remove(flags);
+  dynamic_options_ = options;
+}
+
+std::vector<KeyframeRays> keyframe_rays(const LidarSlam& slam) {
+  std::vector<KeyframeRays> rays;
+  const std::vector<core::SE3> poses = slam.keyframe_poses();
+  for (std::size_t k = 0; k < poses.size(); ++k) rays.push_back({&slam.keyframe_points(k), poses[k]});
+  return rays;
+}
+
 HealthCounts SlamRun::health_counts() const {
   HealthCounts counts;
   for (const OdometryScanResult& r : scans_) {

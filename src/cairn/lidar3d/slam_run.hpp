@@ -14,6 +14,7 @@
 
 #include "cairn/core/se3.hpp"
 #include "cairn/io/point_cloud.hpp"
+#include "cairn/lidar3d/dynamic_points.hpp"
 #include "cairn/lidar3d/odometry.hpp"
 #include "cairn/lidar3d/outputs.hpp"
 #include "cairn/lidar3d/slam.hpp"
@@ -48,6 +49,10 @@ class SlamRun {
   /// its pose from `slam.trajectory()`, and the keyframes' points go into the global map at their
   /// scans' poses.
   void finish(const LidarSlam& slam);
+  /// After finish: the global map's points seen on something that moved (dynamic_points.hpp, the
+  /// keyframes' points as rays) leave it for dynamic_points(); later saved maps leave out theirs
+  /// too (make_saved_map). Precondition: options.is_valid().
+  void remove_dynamic_points(const LidarSlam& slam, const DynamicPointOptions& options);
 
   /// The processed scans in order; poses final after finish().
   const std::vector<OdometryScanResult>& scans() const { return scans_; }
@@ -58,6 +63,11 @@ class SlamRun {
   const std::vector<double>& read_times_s() const { return read_times_s_; }
   /// Empty before finish().
   const GlobalMap& global_map() const { return global_map_; }
+  /// The points remove_dynamic_points took out of the global map, and what it found; empty /
+  /// unset when it was not called.
+  const std::vector<Eigen::Vector3f>& dynamic_points() const { return dynamic_points_; }
+  const std::optional<DynamicPointOptions>& dynamic_options() const { return dynamic_options_; }
+  const DynamicPointSummary& dynamic_summary() const { return dynamic_summary_; }
   double map_voxel_m() const { return global_map_.voxel_size_m(); }
 
   HealthCounts health_counts() const;
@@ -80,6 +90,13 @@ class SlamRun {
   /// Sensor frame, raw (not deskewed), at the map's voxel: drawn at the final poses of their scans.
   std::vector<std::vector<Eigen::Vector3d>> keyframe_points_;
   GlobalMap global_map_;
+  std::vector<Eigen::Vector3f> dynamic_points_;
+  std::optional<DynamicPointOptions> dynamic_options_;
+  DynamicPointSummary dynamic_summary_;
 };
+
+/// The keyframes of `slam` as rays for find_dynamic_points (their points as the odometry
+/// registered them, at their latest poses); valid while `slam` lives.
+std::vector<KeyframeRays> keyframe_rays(const LidarSlam& slam);
 
 }  // namespace cairn::lidar3d
