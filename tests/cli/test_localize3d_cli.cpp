@@ -143,3 +143,22 @@ TEST(Localize3dCli, DamagedAndForeignMapsAreRefusedNamingTheFile) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Slam3dCliDynamic, RemoveDynamicWritesTheRemovedPointsApartAndCountsThem) {
+  CAIRN_REQUIRE_DATA("lidar3d/kitti00_keyframes/poses_keyframes.txt");
+  const fs::path out = scratch() / "dynamic_run";
+  fs::remove_all(out);
+  const Result r = cairn_run("slam3d " + key_frames(0, 5) + "--preset kitti --remove-dynamic --out " + q(out) + " -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  ASSERT_TRUE(fs::exists(out / "dynamic.ply"));
+  const nlohmann::json report = nlohmann::json::parse(cairn::test::slurp(out / "report.json"));
+  const nlohmann::json& d = report["dynamic_points"];
+  // Every point of the map before the carving is either in map.ply or in dynamic.ply.
+  EXPECT_EQ(d["of"].get<std::size_t>(), d["removed"].get<std::size_t>() + report["summary"]["map_points"].get<std::size_t>());
+  EXPECT_NE(cairn::test::slurp(out / "dynamic.ply").find("element vertex " + std::to_string(d["removed"].get<std::size_t>())),
+            std::string::npos);
+}
+
+}  // namespace
