@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cli_runner.hpp"
+#include "kitti_key_frame_files.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -23,26 +24,17 @@ namespace fs = std::filesystem;
 using Result = cairn::test::CliResult;
 using Pose = Eigen::Isometry3d;
 
-constexpr const char* kKitti = "lidar3d/kitti00_keyframes";
 
 fs::path scratch() { return cairn::test::scratch_folder("localize3d_test"); }
 Result cairn_run(const std::string& args) { return cairn::test::run_command(CAIRN_BINARY, args, scratch() / "stderr.txt"); }
 std::string q(const fs::path& p) { return cairn::test::quoted(p); }
 
-Pose reference_pose(int k) {
-  std::ifstream in(cairn::test::data_path(std::string(kKitti) + "/poses_keyframes.txt"));
-  std::string line;
-  for (int i = 0; i <= k; ++i) std::getline(in, line);
-  std::istringstream fields(line);
-  Pose T = Pose::Identity();
-  for (int i = 0; i < 12; ++i) fields >> T.matrix()(i / 4, i % 4);
-  return T;
-}
+Pose reference_pose(int k) { return cairn::test::kitti_reference_pose(k); }
 
 std::string key_frames(int first, int last) {
   std::string files;
   for (int k = first; k <= last; ++k) {
-    files += q(cairn::test::data_path(std::string(kKitti) + "/key_frames/key_frame_" + std::to_string(k) + ".pcd.xz")) + " ";
+    files += q(cairn::test::kitti_key_frame(k)) + " ";
   }
   return files;
 }

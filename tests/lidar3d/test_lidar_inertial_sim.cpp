@@ -16,6 +16,7 @@
 #include "cairn/sim/gnss_receiver.hpp"
 #include "cairn/sim/scenario.hpp"
 #include "cairn/sim/street_run.hpp"
+#include "sim_clouds.hpp"
 
 namespace cairn::lidar3d {
 namespace {
@@ -57,12 +58,7 @@ SimRun run_scenario(const sim::Scenario& scenario, std::uint64_t seed, bool with
     for (const inertial::ImuSample& sample : s.imu.samples) lio.add_imu(sample);
   }
   for (std::size_t k = 0; k < s.clouds.size(); ++k) {
-    io::PointCloud cloud;
-    for (const sim::LidarPoint& p : s.clouds[k]) {
-      cloud.points.push_back(p.position.cast<float>());
-      cloud.time_s.push_back(static_cast<float>(p.time_offset_s));
-      cloud.ring.push_back(static_cast<std::uint16_t>(p.ring));
-    }
+    const io::PointCloud cloud = test::to_point_cloud(s.clouds[k]);
     const double time_s = s.truth[s.scan_samples[k]].stamp.seconds();
     for (; out.gnss && next_fix < out.gnss->gnss.fixes.size() && out.gnss->gnss.fixes[next_fix].stamp.seconds() <= time_s; ++next_fix) {
       slam.add_gnss(out.gnss->gnss.fixes[next_fix]);

@@ -20,6 +20,7 @@
 #include "cairn/lidar3d/slam_run.hpp"
 #include "cairn/sim/scenario.hpp"
 #include "cairn/sim/street_run.hpp"
+#include "sim_clouds.hpp"
 
 namespace cairn::lidar3d {
 namespace {
@@ -37,13 +38,7 @@ SimScans simulate_scans(const sim::Scenario& scenario, std::uint64_t seed) {
   const double sample_period = s.truth[1].stamp.seconds() - s.truth[0].stamp.seconds();
   const auto half = static_cast<std::size_t>(std::lround(0.5 * scenario.lidar3d.period_s / sample_period));
   for (std::size_t k = 0; k < s.clouds.size(); ++k) {
-    io::PointCloud cloud;
-    for (const sim::LidarPoint& p : s.clouds[k]) {
-      cloud.points.push_back(p.position.cast<float>());
-      cloud.time_s.push_back(static_cast<float>(p.time_offset_s));
-      cloud.ring.push_back(static_cast<std::uint16_t>(p.ring));
-    }
-    out.clouds.push_back(std::move(cloud));
+    out.clouds.push_back(test::to_point_cloud(s.clouds[k]));
     out.times_s.push_back(s.truth[s.scan_samples[k]].stamp.seconds());
     const std::size_t middle = std::min(s.scan_samples[k] + half, s.truth.size() - 1);
     out.T_world_stamp.push_back(sim::lidar_pose(s.truth[s.scan_samples[k]].T_world_body, scenario.lidar3d));

@@ -14,6 +14,7 @@
 #include "cairn/lidar3d/slam.hpp"
 #include "cairn/sim/scenario.hpp"
 #include "cairn/sim/street_run.hpp"
+#include "sim_clouds.hpp"
 
 namespace cairn::lidar3d {
 namespace {
@@ -38,14 +39,8 @@ SimRun run_scenario(const sim::Scenario& scenario, std::uint64_t seed, const Lid
   const double sample_period = s.truth.size() > 1 ? s.truth[1].stamp.seconds() - s.truth[0].stamp.seconds() : 0.01;
   const auto half = static_cast<std::size_t>(std::lround(0.5 * scenario.lidar3d.period_s / sample_period));
   for (std::size_t k = 0; k < s.clouds.size(); ++k) {
-    io::PointCloud cloud;
     const bool blind = k >= blind_begin && k < blind_end;
-    for (const sim::LidarPoint& p : s.clouds[k]) {
-      if (blind) break;
-      cloud.points.push_back(p.position.cast<float>());
-      cloud.time_s.push_back(static_cast<float>(p.time_offset_s));
-      cloud.ring.push_back(static_cast<std::uint16_t>(p.ring));
-    }
+    const io::PointCloud cloud = blind ? io::PointCloud{} : test::to_point_cloud(s.clouds[k]);
     out.scans.push_back(slam.add_scan(cloud, s.truth[s.scan_samples[k]].stamp.seconds()));
     const std::size_t middle = std::min(s.scan_samples[k] + half, s.truth.size() - 1);
     out.T_world_lidar_middle.push_back(sim::lidar_pose(s.truth[middle].T_world_body, scenario.lidar3d));

@@ -39,19 +39,31 @@ std::vector<Eigen::Vector3f> estimate_normals(const std::vector<Eigen::Vector3f>
   return normals;
 }
 
+namespace {
+
+/// The odometry's preprocessing and voxel, with the front end it actually used.
+SavedSensorModel sensor_model(const LidarSlam& slam) {
+  const LidarOdometryOptions& o = slam.options().odometry;
+  SavedSensorModel sensor;
+  sensor.front_end = slam.front_end() == FrontEnd::kAuto ? FrontEnd::kDense : slam.front_end();
+  sensor.rings_from_kitti_order = o.rings_from_kitti_order;
+  sensor.min_range_m = o.min_range_m;
+  sensor.max_range_m = o.max_range_m;
+  sensor.deskew = o.deskew;
+  sensor.vertical_angle_correction_rad = o.vertical_angle_correction_rad;
+  sensor.sweep_period_s = o.sweep_period_s;
+  sensor.voxel_size_m = o.voxel_size_m;
+  sensor.max_points_per_voxel = o.max_points_per_voxel;
+  return sensor;
+}
+
+}  // namespace
+
 SavedMap3D make_saved_map(const LidarSlam& slam, const SlamRun& run, const std::string& configuration_json,
                           const std::string& source, const std::vector<bool>* keep) {
   SavedMap3D map;
   const LidarOdometryOptions& o = slam.options().odometry;
-  map.sensor.front_end = slam.front_end() == FrontEnd::kAuto ? FrontEnd::kDense : slam.front_end();
-  map.sensor.rings_from_kitti_order = o.rings_from_kitti_order;
-  map.sensor.min_range_m = o.min_range_m;
-  map.sensor.max_range_m = o.max_range_m;
-  map.sensor.deskew = o.deskew;
-  map.sensor.vertical_angle_correction_rad = o.vertical_angle_correction_rad;
-  map.sensor.sweep_period_s = o.sweep_period_s;
-  map.sensor.voxel_size_m = o.voxel_size_m;
-  map.sensor.max_points_per_voxel = o.max_points_per_voxel;
+  map.sensor = sensor_model(slam);
   map.scan_context = slam.options().scan_context;
   map.map_voxel_m = run.map_voxel_m();
 
