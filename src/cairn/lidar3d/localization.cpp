@@ -175,7 +175,6 @@ struct Localizer3d::Impl {
   /// The last two matched poses (registered instants) and their times: the localiser's own
   /// constant-velocity prediction when the odometry lost track.
   std::vector<std::pair<double, core::SE3>> recent_poses;
-  double tracked_fitness = 0.0;
   int failures = 0;
   std::size_t tracked_scans = 0;
   std::vector<Hypothesis> hypotheses;
@@ -541,7 +540,6 @@ struct Localizer3d::Impl {
     T_map_odom = h.T_map_odom;
     recent_poses.clear();
     remember_pose(in.time_s, h.last.T_map_sensor);
-    tracked_fitness = h.last.fitness;
     failures = 0;
     tracked_scans = 0;
     hypotheses.clear();
@@ -657,7 +655,6 @@ struct Localizer3d::Impl {
 
   void accept_tracked(const MapMatch& m, const ScanInput& in, Localization3dResult& result) {
     T_map_odom = m.T_map_sensor * in.T_odom_registered.inverse();
-    tracked_fitness = m.fitness;
     failures = 0;
     remember_pose(in.time_s, m.T_map_sensor);
     report_match(m, in, result);

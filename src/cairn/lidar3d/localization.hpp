@@ -25,7 +25,8 @@
 ///    (`candidates` nearest ring keys, as LidarSlam's loop search, with the same lateral views);
 ///    up to `places_verified` distinct places (keyframes more than `separation_m` apart) with a
 ///    descriptor distance at most `max_descriptor_distance` are matched from the descriptor's
-///    guess (the keyframe's pose with the descriptor's yaw). A match is verified when it
+///    guess (the keyframe's pose with the descriptor's yaw) and from that guess moved half-way to
+///    each neighbouring keyframe, the best score kept. A match is verified when it
 ///    converged, has fitness >= verification_min_fitness, inlier RMSE <= verification_max_rmse_m
 ///    and no degenerate direction. Each verified match that agrees with no hypothesis starts one:
 ///    T_map_odom = T_map_sensor T_odom_sensor^-1.
@@ -34,7 +35,8 @@
 ///    `agreement_m` / `agreement_rad` of the prediction supports it (one support per scan);
 ///    `hypothesis_max_misses` scans in a row without support drop it. A hypothesis is accepted
 ///    (tracking starts; a relocalisation is recorded with its evidence) when `confirmations`
-///    distinct scans support it, the current one among them, and no other hypothesis is alive.
+///    distinct scans support it, the current one among them, and no other hypothesis is alive;
+///    its pose is then matched again from starts `polish_offsets_m` away (the best score kept).
 ///    While two places keep explaining the scans (a garage's identical bays) the localiser stays
 ///    `lost`: a wrong relocalisation is the worst failure. When the odometry cannot carry a
 ///    hypothesis (it lost track on a scan, as it does over the first scans of a run whose scans
