@@ -458,8 +458,8 @@ struct Localizer3d::Impl {
     return sum >= options.hypothesis_drop_deficit;
   }
 
-  void drop_hypotheses(Localizer3dSummary& summary, bool all) {
-    const auto dead = [&](const Hypothesis& h) { return all || h.misses >= options.hypothesis_max_misses || falls_short(h); };
+  void drop_hypotheses(Localizer3dSummary& summary) {
+    const auto dead = [&](const Hypothesis& h) { return h.misses >= options.hypothesis_max_misses || falls_short(h); };
     const std::size_t before = hypotheses.size();
     hypotheses.erase(std::remove_if(hypotheses.begin(), hypotheses.end(), dead), hypotheses.end());
     summary.hypotheses_dropped += before - hypotheses.size();
@@ -506,7 +506,7 @@ struct Localizer3d::Impl {
     summary.max_search_s = std::max(summary.max_search_s, result.search_s);
     for (LocalizationAttempt3d& a : attempts) summary.attempts.push_back(std::move(a));
     compare_hypotheses();
-    drop_hypotheses(summary, false);
+    drop_hypotheses(summary);
     result.live_hypotheses = static_cast<int>(hypotheses.size());
     accept_if_confirmed(in, result, summary);
   }
@@ -597,8 +597,9 @@ struct Localizer3d::Impl {
   void track(const ScanInput& in, Localization3dResult& result, Localizer3dSummary& summary) {
     const auto start = Clock::now();
     const core::SE3 predicted = predict(in);
-    MapMatch m = match(in, predicted, in.odometry_health == core::Health::kLost);
-    if (!m.converged || m.fitness < options.ok_min_fitness) {
+    const bool coarse_first = in.odometry_health == core::Health::kLost;
+    MapMatch m = match(in, predicted, coarse_first);
+    if (!coarse_first && (!m.converged || m.fitness < options.ok_min_fitness)) {
       // The odometry may be off by more than the correspondence distance (a fast turn): from
       // the same prediction at the coarse distance first.
       const MapMatch coarse = match(in, predicted, true);
