@@ -15,6 +15,7 @@
 #include "cairn/vision/vocabulary.hpp"
 #include "cairn/vslam/visual_slam.hpp"
 #include "test_data.hpp"
+#include "tum_desk.hpp"
 
 namespace cairn::vslam {
 namespace {
@@ -141,13 +142,6 @@ TEST(VisualSlam, RefusesBadCalibrationsAndImages) {
   EXPECT_NE(r.note.find("too few"), std::string::npos) << r.note;
 }
 
-// The ground-truth pose nearest in time (TUM's mocap runs at 100 Hz).
-core::SE3 nearest(const io::Trajectory& truth, core::Timestamp t) {
-  const auto it = std::lower_bound(truth.stamps.begin(), truth.stamps.end(), t);
-  std::size_t i = static_cast<std::size_t>(it - truth.stamps.begin());
-  if (i == truth.stamps.size() || (i > 0 && (t.seconds() - truth.stamps[i - 1].seconds()) < (truth.stamps[i].seconds() - t.seconds()))) --i;
-  return truth.poses[i];
-}
 
 // RGB-D on TUM fr1/desk (every 4th frame) with a vocabulary trained on the KITTI images (never
 // on TUM's): place recognition may close the desk loop and relocalise after fast turns, but every
@@ -156,26 +150,10 @@ core::SE3 nearest(const io::Trajectory& truth, core::Timestamp t) {
 void run_tum_place_recognition(bool bow_restricted) {
   CAIRN_REQUIRE_DATA("visual/tum_fr1_desk_every4th/associations.txt");
   CAIRN_REQUIRE_DATA("visual/kitti_extract_seq2/image_l");
-  std::vector<cv::Mat> training;
-  const vision::OrbExtractor kitti_orb(vision::OrbOptions{1000});
-  std::vector<std::string> images;
-  for (const auto& entry : std::filesystem::directory_iterator(test::data_path("visual/kitti_extract_seq2/image_l"))) {
-    images.push_back(entry.path().string());
-  }
-  std::sort(images.begin(), images.end());  // as `cairn vocabulary train image_l/` takes them
-  for (const std::string& image : images) training.push_back(kitti_orb.extract(vision::read_gray_image(image)).descriptors);
-  vision::VocabularyOptions vo;
-  vo.branching = 10;
-  vo.depth = 4;
-  auto vocabulary = std::make_shared<const vision::Vocabulary>(vision::Vocabulary::train(training, vo));
+  auto vocabulary = test_tum::kitti_vocabulary();
   const io::ImageSequence seq = io::read_tum_rgbd(test::data_path("visual/tum_fr1_desk_every4th").string());
-  io::CameraCalibration camera{517.306408, 516.469215, 318.643040, 255.313989, 0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
-  camera.depth_units_per_m = 5000.0;
-  camera.virtual_baseline_m = 40.0 / camera.fx;
-  VisualSlamOptions options;
-  options.orb.features = 1000;
-  options.close_depth_baselines = 40.0;
-  options.vocabulary = vocabulary;
+  const io::CameraCalibration camera = test_tum::fr1_camera();
+  VisualSlamOptions options = test_tum::rgbd_options(vocabulary);
   options.bow_restricted_matching = bow_restricted;
   VisualSlam slam(camera, io::SequenceKind::kRgbd, options);
   std::vector<FrameResult> results;
@@ -191,7 +169,7 @@ void run_tum_place_recognition(bool bow_restricted) {
   const io::Trajectory& truth = *seq.ground_truth;
   std::size_t returns_verified = 0;
   for (const LoopRecord& loop : s.loops) {
-    const core::SE3 a = nearest(truth, seq.frames[loop.frame].time), b = nearest(truth, seq.frames[loop.candidate_frame].time);
+    const core::SE3 a = test_tum::nearest(truth, seq.frames[loop.frame].time), b = test_tum::nearest(truth, seq.frames[loop.candidate_frame].time);
     const core::SE3 d = a.inverse() * b;
     const double metres = d.translation().norm();
     const double degrees = Eigen::AngleAxisd(d.rotation_matrix()).angle() * 180.0 / 3.14159265358979323846;

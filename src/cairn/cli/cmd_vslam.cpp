@@ -34,6 +34,7 @@
 #include "cairn/vslam/evaluation.hpp"
 #include "cairn/vslam/foxglove_output.hpp"
 #include "cairn/vslam/image_input.hpp"
+#include "cairn/vslam/map_file.hpp"
 #include "cairn/vslam/outputs.hpp"
 #include "cairn/vslam/visual_slam.hpp"
 
@@ -148,13 +149,56 @@ void print_summary(const vslam::VisualSlamSummary& s, const vslam::RunRecord& ru
   std::printf("wrote %s\n", flags.out.c_str());
 }
 
+/// --first-frame: the sequence from frame K on (ground truth pairs by stamp, so it still holds).
+void skip_first_frames(VslamInput& input, const VslamFlags& flags) {
+  if (flags.first_frame <= 0) return;
+  io::ImageSequence& seq = input.sequence();
+  if (input.bag) throw UsageError("--first-frame is for dataset folders; a bag's frames are read in order from the first");
+  if (static_cast<std::size_t>(flags.first_frame) >= seq.frames.size()) {
+    throw UsageError("--first-frame " + std::to_string(flags.first_frame) + ": the sequence has " + std::to_string(seq.frames.size()) + " frames");
+  }
+  seq.frames.erase(seq.frames.begin(), seq.frames.begin() + flags.first_frame);
+}
+
+/// --save-map and --localize-in: usage checks before any work.
+void check_map_flags(const VslamFlags& flags) {
+  if (!flags.save_map.empty() && !flags.localize_in.empty()) {
+    throw UsageError("--save-map and --localize-in exclude each other: localising never changes the map");
+  }
+  if (flags.save_map.empty()) return;
+  if (io::is_standard_output(flags.save_map)) throw std::invalid_argument("--save-map needs a file: the map is binary");
+  io::resolve_output(flags.save_map);
+  io::check_file_outside_directory("--save-map", flags.save_map, "--out", flags.out,
+                                   {"trajectory.tum", "trajectory.kitti", "keyframes.tum", "map_points.ply", "frames.csv", "report.json"});
+}
+
+/// The saved map of --localize-in, refused (naming the file and why) when these images cannot be
+/// localised in it; a warning when its vocabulary was another.
+vslam::SavedVisualMap read_map_to_localise_in(const VslamFlags& flags, const io::ImageSequence& seq, io::SequenceKind kind,
+                                              const vslam::VisualSlamOptions& options) {
+  vslam::SavedVisualMap map = vslam::read_saved_map(flags.localize_in);
+  if (const std::string why = vslam::map_incompatibility(map, seq.calibration, kind, options.vocabulary.get()); !why.empty()) {
+    throw std::runtime_error("--localize-in " + flags.localize_in + ": cannot localise these images in this map: " + why);
+  }
+  if (const std::string warning = vslam::vocabulary_mismatch(map, options.vocabulary.get()); !warning.empty()) {
+    std::fprintf(stderr, "cairn vslam: warning: %s\n", warning.c_str());
+  }
+  if (!flags.quiet) {
+    std::fprintf(stderr, "cairn vslam: localising in %s: %zu keyframes, %zu map points (mapped from %s)\n", flags.localize_in.c_str(),
+                 map.keyframes.size(), map.points.size(), map.source.c_str());
+  }
+  return map;
+}
+
 int vslam_command(const VslamFlags& flags) {
   if (flags.print_config && flags.folder.empty()) {  // no dataset: VisualSlamOptions' defaults
     configured_options(flags, vslam::VisualSlamOptions{});
     return 0;
   }
   if (flags.out.empty() && !flags.print_config) throw std::invalid_argument("--out DIR is required");
+  check_map_flags(flags);
   VslamInput input = read_vslam_input(flags);
+  skip_first_frames(input, flags);
   io::ImageSequence& seq = input.sequence();
   const std::optional<vision::StereoRectifier> rectifier = resolve_calibration(input, flags);
   const io::SequenceKind kind = flags.mono ? io::SequenceKind::kMonocular : seq.kind;
@@ -172,7 +216,10 @@ int vslam_command(const VslamFlags& flags) {
     io::check_file_outside_directory("--mcap", flags.mcap, "--out", flags.out, {"trajectory.tum", "report.json"});
   }
   io::OutputDirectory out(flags.out, flags.overwrite);
-  vslam::VisualSlam slam(seq.calibration, kind, options);
+  std::unique_ptr<vslam::VisualSlam> slam_owner =
+      flags.localize_in.empty() ? std::make_unique<vslam::VisualSlam>(seq.calibration, kind, options)
+                                : std::make_unique<vslam::VisualSlam>(read_map_to_localise_in(flags, seq, kind, options), options);
+  vslam::VisualSlam& slam = *slam_owner;
   const std::size_t feature_frame = flags.feature_frame >= 0 ? static_cast<std::size_t>(flags.feature_frame) : n / 2;
   if (flags.feature_frame >= 0 && feature_frame >= n) {
     throw UsageError("--feature-frame " + std::to_string(flags.feature_frame) + ": this run has " + std::to_string(n) +
@@ -186,9 +233,13 @@ int vslam_command(const VslamFlags& flags) {
   }
   const vslam::RunRecord run = run_frames(slam, *reader, seq, n, feature_frame, flags);
   const vslam::RunInput run_input{seq, kind, calibration_source(input, flags), flags.vocabulary,
-                                  input.bag ? input.bag->topics : std::vector<std::pair<std::string, std::string>>{}};
+                                  input.bag ? input.bag->topics : std::vector<std::pair<std::string, std::string>>{}, flags.localize_in};
   const vslam::WrittenOutputs written = vslam::write_outputs(out, slam, run_input, run, ground_truth);
   out.commit();
+  if (!flags.save_map.empty()) {
+    vslam::write_saved_map(flags.save_map, slam.saved_map(vslam::configuration().json(options).dump(), seq.folder));
+    if (!flags.quiet) std::printf("wrote the map for reuse (cairn vslam --localize-in) to %s\n", flags.save_map.c_str());
+  }
   if (!flags.mcap.empty()) vslam::write_foxglove_mcap(flags.mcap, slam, run);
   if (!flags.quiet) print_summary(slam.summary(), run, written, flags);
   return run.interrupted ? interrupted_exit_status() : 0;

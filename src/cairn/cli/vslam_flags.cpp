@@ -25,6 +25,14 @@ void add_vslam_flags(CLI::App& command, VslamFlags& flags) {
   cmd->add_option("--features", flags.features, "ORB features per image (default 2000 stereo, 1000 RGB-D, as ORB-SLAM2)")
       ->check(checks::whole_range(10, 100000));
   cmd->add_option("--max-frames", flags.max_frames, "Process at most N frames")->check(checks::count(std::numeric_limits<long>::max()));
+  cmd->add_option("--first-frame", flags.first_frame, "Start at frame K, 0-based (the frames before it are skipped; not for bags)")
+      ->check(checks::count_or_zero(std::numeric_limits<long>::max()));
+  cmd->add_option("--save-map", flags.save_map,
+                  "Also write the main map (keyframes, map points, descriptors, covisibility, the vocabulary's identity) for "
+                  "--localize-in (docs/formats.md, \"cairn visual map\")");
+  cmd->add_option("--localize-in", flags.localize_in,
+                  "Localise in a map saved with --save-map instead of mapping: track against it without adding to it, "
+                  "relocalise by bag of words (--vocabulary) when lost (ORB-SLAM2's localisation mode)");
   cmd->add_option("--feature-frame", flags.feature_frame, "Frame drawn in features.png, 0-based (default: the middle one)")
       ->check(checks::count_or_zero(std::numeric_limits<long>::max()));
   cmd->add_flag("--mono", flags.mono, "Monocular: the left (stereo) or colour (TUM) images only; the scale is not observable (a plain folder of images is monocular anyway)");

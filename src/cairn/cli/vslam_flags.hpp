@@ -21,6 +21,9 @@ struct VslamFlags {
   bool print_config = false;
   int features = 0;
   long max_frames = 0;
+  long first_frame = 0;
+  std::string save_map;    // write the main map for --localize-in (vslam/map_file.hpp)
+  std::string localize_in; // localise in a saved map without changing it
   long feature_frame = -1;
   bool no_local_ba = false;
   bool mono = false;

@@ -34,6 +34,7 @@ struct KnownKind {
 constexpr KnownKind kKnownKinds[] = {
     {"CAIRNMAP", "cairn 2D map", "cairn slam2d --save-map"},
     {"CAIRN3DM", "cairn 3D LiDAR map", "cairn slam3d --save-map"},
+    {"CAIRNVSM", "cairn visual map", "cairn vslam --save-map"},
 };
 
 std::string_view magic_of(const ContainerKind& kind) { return {kind.magic.data(), kind.magic.size()}; }

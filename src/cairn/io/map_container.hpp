@@ -1,7 +1,8 @@
 #pragma once
 /// \file
 /// The framing every saved cairn map shares (the 2D map of slam2d/map_file.hpp, the 3D LiDAR map of
-/// lidar3d/map_file.hpp; docs/formats.md, "cairn 2D map" and "cairn 3D LiDAR map"):
+/// lidar3d/map_file.hpp, the visual map of vslam/map_file.hpp; docs/formats.md, "cairn 2D map",
+/// "cairn 3D LiDAR map" and "cairn visual map"):
 ///
 ///   8-byte magic | u32 version | u32 flags | u64 file size | u64 payload size |
 ///   zlib stream of the payload | u32 CRC-32 of everything before it
@@ -33,9 +34,10 @@ struct ContainerKind {
 };
 
 /// The kind of a container cairn writes, by magic, with `version`: "CAIRNMAP" (a cairn 2D map,
-/// cairn slam2d --save-map) or "CAIRN3DM" (a cairn 3D LiDAR map, cairn slam3d --save-map). The
-/// names come from one table, which decode_container also uses to tell what a file of another
-/// kind is. Precondition: `magic` is in the table.
+/// cairn slam2d --save-map), "CAIRN3DM" (a cairn 3D LiDAR map, cairn slam3d --save-map) or
+/// "CAIRNVSM" (a cairn visual map, cairn vslam --save-map). The names come from one table, which
+/// decode_container also uses to tell what a file of another kind is. Precondition: `magic` is in
+/// the table.
 ContainerKind known_container_kind(std::string_view magic, std::uint32_t version);
 
 /// The file: the header of `kind`, `payload` deflated (zlib's default level), the CRC-32.

@@ -1239,4 +1239,33 @@ std::vector<BowDatabase::Result> BowDatabase::query(const BowVector& v, std::siz
   return out;
 }
 
+std::uint64_t Vocabulary::fingerprint() const {
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64 (Fowler, Noll, Vo)
+  const auto mix = [&h](const void* data, std::size_t size) {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < size; ++i) {
+      h ^= bytes[i];
+      h *= 1099511628211ull;
+    }
+  };
+  const auto mix_u64 = [&mix](std::uint64_t v) {
+    unsigned char le[8];
+    for (int b = 0; b < 8; ++b) le[b] = static_cast<unsigned char>(v >> (8 * b));
+    mix(le, 8);
+  };
+  mix_u64(static_cast<std::uint64_t>(k_));
+  mix_u64(static_cast<std::uint64_t>(L_));
+  mix_u64(static_cast<std::uint64_t>(weighting_));
+  mix_u64(parent_.size());
+  for (std::size_t n = 0; n < parent_.size(); ++n) {
+    mix_u64(parent_[n]);
+    for (const std::uint64_t word : descriptor_[n]) mix_u64(word);
+    std::uint64_t weight_bits = 0;
+    std::memcpy(&weight_bits, &weight_[n], sizeof weight_bits);
+    mix_u64(weight_bits);
+    mix_u64(word_of_node_[n]);
+  }
+  return h;
+}
+
 }  // namespace cairn::vision

@@ -108,6 +108,11 @@ class Vocabulary {
   std::uint32_t parent_node(std::uint32_t node) const;
   /// e.g. "k=10 L=5 4312 words (tf-idf), trained on 102 images".
   std::string description() const;
+  /// 64-bit FNV-1a hash of what transform() depends on (k, L, weighting, the tree, every node's
+  /// descriptor and weight): equal for the same vocabulary however it was stored (cairn's format,
+  /// DBoW2's text or YAML), different for another one in all practical cases. A saved visual map
+  /// records it (vslam/saved_map.hpp) so that it is only reused with the vocabulary it was made with.
+  std::uint64_t fingerprint() const;
 
  private:
   using Descriptor = std::array<std::uint64_t, 4>;

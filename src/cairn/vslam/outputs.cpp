@@ -50,7 +50,11 @@ void write_trajectories(const io::OutputDirectory& out, const VisualSlam& slam, 
   }
   io::write_output(out.staging_path("trajectory.kitti"), [&](std::ostream& o) { io::write_kitti(o, t.every_frame); });
   io::Trajectory keyframes;
-  for (const std::size_t k : slam.keyframe_frames()) {
+  if (slam.localization_only()) {  // the saved map's keyframes, stamped with the mapping run's times
+    keyframes.stamps = slam.keyframe_times();
+    keyframes.poses = slam.keyframe_poses();
+  }
+  for (const std::size_t k : slam.localization_only() ? std::vector<std::size_t>{} : slam.keyframe_frames()) {
     if (t.segments[k] != t.main_segment) continue;  // keyframes of the main map, as trajectory.tum
     keyframes.stamps.push_back(results[k].time);
     keyframes.poses.push_back(t.poses[k]);  // keyframes are tracked frames
@@ -225,6 +229,27 @@ nlohmann::json place_recognition_json(const RunInput& input, const VisualSlamOpt
   return place_recognition;
 }
 
+/// Localising in a saved map: the map, how many frames were localised and how, and every
+/// relocalisation refused (frame and reason; the rest of the notes are in frames.csv).
+nlohmann::json localization_json(const RunInput& input, const VisualSlam& slam, const std::vector<FrameResult>& results) {
+  const VisualSlamSummary& s = slam.summary();
+  std::size_t tracked = 0, relocalised = 0;
+  nlohmann::json refused = nlohmann::json::array();
+  for (const FrameResult& r : results) {
+    tracked += r.tracked ? 1 : 0;
+    relocalised += r.relocalised ? 1 : 0;
+    if (!r.tracked && (r.note.find("relocalisation") != std::string::npos)) refused.push_back({{"frame", r.frame}, {"reason", r.note}});
+  }
+  return {{"map", input.map_path},
+          {"map_keyframes", slam.keyframe_poses().size()},
+          {"map_points", slam.map_points().size()},
+          {"frames", results.size()},
+          {"frames_localised", tracked},
+          {"relocalisations", relocalised},
+          {"relocalisations_refused_ambiguous", s.relocalisations_ambiguous},
+          {"relocalisations_refused", refused}};
+}
+
 }  // namespace
 
 FrameTimeSeries frame_times(const std::vector<FrameResult>& frames) {
@@ -271,6 +296,7 @@ WrittenOutputs write_outputs(const io::OutputDirectory& out, const VisualSlam& s
   report["maps"] = maps_json(results, t);
   report["evaluation"] = written.evaluation ? evaluation_json(*written.evaluation) : nlohmann::json(nullptr);
   report["place_recognition"] = place_recognition_json(input, slam.options(), s);
+  if (slam.localization_only()) report["localization"] = localization_json(input, slam, results);
   report["not_implemented"] = {"local mapping in its own thread"};
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   return written;

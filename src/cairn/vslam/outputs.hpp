@@ -10,13 +10,15 @@
 ///                             main map, in a frame of its own
 ///   trajectory.kitti          every frame, one line each as the KITTI devkit needs (a lost frame
 ///                             carries the motion model's guess)
-///   keyframes.tum             the main map's keyframes
+///   keyframes.tum             the main map's keyframes (localising in a saved map: the map's)
 ///   map_points.ply            the good map points, world = the first camera (x right, y down, z forward)
 ///   frames.csv                per frame: health, segment, events, counts, times (ms), note
 ///   trajectory.png            top view; with a ground truth, the estimate aligned to it
 ///   features.png              one frame's keypoints and what became of them
 ///   report.json               input, options, summary, timing, map segments, evaluation against
-///                             the ground truth (evaluation.hpp), place recognition
+///                             the ground truth (evaluation.hpp), place recognition; localising
+///                             in a saved map, "localization" (the map, frames localised,
+///                             relocalisations accepted and refused)
 ///
 /// Poses are at the final keyframe poses (VisualSlam::trajectory).
 
@@ -43,6 +45,9 @@ struct RunInput {
   /// A bag's topics read, role and topic ({"left", "/stereo/left/image_raw"}, ...: BagImages::
   /// topics); empty for a folder. report.json's input then says "bag" and lists them.
   std::vector<std::pair<std::string, std::string>> topics = {};
+  /// Localising in a saved map (VisualSlam::localization_only): the map file; report.json's
+  /// "localization" names it, and keyframes.tum holds the map's keyframes (mapping-run stamps).
+  std::string map_path = {};
 };
 
 /// The frame drawn in features.png.

@@ -245,6 +245,13 @@ struct VisualSlam::Impl {
     return cx >= 0 && cx < kGridCols && cy >= 0 && cy < kGridRows;
   }
 
+  // Made from a saved map (VisualSlam(const SavedVisualMap&, ...)): tracking only; the map's
+  // keyframes, points and their statistics are never changed.
+  bool localization_only = false;
+  // --- Map reuse (map_reuse.cpp) ---
+  SavedVisualMap export_main_segment() const;
+  void import_map(const SavedVisualMap& map);
+
   // Monocular, until initialised: the reference frame of the two-view initialisation.
   FrameData init_reference;
   bool have_init_reference = false;

@@ -498,12 +498,14 @@ int VisualSlam::Impl::track_local_map(FrameData& f, double* sigma_position_m, in
     }
   }
   const double th = kind == io::SequenceKind::kRgbd ? 3.0 * options.local_search_radius_px : options.local_search_radius_px;
-  search_by_projection(f, ids, th, update_statistics);
+  // A saved map's statistics stay as they were saved (localization_only).
+  const bool count = update_statistics && !localization_only;
+  search_by_projection(f, ids, th, count);
   int matched = 0;
   for (std::size_t i = 0; i < f.size(); ++i) matched += f.map_point[i] >= 0 ? 1 : 0;
   *given = matched;
   const int inliers = optimize_pose(f, sigma_position_m);
-  for (std::size_t i = 0; update_statistics && i < f.size(); ++i) {
+  for (std::size_t i = 0; count && i < f.size(); ++i) {
     if (f.map_point[i] >= 0 && !f.outlier[i]) ++points[static_cast<std::size_t>(f.map_point[i])].found;
   }
   drop_outliers(f);
@@ -988,7 +990,7 @@ void VisualSlam::Impl::accept_tracked_frame(TrackingFrame& w) {
   } else {
     result.health = TrackingHealth::kOk;
   }
-  if (need_keyframe(w.f, inliers)) map_keyframe(w);
+  if (!localization_only && need_keyframe(w.f, inliers)) map_keyframe(w);
 }
 
 // Local mapping of a new keyframe (ORB-SLAM2 LocalMapping::Run, in line): insert, cull points,

@@ -166,6 +166,14 @@ std::vector<std::size_t> VisualSlam::keyframe_frames() const {
   return out;
 }
 
+std::vector<core::Timestamp> VisualSlam::keyframe_times() const {
+  std::vector<core::Timestamp> out;
+  for (const auto& kf : impl_->keyframes) {
+    if (!kf.bad) out.push_back(kf.frame.time);
+  }
+  return out;
+}
+
 std::vector<Eigen::Vector3d> VisualSlam::map_points() const {
   std::vector<Eigen::Vector3d> out;
   for (const auto& mp : impl_->points) {

@@ -35,6 +35,7 @@
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/vision/features.hpp"
 #include "cairn/vision/vocabulary.hpp"
+#include "cairn/vslam/saved_map.hpp"
 
 namespace cairn::vslam {
 
@@ -233,6 +234,14 @@ struct VisualSlamSummary {
 class VisualSlam {
  public:
   VisualSlam(const io::CameraCalibration& camera, io::SequenceKind kind, const VisualSlamOptions& options = {});
+  /// Localisation in a saved map (ORB-SLAM2's localisation mode, T-RO 2017 Sec. III-F): the
+  /// map's camera, sequence kind and ORB settings; tracking as above, but no keyframe, point,
+  /// loop or map segment is ever added and the map's points and poses never change; the first
+  /// frame, and every frame after a loss, relocalises (bag of words when `options.vocabulary`,
+  /// PnP, the local map, relocalisation_min_inliers and the uniqueness test). Throws
+  /// std::invalid_argument for invalid options, a map without keyframes, or a map indexed with a
+  /// vocabulary when none is given (map_incompatibility).
+  VisualSlam(const SavedVisualMap& map, const VisualSlamOptions& options);
   ~VisualSlam();
   VisualSlam(const VisualSlam&) = delete;
   VisualSlam& operator=(const VisualSlam&) = delete;
@@ -252,13 +261,20 @@ class VisualSlam {
   std::vector<core::SE3> trajectory() const;
   /// The keyframes in the map (culled ones left out), in order of creation.
   std::vector<core::SE3> keyframe_poses() const;
+  /// Their frames' indices (localising in a saved map: the mapping run's frames) and times.
   std::vector<std::size_t> keyframe_frames() const;
+  std::vector<core::Timestamp> keyframe_times() const;
   /// Per frame, the map segment it belongs to now (merges applied; the segment of keyframe 0 is
   /// the main map, main_segment()); -1 for a frame before the first keyframe.
   std::vector<int> frame_segments() const;
   int main_segment() const;
   /// The good map points in the world frame.
   std::vector<Eigen::Vector3d> map_points() const;
+  /// The main map segment (keyframes, points, covisibility; saved_map.hpp), to save with
+  /// write_saved_map (map_file.hpp). Throws std::logic_error before the first keyframe.
+  SavedVisualMap saved_map(std::string configuration_json = {}, std::string source = {}) const;
+  /// True when made from a saved map (the map is then never changed).
+  bool localization_only() const;
   const VisualSlamSummary& summary() const { return summary_; }
   const VisualSlamOptions& options() const { return options_; }
 
@@ -269,5 +285,16 @@ class VisualSlam {
   VisualSlamOptions options_;
   VisualSlamSummary summary_;
 };
+
+/// Why images of `kind` taken with `camera` cannot be localised in `map`, "; "-separated, or ""
+/// when they can: another sequence kind, another camera (intrinsics, distortion, stereo baseline
+/// or depth scale differ by more than 1e-9 relative), another image size (when camera.width and
+/// height are set), or no vocabulary for a map indexed with one.
+std::string map_incompatibility(const SavedVisualMap& map, const io::CameraCalibration& camera, io::SequenceKind kind,
+                                const vision::Vocabulary* vocabulary);
+/// A warning, or "": the map was indexed with another vocabulary than `vocabulary` (its keyframes'
+/// words are then recomputed with the given one, so it works, but a vocabulary trained on other
+/// images may relocalise less well).
+std::string vocabulary_mismatch(const SavedVisualMap& map, const vision::Vocabulary* vocabulary);
 
 }  // namespace cairn::vslam
