@@ -112,6 +112,7 @@ struct Fixtures {
   bool carmen_ready = false;
   bool landmarks_ready = false;
   bool map3d_ready = false;
+  bool visual_map_ready = false;
 };
 
 Fixtures& fixtures() {
@@ -167,6 +168,13 @@ void ensure_fixtures(const std::string& text) {
     EXPECT_EQ(map.status, 0) << map.err;
     f.map3d_ready = true;
   }
+  if (text.find("map.cvsm") != std::string::npos && !f.visual_map_ready && fs::exists(cairn::test::data_path("visual/kitti_extract_seq2/calib.txt"))) {
+    // A visual map of the first 3 real KITTI stereo frames.
+    const CliResult map = run("vslam " + q(cairn::test::data_path("visual/kitti_extract_seq2")) + " --max-frames 3 --out " + q(d / "vslam_map_run") +
+                              " --save-map " + q(d / "map.cvsm") + " -q");
+    EXPECT_EQ(map.status, 0) << map.err;
+    f.visual_map_ready = true;
+  }
   if (text.find("landmarks_run") != std::string::npos && !f.landmarks_ready) {
     const CliResult sim = run("simulate landmarks --out " + q(d / "landmarks_run") + " -q");
     EXPECT_EQ(sim.status, 0) << sim.err;
@@ -198,6 +206,8 @@ std::vector<Command> commands() {
        true, O::kDirectory, "lidar3d/kitti00_keyframes/key_frames"},
       {"vslam", "vslam", "{in} --max-frames 2 --out {out} -q", D + "/visual/kitti_extract_seq2", true, O::kDirectory,
        "visual/kitti_extract_seq2/calib.txt"},
+      {"vslam_localize", "vslam", "{in} --localize-in " + F + "/map.cvsm --max-frames 2 --out {out} -q", D + "/visual/kitti_extract_seq2", true,
+       O::kDirectory, "visual/kitti_extract_seq2/calib.txt"},
       {"landmarks", "landmarks", "{in} --out {out} -q", F + "/landmarks_run", true, O::kDirectory},
       {"simulate", "simulate", "landmarks --out {out} -q", "", false, O::kDirectory},
       {"register", "register", "{in} " + D + "/lidar3d/kitti00_keyframes/key_frames/key_frame_0.pcd.xz --json {out}",

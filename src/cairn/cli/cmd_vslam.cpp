@@ -242,6 +242,12 @@ int vslam_command(const VslamFlags& flags) {
   }
   if (!flags.mcap.empty()) vslam::write_foxglove_mcap(flags.mcap, slam, run);
   if (!flags.quiet) print_summary(slam.summary(), run, written, flags);
+  if (!flags.quiet && slam.localization_only()) {
+    std::size_t localised = 0;
+    for (const vslam::FrameResult& r : run.frames) localised += r.tracked ? 1 : 0;
+    std::printf("localised %zu of %zu frames in %s (%zu keyframes, %zu map points; nothing added to the map)\n", localised, run.frames.size(),
+                flags.localize_in.c_str(), slam.keyframe_poses().size(), written.map_points);
+  }
   return run.interrupted ? interrupted_exit_status() : 0;
 }
 
