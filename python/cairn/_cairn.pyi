@@ -806,6 +806,16 @@ class VisualSlam:
     def __init__(self, calibration: CameraCalibration, kind: str = "stereo", config: _Path | None = None,
                  set: Mapping[str, _Setting] | None = None, *, dataset: str = "folder",
                  vocabulary: _Path | None = None) -> None: ...
+    @staticmethod
+    def localize_in(map: _Path, config: _Path | None = None, set: Mapping[str, _Setting] | None = None, *,
+                    dataset: str = "folder", vocabulary: _Path | None = None) -> VisualSlam:
+        """Localisation in a saved map (`cairn vslam --localize-in`): tracks, never adds to the map."""
+        ...
+    def save_map(self, path: _Path) -> None:
+        """Writes the main map for localize_in (`cairn vslam --save-map`)."""
+        ...
+    @property
+    def localization_only(self) -> bool: ...
     @overload
     def add_frame(self, image: npt.NDArray[np.uint8], time: float,
                   depth: npt.NDArray[np.uint16] | npt.NDArray[np.floating[Any]] | None = None) -> VisualFrameResult: ...

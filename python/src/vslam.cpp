@@ -22,6 +22,7 @@
 #include "cairn/vision/features.hpp"
 #include "cairn/vision/vocabulary.hpp"
 #include "cairn/vslam/config.hpp"
+#include "cairn/vslam/map_file.hpp"
 #include "cairn/vslam/visual_slam.hpp"
 #include "pipeline_support.hpp"
 
@@ -132,6 +133,21 @@ class VisualSession {
  public:
   VisualSession(const io::CameraCalibration& camera, io::SequenceKind kind, vslam::VisualSlamOptions options)
       : camera_(camera), kind_(kind), options_(std::move(options)), slam_(camera_, kind_, options_) {}
+  /// Localisation in a saved map (vslam::VisualSlam(const SavedVisualMap&, ...)).
+  VisualSession(const vslam::SavedVisualMap& map, const vslam::VisualSlamOptions& options)
+      : camera_(map.camera), kind_(map.kind), slam_(map, options) {
+    options_ = slam_.options();
+  }
+
+  /// vslam::write_saved_map of the main map (what `cairn vslam --save-map` writes).
+  void save_map(const std::string& path) {
+    const vslam::SavedVisualMap map = locked(mutex_, [&] {
+      if (slam_.keyframe_poses().empty()) throw_value_error("VisualSlam.save_map(): no keyframe yet: nothing to save");
+      return slam_.saved_map(vslam::configuration().json(options_).dump(), "python");
+    });
+    vslam::write_saved_map(path, map);
+  }
+  bool localization_only() const { return slam_.localization_only(); }
 
   /// `second`: the right image (stereo), the depth image (RGB-D) or empty (monocular).
   vslam::FrameResult add(double time_s, const cv::Mat& image, const cv::Mat& second) {
@@ -344,6 +360,22 @@ void bind_visual_slam(py::module_& m) {
            "virtual_baseline_m); kind 'stereo', 'rgbd' or 'monocular'; the options as `cairn vslam` makes them from the "
            "dataset's layout ('kitti': 2000 features, others 1000), --config and --set; vocabulary: a bag-of-words file "
            "(loop closure, relocalisation).")
+      .def_static("localize_in",
+                  [](const py::object& map_path, const py::object& config, const py::object& set, const std::string& dataset,
+                     const py::object& vocabulary) {
+                    const vslam::SavedVisualMap map = vslam::read_saved_map(fspath(map_path));
+                    return std::make_unique<VisualSession>(map, vslam_configuration(dataset, map.kind, config, set, vocabulary));
+                  },
+                  py::arg("map"), py::arg("config") = py::none(), py::arg("set") = py::none(), py::kw_only(), py::arg("dataset") = "folder",
+                  py::arg("vocabulary") = py::none(),
+                  "Localisation in a map saved by `cairn vslam --save-map` or VisualSlam.save_map (ORB-SLAM2's localisation "
+                  "mode, as `cairn vslam --localize-in`): frames are tracked against the map and relocalised by bag of words "
+                  "(vocabulary) when lost; nothing is added to the map. The map's camera, kind and ORB settings are used.")
+      .def("save_map", [](VisualSession& s, const py::object& path) { s.save_map(fspath(path)); }, py::arg("path"),
+           "Writes the main map (keyframes, map points, descriptors, covisibility, the vocabulary's identity) for "
+           "VisualSlam.localize_in and `cairn vslam --localize-in`, whole or not at all.")
+      .def_property_readonly("localization_only", &VisualSession::localization_only,
+                             "True when made by localize_in: the map is never changed.")
       .def("add_frame", &VisualSession::add_frame, py::arg("image"), py::arg("time"), py::arg("depth") = py::none(),
            "A grey image (H x W uint8, viewed without a copy) at `time` seconds; RGB-D: with its depth (uint16 in "
            "depth_units_per_m, or float metres). Releases the GIL.")

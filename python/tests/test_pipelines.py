@@ -207,6 +207,29 @@ def test_vslam_rgbd_with_depth_in_metres_gives_the_clis_trajectory(data, cli, tm
     np.testing.assert_array_equal(slam.trajectory()[:, :3, :], read_kitti_poses(out / "trajectory.kitti"))
 
 
+def test_vslam_map_saved_from_python_localises_as_the_cli_does(data, cli, tmp_path):
+    """VisualSlam.save_map writes a map `cairn vslam --localize-in` reads; VisualSlam.localize_in gives its poses exactly."""
+    folder = data / "visual" / "kitti_extract_seq2"
+    sequence = cairn.read_image_sequence(folder)
+    slam = cairn.VisualSlam(sequence.calibration, "stereo", dataset="kitti")
+    with pytest.raises(ValueError, match="no keyframe yet"):
+        slam.save_map(tmp_path / "early.cvsm")
+    for k in range(KITTI_FRAMES):
+        slam.add_frame(cairn.read_gray_image(sequence.images[k]), cairn.read_gray_image(sequence.right_images[k]), sequence.times[k])
+    slam.save_map(tmp_path / "map.cvsm")
+    first = KITTI_FRAMES // 2
+    out = tmp_path / "cli"
+    run_cli(cli, "vslam", folder, "--localize-in", tmp_path / "map.cvsm", "--first-frame", first, "--max-frames", KITTI_FRAMES - first,
+            "--out", out, "-q")
+    localiser = cairn.VisualSlam.localize_in(tmp_path / "map.cvsm", dataset="kitti")
+    assert localiser.localization_only and not slam.localization_only
+    for k in range(first, KITTI_FRAMES):
+        localiser.add_frame(cairn.read_gray_image(sequence.images[k]), cairn.read_gray_image(sequence.right_images[k]), sequence.times[k])
+    np.testing.assert_array_equal(localiser.trajectory()[:, :3, :], read_kitti_poses(out / "trajectory.kitti"))
+    assert localiser.summary["keyframes"] == 0
+    assert localiser.keyframe_poses().shape == slam.keyframe_poses().shape
+
+
 # ------------------------------------------------------------------------------------------------
 # Bad input: an exception naming what is wrong, never a crash
 
