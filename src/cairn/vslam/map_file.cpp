@@ -351,6 +351,52 @@ struct KeypointIndex {
   std::vector<std::int64_t> last_point;   // the last point observed in keyframe k (at most one observation each)
 };
 
+// A point's `observations` records after its fixed part (which starts at payload offset `at`):
+// each names an existing keyframe (at most once) and a keypoint of it that observes this point.
+void decode_observations(io::BinaryReader& r, std::size_t index, std::size_t at, std::uint32_t observations, const SavedVisualMap& map,
+                         KeypointIndex& keypoints, SavedMapPoint& point) {
+  const std::string field = "point " + std::to_string(index);
+  auto fail = [&](std::size_t offset, const std::string& what) { r.fail_at(at + offset, field + " " + what); };
+  const std::int64_t last_keyframe = static_cast<std::int64_t>(map.keyframes.size()) - 1;
+  if (static_cast<std::uint64_t>(observations) * kObservationBytes > r.left()) {
+    fail(kPointObservations, "observation count " + std::to_string(observations) + " needs " +
+                                 std::to_string(static_cast<std::uint64_t>(observations) * kObservationBytes) + " bytes, only " +
+                                 std::to_string(r.left()) + " left");
+  }
+  const std::size_t observations_at = r.offset();
+  const unsigned char* o = r.take(kObservationBytes * observations, field + " observations");
+  point.observations.resize(observations);
+  const std::int64_t self = static_cast<std::int64_t>(index);
+  for (std::size_t n = 0; n < observations; ++n) {
+    const unsigned char* record = o + kObservationBytes * n;
+    const std::size_t record_at = observations_at - at + kObservationBytes * n;
+    auto which = [n] { return "observation " + std::to_string(n); };
+    SavedObservation& obs = point.observations[n];
+    obs.keyframe = load_i32(record);
+    if (obs.keyframe < 0 || obs.keyframe > last_keyframe) {
+      fail(record_at, which() + " keyframe: expected an integer in " + range_text(0, last_keyframe) + ", found " +
+                          std::to_string(obs.keyframe));
+    }
+    const std::size_t kf = static_cast<std::size_t>(obs.keyframe);
+    if (keypoints.last_point[kf] == self) fail(record_at, which() + ": a second observation in keyframe " + std::to_string(kf));
+    keypoints.last_point[kf] = self;
+    obs.keypoint = load_i32(record + 4);
+    const std::vector<SavedKeypoint>& in = map.keyframes[kf].keypoints;
+    const std::int64_t last_keypoint = static_cast<std::int64_t>(in.size()) - 1;
+    if (obs.keypoint < 0 || obs.keypoint > last_keypoint) {
+      fail(record_at + 4, which() + " keypoint: expected an integer in " + range_text(0, last_keypoint) + " (keyframe " +
+                              std::to_string(kf) + "'s keypoints), found " + std::to_string(obs.keypoint));
+    }
+    const std::size_t j = static_cast<std::size_t>(obs.keypoint);
+    if (in[j].map_point != self) {
+      fail(record_at, which() + ": keyframe " + std::to_string(kf) + " keypoint " + std::to_string(j) + " observes " +
+                          (in[j].map_point < 0 ? std::string("no map point") : "map point " + std::to_string(in[j].map_point)) +
+                          ", not this one");
+    }
+    keypoints.claimed[keypoints.first[kf] + j] = 1;
+  }
+}
+
 SavedMapPoint decode_point(io::BinaryReader& r, std::size_t index, const SavedVisualMap& map, KeypointIndex& keypoints) {
   const std::string field = "point " + std::to_string(index);
   const std::size_t at = r.offset();
@@ -403,43 +449,7 @@ SavedMapPoint decode_point(io::BinaryReader& r, std::size_t index, const SavedVi
   }
   const std::uint32_t observations = io::load_u32(p + kPointObservations);
   if (observations == 0) fail(kPointObservations, "observation count 0: a map point has at least one observation");
-  if (static_cast<std::uint64_t>(observations) * kObservationBytes > r.left()) {
-    fail(kPointObservations, "observation count " + std::to_string(observations) + " needs " +
-                                 std::to_string(static_cast<std::uint64_t>(observations) * kObservationBytes) + " bytes, only " +
-                                 std::to_string(r.left()) + " left");
-  }
-  const std::size_t observations_at = r.offset();
-  const unsigned char* o = r.take(kObservationBytes * observations, field + " observations");
-  point.observations.resize(observations);
-  const std::int64_t self = static_cast<std::int64_t>(index);
-  for (std::size_t n = 0; n < observations; ++n) {
-    const unsigned char* record = o + kObservationBytes * n;
-    const std::size_t record_at = observations_at - at + kObservationBytes * n;
-    auto which = [n] { return "observation " + std::to_string(n); };
-    SavedObservation& obs = point.observations[n];
-    obs.keyframe = load_i32(record);
-    if (obs.keyframe < 0 || obs.keyframe > last_keyframe) {
-      fail(record_at, which() + " keyframe: expected an integer in " + range_text(0, last_keyframe) + ", found " +
-                          std::to_string(obs.keyframe));
-    }
-    const std::size_t kf = static_cast<std::size_t>(obs.keyframe);
-    if (keypoints.last_point[kf] == self) fail(record_at, which() + ": a second observation in keyframe " + std::to_string(kf));
-    keypoints.last_point[kf] = self;
-    obs.keypoint = load_i32(record + 4);
-    const std::vector<SavedKeypoint>& in = map.keyframes[kf].keypoints;
-    const std::int64_t last_keypoint = static_cast<std::int64_t>(in.size()) - 1;
-    if (obs.keypoint < 0 || obs.keypoint > last_keypoint) {
-      fail(record_at + 4, which() + " keypoint: expected an integer in " + range_text(0, last_keypoint) + " (keyframe " +
-                              std::to_string(kf) + "'s keypoints), found " + std::to_string(obs.keypoint));
-    }
-    const std::size_t j = static_cast<std::size_t>(obs.keypoint);
-    if (in[j].map_point != self) {
-      fail(record_at, which() + ": keyframe " + std::to_string(kf) + " keypoint " + std::to_string(j) + " observes " +
-                          (in[j].map_point < 0 ? std::string("no map point") : "map point " + std::to_string(in[j].map_point)) +
-                          ", not this one");
-    }
-    keypoints.claimed[keypoints.first[kf] + j] = 1;
-  }
+  decode_observations(r, index, at, observations, map, keypoints, point);
   return point;
 }
 

@@ -42,10 +42,58 @@ bool near(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, s
 
 }  // namespace
 
-// The main segment's good keyframes, renumbered in order; every keypoint's map point taken from
-// the keyframe (what tracking's local map uses) when that point is good and observes it back, so
-// that the saved observations and keypoints agree by construction; the covisibility counted from
-// those observations.
+namespace {
+
+SavedKeypoint saved_keypoint(const FrameData& f, std::size_t i) {
+  SavedKeypoint kp;
+  kp.x = f.keypoints[i].pt.x;
+  kp.y = f.keypoints[i].pt.y;
+  kp.size = f.keypoints[i].size;
+  kp.angle = f.keypoints[i].angle;
+  kp.response = f.keypoints[i].response;
+  kp.octave = f.keypoints[i].octave;
+  kp.undistorted_x = f.undistorted[i].x();
+  kp.undistorted_y = f.undistorted[i].y();
+  kp.u_right = f.u_right[i];
+  kp.depth = f.depth[i];
+  kp.descriptor = descriptor_bytes(f.descriptors.ptr(static_cast<int>(i)));
+  return kp;
+}
+
+// A point as saved, without its observations (added as its keypoints are met).
+SavedMapPoint saved_point(const MapPoint& mp) {
+  SavedMapPoint p;
+  p.p_world = mp.p_world;
+  p.normal = mp.normal;
+  p.min_distance = mp.min_distance;
+  p.max_distance = mp.max_distance;
+  p.descriptor = descriptor_bytes(mp.descriptor.ptr(0));
+  p.visible = std::max(1, mp.visible);
+  p.found = std::clamp(mp.found, 0, p.visible);
+  p.reference_keyframe = -1;
+  return p;
+}
+
+// Keyframe pairs and the saved points both observe (ORB-SLAM2's covisibility weights).
+std::vector<SavedCovisibility> covisibility_of(const std::vector<SavedMapPoint>& points) {
+  std::map<std::pair<int, int>, int> shared;
+  for (const SavedMapPoint& p : points) {
+    for (std::size_t a = 0; a < p.observations.size(); ++a) {
+      for (std::size_t b = a + 1; b < p.observations.size(); ++b) {
+        const int ka = p.observations[a].keyframe, kb = p.observations[b].keyframe;
+        ++shared[{std::min(ka, kb), std::max(ka, kb)}];
+      }
+    }
+  }
+  std::vector<SavedCovisibility> edges;
+  for (const auto& [pair, n] : shared) edges.push_back({pair.first, pair.second, n});
+  return edges;
+}
+
+}  // namespace
+
+// The main segment's good keyframes, renumbered in order, then their keypoints and points
+// (export_keyframe_observations), then the covisibility those observations give.
 SavedVisualMap VisualSlam::Impl::export_main_segment() const {
   SavedVisualMap map;
   map.kind = kind;
@@ -69,59 +117,33 @@ SavedVisualMap VisualSlam::Impl::export_main_segment() const {
   }
   std::unordered_map<int, int> point_index;
   for (const KeyFrame& kf : keyframes) {
-    const int k = keyframe_index[static_cast<std::size_t>(kf.id)];
-    if (k < 0) continue;
-    const FrameData& f = kf.frame;
-    SavedKeyframe& saved = map.keyframes[static_cast<std::size_t>(k)];
-    saved.keypoints.resize(f.size());
-    for (std::size_t i = 0; i < f.size(); ++i) {
-      SavedKeypoint& kp = saved.keypoints[i];
-      kp.x = f.keypoints[i].pt.x;
-      kp.y = f.keypoints[i].pt.y;
-      kp.size = f.keypoints[i].size;
-      kp.angle = f.keypoints[i].angle;
-      kp.response = f.keypoints[i].response;
-      kp.octave = f.keypoints[i].octave;
-      kp.undistorted_x = f.undistorted[i].x();
-      kp.undistorted_y = f.undistorted[i].y();
-      kp.u_right = f.u_right[i];
-      kp.depth = f.depth[i];
-      kp.descriptor = descriptor_bytes(f.descriptors.ptr(static_cast<int>(i)));
-      const int id = f.map_point[i];
-      if (id < 0) continue;
-      const MapPoint& mp = points[static_cast<std::size_t>(id)];
-      const auto seen = mp.observations.find(kf.id);
-      if (mp.bad || seen == mp.observations.end() || seen->second != static_cast<int>(i)) continue;
-      auto [it, inserted] = point_index.try_emplace(id, static_cast<int>(map.points.size()));
-      if (inserted) {
-        SavedMapPoint p;
-        p.p_world = mp.p_world;
-        p.normal = mp.normal;
-        p.min_distance = mp.min_distance;
-        p.max_distance = mp.max_distance;
-        p.descriptor = descriptor_bytes(mp.descriptor.ptr(0));
-        p.visible = std::max(1, mp.visible);
-        p.found = std::clamp(mp.found, 0, p.visible);
-        p.reference_keyframe = -1;
-        map.points.push_back(std::move(p));
-      }
-      SavedMapPoint& p = map.points[static_cast<std::size_t>(it->second)];
-      p.observations.push_back({k, static_cast<std::int32_t>(i)});
-      if (kf.id == mp.reference_keyframe || p.reference_keyframe < 0) p.reference_keyframe = k;
-      kp.map_point = it->second;
-    }
+    if (const int k = keyframe_index[static_cast<std::size_t>(kf.id)]; k >= 0) export_keyframe_observations(kf, k, map, point_index);
   }
-  std::map<std::pair<int, int>, int> shared;
-  for (const SavedMapPoint& p : map.points) {
-    for (std::size_t a = 0; a < p.observations.size(); ++a) {
-      for (std::size_t b = a + 1; b < p.observations.size(); ++b) {
-        const int ka = p.observations[a].keyframe, kb = p.observations[b].keyframe;
-        ++shared[{std::min(ka, kb), std::max(ka, kb)}];
-      }
-    }
-  }
-  for (const auto& [pair, n] : shared) map.covisibility.push_back({pair.first, pair.second, n});
+  map.covisibility = covisibility_of(map.points);
   return map;
+}
+
+// Keyframe `kf` (saved as index k): every keypoint, and its map point taken from the keyframe
+// (what tracking's local map uses) when that point is good and observes it back, so that the
+// saved observations and keypoints agree by construction. `point_index`: Impl point id -> saved.
+void VisualSlam::Impl::export_keyframe_observations(const KeyFrame& kf, int k, SavedVisualMap& map, std::unordered_map<int, int>& point_index) const {
+  const FrameData& f = kf.frame;
+  SavedKeyframe& saved = map.keyframes[static_cast<std::size_t>(k)];
+  saved.keypoints.reserve(f.size());
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    saved.keypoints.push_back(saved_keypoint(f, i));
+    const int id = f.map_point[i];
+    if (id < 0) continue;
+    const MapPoint& mp = points[static_cast<std::size_t>(id)];
+    const auto seen = mp.observations.find(kf.id);
+    if (mp.bad || seen == mp.observations.end() || seen->second != static_cast<int>(i)) continue;
+    const auto [it, inserted] = point_index.try_emplace(id, static_cast<int>(map.points.size()));
+    if (inserted) map.points.push_back(saved_point(mp));
+    SavedMapPoint& p = map.points[static_cast<std::size_t>(it->second)];
+    p.observations.push_back({k, static_cast<std::int32_t>(i)});
+    if (kf.id == mp.reference_keyframe || p.reference_keyframe < 0) p.reference_keyframe = k;
+    saved.keypoints.back().map_point = it->second;
+  }
 }
 
 // The saved keyframes and points as the tracker's own, one segment (keyframe 0 its anchor), the

@@ -250,6 +250,7 @@ struct VisualSlam::Impl {
   bool localization_only = false;
   // --- Map reuse (map_reuse.cpp) ---
   SavedVisualMap export_main_segment() const;
+  void export_keyframe_observations(const KeyFrame& kf, int k, SavedVisualMap& map, std::unordered_map<int, int>& point_index) const;
   void import_map(const SavedVisualMap& map);
 
   // Monocular, until initialised: the reference frame of the two-view initialisation.
