@@ -269,12 +269,64 @@ TEST(Slam2dSimulation, GarbageScansMakeItLostThenItRecovers) {
   // Lost starts a new map segment; back among mapped walls it is found again and merged.
   ASSERT_GE(run.summary.segments.size(), 2u);
   EXPECT_GE(run.summary.merges.size(), 1u);
-  for (const SegmentInfo& segment : run.summary.segments) EXPECT_EQ(segment.merged_with, 0) << "segment " << segment.id;
+  for (const SegmentInfo& segment : run.summary.segments) {
+    EXPECT_EQ(segment.merged_with, 0) << "segment " << segment.id;
+    EXPECT_EQ(segment.why_not_merged, "") << "segment " << segment.id;
+  }
   // Garbage does not match even itself: the seeds are dropped on probation, so the odometry
   // across the loss is trusted and may corroborate the merge (the office is half-turn
   // symmetric: the twin placement is supported by the scans as long as the true one).
   EXPECT_TRUE(run.summary.segments[1].odometry_link_trusted);
   EXPECT_LT(run.ate_m, 0.05);
+}
+
+// The same garbage, but the log ends 20 real scans after it: the new segment has had no time to
+// merge, and the report says why for it (SegmentInfo::why_not_merged, issue 41), consistently with
+// what its keyframes' merge searches found; the first segment has no such line.
+TEST(Slam2dSimulation, ASegmentThatDidNotMergeSaysWhy) {
+  std::size_t last_scan = 0;
+  const CorruptedRun run = run_corrupted_office([&](io::CarmenLog& log) {
+    std::mt19937 random(3);
+    std::uniform_real_distribution<float> range(0.2f, 20.0f);
+    for (std::size_t k = 900; k < 960; ++k) {
+      for (float& r : log.scans[k].ranges_m) r = range(random);
+    }
+    log.scans.resize(980);
+    last_scan = log.scans.size();
+  });
+  ASSERT_EQ(last_scan, 980u);
+  ASSERT_GE(run.summary.segments.size(), 2u);
+  std::size_t unmerged = 0;
+  for (const SegmentInfo& segment : run.summary.segments) {
+    std::printf("segment %d: %zu scans, merged with %d, %zu merge searches: %s\n", segment.id, segment.scans, segment.merged_with,
+                segment.merge_searches, segment.why_not_merged.c_str());
+    if (segment.merged_with == 0) {
+      EXPECT_EQ(segment.why_not_merged, "") << "segment " << segment.id;
+      continue;
+    }
+    ++unmerged;
+    std::size_t decided = 0;
+    for (const LoopCandidate& c : run.summary.candidates) {
+      if (c.merge_decision.empty()) continue;
+      // Its own keyframes' candidates: keyframes from its first on, before the next segment's.
+      const bool own = c.keyframe >= segment.first_keyframe && c.keyframe < segment.first_keyframe + segment.keyframes;
+      decided += own ? 1 : 0;
+    }
+    const std::string& why = segment.why_not_merged;
+    const std::string category = why.substr(0, why.find(':'));
+    EXPECT_TRUE(category == "no merge search" || category == "no candidate" || category == "ambiguous" || category == "not enough support" ||
+                category == "failed verification")
+        << why;
+    if (category == "no merge search") {
+      EXPECT_EQ(segment.merge_searches, 0u);
+    }
+    if (category == "no merge search" || category == "no candidate") {
+      EXPECT_EQ(decided, 0u) << why;
+    } else {
+      EXPECT_GT(decided, 0u) << why;
+    }
+  }
+  EXPECT_GE(unmerged, 1u) << "the log ends before the new segment could merge";
 }
 
 // Issue 20, kidnapping (the scenario's defaults, seed 1): at 55 s the robot is carried 17.5 m into

@@ -148,6 +148,18 @@ void print_summary(const slam2d::Slam2dSummary& summary, std::size_t used, doubl
   std::printf("time: match %.1f s, local map %.1f s, submaps %.1f s, loop search %.1f s, optimisation %.1f s\n",
               summary.times.local_match_s, summary.times.local_map_s, summary.times.submap_s,
               summary.times.loop_search_s, summary.times.optimize_s);
+  if (summary.segments.size() > 1) {
+    std::printf("map segments: %zu, %zu merges\n", summary.segments.size(), summary.merges.size());
+    int listed = 0;
+    for (const slam2d::SegmentInfo& g : summary.segments) {
+      if (g.why_not_merged.empty()) continue;
+      if (++listed > 10) {
+        std::printf("  ... (every segment in report.json)\n");
+        break;
+      }
+      std::printf("  segment %d (%zu scans, %.0f m) not joined with segment 0: %s\n", g.id, g.scans, g.path_length_m, g.why_not_merged.c_str());
+    }
+  }
   std::printf("wrote map.png, map.pgm, map.yaml, trajectory.tum, scans.csv, graph.g2o, corrected.clf, report.json to %s%s\n",
               flags.out.c_str(), stopped ? " (interrupted: the result so far)" : "");
   if (saved_map) std::printf("wrote the map for reuse (cairn localize2d --map) to %s\n", flags.save_map.c_str());

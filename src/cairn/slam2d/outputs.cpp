@@ -308,6 +308,7 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                           {"rejected_by_gnc", c.rejected_by_gnc},
                           {"relocalisation", c.relocalisation},
                           {"merge", c.merge},
+                          {"merge_decision", c.merge_decision},
                           {"global", c.global},
                           {"reason", c.rejected_by_gnc ? std::string("rejected by GNC in the back end") : c.reason}});
   }
@@ -324,7 +325,9 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                         {"extent_m", {{"min", {g.min_world.x(), g.min_world.y()}}, {"max", {g.max_world.x(), g.max_world.y()}}}},
                         {"merged_with", g.merged_with},
                         {"started_because", g.started_because},
-                        {"odometry_link_trusted", g.odometry_link_trusted}});
+                        {"odometry_link_trusted", g.odometry_link_trusted},
+                        {"merge_searches", g.merge_searches},
+                        {"why_not_merged", g.why_not_merged}});
   }
   report["segments"] = segments;
   // Segment groups that nothing joined to segment 0: their placement rests on odometry alone.

@@ -518,10 +518,14 @@ struct Slam2d::Impl {
       summary.candidates.push_back(*job.found[i]);
       const int c = static_cast<int>(summary.candidates.size()) - 1;
       LoopCandidate& candidate = summary.candidates.back();
-      if (!candidate.accepted) continue;
       const Submap& submap = submaps[static_cast<std::size_t>(candidate.submap)];
       const int keyframe_segment = keyframes[static_cast<std::size_t>(candidate.keyframe)].segment;
-      if (group_of(submap.segment) != group_of(keyframe_segment)) {
+      const bool across = group_of(submap.segment) != group_of(keyframe_segment);
+      if (!candidate.accepted) {
+        if (across) candidate.merge_decision = "failed verification";
+        continue;
+      }
+      if (across) {
         consider_merge(c, job.scan, job.time, summary);
         continue;
       }
@@ -530,6 +534,7 @@ struct Slam2d::Impl {
       if (candidate.merge && !agree(implied_pose(candidate), keyframes[static_cast<std::size_t>(candidate.keyframe)].T_world_laser)) {
         candidate.accepted = false;
         candidate.reason = "disagrees with the merge just made";
+        candidate.merge_decision = "superseded";
         continue;
       }
       // The search's own ambiguity test covers its submap; when the estimate may have drifted
@@ -759,6 +764,7 @@ struct Slam2d::Impl {
         chosen.push_back(s);
         plan.push_back({s, true, false, guess, pending.id});
         ++summary.merge_searches;
+        ++summary.segments[static_cast<std::size_t>(current.segment)].merge_searches;
       }
     }
     // (2) Around the estimate (the odometry link), merge_searches_per_keyframe searches.
@@ -768,6 +774,7 @@ struct Slam2d::Impl {
       chosen.push_back(s);
       plan.push_back({s, true, false, current.T_world_laser, -1});
       ++summary.merge_searches;
+      ++summary.segments[static_cast<std::size_t>(current.segment)].merge_searches;
     }
   }
 
@@ -808,6 +815,7 @@ struct Slam2d::Impl {
       const int s = others[global_search_turn++ % others.size()];
       plan.push_back({s, true, true, current.T_world_laser, -1});
       ++summary.global_searches;
+      ++summary.segments[static_cast<std::size_t>(current.segment)].merge_searches;
     }
   }
 
@@ -865,11 +873,13 @@ struct Slam2d::Impl {
       candidate.reason = "verified across segments; " + std::to_string(support) + " agreeing matches over " + std::to_string(spread_m) +
                          " m of path (a merge " + (corroborated ? "near" : "away from") + " the odometry link needs " +
                          std::to_string(options.merge_confirmations) + " over " + std::to_string(needed_m) + " m)";
+      candidate.merge_decision = "awaiting support";
       return;
     }
     if (const PendingMerge* other = competing_placement(pending, group_a, group_b, corroborated, T_world_keyframe)) {
       candidate.reason = "verified across segments and confirmed, but another placement of the same segments is also "
                          "supported (hypothesis " + std::to_string(other->id) + "); waiting until one is refuted";
+      candidate.merge_decision = "competing placement";
       return;
     }
     // The uniqueness test costs a search of every submap: after a refusal, the group waits for
@@ -878,6 +888,7 @@ struct Slam2d::Impl {
     double& blocked_until_m = uniqueness_blocked_until_m[group_b];
     if (path_m < blocked_until_m) {
       candidate.reason = "verified across segments; confirmed, waiting to repeat the map-wide uniqueness test";
+      candidate.merge_decision = "awaiting the uniqueness test";
       return;
     }
     // Odometry corroborates a placement near the link: a twin of the place elsewhere (farther
@@ -886,6 +897,7 @@ struct Slam2d::Impl {
     if (corroborated || unique_over_map(c, summary)) {
       const PendingMerge confirmed = pending;
       pending_merges.erase(pending_merges.begin() + static_cast<std::ptrdiff_t>(p));
+      candidate.merge_decision = "merged";
       merge(confirmed, scan, time, summary);
       return;
     }
@@ -893,6 +905,7 @@ struct Slam2d::Impl {
     blocked_until_m = path_m + kUniquenessRetryM;
     candidate.reason = "verified across segments, but the place is ambiguous over the whole map: another submap scores "
                        "within the margin elsewhere (symmetric or repeated structure); not merged";
+    candidate.merge_decision = "ambiguous";
     ++summary.merges_refused_as_ambiguous;
   }
 
@@ -1128,6 +1141,43 @@ struct Slam2d::Impl {
     summary.merges.push_back({time, scan, group_a, group_b, confirmed.candidates, moved_m});
     optimize(false, summary);
     refresh_segments(summary);
+  }
+
+  // Why each segment not joined with segment 0 stayed apart (SegmentInfo::why_not_merged), from
+  // the merge decisions of the matches its own keyframes found across segments.
+  void explain_unmerged_segments(Slam2dSummary& summary) const {
+    for (SegmentInfo& info : summary.segments) {
+      info.why_not_merged.clear();
+      if (info.merged_with == 0) continue;
+      std::map<std::string, std::size_t> decisions;
+      std::map<std::string, std::string> last_reason;
+      for (const LoopCandidate& c : summary.candidates) {
+        if (c.merge_decision.empty() || keyframes[static_cast<std::size_t>(c.keyframe)].segment != info.id) continue;
+        ++decisions[c.merge_decision];
+        last_reason[c.merge_decision] = c.reason;
+      }
+      const auto count = [&](const char* decision) { return decisions.count(decision) ? decisions.at(decision) : std::size_t{0}; };
+      const std::size_t waiting = count("awaiting support") + count("competing placement") + count("awaiting the uniqueness test");
+      if (info.merge_searches == 0 && decisions.empty()) {
+        info.why_not_merged = "no merge search: no other segment's finished submap lay within merge_max_distance_m of its keyframes, "
+                              "or the search budget was spent";
+      } else if (decisions.empty()) {
+        info.why_not_merged = "no candidate: " + std::to_string(info.merge_searches) +
+                              " merge searches from its keyframes found no match above the minimum score";
+      } else if (count("ambiguous") > 0) {
+        info.why_not_merged = "ambiguous: a placement was confirmed " + std::to_string(count("ambiguous")) +
+                              " times but another place scored within the margin elsewhere";
+      } else if (waiting > 0) {
+        const std::string last = count("awaiting support") > 0 ? last_reason.at("awaiting support")
+                                 : count("competing placement") > 0 ? last_reason.at("competing placement")
+                                                                     : last_reason.at("awaiting the uniqueness test");
+        info.why_not_merged = "not enough support: " + std::to_string(waiting) + " verified matches; the last: " + last;
+      } else {
+        info.why_not_merged = "failed verification: " + std::to_string(count("failed verification") + count("superseded")) +
+                              " candidates above the minimum score, none verified; the last: " +
+                              (count("failed verification") > 0 ? last_reason.at("failed verification") : last_reason.at("superseded"));
+      }
+    }
   }
 
   void refresh_segments(Slam2dSummary& summary) const {
@@ -1581,6 +1631,7 @@ void Slam2d::finish() {
   impl_->optimize(impl_->options.final_gnc, summary_);
   if (impl_->options.final_gnc) impl_->optimize(false, summary_);
   impl_->refresh_segments(summary_);
+  impl_->explain_unmerged_segments(summary_);
   summary_.total_s += seconds_since(start);
 }
 

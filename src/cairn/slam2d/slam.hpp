@@ -232,6 +232,12 @@ struct LoopCandidate {
   bool merge = false;             ///< searched across map segments (merge search)
   bool global = false;            ///< searched over the whole submap and every heading
   std::string reason;             ///< why rejected, or "accepted"
+  /// For a match across map segments (its keyframe's group and its submap's differ when it was
+  /// found), what became of it as merge evidence: "failed verification", "awaiting support",
+  /// "competing placement", "awaiting the uniqueness test", "ambiguous", "merged" (it confirmed
+  /// a merge) or "superseded" (a merge earlier in the same batch joined the groups and it
+  /// disagrees); "" for a match within one segment group.
+  std::string merge_decision;
 };
 
 /// One map segment: a stretch of the run mapped on its own after the previous one was lost.
@@ -255,6 +261,13 @@ struct SegmentInfo {
   /// The segment it ended up joined with (the lowest id of its group; itself when unmerged
   /// with any lower segment). Filled at finish() and by merges.
   int merged_with = 0;
+  /// Merge searches (windowed and whole-submap) its keyframes made into other segments' submaps.
+  std::size_t merge_searches = 0;
+  /// For a segment not joined with segment 0 at finish(): why, from what its keyframes' merge
+  /// searches found (LoopCandidate::merge_decision), the first that applies: "no merge search
+  /// ...", "no candidate ...", "ambiguous ...", "not enough support ...", "failed verification
+  /// ..."; empty for a segment joined with segment 0.
+  std::string why_not_merged;
   Eigen::Vector2d min_world = Eigen::Vector2d::Zero();  ///< keyframe extent, current estimate
   Eigen::Vector2d max_world = Eigen::Vector2d::Zero();
 };
