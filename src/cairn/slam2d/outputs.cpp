@@ -262,6 +262,26 @@ OutputFiles write_outputs(const Slam2d& slam, const io::CarmenLog& log, std::siz
   return files;
 }
 
+/// Per map segment: where and why it started, what it merged with, and why not (SegmentInfo).
+nlohmann::json segments_json(const Slam2dSummary& s) {
+  nlohmann::json segments = nlohmann::json::array();
+  for (const SegmentInfo& g : s.segments) {
+    segments.push_back({{"id", g.id},
+                        {"first_scan", g.first_scan},
+                        {"scans", g.scans},
+                        {"first_keyframe", g.first_keyframe},
+                        {"keyframes", g.keyframes},
+                        {"path_length_m", g.path_length_m},
+                        {"extent_m", {{"min", {g.min_world.x(), g.min_world.y()}}, {"max", {g.max_world.x(), g.max_world.y()}}}},
+                        {"merged_with", g.merged_with},
+                        {"started_because", g.started_because},
+                        {"odometry_link_trusted", g.odometry_link_trusted},
+                        {"merge_searches", g.merge_searches},
+                        {"why_not_merged", g.why_not_merged}});
+  }
+  return segments;
+}
+
 nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
   const Slam2dSummary& s = slam.summary();
   nlohmann::json report;
@@ -314,22 +334,7 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
   }
   report["loop_candidates"] = candidates;
   report["health_events"] = health_events_json(s.health_events);
-  nlohmann::json segments = nlohmann::json::array();
-  for (const SegmentInfo& g : s.segments) {
-    segments.push_back({{"id", g.id},
-                        {"first_scan", g.first_scan},
-                        {"scans", g.scans},
-                        {"first_keyframe", g.first_keyframe},
-                        {"keyframes", g.keyframes},
-                        {"path_length_m", g.path_length_m},
-                        {"extent_m", {{"min", {g.min_world.x(), g.min_world.y()}}, {"max", {g.max_world.x(), g.max_world.y()}}}},
-                        {"merged_with", g.merged_with},
-                        {"started_because", g.started_because},
-                        {"odometry_link_trusted", g.odometry_link_trusted},
-                        {"merge_searches", g.merge_searches},
-                        {"why_not_merged", g.why_not_merged}});
-  }
-  report["segments"] = segments;
+  report["segments"] = segments_json(s);
   // Segment groups that nothing joined to segment 0: their placement rests on odometry alone.
   nlohmann::json unmerged = nlohmann::json::array();
   for (const SegmentInfo& g : s.segments)
