@@ -280,6 +280,7 @@ TEST(VslamCli, SaveAMapThenLocaliseInItWithoutChangingIt) {
   const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
   ASSERT_TRUE(report["localization"].is_object()) << report.dump();
   EXPECT_EQ(report["localization"]["frames"], 8);
+  EXPECT_EQ(report["input"]["first_frame"], 8);
   EXPECT_EQ(report["localization"]["frames_localised"], 8);  // frames the map was made from
   EXPECT_EQ(report["summary"]["keyframes"], 0);             // nothing added
   EXPECT_EQ(report["localization"]["map_keyframes"].get<std::size_t>(), lines_in(scratch() / "map_run" / "keyframes.tum"));

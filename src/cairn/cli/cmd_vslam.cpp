@@ -233,7 +233,8 @@ int vslam_command(const VslamFlags& flags) {
   }
   const vslam::RunRecord run = run_frames(slam, *reader, seq, n, feature_frame, flags);
   const vslam::RunInput run_input{seq, kind, calibration_source(input, flags), flags.vocabulary,
-                                  input.bag ? input.bag->topics : std::vector<std::pair<std::string, std::string>>{}, flags.localize_in};
+                                  input.bag ? input.bag->topics : std::vector<std::pair<std::string, std::string>>{}, flags.localize_in,
+                                  static_cast<std::size_t>(flags.first_frame)};
   const vslam::WrittenOutputs written = vslam::write_outputs(out, slam, run_input, run, ground_truth);
   out.commit();
   if (!flags.save_map.empty()) {

@@ -130,6 +130,7 @@ nlohmann::json input_json(const RunInput& input, std::size_t frames_processed) {
                          {"kind", std::string(io::to_string(input.kind))},
                          {"frames_listed", seq.frames.size()},
                          {"frames_processed", frames_processed},
+                         {"first_frame", input.first_frame},
                          {"times_from_file", seq.times_from_file},
                          {"notes", seq.notes},
                          {"calibration",

@@ -48,6 +48,9 @@ struct RunInput {
   /// Localising in a saved map (VisualSlam::localization_only): the map file; report.json's
   /// "localization" names it, and keyframes.tum holds the map's keyframes (mapping-run stamps).
   std::string map_path = {};
+  /// Frames of the sequence skipped before the first one processed (--first-frame); frames.csv
+  /// counts from the first processed, report.json's input says how many were skipped.
+  std::size_t first_frame = 0;
 };
 
 /// The frame drawn in features.png.
