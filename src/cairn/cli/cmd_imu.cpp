@@ -27,7 +27,7 @@ namespace fs = std::filesystem;
 
 struct ImuFlags {
   std::string data, topic, calibration, ground_truth, poses, poses_format, out;
-  double window_s = 1.0, static_window_s = 2.0, time_offset_s = 0.0;
+  double window_s = 1.0, static_window_s = 2.0, time_offset_s = 0.0, init_window_s = 2.0;
   double gyro_saturation_deg_s = 0.0, accel_saturation_g = 0.0;
   int stride = 1;
   bool no_allan = false, json = false, overwrite = false, quiet = false;
@@ -95,6 +95,16 @@ void print_summary(const ImuFlags& flags, const inertial::ImuAnalysis& a, const 
     std::printf("  position error   median %.4f m     p90 %.4f m\n", c.position_m.median, c.position_m.p90);
     std::printf("  NEES (9 dof)     median %.2f       mean %.2f (9 for a consistent model)\n", c.nees.median, c.nees.mean);
   }
+  if (a.moving_initialization) {
+    const inertial::MovingInitializationCheck& m = *a.moving_initialization;
+    std::size_t ok = 0;
+    for (const inertial::MovingInitializationWindow& w : m.windows) ok += w.ok ? 1 : 0;
+    std::printf("initialisation while moving (from the ground truth's poses), %zu of %zu windows initialised, %d still ones skipped:\n", ok,
+                m.windows.size(), m.windows_still);
+    std::printf("  gravity error    median %.3f deg   max %.3f deg\n", m.gravity_deg.median, m.gravity_deg.max);
+    std::printf("  gyro bias error  median %.2e rad/s max %.2e rad/s\n", m.gyro_bias_rad_s.median, m.gyro_bias_rad_s.max);
+    std::printf("  accel bias error median %.3f m/s^2 max %.3f m/s^2\n", m.accel_bias_mps2.median, m.accel_bias_mps2.max);
+  }
 }
 
 int run_imu(const ImuFlags& flags) {
@@ -106,6 +116,8 @@ int run_imu(const ImuFlags& flags) {
   options.allan = !flags.no_allan;
   options.check.window_s = flags.window_s;
   options.check.stride = flags.stride;
+  options.moving_initialization = flags.init_window_s > 0.0;
+  if (options.moving_initialization) options.moving.window_s = flags.init_window_s;
   std::string noise_source;
   options.check.noise = noise_of(flags, noise_source);
   if (std::string why; !options.is_valid(&why)) throw UsageError(why);
@@ -158,6 +170,11 @@ Runner register_imu(CLI::App& app) {
   app.add_option("--poses-format", flags->poses_format, "tum, euroc or kitti (default: from the file)");
   app.add_option("--window", flags->window_s, "Preintegration window, seconds")->check(checks::in_range(0.001, 1e4))->capture_default_str();
   app.add_option("--stride", flags->stride, "Start a window at every Nth ground-truth state")->check(checks::count(1000000))->capture_default_str();
+  app.add_option("--init-window", flags->init_window_s,
+                 "With --groundtruth: the initialisation while moving (ORB-SLAM3's inertial-only MAP from the ground truth's poses) "
+                 "on windows of S seconds, one every 10 s (0: off)")
+      ->check(checks::in_range(0.0, 1e4))
+      ->capture_default_str();
   app.add_option("--static-window", flags->static_window_s, "Static initialisation over the first S seconds")
       ->check(checks::in_range(0.01, 1e4))->capture_default_str();
   app.add_option("--time-offset", flags->time_offset_s, "Seconds added to every IMU stamp")->capture_default_str();

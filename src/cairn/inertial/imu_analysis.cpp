@@ -17,6 +17,8 @@ bool ImuAnalysisOptions::is_valid(std::string* why) const {
   if (!allan_options.is_valid(&nested)) problems.add_all("allan: ", nested);
   nested.clear();
   if (!check.is_valid(&nested)) problems.add_all("check: ", nested);
+  nested.clear();
+  if (!moving.is_valid(&nested)) problems.add_all("moving initialisation: ", nested);
   return problems.report(why);
 }
 
@@ -48,6 +50,27 @@ nlohmann::json spread_json(const ErrorSpread& s) {
 
 nlohmann::json vector_json(const Vector3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
 
+nlohmann::json to_json(const MovingInitializationCheck& c) {
+  nlohmann::json windows = nlohmann::json::array();
+  for (const MovingInitializationWindow& w : c.windows) {
+    nlohmann::json j = {{"start_s", w.start_s}, {"ok", w.ok}};
+    if (w.ok) {
+      j["gravity_error_deg"] = w.gravity_error_deg;
+      j["gyro_bias_error_rad_s"] = w.gyro_bias_error_rad_s;
+      j["accel_bias_error_mps2"] = w.accel_bias_error_mps2;
+    } else {
+      j["why"] = w.why;
+    }
+    windows.push_back(std::move(j));
+  }
+  return {{"method", "inertial-only MAP (Campos et al., ICRA 2020) from the ground truth's poses, scale held"},
+          {"windows_still_skipped", c.windows_still},
+          {"gravity_error_deg", spread_json(c.gravity_deg)},
+          {"gyro_bias_error_rad_s", spread_json(c.gyro_bias_rad_s)},
+          {"accel_bias_error_mps2", spread_json(c.accel_bias_mps2)},
+          {"windows", windows}};
+}
+
 }  // namespace
 
 ImuAnalysis analyse_imu(const std::vector<ImuSample>& samples, const std::vector<GroundTruthState>& states,
@@ -59,6 +82,9 @@ ImuAnalysis analyse_imu(const std::vector<ImuSample>& samples, const std::vector
   analysis.initialization_vs_truth = compare_initialization(analysis.initialization, states);
   if (options.allan && samples.size() >= 3) analysis.allan = imu_allan_deviation(samples, options.allan_options);
   if (states.size() >= 2) analysis.check = check_preintegration(samples, states, poses, options.check);
+  if (options.moving_initialization && states.size() >= 3) {
+    analysis.moving_initialization = check_moving_initialization(samples, states, options.check.noise, options.moving);
+  }
   return analysis;
 }
 
@@ -109,6 +135,7 @@ nlohmann::json to_json(const ImuAnalysis& a) {
                                    {"nees", spread_json(c.nees)},
                                    {"nees_expected", 9}};
   }
+  if (a.moving_initialization) out["initialization_while_moving"] = to_json(*a.moving_initialization);
   return out;
 }
 

@@ -5,8 +5,9 @@
 /// (imu_analysis_outputs.hpp). Stages: the data's checks (rates, gaps, saturation:
 /// imu_input.hpp), static initialisation (static_initialization.hpp) compared with the ground
 /// truth's biases and attitude when given, the Allan deviation with its noise fits
-/// (allan_deviation.hpp; meaningful for a static recording only), and the preintegration check over
-/// windows (preintegration_check.hpp) with the noise model in use.
+/// (allan_deviation.hpp; meaningful for a static recording only), the preintegration check over
+/// windows (preintegration_check.hpp) with the noise model in use, and the initialisation while
+/// moving on windows of the ground truth (inertial_initialization.hpp).
 
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
@@ -15,6 +16,7 @@
 
 #include "cairn/inertial/allan_deviation.hpp"
 #include "cairn/inertial/imu_input.hpp"
+#include "cairn/inertial/inertial_initialization.hpp"
 #include "cairn/inertial/preintegration_check.hpp"
 #include "cairn/inertial/static_initialization.hpp"
 
@@ -27,6 +29,10 @@ struct ImuAnalysisOptions {
   AllanOptions allan_options;
   /// The noise model (check.noise) is the one the preintegration check uses.
   PreintegrationCheckOptions check;
+  /// With a ground truth: the initialisation while moving (inertial_initialization.hpp) on its
+  /// windows, unless off.
+  bool moving_initialization = true;
+  MovingInitializationCheckOptions moving;
   bool is_valid(std::string* why) const;
 };
 
@@ -44,6 +50,7 @@ struct ImuAnalysis {
   std::optional<InitializationVsTruth> initialization_vs_truth;
   std::optional<ImuAllanReport> allan;
   std::optional<PreintegrationCheck> check;
+  std::optional<MovingInitializationCheck> moving_initialization;
   ImuNoise noise;  ///< the model the check used
 };
 

@@ -242,4 +242,87 @@ InertialInitialization initialize_inertial(const std::vector<core::Timestamp>& s
   return out;
 }
 
+bool MovingInitializationCheckOptions::is_valid(std::string* why) const {
+  core::Problems problems;
+  if (!(window_s > 0.0) || !(every_s > 0.0) || !(keyframe_spacing_s > 0.0) || !(min_path_m >= 0.0)) {
+    problems.add("window_s, every_s and keyframe_spacing_s must be > 0, min_path_m >= 0");
+  }
+  if (!(keyframe_spacing_s * 2.0 <= window_s)) problems.add("a window must hold at least 3 keyframes (window_s >= 2 keyframe_spacing_s)");
+  if (std::string p; !initialization.is_valid(&p)) problems.add_all("initialization: ", p);
+  return problems.report(why);
+}
+
+namespace {
+
+// The states of one window, every keyframe_spacing_s from `first`; empty when it runs past the end.
+std::vector<std::size_t> window_keyframes(const std::vector<GroundTruthState>& states, std::size_t first,
+                                          const MovingInitializationCheckOptions& options) {
+  std::vector<std::size_t> picked{first};
+  const double start = states[first].stamp.seconds();
+  for (std::size_t k = first + 1; k < states.size(); ++k) {
+    const double t = states[k].stamp.seconds();
+    if (t - start > options.window_s + 1e-6) return picked;
+    if (t - states[picked.back()].stamp.seconds() >= options.keyframe_spacing_s - 1e-6) picked.push_back(k);
+  }
+  return {};
+}
+
+MovingInitializationWindow initialise_window(const std::vector<ImuSample>& samples, const std::vector<GroundTruthState>& states,
+                                             const std::vector<std::size_t>& picked, const ImuNoise& noise,
+                                             const MovingInitializationCheckOptions& options) {
+  std::vector<core::Timestamp> stamps;
+  std::vector<core::SE3> poses;
+  for (const std::size_t k : picked) {
+    stamps.push_back(states[k].stamp);
+    poses.push_back(states[k].state.T_world_body);
+  }
+  InertialInitializationOptions o = options.initialization;
+  o.estimate_scale = false;
+  const InertialInitialization init = initialize_inertial(stamps, poses, core::SE3(), samples, noise, o);
+  MovingInitializationWindow w;
+  w.start_s = states[picked.front()].stamp.seconds() - states.front().stamp.seconds();
+  w.ok = init.ok;
+  w.why = init.why;
+  if (!init.ok) return w;
+  const Vector3 down(0.0, 0.0, -1.0);
+  w.gravity_error_deg = std::atan2(init.gravity_world.cross(down).norm(), init.gravity_world.dot(down)) * 180.0 / M_PI;
+  const ImuBias& truth = states[picked.front()].bias;
+  w.gyro_bias_error_rad_s = (init.bias.gyro_rad_s - truth.gyro_rad_s).norm();
+  w.accel_bias_error_mps2 = (init.bias.accel_mps2 - truth.accel_mps2).norm();
+  return w;
+}
+
+}  // namespace
+
+MovingInitializationCheck check_moving_initialization(const std::vector<ImuSample>& samples, const std::vector<GroundTruthState>& states,
+                                                      const ImuNoise& noise, const MovingInitializationCheckOptions& options) {
+  MovingInitializationCheck check;
+  std::vector<double> gravity, gyro, accel;
+  double next_start = states.empty() ? 0.0 : states.front().stamp.seconds();
+  for (std::size_t first = 0; first < states.size(); ++first) {
+    if (states[first].stamp.seconds() < next_start) continue;
+    const std::vector<std::size_t> picked = window_keyframes(states, first, options);
+    if (picked.size() < 3) break;  // the recording ends within the window
+    next_start = states[first].stamp.seconds() + options.every_s;
+    double path = 0.0;
+    for (std::size_t i = 1; i < picked.size(); ++i) {
+      path += (states[picked[i]].state.T_world_body.translation() - states[picked[i - 1]].state.T_world_body.translation()).norm();
+    }
+    if (path < options.min_path_m) {
+      ++check.windows_still;
+      continue;
+    }
+    check.windows.push_back(initialise_window(samples, states, picked, noise, options));
+    const MovingInitializationWindow& w = check.windows.back();
+    if (!w.ok) continue;
+    gravity.push_back(w.gravity_error_deg);
+    gyro.push_back(w.gyro_bias_error_rad_s);
+    accel.push_back(w.accel_bias_error_mps2);
+  }
+  check.gravity_deg = spread_of(gravity);
+  check.gyro_bias_rad_s = spread_of(gyro);
+  check.accel_bias_mps2 = spread_of(accel);
+  return check;
+}
+
 }  // namespace cairn::inertial

@@ -30,6 +30,7 @@
 #include "cairn/core/time.hpp"
 #include "cairn/inertial/imu_factors.hpp"
 #include "cairn/inertial/imu_types.hpp"
+#include "cairn/inertial/preintegration_check.hpp"
 
 namespace cairn::inertial {
 
@@ -117,5 +118,39 @@ struct InertialInitialization {
 InertialInitialization initialize_inertial(const std::vector<core::Timestamp>& stamps, const std::vector<core::SE3>& T_world_camera,
                                            const core::SE3& T_camera_body, const std::vector<ImuSample>& samples, const ImuNoise& noise,
                                            const InertialInitializationOptions& options = {});
+
+/// The initialisation tried on windows of a recording with ground truth (`cairn imu --groundtruth`):
+/// keyframes every keyframe_spacing_s from the ground truth's states (their poses as the visual
+/// input, metric: scale held), a window of window_s every every_s; windows in which the body moves
+/// less than min_path_m are skipped (nothing to initialise from). Errors against the ground truth:
+/// gravity's direction against the world's -z (the ground truth's world must be gravity-aligned,
+/// as EuRoC's state file is), the biases against the state's at the window's start.
+struct MovingInitializationCheckOptions {
+  double window_s = 2.0;
+  double every_s = 10.0;
+  double keyframe_spacing_s = 0.1;
+  double min_path_m = 0.2;
+  InertialInitializationOptions initialization;
+  bool is_valid(std::string* why) const;
+};
+
+struct MovingInitializationWindow {
+  double start_s = 0.0;  ///< since the first state
+  bool ok = false;
+  std::string why;       ///< when not ok
+  double gravity_error_deg = 0.0;
+  double gyro_bias_error_rad_s = 0.0;
+  double accel_bias_error_mps2 = 0.0;
+};
+
+struct MovingInitializationCheck {
+  std::vector<MovingInitializationWindow> windows;
+  int windows_still = 0;  ///< skipped: the body moved less than min_path_m
+  ErrorSpread gravity_deg, gyro_bias_rad_s, accel_bias_mps2;  ///< over the windows that initialised
+};
+
+/// Precondition: options.is_valid(), noise.is_valid(); samples and states sorted by stamp.
+MovingInitializationCheck check_moving_initialization(const std::vector<ImuSample>& samples, const std::vector<GroundTruthState>& states,
+                                                      const ImuNoise& noise, const MovingInitializationCheckOptions& options);
 
 }  // namespace cairn::inertial
