@@ -146,6 +146,56 @@ void VisualSlam::Impl::export_keyframe_observations(const KeyFrame& kf, int k, S
   }
 }
 
+namespace {
+
+// A saved keyframe's frame: its keypoints, measurements, descriptors and map points as tracking
+// holds them (the grid is built by the caller, which knows the image size).
+FrameData frame_from_saved(const SavedKeyframe& saved) {
+  FrameData f;
+  f.index = saved.frame;
+  f.time = core::Timestamp::from_nanoseconds(saved.time_ns);
+  f.T_world_camera = saved.T_world_camera;
+  const std::size_t n = saved.keypoints.size();
+  f.keypoints.resize(n);
+  f.undistorted.resize(n);
+  f.u_right.resize(n);
+  f.depth.resize(n);
+  f.map_point.resize(n);
+  f.outlier.assign(n, 0);
+  f.descriptors.create(static_cast<int>(n), 32, CV_8U);
+  for (std::size_t i = 0; i < n; ++i) {
+    const SavedKeypoint& kp = saved.keypoints[i];
+    f.keypoints[i] = cv::KeyPoint(kp.x, kp.y, kp.size, kp.angle, kp.response, kp.octave);
+    f.undistorted[i] = Eigen::Vector2d(kp.undistorted_x, kp.undistorted_y);
+    f.u_right[i] = kp.u_right;
+    f.depth[i] = kp.depth;
+    f.map_point[i] = kp.map_point;
+    std::memcpy(f.descriptors.ptr(static_cast<int>(i)), kp.descriptor.data(), 32);
+  }
+  return f;
+}
+
+MapPoint point_from_saved(const SavedMapPoint& saved, int keyframes) {
+  MapPoint mp;
+  mp.p_world = saved.p_world;
+  mp.normal = saved.normal;
+  mp.min_distance = saved.min_distance;
+  mp.max_distance = saved.max_distance;
+  mp.descriptor = cv::Mat(1, 32, CV_8U);
+  std::memcpy(mp.descriptor.ptr(0), saved.descriptor.data(), 32);
+  mp.first_keyframe = keyframes;
+  for (const SavedObservation& o : saved.observations) {
+    mp.observations[o.keyframe] = o.keypoint;
+    mp.first_keyframe = std::min(mp.first_keyframe, static_cast<int>(o.keyframe));
+  }
+  mp.reference_keyframe = saved.reference_keyframe;
+  mp.visible = saved.visible;
+  mp.found = saved.found;
+  return mp;
+}
+
+}  // namespace
+
 // The saved keyframes and points as the tracker's own, one segment (keyframe 0 its anchor), the
 // keyframes' words in the place-recognition database, and the tracker lost: the first frame
 // relocalises (bag of words, PnP, the local map, the uniqueness test) as after any loss.
@@ -153,58 +203,20 @@ void VisualSlam::Impl::import_map(const SavedVisualMap& map) {
   set_image_size(map.camera.width, map.camera.height);
   keyframes.reserve(map.keyframes.size());
   for (std::size_t k = 0; k < map.keyframes.size(); ++k) {
-    const SavedKeyframe& saved = map.keyframes[k];
     KeyFrame kf;
     kf.id = static_cast<int>(k);
     kf.segment = 0;
     kf.starts_segment = k == 0;
-    FrameData& f = kf.frame;
-    f.index = saved.frame;
-    f.time = core::Timestamp::from_nanoseconds(saved.time_ns);
-    f.T_world_camera = saved.T_world_camera;
-    const std::size_t n = saved.keypoints.size();
-    f.keypoints.resize(n);
-    f.undistorted.resize(n);
-    f.u_right.resize(n);
-    f.depth.resize(n);
-    f.map_point.resize(n);
-    f.outlier.assign(n, 0);
-    f.descriptors.create(static_cast<int>(n), 32, CV_8U);
-    for (std::size_t i = 0; i < n; ++i) {
-      const SavedKeypoint& kp = saved.keypoints[i];
-      f.keypoints[i] = cv::KeyPoint(kp.x, kp.y, kp.size, kp.angle, kp.response, kp.octave);
-      f.undistorted[i] = Eigen::Vector2d(kp.undistorted_x, kp.undistorted_y);
-      f.u_right[i] = kp.u_right;
-      f.depth[i] = kp.depth;
-      f.map_point[i] = kp.map_point;
-      std::memcpy(f.descriptors.ptr(static_cast<int>(i)), kp.descriptor.data(), 32);
-    }
-    build_grid(f);
+    kf.frame = frame_from_saved(map.keyframes[k]);
+    build_grid(kf.frame);
     if (options.vocabulary) {
-      kf.bow = options.vocabulary->transform(f.descriptors, nullptr, &kf.nodes, bow_levels_up());
+      kf.bow = options.vocabulary->transform(kf.frame.descriptors, nullptr, &kf.nodes, bow_levels_up());
       database.add(static_cast<std::uint32_t>(k), kf.bow);
     }
     keyframes.push_back(std::move(kf));
   }
   points.reserve(map.points.size());
-  for (const SavedMapPoint& saved : map.points) {
-    MapPoint mp;
-    mp.p_world = saved.p_world;
-    mp.normal = saved.normal;
-    mp.min_distance = saved.min_distance;
-    mp.max_distance = saved.max_distance;
-    mp.descriptor = cv::Mat(1, 32, CV_8U);
-    std::memcpy(mp.descriptor.ptr(0), saved.descriptor.data(), 32);
-    mp.first_keyframe = static_cast<int>(map.keyframes.size());
-    for (const SavedObservation& o : saved.observations) {
-      mp.observations[o.keyframe] = o.keypoint;
-      mp.first_keyframe = std::min(mp.first_keyframe, static_cast<int>(o.keyframe));
-    }
-    mp.reference_keyframe = saved.reference_keyframe;
-    mp.visible = saved.visible;
-    mp.found = saved.found;
-    points.push_back(std::move(mp));
-  }
+  for (const SavedMapPoint& saved : map.points) points.push_back(point_from_saved(saved, static_cast<int>(map.keyframes.size())));
   lost = true;
   reference_keyframe = -1;
 }
