@@ -93,80 +93,87 @@ TrajectoryErrors evaluate_trajectory(const std::vector<core::SE3>& ground_truth,
   return e;
 }
 
-std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& map_points,
-                                           const std::vector<OdometryScanResult>& scans,
-                                           const std::vector<core::SE3>& ground_truth, int max_side_px) {
-  // Extent: the trajectory plus the map within 30 m of it (the map reaches 100 m out and would
-  // shrink the trajectory to a few pixels).
-  Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
-  for (const OdometryScanResult& s : scans) {
-    lo = lo.cwiseMin(s.T_world_sensor.translation().head<2>());
-    hi = hi.cwiseMax(s.T_world_sensor.translation().head<2>());
-  }
-  if (scans.empty()) lo = hi = Eigen::Vector2d::Zero();
-  lo -= Eigen::Vector2d(30.0, 30.0);
-  hi += Eigen::Vector2d(30.0, 30.0);
-  const int max_side = std::max(200, max_side_px);
-  const double resolution = std::max((hi - lo).maxCoeff() / max_side, 0.05);  // metres per pixel
-  const int width = std::max(200, static_cast<int>(std::ceil((hi.x() - lo.x()) / resolution)));
-  const int height = std::max(200, static_cast<int>(std::ceil((hi.y() - lo.y()) / resolution)));
-  const int legend = 28;
-  auto pixel = [&](const Eigen::Vector3d& p) {
+namespace {
+
+// The picture's frame: the trajectory plus the map within 30 m of it (the map reaches 100 m out
+// and would shrink the trajectory to a few pixels), metres per pixel, and the legend strip below.
+struct TopDownFrame {
+  Eigen::Vector2d lo, hi;
+  double resolution = 0.05;  // metres per pixel
+  int width = 200, height = 200;
+  static constexpr int kLegend = 28;
+  Eigen::Vector2d pixel(const Eigen::Vector3d& p) const {
     return Eigen::Vector2d((p.x() - lo.x()) / resolution, static_cast<double>(height) - (p.y() - lo.y()) / resolution);
-  };
+  }
+};
 
-  viz::CairoSurface surface(
-      cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height + legend));
-  if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) throw std::runtime_error("cannot create a picture");
-  viz::CairoContext context(cairo_create(surface.get()));
-  cairo_t* cr = context.get();
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
+TopDownFrame top_down_frame(const std::vector<OdometryScanResult>& scans, int max_side_px) {
+  TopDownFrame f;
+  f.lo = Eigen::Vector2d(1e300, 1e300);
+  f.hi = Eigen::Vector2d(-1e300, -1e300);
+  for (const OdometryScanResult& s : scans) {
+    f.lo = f.lo.cwiseMin(s.T_world_sensor.translation().head<2>());
+    f.hi = f.hi.cwiseMax(s.T_world_sensor.translation().head<2>());
+  }
+  if (scans.empty()) f.lo = f.hi = Eigen::Vector2d::Zero();
+  f.lo -= Eigen::Vector2d(30.0, 30.0);
+  f.hi += Eigen::Vector2d(30.0, 30.0);
+  const int max_side = std::max(200, max_side_px);
+  f.resolution = std::max((f.hi - f.lo).maxCoeff() / max_side, 0.05);
+  f.width = std::max(200, static_cast<int>(std::ceil((f.hi.x() - f.lo.x()) / f.resolution)));
+  f.height = std::max(200, static_cast<int>(std::ceil((f.hi.y() - f.lo.y()) / f.resolution)));
+  return f;
+}
 
-  // Map points: darker where higher above the trajectory's mean height (walls, trees), light
-  // for the ground.
+// Map points: darker where higher above the trajectory's mean height (walls, trees), light for
+// the ground.
+void draw_map_points(cairo_t* cr, const TopDownFrame& f, const std::vector<Eigen::Vector3f>& map_points,
+                     const std::vector<OdometryScanResult>& scans) {
   double z_mean = 0.0;
   for (const OdometryScanResult& s : scans) z_mean += s.T_world_sensor.translation().z();
   if (!scans.empty()) z_mean /= static_cast<double>(scans.size());
-  const double dot = std::max(1.0, 0.25 / resolution);
+  const double dot = std::max(1.0, 0.25 / f.resolution);
   for (const Eigen::Vector3f& point : map_points) {
     const Eigen::Vector3d p = point.cast<double>();
-    if (p.x() < lo.x() || p.y() < lo.y() || p.x() > hi.x() || p.y() > hi.y()) continue;
+    if (p.x() < f.lo.x() || p.y() < f.lo.y() || p.x() > f.hi.x() || p.y() > f.hi.y()) continue;
     const double above_ground = p.z() - (z_mean - 1.7);
     const double shade = std::clamp(0.85 - 0.25 * above_ground, 0.15, 0.88);
     cairo_set_source_rgb(cr, shade, shade, shade);
-    const Eigen::Vector2d q = pixel(p);
+    const Eigen::Vector2d q = f.pixel(p);
     cairo_rectangle(cr, q.x(), q.y(), dot, dot);
     cairo_fill(cr);
   }
+}
 
-  // Ground truth, aligned onto the estimate (SE(3) Umeyama), thin grey dashes.
-  if (ground_truth.size() == scans.size() && scans.size() >= 3) {
-    std::vector<Eigen::Matrix4d> est, gt;
-    for (std::size_t i = 0; i < scans.size(); ++i) {
-      est.push_back(scans[i].T_world_sensor.matrix());
-      gt.push_back(ground_truth[i].matrix());
-    }
-    eval::AlignmentOptions options;
-    options.method = eval::AlignmentMethod::kSE3;
-    const eval::Alignment alignment = eval::align(est, gt, options);
-    if (alignment.outcome.ok()) {
-      const std::vector<Eigen::Matrix4d> aligned = eval::apply_alignment(alignment, gt);
-      cairo_set_source_rgb(cr, 0.35, 0.35, 0.35);
-      cairo_set_line_width(cr, 1.5);
-      const double dashes[] = {6.0, 4.0};
-      cairo_set_dash(cr, dashes, 2, 0.0);
-      for (std::size_t i = 0; i < aligned.size(); ++i) {
-        const Eigen::Vector2d q = pixel(aligned[i].block<3, 1>(0, 3));
-        if (i == 0) cairo_move_to(cr, q.x(), q.y());
-        else cairo_line_to(cr, q.x(), q.y());
-      }
-      cairo_stroke(cr);
-      cairo_set_dash(cr, nullptr, 0, 0.0);
-    }
+// Ground truth, aligned onto the estimate (SE(3) Umeyama), thin grey dashes; nothing when it
+// cannot be aligned.
+void draw_ground_truth(cairo_t* cr, const TopDownFrame& f, const std::vector<OdometryScanResult>& scans,
+                       const std::vector<core::SE3>& ground_truth) {
+  std::vector<Eigen::Matrix4d> est, gt;
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    est.push_back(scans[i].T_world_sensor.matrix());
+    gt.push_back(ground_truth[i].matrix());
   }
+  eval::AlignmentOptions options;
+  options.method = eval::AlignmentMethod::kSE3;
+  const eval::Alignment alignment = eval::align(est, gt, options);
+  if (!alignment.outcome.ok()) return;
+  const std::vector<Eigen::Matrix4d> aligned = eval::apply_alignment(alignment, gt);
+  cairo_set_source_rgb(cr, 0.35, 0.35, 0.35);
+  cairo_set_line_width(cr, 1.5);
+  const double dashes[] = {6.0, 4.0};
+  cairo_set_dash(cr, dashes, 2, 0.0);
+  for (std::size_t i = 0; i < aligned.size(); ++i) {
+    const Eigen::Vector2d q = f.pixel(aligned[i].block<3, 1>(0, 3));
+    if (i == 0) cairo_move_to(cr, q.x(), q.y());
+    else cairo_line_to(cr, q.x(), q.y());
+  }
+  cairo_stroke(cr);
+  cairo_set_dash(cr, nullptr, 0, 0.0);
+}
 
-  // Trajectory by health; no line across a segment change.
+// Trajectory by health; no line across a segment change; a red dot at every lost scan.
+void draw_trajectory(cairo_t* cr, const TopDownFrame& f, const std::vector<OdometryScanResult>& scans) {
   cairo_set_line_width(cr, 2.5);
   for (std::size_t i = 1; i < scans.size(); ++i) {
     if (scans[i].segment != scans[i - 1].segment) continue;
@@ -174,8 +181,8 @@ std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& m
     if (h == Health::kOk) cairo_set_source_rgb(cr, 0.12, 0.35, 0.85);
     else if (h == Health::kDegraded) cairo_set_source_rgb(cr, 0.95, 0.55, 0.05);
     else cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
-    const Eigen::Vector2d a = pixel(scans[i - 1].T_world_sensor.translation());
-    const Eigen::Vector2d b = pixel(scans[i].T_world_sensor.translation());
+    const Eigen::Vector2d a = f.pixel(scans[i - 1].T_world_sensor.translation());
+    const Eigen::Vector2d b = f.pixel(scans[i].T_world_sensor.translation());
     cairo_move_to(cr, a.x(), a.y());
     cairo_line_to(cr, b.x(), b.y());
     cairo_stroke(cr);
@@ -183,19 +190,21 @@ std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& m
   for (std::size_t i = 0; i < scans.size(); ++i) {
     if (scans[i].health != Health::kLost) continue;
     cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
-    const Eigen::Vector2d q = pixel(scans[i].T_world_sensor.translation());
+    const Eigen::Vector2d q = f.pixel(scans[i].T_world_sensor.translation());
     cairo_arc(cr, q.x(), q.y(), 4.0, 0.0, 2.0 * M_PI);
     cairo_fill(cr);
   }
+}
 
-  // Legend and scale bar.
+// Legend and scale bar in the strip below the map.
+void draw_legend(cairo_t* cr, const TopDownFrame& f, bool with_ground_truth) {
   cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_rectangle(cr, 0, height, width, legend);
+  cairo_rectangle(cr, 0, f.height, f.width, TopDownFrame::kLegend);
   cairo_fill(cr);
   cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, 12.0);
   double x = 8.0;
-  const double y = height + 18.0;
+  const double y = f.height + 18.0;
   auto entry = [&](double red, double green, double blue, const char* text) {
     cairo_set_source_rgb(cr, red, green, blue);
     cairo_rectangle(cr, x, y - 9.0, 18.0, 4.0);
@@ -210,17 +219,36 @@ std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& m
   entry(0.12, 0.35, 0.85, "ok");
   entry(0.95, 0.55, 0.05, "degraded");
   entry(0.9, 0.1, 0.1, "lost (new map segment)");
-  if (ground_truth.size() == scans.size() && scans.size() >= 3) entry(0.35, 0.35, 0.35, "ground truth (aligned)");
+  if (with_ground_truth) entry(0.35, 0.35, 0.35, "ground truth (aligned)");
   const double nice[] = {1, 2, 5, 10, 20, 50, 100, 200, 500, 1000};
   double bar_m = nice[0];
   for (double candidate : nice) {
-    if (candidate / resolution <= 0.2 * width) bar_m = candidate;
+    if (candidate / f.resolution <= 0.2 * f.width) bar_m = candidate;
   }
   cairo_set_source_rgb(cr, 0, 0, 0);
-  cairo_rectangle(cr, x, y - 9.0, bar_m / resolution, 4.0);
+  cairo_rectangle(cr, x, y - 9.0, bar_m / f.resolution, 4.0);
   cairo_fill(cr);
-  cairo_move_to(cr, x + bar_m / resolution + 6.0, y - 3.0);
+  cairo_move_to(cr, x + bar_m / f.resolution + 6.0, y - 3.0);
   cairo_show_text(cr, (std::to_string(static_cast<int>(bar_m)) + " m").c_str());
+}
+
+}  // namespace
+
+std::vector<unsigned char> render_top_down(const std::vector<Eigen::Vector3f>& map_points,
+                                           const std::vector<OdometryScanResult>& scans,
+                                           const std::vector<core::SE3>& ground_truth, int max_side_px) {
+  const TopDownFrame frame = top_down_frame(scans, max_side_px);
+  viz::CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, frame.width, frame.height + TopDownFrame::kLegend));
+  if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) throw std::runtime_error("cannot create a picture");
+  viz::CairoContext context(cairo_create(surface.get()));
+  cairo_t* cr = context.get();
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+  draw_map_points(cr, frame, map_points, scans);
+  const bool with_ground_truth = ground_truth.size() == scans.size() && scans.size() >= 3;
+  if (with_ground_truth) draw_ground_truth(cr, frame, scans, ground_truth);
+  draw_trajectory(cr, frame, scans);
+  draw_legend(cr, frame, with_ground_truth);
   const std::string png = viz::encode_png(surface.get());
   return std::vector<unsigned char>(png.begin(), png.end());
 }
