@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
+#include <random>
 
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/lidar3d/odometry.hpp"
@@ -148,6 +150,40 @@ TEST(LidarOdometry, PointTimesThatAreNotSweepOffsetsAreIgnored) {
   EXPECT_TRUE(second.point_times_unusable);
   EXPECT_TRUE(second.T_world_sensor.matrix().allFinite());
   EXPECT_LT(second.T_world_sensor.translation().norm(), 0.05);  // the room did not move
+}
+
+// Against Eigen's angle-axis rotation about p x z (the definition in odometry.hpp), on points in
+// every direction, including ones on the vertical axis (left as they are).
+TEST(VerticalAngleCorrection, TurnsEachPointAboutPCrossZTowardUp) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-80.0, 80.0);
+  for (const double angle : {0.205 * M_PI / 180.0, -0.01, 0.3}) {
+    for (int i = 0; i < 1000; ++i) {
+      const Eigen::Vector3d p(u(rng), u(rng), 0.2 * u(rng));
+      const Eigen::Vector3d axis = p.cross(Eigen::Vector3d::UnitZ()).normalized();
+      const Eigen::Vector3d expected = Eigen::AngleAxisd(angle, axis) * p;
+      EXPECT_LT((correct_vertical_angle(p, angle) - expected).norm(), 1e-12 * p.norm()) << p.transpose();
+    }
+    const Eigen::Vector3d up(0.0, 0.0, 4.0);
+    EXPECT_EQ(correct_vertical_angle(up, angle), up);
+  }
+  // Toward +z: a point ahead at the horizon rises for a positive angle.
+  EXPECT_GT(correct_vertical_angle(Eigen::Vector3d(10.0, 0.0, 0.0), 0.01).z(), 0.0);
+}
+
+// prepare_scan without a velocity is the first scan's preparation in add_scan: the same points.
+TEST(LidarOdometry, PrepareScanGivesWhatTheFirstScanPutsInTheMap) {
+  const KeyFrames k = read_key_frames(2);
+  const io::PointCloud cloud = io::read_point_cloud(k.files[1]);
+  const LidarOdometryOptions options = preset_options("kitti");
+  LidarOdometry odometry(options);
+  const LidarOdometry::PreparedScan prepared = odometry.prepare_scan(cloud, k.times_s[1], Eigen::Matrix<double, 6, 1>::Zero());
+  const OdometryScanResult first = odometry.add_scan(cloud, k.times_s[1]);
+  EXPECT_EQ(prepared.frame_sensor, odometry.last_frame_points());
+  EXPECT_GT(prepared.frame_sensor.size(), 1000u);
+  EXPECT_DOUBLE_EQ(prepared.registered_time_s, first.registered_time_s);
+  EXPECT_TRUE(prepared.T_registered_stamp.matrix().isIdentity());
+  EXPECT_THROW(odometry.prepare_scan(cloud, std::nan(""), Eigen::Matrix<double, 6, 1>::Zero()), std::invalid_argument);
 }
 
 TEST(LidarOdometry, RefusesTimesThatDoNotIncreaseAndInvalidOptions) {

@@ -3,9 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include "cairn/io/point_cloud.hpp"
@@ -62,6 +64,28 @@ TEST(VoxelDownsample, KeepsTheFirstPointOfEachVoxelInInputOrder) {
   EXPECT_EQ(out[0], points[0]);
   EXPECT_EQ(out[1], points[2]);
   EXPECT_EQ(out[2], points[3]);
+}
+
+// The first point of each voxel in input order, by std::set of floor triples: the reference for
+// the packed open-addressing table, near the origin, around the packing's limits (2^20 voxels)
+// and far beyond them (the node-based path).
+TEST(VoxelDownsample, MatchesASetOfFloorTriplesNearAndFarFromTheOrigin) {
+  std::mt19937 rng(7);
+  for (const double centre : {0.0, 262143.0, -262144.5, 3.0e6, -2.0e8}) {
+    std::uniform_real_distribution<double> u(-40.0, 40.0);
+    std::vector<Eigen::Vector3d> points;
+    for (int i = 0; i < 20000; ++i) points.emplace_back(centre + u(rng), u(rng), 0.1 * u(rng));
+    for (const double voxel : {0.25, 1.0}) {
+      std::set<std::array<double, 3>> seen;
+      std::vector<Eigen::Vector3d> expected;
+      for (const Eigen::Vector3d& p : points) {
+        if (seen.insert({std::floor(p.x() / voxel), std::floor(p.y() / voxel), std::floor(p.z() / voxel)}).second) expected.push_back(p);
+      }
+      const std::vector<Eigen::Vector3d> out = voxel_downsample(points, voxel);
+      ASSERT_EQ(out.size(), expected.size()) << "centre " << centre << " voxel " << voxel;
+      for (std::size_t i = 0; i < out.size(); ++i) ASSERT_EQ(out[i], expected[i]) << "centre " << centre << " voxel " << voxel << " point " << i;
+    }
+  }
 }
 
 TEST(VoxelHashMap, NearestMatchesBruteForceWithinOneVoxel) {

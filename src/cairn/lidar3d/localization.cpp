@@ -30,6 +30,10 @@ using Points = std::vector<Eigen::Vector3d>;
 struct ScanInput {
   std::size_t index = 0;
   double time_s = 0.0;
+  double registered_time_s = 0.0;   ///< the instant of frame_sensor (the sweep's middle)
+  /// Whether the odometry registered this scan; false when tracking prepared it alone (lean
+  /// tracking): T_odom_registered and odometry_health then say nothing.
+  bool odometry_step = true;
   Points frame_sensor;              ///< the odometry's points (half its voxel), registered instant
   Points source_sensor;             ///< thinned to source_voxel_m
   std::shared_ptr<const GicpCloud> source;  ///< null when too few points to match
@@ -72,6 +76,7 @@ struct Hypothesis {
 };
 
 constexpr std::size_t kMinMatchPoints = 20;
+constexpr std::size_t kDegeneracyPoints = 800;
 
 std::string fixed(double value, int digits) {
   char buffer[64];
@@ -126,6 +131,9 @@ bool Localizer3dOptions::is_valid(std::string* why) const {
   if (check_every_n_scans < 1) p.add("check_every_n_scans must be >= 1");
   p.require_positive(max_acceleration_mps2, "max_acceleration_mps2");
   if (!(jump_margin_m >= 0.0)) p.add("jump_margin_m must be >= 0");
+  for (const double yaw : retry_yaw_offsets_rad) {
+    if (!std::isfinite(yaw)) p.add("retry_yaw_offsets_rad must be finite");
+  }
   for (const double o : polish_offsets_m) {
     if (!std::isfinite(o)) p.add("polish_offsets_m must be finite");
   }
@@ -203,22 +211,48 @@ struct Localizer3d::Impl {
 
   // ---- stages of add_scan --------------------------------------------------------------------
 
+  /// The scan's points and motion: one odometry step, or, when tracking has a velocity of its
+  /// own (lean tracking, Localizer3dOptions::odometry_while_tracking), the scan prepared alone and
+  /// deskewed by that velocity.
   ScanInput prepare(const io::PointCloud& cloud, double time_s, Localization3dResult& result) {
     const auto start = Clock::now();
-    const OdometryScanResult od = odometry->add_scan(cloud, time_s);
     ScanInput in;
     in.index = scans;
     in.time_s = time_s;
-    in.frame_sensor = odometry->last_frame_points();
-    in.T_odom_registered = od.T_world_registered;
-    in.T_registered_stamp = od.T_world_registered.inverse() * od.T_world_sensor;
-    in.odometry_health = od.health;
-    in.odometry_fresh = odometry->scans() == 1;
+    if (lean_tracking()) {
+      LidarOdometry::PreparedScan prepared = odometry->prepare_scan(cloud, time_s, velocity_per_s());
+      in.odometry_step = false;
+      in.registered_time_s = prepared.registered_time_s;
+      in.frame_sensor = std::move(prepared.frame_sensor);
+      in.T_registered_stamp = prepared.T_registered_stamp;
+    } else {
+      const OdometryScanResult od = odometry->add_scan(cloud, time_s);
+      in.registered_time_s = od.registered_time_s;
+      in.frame_sensor = odometry->last_frame_points();
+      in.T_odom_registered = od.T_world_registered;
+      in.T_registered_stamp = od.T_world_registered.inverse() * od.T_world_sensor;
+      in.odometry_health = od.health;
+      in.odometry_fresh = odometry->scans() == 1;
+    }
     in.source_sensor = voxel_downsample(in.frame_sensor, options.source_voxel_m);
     if (in.source_sensor.size() >= kMinMatchPoints) in.source = std::make_shared<const GicpCloud>(in.source_sensor, in.frame_sensor);
-    result.odometry_health = od.health;
+    result.odometry_step = in.odometry_step;
+    result.odometry_health = in.odometry_health;
     result.odometry_s = seconds_since(start);
     return in;
+  }
+
+  /// Tracking without the odometry: the localiser's own last two matched poses give the velocity.
+  bool lean_tracking() const {
+    return state == Localization3dState::kTracking && !options.odometry_while_tracking && recent_poses.size() >= 2;
+  }
+
+  /// The twist per second between the last two matched poses (zero without two).
+  Eigen::Matrix<double, 6, 1> velocity_per_s() const {
+    if (recent_poses.size() < 2) return Eigen::Matrix<double, 6, 1>::Zero();
+    const auto& [t0, T0] = recent_poses.front();
+    const auto& [t1, T1] = recent_poses.back();
+    return t1 > t0 ? Eigen::Matrix<double, 6, 1>((T0.inverse() * T1).log() / (t1 - t0)) : Eigen::Matrix<double, 6, 1>::Zero();
   }
 
   MapMatch match(const ScanInput& in, const core::SE3& guess, bool coarse_first) const {
@@ -237,30 +271,26 @@ struct Localizer3d::Impl {
       const GicpResult r = register_gicp(*target, *in.source, start, g);
       m.T_map_sensor = r.T_target_source;
       m.converged = r.converged;
-      measure(in, m);
+      m.fitness = r.fitness;
+      m.inlier_rmse_m = r.inlier_rmse_m;
+      measure_degeneracy(in, m);
     });
     return m;
   }
 
-  /// Fitness and inlier RMSE (nearest thinned map point within max_correspondence_m), and the
-  /// translation degeneracy of one point-to-plane linearisation at the result.
-  void measure(const ScanInput& in, MapMatch& m) const {
-    const double max2 = options.max_correspondence_m * options.max_correspondence_m;
-    std::size_t inliers = 0;
-    double sum2 = 0.0;
-    for (const Eigen::Vector3d& p : in.source_sensor) {
-      std::size_t index = 0;
-      double d2 = 0.0;
-      if (target->nearest(m.T_map_sensor * p, max2, &index, &d2)) {
-        ++inliers;
-        sum2 += d2;
-      }
-    }
-    m.fitness = static_cast<double>(inliers) / static_cast<double>(in.source_sensor.size());
-    m.inlier_rmse_m = inliers > 0 ? std::sqrt(sum2 / static_cast<double>(inliers)) : 0.0;
+  /// The translation degeneracy of one point-to-plane linearisation at the match
+  /// (registration.hpp), and the weakest axis when it is degenerate. (Fitness and inlier RMSE are
+  /// GICP's own, at its last linearisation: within its tolerances of the result when it converged.)
+  /// The normals' moment is a mean, so it is taken over at most kDegeneracyPoints source points
+  /// spread evenly through the scan (all of them cost 2.5 ms per KITTI scan, a third of tracking).
+  void measure_degeneracy(const ScanInput& in, MapMatch& m) const {
+    const std::size_t stride = std::max<std::size_t>(1, in.source_sensor.size() / kDegeneracyPoints);
+    Points sample;
+    sample.reserve(in.source_sensor.size() / stride + 1);
+    for (std::size_t i = 0; i < in.source_sensor.size(); i += stride) sample.push_back(in.source_sensor[i]);
     RegistrationOptions one;
     one.max_iterations = 1;
-    const RegistrationResult r = register_scan(target_map, in.source_sensor, m.T_map_sensor, options.max_correspondence_m,
+    const RegistrationResult r = register_scan(target_map, sample, m.T_map_sensor, options.max_correspondence_m,
                                                options.max_correspondence_m / 3.0, one);
     m.translation_degeneracy = r.translation_degeneracy;
     if (r.characteristic_length_m > 0.0 && r.translation_degeneracy < options.min_translation_degeneracy) {
@@ -539,7 +569,7 @@ struct Localizer3d::Impl {
     state = Localization3dState::kTracking;
     T_map_odom = h.T_map_odom;
     recent_poses.clear();
-    remember_pose(in.time_s, h.last.T_map_sensor);
+    remember_pose(in.registered_time_s, h.last.T_map_sensor);
     failures = 0;
     tracked_scans = 0;
     hypotheses.clear();
@@ -566,6 +596,12 @@ struct Localizer3d::Impl {
     h.T_map_odom = h.last.T_map_sensor * in.T_odom_registered.inverse();
   }
 
+  /// The health test of a match: converged, fitness and inlier RMSE within the `ok` bounds
+  /// (degeneracy aside).
+  bool fits_ok(const MapMatch& m) const {
+    return m.converged && m.fitness >= options.ok_min_fitness && m.inlier_rmse_m <= options.ok_max_rmse_m;
+  }
+
   void report_match(const MapMatch& m, const ScanInput& in, Localization3dResult& result) const {
     result.localised = true;
     result.state = Localization3dState::kTracking;
@@ -583,27 +619,40 @@ struct Localizer3d::Impl {
     if (recent_poses.size() > 2) recent_poses.erase(recent_poses.begin());
   }
 
-  /// Where the scan is expected: through the odometry, or, when it lost track on this scan (its
-  /// pose jumped), by the localiser's own last motion carried on (constant velocity).
+  /// Where the scan is expected: through the odometry, or, in lean tracking and when the odometry
+  /// lost track on this scan (its pose jumped), by the localiser's own last motion carried on
+  /// (constant velocity).
   core::SE3 predict(const ScanInput& in) const {
-    if (in.odometry_health != core::Health::kLost || recent_poses.empty()) return T_map_odom * in.T_odom_registered;
+    const bool own = !in.odometry_step || in.odometry_health == core::Health::kLost;
+    if (!own || recent_poses.empty()) return T_map_odom * in.T_odom_registered;
     const auto& [t1, T1] = recent_poses.back();
-    if (recent_poses.size() < 2) return T1;
-    const auto& [t0, T0] = recent_poses.front();
-    const double ratio = t1 > t0 ? (in.time_s - t1) / (t1 - t0) : 0.0;
-    return T1 * core::SE3::exp(ratio * (T0.inverse() * T1).log());
+    return T1 * core::SE3::exp(velocity_per_s() * (in.registered_time_s - t1));
+  }
+
+  /// The prediction, then the prediction turned about the map's vertical by each of
+  /// retry_yaw_offsets_rad (the start of a retry).
+  std::vector<core::SE3> retry_starts(const core::SE3& predicted) const {
+    std::vector<core::SE3> starts = {predicted};
+    for (const double yaw : options.retry_yaw_offsets_rad) {
+      starts.emplace_back(core::SO3::exp(Eigen::Vector3d(0.0, 0.0, yaw)) * predicted.so3(), predicted.translation());
+    }
+    return starts;
   }
 
   void track(const ScanInput& in, Localization3dResult& result, Localizer3dSummary& summary) {
     const auto start = Clock::now();
     const core::SE3 predicted = predict(in);
-    const bool coarse_first = in.odometry_health == core::Health::kLost;
+    const bool coarse_first = in.odometry_step && in.odometry_health == core::Health::kLost;
     MapMatch m = match(in, predicted, coarse_first);
-    if (!coarse_first && (!m.converged || m.fitness < options.ok_min_fitness)) {
-      // The odometry may be off by more than the correspondence distance (a fast turn): from
-      // the same prediction at the coarse distance first.
-      const MapMatch coarse = match(in, predicted, true);
-      if (coarse.score(options.max_correspondence_m) > m.score(options.max_correspondence_m)) m = coarse;
+    if (!coarse_first && !fits_ok(m)) {
+      // The prediction may be off by more than the correspondence distance (a turn whose rate
+      // changed between sparse scans): coarse to fine from it, then from it turned by each of
+      // retry_yaw_offsets_rad, until one fits `ok`; the best score wins.
+      for (const core::SE3& from : retry_starts(predicted)) {
+        const MapMatch retry = match(in, from, true);
+        if (retry.score(options.max_correspondence_m) > m.score(options.max_correspondence_m)) m = retry;
+        if (fits_ok(m)) break;
+      }
     }
     result.tracking_s += seconds_since(start);
     if (m.converged && m.fitness >= options.tracking_min_fitness) {
@@ -644,8 +693,8 @@ struct Localizer3d::Impl {
     const auto& [t0, T0] = recent_poses.front();
     const auto& [t1, T1] = recent_poses.back();
     if (!(t1 > t0)) return false;
-    const core::SE3 expected = T1 * core::SE3::exp(((in.time_s - t1) / (t1 - t0)) * (T0.inverse() * T1).log());
-    const double dt = in.time_s - t1;
+    const core::SE3 expected = T1 * core::SE3::exp(velocity_per_s() * (in.registered_time_s - t1));
+    const double dt = in.registered_time_s - t1;
     const double limit = options.jump_margin_m + 0.5 * options.max_acceleration_mps2 * dt * dt;
     const double off = (m.T_map_sensor.translation() - expected.translation()).norm();
     if (off <= limit) return false;
@@ -655,9 +704,9 @@ struct Localizer3d::Impl {
   }
 
   void accept_tracked(const MapMatch& m, const ScanInput& in, Localization3dResult& result) {
-    T_map_odom = m.T_map_sensor * in.T_odom_registered.inverse();
+    if (in.odometry_step) T_map_odom = m.T_map_sensor * in.T_odom_registered.inverse();
     failures = 0;
-    remember_pose(in.time_s, m.T_map_sensor);
+    remember_pose(in.registered_time_s, m.T_map_sensor);
     report_match(m, in, result);
     result.reason = result.health == core::Health::kOk ? "tracking"
                     : !m.weakest_axis.empty()          ? "tracking, degenerate along " + m.weakest_axis

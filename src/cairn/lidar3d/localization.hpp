@@ -7,16 +7,21 @@
 /// are proposed (Scan Context instead of branch and bound) and where odometry comes from.
 ///
 /// Odometry: the scans themselves. A LidarOdometry with the map's sensor model (so every scan is
-/// cropped, corrected and deskewed as the map's were) gives T_odom_sensor for every scan, the
-/// motion between scans that carries a hypothesis or the tracked pose from one scan to the next.
-/// Its points (last_frame_points, at half its voxel) are what is matched against the map.
+/// cropped, corrected and deskewed as the map's were) gives T_odom_sensor for every scan while
+/// searching, the motion between scans that carries a hypothesis from one scan to the next. Its
+/// points (last_frame_points, at half its voxel) are what is matched against the map. Once
+/// tracking has matched two scans, it needs no odometry (lean tracking): each scan is predicted by
+/// the localiser's own constant velocity and only prepared as the odometry would
+/// (LidarOdometry::prepare_scan), since the odometry's registration and map update cost more than
+/// the match against the map (KITTI key frames: 24 ms against 12; docs/lidar3d.md).
 ///
 /// Matching a scan against the map at a guess: Generalized-ICP (gicp.hpp) of the scan, thinned
 /// to `source_voxel_m` with covariances from its own half-voxel sampling, onto the map thinned
 /// to `target_voxel_m` with covariances from all of the map's points (the configuration that did
 /// best on the KITTI pairs, gicp.hpp), then fitness (the share of the scan's points with a map
-/// point within max_correspondence_m), inlier RMSE and the degeneracy of one point-to-plane
-/// linearisation at the result (registration.hpp), as pairwise_registration.hpp measures them.
+/// point within max_correspondence_m) and inlier RMSE at GICP's last linearisation, and the
+/// degeneracy of one point-to-plane linearisation at the result (registration.hpp) over at most
+/// 800 of the scan's points spread through it.
 /// From a place's descriptor guess, a point-to-plane ICP at `coarse_correspondence_m` first.
 ///
 /// States:
@@ -45,7 +50,10 @@
 ///    two places, ends within the agreement of that motion (the check the odometry's prediction
 ///    makes otherwise). Among several hypotheses, one that explains clearly less than the best
 ///    (`hypothesis_drop_deficit`) is dropped.
-///  - Tracking (health `ok` or `degraded`): the scan is matched at T_map_odom T_odom_sensor. `ok`
+///  - Tracking (health `ok` or `degraded`): the scan is matched at its prediction (constant
+///    velocity; through the odometry on the first scan after a relocalisation, or with
+///    `odometry_while_tracking`); when that does not fit `ok`, again coarse to fine from the
+///    prediction and from it turned by `retry_yaw_offsets_rad` (a turn between sparse scans). `ok`
 ///    when fitness >= ok_min_fitness and no direction is degenerate; `degraded` otherwise, with
 ///    the degenerate axis named. Fitness below tracking_min_fitness (or no convergence) is a
 ///    failure: the pose follows the odometry (`degraded`, dead reckoning), and `lost_after_failures`
@@ -56,9 +64,10 @@
 ///    whose odometry did not notice). So does a matched pose that jumped farther from the last
 ///    poses' constant velocity than `max_acceleration_mps2` allows.
 ///
-/// Every scan costs one odometry step, one match per live hypothesis (at most `max_hypotheses`)
-/// and, while searching, one descriptor query and at most `places_verified` coarse-to-fine
-/// matches.
+/// A searching scan costs one odometry step, one match per live hypothesis (at most
+/// `max_hypotheses`), one descriptor query and at most `places_verified` coarse-to-fine matches; a
+/// tracked scan its preparation and one match (more when retried), and the global search every
+/// `check_every_n_scans` scans.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -78,6 +87,13 @@ namespace cairn::lidar3d {
 struct Localizer3dOptions {
   /// Threads for the odometry and matching; 0 = all the machine has.
   int threads = 0;
+
+  /// False (lean tracking): once two scans were matched, tracking predicts each scan from the
+  /// localiser's own constant velocity and only prepares it (LidarOdometry::prepare_scan: crop,
+  /// deskew by that velocity, subsample), skipping the odometry's registration and map update,
+  /// which cost more than the match against the map itself (see docs/lidar3d.md). True: a whole
+  /// odometry step per tracked scan, whose motion predicts the match.
+  bool odometry_while_tracking = false;
 
   /// Matching (see the file comment), metres, each > 0.
   double source_voxel_m = 1.0;
@@ -100,6 +116,12 @@ struct Localizer3dOptions {
   double ok_max_rmse_m = 0.3;
   double tracking_min_fitness = 0.5;
   int lost_after_failures = 3;  ///< >= 1
+  /// A tracked scan that does not fit `ok` (converged, fitness and RMSE) at its prediction is
+  /// matched again coarse to fine from the prediction, then from the prediction turned about the
+  /// vertical by each of these (radians, finite), until one fits `ok`; the best score wins.
+  /// Between sparse scans in a turn constant velocity misjudges the yaw (KITTI key frames 3.5 m
+  /// apart at an intersection: 10-12 degrees, where the match from the prediction fails).
+  std::vector<double> retry_yaw_offsets_rad = {0.175, -0.175, 0.35, -0.35};
 
   /// Searching: descriptor candidates (Scan Context's nearest ring keys, > 0), the largest
   /// descriptor distance verified (in [0, 1]), distinct places verified per scan (>= 1) and what
@@ -164,6 +186,8 @@ struct Localization3dResult {
   double inlier_rmse_m = 0.0;
   double translation_degeneracy = 0.0;
   std::string degenerate_axis;  ///< empty unless a direction was degenerate
+  /// Whether an odometry step ran on this scan (false in lean tracking); its health when it did.
+  bool odometry_step = true;
   core::Health odometry_health = core::Health::kOk;
   int live_hypotheses = 0;
   /// Why the health is what it is, in words ("tracking", "fitness 0.52 below 0.7", ...).

@@ -36,7 +36,8 @@ void write_localization_csv(const std::vector<Localization3dResult>& results, co
       }
       // The reason holds commas only inside quotes (RFC 4180).
       o << r.fitness << ',' << r.inlier_rmse_m << ',' << r.translation_degeneracy << ',' << r.degenerate_axis << ','
-        << (r.dead_reckoning ? 1 : 0) << ',' << (r.relocalised ? 1 : 0) << ',' << core::to_string(r.odometry_health) << ','
+        << (r.dead_reckoning ? 1 : 0) << ',' << (r.relocalised ? 1 : 0) << ','
+        << (r.odometry_step ? core::to_string(r.odometry_health) : std::string_view("not run")) << ','
         << r.live_hypotheses << ",\"" << r.reason << "\"," << 1e3 * r.total_s << '\n';
     }
   });

@@ -70,9 +70,16 @@ bool LidarOdometryOptions::is_valid(std::string* error) const {
 }
 
 Eigen::Vector3d correct_vertical_angle(const Eigen::Vector3d& p, double correction_rad) {
-  const Eigen::Vector3d axis(p.y(), -p.x(), 0.0);  // p x z
-  const double axis_norm = axis.norm();
-  return axis_norm > 0.0 ? Eigen::Vector3d(Eigen::AngleAxisd(correction_rad, axis / axis_norm) * p) : p;
+  return correct_vertical_angle(p, std::cos(correction_rad), std::sin(correction_rad));
+}
+
+// Rodrigues' formula about the unit axis k = (y, -x, 0) / r, r = |(x, y)|: k . p = 0, so
+// p' = p cos + (k x p) sin with k x p = (-x z / r, -y z / r, r).
+Eigen::Vector3d correct_vertical_angle(const Eigen::Vector3d& p, double cos_correction, double sin_correction) {
+  const double r = std::hypot(p.x(), p.y());
+  if (!(r > 0.0)) return p;
+  const double lift = p.z() * sin_correction / r;
+  return {p.x() * (cos_correction - lift), p.y() * (cos_correction - lift), p.z() * cos_correction + r * sin_correction};
 }
 
 LidarOdometryOptions preset_options(std::string_view name) {
@@ -182,6 +189,27 @@ OdometryScanResult LidarOdometry::add_scan(const io::PointCloud& cloud, double t
   return result;
 }
 
+LidarOdometry::PreparedScan LidarOdometry::prepare_scan(const io::PointCloud& cloud, double time_s,
+                                                       const Eigen::Matrix<double, 6, 1>& velocity_per_s) const {
+  if (!std::isfinite(time_s)) throw std::invalid_argument("LidarOdometry::prepare_scan: the scan time must be finite");
+  OdometryScanResult checks;
+  ScanWork work;
+  work.time_s = time_s;
+  work.velocity = velocity_per_s;
+  choose_point_times(cloud, work, checks);
+  crop_and_correct(cloud, work);  // work.loam stays false: no rings, no features
+  sweep_instants(work);
+  PreparedScan prepared;
+  prepared.registered_time_s = work.t_mid;
+  prepared.point_times_unusable = checks.point_times_unusable;
+  arena_->arena.execute([&] {
+    if (work.deskew && !velocity_per_s.isZero()) deskew_to_sweep_middle(work);
+    prepared.frame_sensor = voxel_downsample(work.points, 0.5 * options_.voxel_size_m);
+  });
+  prepared.T_registered_stamp = core::SE3::exp(velocity_per_s * (work.tau_0 - work.tau_mid));
+  return prepared;
+}
+
 // Step 2's times: the file's per-point times where usable (DeskewMode::kPointTimes), the
 // azimuth's (kAzimuth), or none.
 void LidarOdometry::choose_point_times(const io::PointCloud& cloud, ScanWork& work, OdometryScanResult& result) const {
@@ -244,11 +272,12 @@ void LidarOdometry::crop_and_correct(const io::PointCloud& cloud, ScanWork& work
   if (work.deskew) point_time.reserve(cloud.size());
   if (work.loam) point_ring.reserve(cloud.size());
   const double correction = options_.vertical_angle_correction_rad;
+  const double cos_correction = std::cos(correction), sin_correction = std::sin(correction);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     Eigen::Vector3d p = cloud.points[i].cast<double>();
     const double r2 = p.squaredNorm();
     if (r2 < min2 || r2 > max2) continue;
-    if (correction != 0.0) p = correct_vertical_angle(p, correction);
+    if (correction != 0.0) p = correct_vertical_angle(p, cos_correction, sin_correction);
     points.push_back(p);
     if (work.loam) point_ring.push_back((*rings)[i]);
     if (work.deskew) {

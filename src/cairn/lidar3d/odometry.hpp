@@ -142,6 +142,8 @@ struct LidarOdometryOptions {
 /// `p` (sensor frame) with the vertical-angle correction (LidarOdometryOptions::
 /// vertical_angle_correction_rad): turned by `correction_rad` about p x z, toward +z.
 Eigen::Vector3d correct_vertical_angle(const Eigen::Vector3d& p, double correction_rad);
+/// The same with the correction's cosine and sine given (a whole scan shares one angle).
+Eigen::Vector3d correct_vertical_angle(const Eigen::Vector3d& p, double cos_correction, double sin_correction);
 
 /// Named starting configurations: "default" (KISS-ICP's defaults with point-to-plane
 /// registration and deskew from per-point times where the files have them) and "kitti" (for
@@ -203,6 +205,23 @@ class LidarOdometry {
   /// at the registration instant, every point is deskewed by the prior's pose at its own time, and
   /// the first scan takes the prior's pose (an IMU's gravity-aligned frame) instead of the identity.
   OdometryScanResult add_scan(const io::PointCloud& cloud, double time_s, const MotionPrior* prior = nullptr);
+
+  /// One scan prepared as add_scan prepares it (steps 2-3: point times, crop, vertical-angle
+  /// correction, deskew to the sweep's middle, subsampling at 0.5 v), without registering it or
+  /// changing the odometry: what a localiser tracking against a saved map matches in place of a
+  /// whole odometry step (localization.hpp). `velocity_per_s` is the sensor's twist per second
+  /// (core::SE3::log of the motion over one second, translation first) that deskews the points;
+  /// zero leaves them as taken. No LOAM features are extracted, so no rings are needed. Throws
+  /// std::invalid_argument for a non-finite time.
+  struct PreparedScan {
+    std::vector<Eigen::Vector3d> frame_sensor;  ///< as last_frame_points(): sensor frame at the sweep's middle
+    double registered_time_s = 0.0;             ///< the sweep's middle (the stamp when not deskewed)
+    /// The motion from the sweep's middle to the stamp by `velocity_per_s` (identity when the
+    /// stamp is the middle): T_world_stamp = T_world_registered * T_registered_stamp.
+    core::SE3 T_registered_stamp;
+    bool point_times_unusable = false;          ///< as OdometryScanResult's
+  };
+  PreparedScan prepare_scan(const io::PointCloud& cloud, double time_s, const Eigen::Matrix<double, 6, 1>& velocity_per_s) const;
 
   const VoxelHashMap& local_map() const { return map_; }
   /// The last scan's points as they went into the map (corrected, deskewed, cropped, subsampled at

@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <unordered_set>
 
@@ -13,14 +14,67 @@ Voxel voxel_of(const Eigen::Vector3d& point, double inverse_voxel_size) {
                static_cast<int>(std::floor(point.z() * inverse_voxel_size)));
 }
 
-std::vector<Eigen::Vector3d> voxel_downsample(const std::vector<Eigen::Vector3d>& points, double voxel_size_m) {
-  const double inverse = 1.0 / voxel_size_m;
+namespace {
+
+/// A voxel's coordinates packed into 63 bits (21 per axis, offset to be non-negative), plus one so
+/// that 0 marks an empty slot; false when a coordinate lies outside [-2^20, 2^20) voxels.
+bool pack_voxel(const Eigen::Vector3d& point, double inverse_voxel_size, std::uint64_t* key) {
+  constexpr double kLimit = 1048576.0;  // 2^20
+  const double x = std::floor(point.x() * inverse_voxel_size), y = std::floor(point.y() * inverse_voxel_size),
+               z = std::floor(point.z() * inverse_voxel_size);
+  if (!(x >= -kLimit && x < kLimit && y >= -kLimit && y < kLimit && z >= -kLimit && z < kLimit)) return false;
+  const auto u = [&](double c) { return static_cast<std::uint64_t>(c + kLimit); };
+  *key = ((u(x) << 42) | (u(y) << 21) | u(z)) + 1;
+  return true;
+}
+
+/// voxel_downsample with a node-based set: for coordinates pack_voxel cannot hold.
+std::vector<Eigen::Vector3d> voxel_downsample_any(const std::vector<Eigen::Vector3d>& points, double inverse) {
   std::unordered_set<Voxel, VoxelHash> seen;
   seen.reserve(points.size());
   std::vector<Eigen::Vector3d> out;
   out.reserve(points.size() / 4);
   for (const Eigen::Vector3d& p : points) {
     if (seen.insert(voxel_of(p, inverse)).second) out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace
+
+// One open-addressing table of packed voxel keys (linear probing, grown to stay at most half
+// full): a scan of 120,000 points is subsampled several times faster than with
+// std::unordered_set, whose node per voxel dominated the localiser's preparation of a scan
+// (measured on the KITTI key frames). The table starts small: a scan has far fewer voxels than
+// points, and zeroing a table sized for the points cost more than the subsampling.
+std::vector<Eigen::Vector3d> voxel_downsample(const std::vector<Eigen::Vector3d>& points, double voxel_size_m) {
+  const double inverse = 1.0 / voxel_size_m;
+  std::vector<std::uint64_t> table(1024, 0);
+  std::uint64_t mask = table.size() - 1;
+  int shift = 64 - 10;  // Fibonacci hashing: the product's top log2(size) bits, which every key bit reaches
+  const auto slot_of = [&](std::uint64_t key) {
+    std::uint64_t slot = (key * 0x9E3779B97F4A7C15ull) >> shift;
+    while (table[slot] != 0 && table[slot] != key) slot = (slot + 1) & mask;
+    return slot;
+  };
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(points.size() / 8);
+  for (const Eigen::Vector3d& p : points) {
+    std::uint64_t key = 0;
+    if (!pack_voxel(p, inverse, &key)) return voxel_downsample_any(points, inverse);
+    const std::uint64_t slot = slot_of(key);
+    if (table[slot] != 0) continue;
+    table[slot] = key;
+    out.push_back(p);
+    if (2 * out.size() > table.size()) {
+      std::vector<std::uint64_t> old(table.size() * 2, 0);
+      old.swap(table);
+      mask = table.size() - 1;
+      --shift;
+      for (const std::uint64_t k : old) {
+        if (k != 0) table[slot_of(k)] = k;
+      }
+    }
   }
   return out;
 }
