@@ -39,12 +39,14 @@ struct Localize3dFlags {
   int confirmations = 0;
   int picture_px = 1600;
   bool quiet = false, progress = false, overwrite = false;
+  bool odometry_while_tracking = false;
 };
 
 lidar3d::Localizer3dOptions localizer_options(const Localize3dFlags& flags) {
   lidar3d::Localizer3dOptions options;
   options.threads = flags.threads;
   if (flags.confirmations > 0) options.confirmations = flags.confirmations;
+  options.odometry_while_tracking = flags.odometry_while_tracking;
   return options;
 }
 
@@ -155,6 +157,9 @@ Runner register_localize3d(CLI::App& app) {
   app.add_option("--confirmations", flags->confirmations,
                  "Scans that must support a place before it is accepted (default 2)")
       ->check(checks::count());
+  app.add_flag("--odometry-while-tracking", flags->odometry_while_tracking,
+               "Run the odometry on every tracked scan and predict through it (default: the localiser's own "
+               "constant velocity, no odometry step while tracking)");
   app.add_option("--threads", flags->threads, "Threads (0 = all; more than the machine has are clamped)")
       ->transform(checks::threads())
       ->capture_default_str();

@@ -9,6 +9,7 @@
 // linking, more than a whole solve of a small pose graph (docs/benchmarks.md, "Certified global
 // optimality"); a command that does not draw or see should not pay it.
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -53,6 +54,12 @@ namespace {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Large buffers (a scan's 120,000 points are 3 MB) come from the heap and stay there: with
+  // glibc's defaults each one is a fresh mmap whose pages fault in again on every scan, which on
+  // this project's 2-core VM cost localize3d 6 of its 9 ms of preparation per scan (docs/lidar3d.md,
+  // "Tracking time"). Fixed thresholds also stop glibc from raising them on its own.
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
   CLI::App app{
       "cairn: SLAM that tells you how good its answer is.\n"
       "Pose graphs (g2o, TORO) and trajectories (TUM, KITTI, EuRoC) in, maps and reports out."};
