@@ -133,10 +133,12 @@ TEST(Localization3dSimulation, KidnappedInTheGarageOfIdenticalBaysItIsNeverWrong
   const Outcome o = localise_with_kidnap(map, mapped, run, n / 4, n / 2, n / 2 + 120);
   EXPECT_EQ(o.wrong_relocalisations, 0u);
   // The scans just after the carry are tracked on at the old place: the garage repeats, the scan
-  // fits there as well as where it is (fitness 0.96), and the odometry followed it without a jump.
-  // Nothing in one scan tells them apart; tracking ends once the scans stop fitting (measured: 4
-  // scans) and the localiser then stays lost (every bay explains the scans). Bounded, not zero.
-  EXPECT_LE(o.wrong_tracked, 5u);
+  // fits there as well as where it is (fitness 0.96), and constant velocity (or the odometry)
+  // follows it without a jump. Nothing in one scan tells them apart; tracking ends once the scans
+  // stop fitting and the localiser then stays lost (every bay explains the scans). Bounded, not
+  // zero. Measured: 6 scans with lean tracking (the default), 4 with odometry_while_tracking,
+  // whose odometry registration loses the fit a little sooner.
+  EXPECT_LE(o.wrong_tracked, 6u);
 }
 
 }  // namespace

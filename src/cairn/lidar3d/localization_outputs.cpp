@@ -73,11 +73,14 @@ namespace {
 
 nlohmann::json options_json(const Localizer3dOptions& o) {
   return {{"threads", o.threads},
+          {"odometry_while_tracking", o.odometry_while_tracking},
           {"source_voxel_m", o.source_voxel_m},
           {"target_voxel_m", o.target_voxel_m},
           {"max_correspondence_m", o.max_correspondence_m},
           {"coarse_correspondence_m", o.coarse_correspondence_m},
           {"max_iterations", o.max_iterations},
+          {"tracking_max_iterations", o.tracking_max_iterations},
+          {"step_tolerance", o.step_tolerance},
           {"verification_min_fitness", o.verification_min_fitness},
           {"verification_max_rmse_m", o.verification_max_rmse_m},
           {"min_translation_degeneracy", o.min_translation_degeneracy},
@@ -85,6 +88,7 @@ nlohmann::json options_json(const Localizer3dOptions& o) {
           {"ok_max_rmse_m", o.ok_max_rmse_m},
           {"tracking_min_fitness", o.tracking_min_fitness},
           {"lost_after_failures", o.lost_after_failures},
+          {"retry_yaw_offsets_rad", o.retry_yaw_offsets_rad},
           {"candidates", o.candidates},
           {"max_descriptor_distance", o.max_descriptor_distance},
           {"places_verified", o.places_verified},
