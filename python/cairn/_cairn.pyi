@@ -595,7 +595,8 @@ class LidarSlam:
 
 class Localizer3d:
     """Localisation in a saved 3D map, as `cairn localize3d` runs it; the map is never changed."""
-    def __init__(self, map: _Path, *, confirmations: int = 2, threads: int = 0) -> None: ...
+    def __init__(self, map: _Path, *, confirmations: int = 2, threads: int = 0,
+                 odometry_while_tracking: bool = False) -> None: ...
     @overload
     def add_scan(self, cloud: PointCloud, time: float) -> dict[str, Any]:
         """state, health, localised, pose (4 x 4 or None), relocalised, dead_reckoning, fitness, inlier_rmse_m,

@@ -293,18 +293,21 @@ void bind_localizer3d(py::module_& m) {
   py::class_<LocalizerSession>(m, "Localizer3d",
                                "Localisation in a map saved by `cairn slam3d --save-map` or LidarSlam.save_map "
                                "(lidar3d::Localizer3d, as `cairn localize3d` runs it); the map is never changed.")
-      .def(py::init([](const py::object& map, int confirmations, int threads) {
+      .def(py::init([](const py::object& map, int confirmations, int threads, bool odometry_while_tracking) {
              if (confirmations < 1) throw_value_error("confirmations: expected >= 1");
              if (threads < 0) throw_value_error("threads: expected >= 0 (0: all)");
              lidar3d::Localizer3dOptions options;
              options.confirmations = confirmations;
              options.threads = threads;
+             options.odometry_while_tracking = odometry_while_tracking;
              const std::string path = fspath(map);
              const py::gil_scoped_release release;
              return std::make_unique<LocalizerSession>(path, options);
            }),
            py::arg("map"), py::kw_only(), py::arg("confirmations") = 2, py::arg("threads") = 0,
-           "Reads the map (cairn.ParseError naming the file when it is damaged) and builds its search structures.")
+           py::arg("odometry_while_tracking") = false,
+           "Reads the map (cairn.ParseError naming the file when it is damaged) and builds its search structures. "
+           "odometry_while_tracking: an odometry step on every tracked scan, as `--odometry-while-tracking`.")
       .def("add_scan", &LocalizerSession::add_scan, py::arg("cloud"), py::arg("time"),
            "Localises one scan taken at `time` (seconds, strictly increasing): a dict with state, health, localised, "
            "pose (4 x 4 in the map frame, or None while searching), relocalised, dead_reckoning, fitness, inlier_rmse_m, "

@@ -424,6 +424,18 @@ def test_localize3d_from_python_equals_the_cli(kitti_keyframes, cli, tmp_path):
     poses, stamps = localizer.trajectory()
     assert poses.shape[0] == stamps.shape[0] >= len(files) - 2  # relocalised within the first 3 scans
     assert localizer.report()["summary"]["localised"] == poses.shape[0]
+    # The same with an odometry step on every tracked scan.
+    run_cli(cli, "localize3d", *files, "--map", tmp_path / "map.c3dm", "--times", tmp_path / "times.txt",
+            "--out", tmp_path / "cli_odometry", "-q", "--odometry-while-tracking")
+    rows = read_csv(tmp_path / "cli_odometry" / "scans.csv")
+    localizer = cairn.Localizer3d(tmp_path / "map.c3dm", odometry_while_tracking=True)
+    for (path, stamp), row in zip(sequence[8:], rows):
+        result = localizer.add_scan(cairn.read_point_cloud(path), stamp)
+        assert result["localised"] == (row["localised"] == "1")
+        if result["localised"]:
+            np.testing.assert_array_equal(result["pose"][:3, 3], [float(row["x"]), float(row["y"]), float(row["z"])])
+    assert localizer.report()["options"]["odometry_while_tracking"] is True
+    assert all(row["odometry_health"] != "not run" for row in rows)
     (tmp_path / "cut.c3dm").write_bytes((tmp_path / "map.c3dm").read_bytes()[:1000])
     with pytest.raises(cairn.ParseError, match="cut.c3dm"):
         cairn.Localizer3d(tmp_path / "cut.c3dm")
