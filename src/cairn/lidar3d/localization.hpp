@@ -201,8 +201,9 @@ struct Localization3dResult {
   int live_hypotheses = 0;
   /// Why the health is what it is, in words ("tracking", "fitness 0.52 below 0.7", ...).
   std::string reason;
-  /// Seconds: the odometry step, matching against the map (tracking and hypotheses), the global
-  /// search (descriptor and verification), and the whole call.
+  /// Seconds: the odometry step (in lean tracking the scan's preparation alone) with the scan's
+  /// matching cloud, matching against the map (tracking and hypotheses), the global search
+  /// (descriptor and verification), and the whole call.
   double odometry_s = 0.0;
   double tracking_s = 0.0;
   double search_s = 0.0;

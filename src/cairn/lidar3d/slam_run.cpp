@@ -1,5 +1,7 @@
 #include "cairn/lidar3d/slam_run.hpp"
 
+#include <cmath>
+
 #include "cairn/lidar3d/voxel_hash_map.hpp"
 
 namespace cairn::lidar3d {
@@ -16,11 +18,12 @@ void SlamRun::add_scan(std::size_t sequence_index, const io::PointCloud& cloud, 
     std::vector<Eigen::Vector3d> points;
     points.reserve(cloud.size());
     const double max2 = max_range_m_ * max_range_m_, min2 = min_range_m_ * min_range_m_;
+    const double cos_correction = std::cos(vertical_angle_correction_rad_), sin_correction = std::sin(vertical_angle_correction_rad_);
     for (const Eigen::Vector3f& p : cloud.points) {
       const double r2 = p.cast<double>().squaredNorm();
       if (r2 < min2 || r2 > max2) continue;
       // Corrected as the odometry corrects them (KITTI's 0.205 deg), or map.ply's far points bend.
-      points.push_back(vertical_angle_correction_rad_ != 0.0 ? correct_vertical_angle(p.cast<double>(), vertical_angle_correction_rad_)
+      points.push_back(vertical_angle_correction_rad_ != 0.0 ? correct_vertical_angle(p.cast<double>(), cos_correction, sin_correction)
                                                              : Eigen::Vector3d(p.cast<double>()));
     }
     keyframe_points_.push_back(voxel_downsample(points, global_map_.voxel_size_m()));
