@@ -786,6 +786,9 @@ class VisualFrameResult:
     @property
     def relocalised(self) -> bool: ...
     @property
+    def relocalisation_refused(self) -> bool:
+        """A relocalisation candidate was refused (ambiguous, or too few inliers); the reason is in note."""
+    @property
     def loop_closed(self) -> bool: ...
     @property
     def new_map(self) -> bool: ...

@@ -311,6 +311,8 @@ void bind_vslam_result(py::module_& m) {
       .def_readonly("inlier_ratio", &R::inlier_ratio)
       .def_readonly("keyframe", &R::keyframe)
       .def_readonly("relocalised", &R::relocalised)
+      .def_readonly("relocalisation_refused", &R::relocalisation_refused,
+                    "A relocalisation candidate was refused (ambiguous, or too few inliers); the reason is in note.")
       .def_readonly("loop_closed", &R::loop_closed)
       .def_readonly("new_map", &R::new_map, "This frame started a new map segment.")
       .def_readonly("segment", &R::segment)

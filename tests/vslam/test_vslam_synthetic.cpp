@@ -628,7 +628,12 @@ std::vector<KidnapOutcome> run_kidnaps(const SyntheticWorld& world, const std::v
                   "segment, %.3f m absolute %s\n",
                   kidnap.name, k, k - jumps[n], health_name(r.health), r.tracked ? 1 : 0, r.relocalised ? 1 : 0, r.new_map ? 1 : 0,
                   r.segment, r.inliers, e, position_error(run, k, r.T_world_camera), r.note.c_str());
-      out.refusals += r.note.find("ambiguous relocalisation") != std::string::npos ? 1 : 0;
+      const bool ambiguous = r.note.find("ambiguous relocalisation") != std::string::npos;
+      out.refusals += ambiguous ? 1 : 0;
+      // The refusal is flagged, not only written: report.json's relocalisations_refused reads it.
+      if (ambiguous) {
+        EXPECT_TRUE(r.relocalisation_refused && !r.tracked) << kidnap.name << " frame " << k;
+      }
       if (!r.tracked) {
         ++out.lost;
       } else if (e <= 0.5) {

@@ -239,7 +239,7 @@ nlohmann::json localization_json(const RunInput& input, const VisualSlam& slam, 
   for (const FrameResult& r : results) {
     tracked += r.tracked ? 1 : 0;
     relocalised += r.relocalised ? 1 : 0;
-    if (!r.tracked && (r.note.find("relocalisation") != std::string::npos)) refused.push_back({{"frame", r.frame}, {"reason", r.note}});
+    if (r.relocalisation_refused) refused.push_back({{"frame", r.frame}, {"reason", r.note}});
   }
   return {{"map", input.map_path},
           {"map_keyframes", slam.keyframe_poses().size()},

@@ -900,6 +900,7 @@ void VisualSlam::Impl::verify_relocalisation(TrackingFrame& w) {
                                                        w.relocalisation_nodes.empty() ? nullptr : &w.relocalisation_nodes);
     if (!ambiguous.empty()) {
       result.note = ambiguous;
+      result.relocalisation_refused = true;
       inliers = 0;
       ++summary->relocalisations_ambiguous;
     }
@@ -907,6 +908,7 @@ void VisualSlam::Impl::verify_relocalisation(TrackingFrame& w) {
   if (w.relocalising && inliers >= options.lost_below_inliers && inliers < options.relocalisation_min_inliers) {
     result.note = "relocalisation candidate with " + std::to_string(inliers) + " inliers (< " +
                   std::to_string(options.relocalisation_min_inliers) + " needed after being lost): still lost";
+    result.relocalisation_refused = true;
     inliers = 0;
   }
   if (w.unverified_start && inliers >= options.lost_below_inliers && inliers < options.relocalisation_min_inliers) {

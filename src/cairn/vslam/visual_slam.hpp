@@ -178,6 +178,9 @@ struct FrameResult {
   double inlier_ratio = 0.0;   ///< inliers / matches given to that optimisation
   bool keyframe = false;
   bool relocalised = false;  ///< the pose came from a place-recognition match after being lost
+  /// A relocalisation candidate was found and refused (ambiguous, or fewer inliers than
+  /// relocalisation_min_inliers): the frame stays lost, the reason in `note`.
+  bool relocalisation_refused = false;
   bool loop_closed = false;  ///< this frame's keyframe closed a loop
   bool new_map = false;      ///< this frame started a new map segment after being lost
   int segment = 0;           ///< the map segment the frame was tracked in (at that time)
