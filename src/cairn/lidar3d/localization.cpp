@@ -667,8 +667,8 @@ struct Localizer3d::Impl {
     MapMatch m = match(in, predicted, coarse_first, coarse_first ? 0 : options.tracking_max_iterations);
     if (!coarse_first && !fits_ok(m)) {
       // The prediction may be off by more than the correspondence distance (a turn whose rate
-      // changed between sparse scans): coarse to fine from it, then from it turned by each of
-      // retry_yaw_offsets_rad, until one fits `ok`; the best score wins.
+      // changed between sparse scans): coarse to fine from it and from it turned by each of
+      // retry_yaw_offsets_rad, in retry_starts' order, until one fits `ok`; the best score wins.
       for (const core::SE3& from : retry_starts(in, predicted)) {
         const MapMatch retry = match(in, from, true);
         if (retry.score(options.max_correspondence_m) > m.score(options.max_correspondence_m)) m = retry;
