@@ -12,7 +12,7 @@
 // then a second run with other noise through the same world: from the office start, localised
 // from no prior, picked up after a while and put down elsewhere (the odometry shows no motion
 // across the jump): on the ring corridor (KidnappedRobotTenSeeds) or in a room, mostly unmapped
-// (KidnappedIntoRoomsTenSeeds). The seed sets the noise of both runs, the
+// (KidnappedIntoRoomsFourSeeds in `make test`, all ten on demand). The seed sets the noise of both runs, the
 // time of the pick-up, where the robot is put down and its heading.
 
 #include <gtest/gtest.h>
@@ -167,7 +167,7 @@ constexpr double kAfterJumpS = 40.0;
 
 // Where the second run's robot is put down: a point of the ring corridor (mapped, and told
 // apart by its furniture) or the centre of a room (mostly unmapped: the map saw it through its
-// door; see KidnappedIntoRoomsTenSeeds).
+// door; see expect_relocalised_after_kidnappings_into_rooms).
 enum class Drop { kRing, kRoom };
 
 SeedResult run_seed(std::uint64_t seed, Drop drop, const fs::path& dir) {
@@ -332,11 +332,11 @@ TEST(LocalizationSimulation, KidnappedRobotTenSeeds) {
 // the end of the run (out of the room and along the ring: how soon is printed, not asserted;
 // where a partly mapped twin fits, not before the robot has left the room). Before the
 // partly-mapped look-alike test (2026-11-28) 6 of the 10 seeds relocalised in a room 7-21 m away.
-TEST(LocalizationSimulation, KidnappedIntoRoomsTenSeeds) {
+void expect_relocalised_after_kidnappings_into_rooms(std::uint64_t first, std::uint64_t last) {
   const fs::path dir = temp_dir("kidnapping-rooms");
   std::size_t wrong_relocalisations = 0, wrong_ok = 0, refusals = 0;
   double total_s = 0.0;
-  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+  for (std::uint64_t seed = first; seed <= last; ++seed) {
     const SeedResult r = run_seed(seed, Drop::kRoom, dir);
     total_s += r.total_s;
     print(r);
@@ -349,10 +349,16 @@ TEST(LocalizationSimulation, KidnappedIntoRoomsTenSeeds) {
     EXPECT_TRUE(r.lost_after.has_value()) << "seed " << seed << ": never lost after the kidnapping";
     EXPECT_TRUE(r.relocalised_after.has_value()) << "seed " << seed << ": not relocalised";
   }
-  std::printf("10 seeds: %zu wrong relocalisations, %zu wrong ok poses, %zu acceptances refused; %.1f s\n",
-              wrong_relocalisations, wrong_ok, refusals, total_s);
+  std::printf("seeds %d-%d: %zu wrong relocalisations, %zu wrong ok poses, %zu acceptances refused; %.1f s\n",
+              static_cast<int>(first), static_cast<int>(last), wrong_relocalisations, wrong_ok, refusals, total_s);
   fs::remove_all(dir);
 }
+
+// Four seeds in `make test` (about 35 s; drops into rooms the map saw only through their doors, seeds
+// 1, 2 and 4, and one it drove through, seed 3); all ten (about 90 s) on demand:
+//   build/tests/slam2d/test_slam2d_localization_sim --gtest_also_run_disabled_tests --gtest_filter='*DISABLED_KidnappedIntoRooms*'
+TEST(LocalizationSimulation, KidnappedIntoRoomsFourSeeds) { expect_relocalised_after_kidnappings_into_rooms(1, 4); }
+TEST(LocalizationSimulation, DISABLED_KidnappedIntoRoomsTenSeeds) { expect_relocalised_after_kidnappings_into_rooms(1, 10); }
 
 }  // namespace
 }  // namespace cairn::slam2d
