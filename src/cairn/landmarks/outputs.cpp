@@ -133,74 +133,84 @@ void write_report_json(const std::string& path, const LandmarkSlamReport& report
   io::write_output(path, [&](std::ostream& out) { out << report_json(report); });
 }
 
-void write_landmarks_png(const std::string& path, const LandmarkRun& run, const LandmarkSlamResult& result) {
-  // World bounds over everything drawn.
-  Vector2 low(1e300, 1e300);
-  Vector2 high(-1e300, -1e300);
+namespace {
+
+/// The picture's frame: the world box over everything drawn (1 m added around it), its scale and
+/// the canvas, with the legend's strip below the map.
+struct LandmarkCanvas {
+  Vector2 low, high;
+  double scale = 1.0;
+  double margin = 20.0;
+  double legend = 60.0;
+  int width = 0, height = 0;
+
+  Vector2 to_pixel(const Vector2& p) const { return Vector2(margin + (p.x() - low.x()) * scale, margin + (high.y() - p.y()) * scale); }
+};
+
+LandmarkCanvas landmark_canvas(const LandmarkRun& run, const LandmarkSlamResult& result) {
+  LandmarkCanvas c;
+  c.low = Vector2(1e300, 1e300);
+  c.high = Vector2(-1e300, -1e300);
   const auto grow = [&](const Vector2& p) {
     if (!p.allFinite()) return;
-    low = low.cwiseMin(p);
-    high = high.cwiseMax(p);
+    c.low = c.low.cwiseMin(p);
+    c.high = c.high.cwiseMax(p);
   };
   for (const TimedPose& p : result.trajectory) grow(p.pose.head<2>());
   for (const TimedPose& p : run.ground_truth) grow(p.pose.head<2>());
   for (const auto& [id, p] : run.true_landmarks) grow(p);
   for (const LandmarkEstimate& l : result.landmarks) grow(l.p_world);
-  if (!(low.x() <= high.x())) {
-    low = Vector2(-1, -1);
-    high = Vector2(1, 1);
+  if (!(c.low.x() <= c.high.x())) {
+    c.low = Vector2(-1, -1);
+    c.high = Vector2(1, 1);
   }
-  low -= Vector2(1.0, 1.0);
-  high += Vector2(1.0, 1.0);
-  const Vector2 size = high - low;
-  const double scale = std::min(25.0, 2000.0 / std::max({size.x(), size.y(), 1.0}));
-  const double margin = 20.0;
-  const double legend = 60.0;
-  const int width = static_cast<int>(std::ceil(size.x() * scale + 2 * margin));
-  const int height = static_cast<int>(std::ceil(size.y() * scale + 2 * margin + legend));
-  viz::CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height));
-  viz::CairoContext context(cairo_create(surface.get()));
-  cairo_t* cr = context.get();
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
-  const auto to_pixel = [&](const Vector2& p) {
-    return Vector2(margin + (p.x() - low.x()) * scale, margin + (high.y() - p.y()) * scale);
-  };
-  const auto polyline = [&](const std::vector<TimedPose>& poses, double r, double g, double b, double line_width) {
-    if (poses.empty()) return;
-    cairo_set_source_rgb(cr, r, g, b);
-    cairo_set_line_width(cr, line_width);
-    bool first = true;
-    for (const TimedPose& p : poses) {
-      const Vector2 q = to_pixel(p.pose.head<2>());
-      if (first) {
-        cairo_move_to(cr, q.x(), q.y());
-        first = false;
-      } else {
-        cairo_line_to(cr, q.x(), q.y());
-      }
+  c.low -= Vector2(1.0, 1.0);
+  c.high += Vector2(1.0, 1.0);
+  const Vector2 size = c.high - c.low;
+  c.scale = std::min(25.0, 2000.0 / std::max({size.x(), size.y(), 1.0}));
+  c.width = static_cast<int>(std::ceil(size.x() * c.scale + 2 * c.margin));
+  c.height = static_cast<int>(std::ceil(size.y() * c.scale + 2 * c.margin + c.legend));
+  return c;
+}
+
+void draw_polyline(cairo_t* cr, const LandmarkCanvas& c, const std::vector<TimedPose>& poses, double r, double g, double b,
+                   double line_width) {
+  if (poses.empty()) return;
+  cairo_set_source_rgb(cr, r, g, b);
+  cairo_set_line_width(cr, line_width);
+  bool first = true;
+  for (const TimedPose& p : poses) {
+    const Vector2 q = c.to_pixel(p.pose.head<2>());
+    if (first) {
+      cairo_move_to(cr, q.x(), q.y());
+      first = false;
+    } else {
+      cairo_line_to(cr, q.x(), q.y());
     }
-    cairo_stroke(cr);
-  };
-  polyline(run.odometry, 0.95, 0.6, 0.2, 1.0);      // dead reckoning: orange
-  polyline(run.ground_truth, 0.2, 0.35, 0.9, 1.5);  // ground truth: blue
-  polyline(result.trajectory, 0.85, 0.1, 0.1, 1.0); // estimate: red
-  // True landmarks: black crosses.
+  }
+  cairo_stroke(cr);
+}
+
+/// True landmarks: black crosses.
+void draw_true_landmarks(cairo_t* cr, const LandmarkCanvas& c, const LandmarkRun& run) {
   cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_set_line_width(cr, 1.0);
   for (const auto& [id, p] : run.true_landmarks) {
-    const Vector2 q = to_pixel(p);
+    const Vector2 q = c.to_pixel(p);
     cairo_move_to(cr, q.x() - 4, q.y() - 4);
     cairo_line_to(cr, q.x() + 4, q.y() + 4);
     cairo_move_to(cr, q.x() - 4, q.y() + 4);
     cairo_line_to(cr, q.x() + 4, q.y() - 4);
   }
   cairo_stroke(cr);
-  // Estimates: green dots with 95% ellipses (radius sqrt(chi2inv(0.95, 2) lambda_i) along the
-  // eigenvectors of the 2x2 covariance), magnified 10x when tiny so they stay visible.
+}
+
+/// Estimates: green dots with 95% ellipses (radius sqrt(chi2inv(0.95, 2) lambda_i) along the
+/// eigenvectors of the 2x2 covariance), magnified 10x when tiny so they stay visible.
+void draw_estimates(cairo_t* cr, const LandmarkCanvas& c, const LandmarkSlamResult& result) {
   const double k95 = std::sqrt(filter::chi_square_quantile(0.95, 2.0));
   for (const LandmarkEstimate& l : result.landmarks) {
-    const Vector2 q = to_pixel(l.p_world);
+    const Vector2 q = c.to_pixel(l.p_world);
     if (!q.allFinite()) continue;
     cairo_set_source_rgb(cr, l.id < 0 ? 0.8 : 0.0, 0.6, 0.0);
     cairo_arc(cr, q.x(), q.y(), 2.5, 0, 2 * std::numbers::pi);
@@ -212,29 +222,48 @@ void write_landmarks_png(const std::string& path, const LandmarkRun& run, const 
     cairo_save(cr);
     cairo_translate(cr, q.x(), q.y());
     cairo_rotate(cr, -std::atan2(axis.y(), axis.x()));
-    const double a = k95 * std::sqrt(values(1)) * scale * 10.0;
-    const double b = k95 * std::sqrt(values(0)) * scale * 10.0;
+    const double a = k95 * std::sqrt(values(1)) * c.scale * 10.0;
+    const double b = k95 * std::sqrt(values(0)) * c.scale * 10.0;
     cairo_scale(cr, std::max(a, 0.5), std::max(b, 0.5));
     cairo_arc(cr, 0, 0, 1, 0, 2 * std::numbers::pi);
     cairo_restore(cr);
     cairo_set_line_width(cr, 1.0);
     cairo_stroke(cr);
   }
-  // Legend.
+}
+
+void draw_legend(cairo_t* cr, const LandmarkCanvas& c, const LandmarkSlamResult& result) {
   cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, 12);
-  const double y0 = height - legend + 18;
-  cairo_move_to(cr, margin, y0);
+  const double y0 = c.height - c.legend + 18;
+  cairo_move_to(cr, c.margin, y0);
   const std::string line1 = "cairn landmarks --method " + result.report.method + " --association " +
                             result.report.association + ": red estimate, blue ground truth, orange dead reckoning";
   cairo_show_text(cr, core::valid_utf8(line1).c_str());
-  cairo_move_to(cr, margin, y0 + 18);
+  cairo_move_to(cr, c.margin, y0 + 18);
   cairo_show_text(cr, "black x true landmarks, green estimates with 95% ellipses magnified 10x; 1 m scale bar:");
   cairo_set_line_width(cr, 2.0);
-  cairo_move_to(cr, margin, y0 + 30);
-  cairo_line_to(cr, margin + scale, y0 + 30);
+  cairo_move_to(cr, c.margin, y0 + 30);
+  cairo_line_to(cr, c.margin + c.scale, y0 + 30);
   cairo_stroke(cr);
+}
+
+}  // namespace
+
+void write_landmarks_png(const std::string& path, const LandmarkRun& run, const LandmarkSlamResult& result) {
+  const LandmarkCanvas canvas = landmark_canvas(run, result);
+  viz::CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, canvas.width, canvas.height));
+  viz::CairoContext context(cairo_create(surface.get()));
+  cairo_t* cr = context.get();
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+  draw_polyline(cr, canvas, run.odometry, 0.95, 0.6, 0.2, 1.0);      // dead reckoning: orange
+  draw_polyline(cr, canvas, run.ground_truth, 0.2, 0.35, 0.9, 1.5);  // ground truth: blue
+  draw_polyline(cr, canvas, result.trajectory, 0.85, 0.1, 0.1, 1.0); // estimate: red
+  draw_true_landmarks(cr, canvas, run);
+  draw_estimates(cr, canvas, result);
+  draw_legend(cr, canvas, result);
   const std::string png = viz::encode_png(surface.get());
   io::write_output(path, [&](std::ostream& out) { out << png; });
 }

@@ -62,13 +62,14 @@ bool SlamConfiguration::is_valid(std::string* why) const {
   return problems.report(why);
 }
 
-io::Parameters parameters(SlamConfiguration& configuration) {
-  LidarSlamOptions& o = configuration.slam;
-  InertialFusionOptions& imu = configuration.imu;
-  LidarOdometryOptions& odometry = o.odometry;
-  RegistrationOptions& registration = o.odometry.registration;
-  LoamFeatureOptions& loam = o.odometry.loam;
-  ScanContextOptions& sc = o.scan_context;
+namespace {
+
+// The keys of parameters() by part of the pipeline, in the order --print-config lists them.
+
+/// The front end: odometry, registration, LOAM features and the scans' health.
+io::Parameters front_end_parameters(LidarOdometryOptions& odometry) {
+  RegistrationOptions& registration = odometry.registration;
+  LoamFeatureOptions& loam = odometry.loam;
   return {
       {"odometry", "front_end",
        enum_choice(odometry.front_end, {FrontEnd::kAuto, FrontEnd::kDense, FrontEnd::kLoamFeatures},
@@ -109,6 +110,13 @@ io::Parameters parameters(SlamConfiguration& configuration) {
       {"health", "lost_min_correspondence_fraction", &odometry.lost_min_correspondence_fraction, "fewer matched: lost (pose from the prediction, new map segment)"},
       {"health", "lost_max_rms_voxels", &odometry.lost_max_rms_voxels, "dense front end: inlier RMS above this many voxels ..."},
       {"health", "lost_rms_max_correspondence_fraction", &odometry.lost_rms_max_correspondence_fraction, "... while fewer than this share matched: lost (0 = off)"},
+  };
+}
+
+/// Keyframes, place recognition, loop closure and the pose graph.
+io::Parameters back_end_parameters(LidarSlamOptions& o) {
+  ScanContextOptions& sc = o.scan_context;
+  return {
       {"keyframes", "distance_m", &o.keyframe_distance_m, "odometry motion since the last keyframe that makes a new one"},
       {"keyframes", "angle_rad", &o.keyframe_angle_rad, "rotation since the last keyframe that makes a new one"},
       {"scan_context", "rings", &sc.rings, "N_r rings of the descriptor"},
@@ -142,6 +150,12 @@ io::Parameters parameters(SlamConfiguration& configuration) {
       {"back_end", "loop_translation_sigma_m", &o.loop_translation_sigma_m, "noise of loop-closure edges"},
       {"back_end", "loop_rotation_sigma_rad", &o.loop_rotation_sigma_rad, "noise of loop-closure edges"},
       {"back_end", "final_gnc", &o.final_gnc, "GNC over the loop closures at the end (rejects the ones that disagree)"},
+  };
+}
+
+/// GNSS anchoring and the LiDAR-inertial fusion.
+io::Parameters sensor_parameters(LidarSlamOptions& o, InertialFusionOptions& imu) {
+  return {
       {"gnss", "max_fix_gap_s", &o.gnss.max_fix_gap_s, "a fix is placed between two scans only when one is this close in time (used with --gnss)"},
       {"gnss", "solve_every_keyframes", &o.gnss.solve_every_keyframes, "the graph with its GNSS factors is solved every this many keyframes (and at loops, at the end)"},
       {"gnss", "default_sigma_horizontal_m", &o.gnss.factor.default_sigma_horizontal_m, "a fix without a covariance: horizontal standard deviation"},
@@ -170,6 +184,15 @@ io::Parameters parameters(SlamConfiguration& configuration) {
   };
 }
 
+}  // namespace
+
+io::Parameters parameters(SlamConfiguration& configuration) {
+  io::Parameters all = front_end_parameters(configuration.slam.odometry);
+  const auto append = [&all](io::Parameters part) { all.insert(all.end(), part.begin(), part.end()); };
+  append(back_end_parameters(configuration.slam));
+  append(sensor_parameters(configuration.slam, configuration.imu));
+  return all;
+}
 
 const io::Configuration<SlamConfiguration>& configuration() {
   static const io::Configuration<SlamConfiguration> c(&parameters, "slam3d", "# cairn slam3d configuration: every key, its value and what it means.");
