@@ -17,6 +17,8 @@
 #include <set>
 #include <sstream>
 
+#include "cairn/sim/mission_worlds.hpp"
+#include "cairn/sim/ray_cast.hpp"
 #include "cairn/sim/scenario.hpp"
 
 namespace cairn::sim {
@@ -166,6 +168,41 @@ TEST(BuildingYard, OutThroughAAcrossALargeSparseYardInThroughBThenRevisits) {
   }
   EXPECT_GT(revisiting, 200u);
   EXPECT_GE(r.min_clearance_m, 0.3);
+}
+
+// outdoor.glass_facades: the walls of the two facades that face the path become glass, nothing
+// else changes; and a laser at building 1's door, looking 30 degrees off the facade's normal,
+// reads through the pane (farther than the facade) where the opaque world stops at it.
+TEST(OutdoorStretch, GlassFacadesAreTheFacingWallsAndTheLaserSeesThroughThem) {
+  const Scenario scenario = *make_scenario("outdoor-stretch");
+  OutdoorStretchOptions glass = scenario.outdoor;
+  glass.glass_facades = true;
+  const WorldWithRoute opaque = outdoor_stretch_world(scenario.office, scenario.outdoor);
+  const WorldWithRoute glazed = outdoor_stretch_world(scenario.office, glass);
+  ASSERT_EQ(opaque.world.walls.size(), glazed.world.walls.size());
+  const double x_1 = opaque.doors[0].center.x(), x_2 = opaque.doors[1].center.x();
+  std::size_t panes = 0;
+  for (std::size_t i = 0; i < glazed.world.walls.size(); ++i) {
+    const Segment& a = opaque.world.walls[i];
+    const Segment& b = glazed.world.walls[i];
+    EXPECT_FALSE(a.glass);
+    EXPECT_EQ(a.a, b.a);
+    EXPECT_EQ(a.b, b.b);
+    const bool on_facade = a.a.x() == a.b.x() && (a.a.x() == x_1 || a.a.x() == x_2);
+    EXPECT_EQ(b.glass, on_facade) << i;
+    panes += b.glass ? 1 : 0;
+  }
+  EXPECT_GE(panes, 4u);  // each facade is at least two panes beside its door
+  // 3 m outside building 1's door, towards the facade 30 degrees off its normal (west is -x).
+  const Vector2 origin = opaque.doors[0].center + Vector2(3.0, 0.0);
+  const double angle = std::numbers::pi - 30.0 * std::numbers::pi / 180.0;
+  const Vector2 direction(std::cos(angle), std::sin(angle));
+  const double to_facade = 3.0 / std::cos(30.0 * std::numbers::pi / 180.0);
+  const auto stops = cast_lidar_ray(opaque.world, origin, direction, 30.0);
+  const auto through = cast_lidar_ray(glazed.world, origin, direction, 30.0);
+  ASSERT_TRUE(stops.has_value());
+  EXPECT_NEAR(stops->range_m, to_facade, 1e-9);
+  EXPECT_TRUE(!through.has_value() || through->range_m > to_facade + 0.1);
 }
 
 TEST(OutdoorStretch, ALongBlindPathBetweenTwoBuildingsDrivenBothWays) {

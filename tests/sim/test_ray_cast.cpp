@@ -76,6 +76,39 @@ TEST(RayCastWorld, NearestOfWallsAndCirclesAndMaxRange) {
   EXPECT_EQ(hit->point, Vector2(1.5, 0));
 }
 
+// A glass pane at x = 2 between a wall at x = 5 and one at x = -3 behind the laser. A beam within
+// 15 degrees of the pane's normal returns from the glass (2 / cos); between 15 and 60 degrees it
+// passes through to the wall at x = 5 (5 / cos); beyond 60 degrees it is mirrored back to the wall
+// at x = -3 and reads its whole path, (2 + 5) / cos: a phantom point behind the pane. Cameras and
+// line of sight (cast_ray) see through the glass at any angle.
+TEST(RayCastWorld, GlassReturnsNearItsNormalMirrorsGrazingBeamsAndPassesTheRest) {
+  World world;
+  world.add_glass({2, -40}, {2, 40});
+  world.add_wall({5, -40}, {5, 40});
+  world.add_wall({-3, -40}, {-3, 40});
+  ASSERT_TRUE(world.walls[0].glass);
+  ASSERT_FALSE(world.walls[1].glass);
+  for (const double degrees : {0.0, 10.0, -14.9, 15.1, 30.0, -59.9, 60.1, 70.0, -75.0}) {
+    const double angle = degrees * std::numbers::pi / 180.0;
+    const Vector2 direction(std::cos(angle), std::sin(angle));
+    const auto reading = cast_lidar_ray(world, kOrigin, direction, 60);
+    ASSERT_TRUE(reading.has_value()) << degrees;
+    const double a = std::abs(degrees);
+    const double expected = (a <= 15.0 ? 2.0 : a < 60.0 ? 5.0 : 7.0) / std::cos(angle);
+    EXPECT_NEAR(reading->range_m, expected, 1e-9) << degrees;
+    EXPECT_NEAR((reading->point - expected * direction).norm(), 0.0, 1e-9) << degrees;  // along the beam as emitted
+    EXPECT_NEAR(cast_ray(world, kOrigin, direction, 60)->range_m, 5.0 / std::cos(angle), 1e-9) << degrees;
+  }
+  // The mirrored path counts against the range: 7 / cos(70 deg) = 20.5 m is beyond 20 m.
+  const double seventy = 70.0 * std::numbers::pi / 180.0;
+  EXPECT_FALSE(cast_lidar_ray(world, kOrigin, Vector2(std::cos(seventy), std::sin(seventy)), 20).has_value());
+  world.glass_return_max_incidence_rad = 5.0 * std::numbers::pi / 180.0;  // a narrower cone
+  const double ten = 10.0 * std::numbers::pi / 180.0;
+  EXPECT_NEAR(cast_lidar_ray(world, kOrigin, Vector2(std::cos(ten), std::sin(ten)), 60)->range_m, 5.0 / std::cos(ten), 1e-9);
+  // For the robot a pane is as solid as a wall.
+  EXPECT_NEAR(world.clearance(Vector2(1.5, 0.0)), 0.5, 1e-12);
+}
+
 TEST(RayCastWorld, LineOfSight) {
   World world;
   world.add_wall({2, -1}, {2, 1});

@@ -36,7 +36,7 @@ std::vector<double> ideal_scan(const World& world, const core::SE2& T_world_lase
   for (int i = 0; i < options.beams; ++i) {
     const double angle = T_world_laser.angle() + options.beam_angle(i);
     const Vector2 direction(std::cos(angle), std::sin(angle));
-    if (const auto hit = cast_ray(world, origin, direction, options.max_range_m, walkers)) {
+    if (const auto hit = cast_lidar_ray(world, origin, direction, options.max_range_m, walkers)) {
       ranges[static_cast<std::size_t>(i)] = hit->range_m;
     }
   }

@@ -183,6 +183,13 @@ WorldWithRoute outdoor_stretch_world(const OfficeOptions& building_1, const Outd
   const OfficeFloor second(second_options, {x_second, door_y - second_door_height});
   add_office_floor(result.world, first, {0.0, options.door_width_m});
   add_office_floor(result.world, second, {options.door_width_m, 0.0});
+  if (options.glass_facades) {
+    for (Segment& wall : result.world.walls) {
+      const bool vertical = std::abs(wall.a.x() - wall.b.x()) < 1e-9;
+      const bool facing = std::abs(wall.a.x() - first.width_m()) < 1e-9 || std::abs(wall.a.x() - x_second) < 1e-9;
+      if (vertical && facing) wall.glass = true;
+    }
+  }
   result.regions = {{"building-1", first.bounds()}, {"building-2", second.bounds()}};
   result.outside_region = "path";
   result.doors = {{"building-1", {first.width_m(), door_y}, {1.0, 0.0}, options.door_width_m},

@@ -64,6 +64,10 @@ struct OutdoorStretchOptions {
   int features = 4;
   /// Seed of the features' jitter.
   std::uint64_t world_seed = 17;
+  /// The two facades that face the path (building 1's east, building 2's west) are glass
+  /// (Segment::glass): from the path the LiDAR sees into the rooms behind them, and only beams
+  /// near the panes' normal return from the facade itself.
+  bool glass_facades = false;
 };
 
 struct TwoWingOptions {

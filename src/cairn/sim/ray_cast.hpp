@@ -31,10 +31,20 @@ std::optional<double> intersect(const Vector2& origin, const Vector2& direction,
 std::optional<double> intersect(const Vector2& origin, const Vector2& direction, const Circle& circle);
 
 /// The nearest hit over all walls and circles of `world`, and the `moving` discs (walkers at the
-/// scan's time, see World::walkers_at), within max_range_m, or nullopt.
+/// scan's time, see World::walkers_at), within max_range_m, or nullopt: what is in sight. Glass
+/// panes are transparent here (cameras, landmark sensors, line of sight).
 /// Precondition: |direction| = 1 (asserted to 1e-9).
 std::optional<RayHit> cast_ray(const World& world, const Vector2& origin, const Vector2& direction,
                                double max_range_m, const std::vector<Circle>& moving = {});
+
+/// What a laser scanner's beam reads: as cast_ray, but a glass pane (Segment::glass) met within
+/// World::glass_return_max_incidence_rad of its normal returns the beam, one met beyond
+/// World::glass_reflection_min_incidence_rad mirrors it, and the beam passes through at angles in
+/// between. A mirrored beam's reading is its whole path length along the direction it left in: a
+/// phantom point behind the pane, the mirror image of what the reflection hit (the artefact of
+/// glass facades in laser scans). At most three panes on one beam; max_range_m bounds the path.
+std::optional<RayHit> cast_lidar_ray(const World& world, const Vector2& origin, const Vector2& direction,
+                                     double max_range_m, const std::vector<Circle>& moving = {});
 
 /// True when nothing in `world` lies strictly between `from` and `to` (line of sight), up to
 /// `margin_m` before `to` (so a landmark on a wall is still visible).

@@ -98,6 +98,11 @@ void render_png(const std::string& path, const World& world, const std::vector<V
   cairo_set_line_width(cr, std::max(2.0, 0.1 * scale));
   cairo_set_line_cap(cr, CAIRO_LINE_CAP_SQUARE);
   for (const auto& wall : world.walls) {
+    if (wall.glass) {
+      cairo_set_source_rgb(cr, 0.35, 0.7, 0.95);  // glass: light blue
+    } else {
+      cairo_set_source_rgb(cr, 0, 0, 0);
+    }
     move_to(wall.a);
     line_to(wall.b);
     cairo_stroke(cr);

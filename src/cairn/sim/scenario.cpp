@@ -763,6 +763,8 @@ std::vector<Parameter> parameters(Scenario& s) {
       add("outdoor.door_width_m", "m", "width of the door at each end of the path", &s.outdoor.door_width_m);
       add("outdoor.features", "", "trees, posts and benches along the path (0-30)", &s.outdoor.features);
       add("outdoor.world_seed", "", "seed of the features' places", &s.outdoor.world_seed);
+      add("outdoor.glass_facades", "", "the facades facing the path are glass: the LiDAR sees through them except near "
+          "their normal", &s.outdoor.glass_facades);
       add("building_2.rooms_per_row", "", "building 2: rooms per row (other sizes as office.*)",
           &s.outdoor.building_2_rooms_per_row);
       add("building_2.width_m", "m", "building 2: width", &s.outdoor.building_2_width_m);

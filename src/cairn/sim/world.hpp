@@ -13,9 +13,13 @@
 namespace cairn::sim {
 
 /// A wall from `a` to `b` (both ends in the world frame). Zero thickness; seen from both sides.
+/// A glass pane (`glass`) is as solid as a wall for the robot and transparent to cameras; a LiDAR
+/// beam returns from it near its normal, is mirrored at grazing incidence and passes through in
+/// between (cast_lidar_ray, World's glass angles).
 struct Segment {
   Vector2 a = Vector2::Zero();
   Vector2 b = Vector2::Zero();
+  bool glass = false;
 };
 
 /// A solid disc: a pillar, a post or a person standing still.
@@ -60,8 +64,16 @@ struct World {
   /// (clearance, landmark occlusion and the route ignore them).
   std::vector<Walker> walkers;
 
+  /// Glass panes return a LiDAR beam within this angle of their normal, radians (a specular
+  /// return straight back), and mirror it beyond glass_reflection_min_incidence_rad (glass's
+  /// Fresnel reflectance rises steeply towards grazing incidence: about 4 % head-on, 9 % at 60
+  /// deg, 39 % at 80 deg; one threshold in place of a probability keeps the simulation exact).
+  double glass_return_max_incidence_rad = 0.2617993877991494;     // 15 deg
+  double glass_reflection_min_incidence_rad = 1.0471975511965976;  // 60 deg
   /// Adds the wall a -> b.
   void add_wall(const Vector2& a, const Vector2& b) { walls.push_back({a, b}); }
+  /// Adds the glass pane a -> b (Segment::glass).
+  void add_glass(const Vector2& a, const Vector2& b) { walls.push_back({a, b, true}); }
   /// Adds the four walls of the rectangle [min.x, max.x] x [min.y, max.y].
   void add_rectangle(const Vector2& min, const Vector2& max);
   /// Adds a straight wall from a to b with the openings `gaps` left out. Each gap is

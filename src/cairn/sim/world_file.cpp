@@ -9,8 +9,8 @@ namespace cairn::sim {
 
 void write_world_file(const std::string& path, const World& world) {
   io::write_output(path, [&](std::ostream& out) {
-    out << "# cairn world '" << world.name << "': WALL ax ay bx by | CIRCLE cx cy radius | LANDMARK id x y | "
-        << "WALKER from_x from_y to_x to_y speed_mps radius_m phase_s (metres, seconds, world frame)\n";
+    out << "# cairn world '" << world.name << "': WALL ax ay bx by | GLASS ax ay bx by | CIRCLE cx cy radius | "
+        << "LANDMARK id x y | WALKER from_x from_y to_x to_y speed_mps radius_m phase_s (metres, seconds, world frame)\n";
     std::string line;
     auto emit = [&](const char* tag, std::initializer_list<double> values) {
       line = tag;
@@ -21,7 +21,7 @@ void write_world_file(const std::string& path, const World& world) {
       line += '\n';
       out << line;
     };
-    for (const auto& w : world.walls) emit("WALL", {w.a.x(), w.a.y(), w.b.x(), w.b.y()});
+    for (const auto& w : world.walls) emit(w.glass ? "GLASS" : "WALL", {w.a.x(), w.a.y(), w.b.x(), w.b.y()});
     for (const auto& c : world.circles) emit("CIRCLE", {c.center.x(), c.center.y(), c.radius_m});
     for (const auto& l : world.landmarks) {
       line = "LANDMARK " + std::to_string(l.id) + ' ';

@@ -4,6 +4,7 @@
 /// pillars and people. One element per line, world frame, metres; '#' lines are comments:
 ///
 ///   WALL ax ay bx by
+///   GLASS ax ay bx by      (a glass pane: Segment::glass)
 ///   CIRCLE cx cy radius
 ///   LANDMARK id x y
 ///   WALKER from_x from_y to_x to_y speed_mps radius_m phase_s
