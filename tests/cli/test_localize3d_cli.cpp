@@ -81,12 +81,18 @@ TEST(Localize3dCli, KeyFramesOfTheMappedStretchAreLocalisedWithoutAPrior) {
   std::string line;
   std::getline(scans, line);  // header
   int compared = 0;
+  std::size_t tracked = 0;  // localised, not relocalised: what report.json's tracking_time covers
+  double slowest_ms = 0.0;
   while (std::getline(scans, line)) {
     std::istringstream fields(line);
     std::string cell;
     std::vector<std::string> cells;
     while (std::getline(fields, cell, ',')) cells.push_back(cell);
-    ASSERT_GE(cells.size(), 12u) << line;
+    ASSERT_GE(cells.size(), 22u) << line;
+    if (cells[4] == "1" && cells[17] == "0") {
+      ++tracked;
+      slowest_ms = std::max(slowest_ms, std::stod(cells.back()));  // total_ms, the last column
+    }
     if (cells[4] != "1") continue;
     const int k = 11 + std::stoi(cells[0]);
     Pose T = Pose::Identity();
@@ -101,6 +107,12 @@ TEST(Localize3dCli, KeyFramesOfTheMappedStretchAreLocalisedWithoutAPrior) {
     ++compared;
   }
   EXPECT_GE(compared, 7);
+  const nlohmann::json& timing = report["tracking_time"];
+  EXPECT_EQ(timing["tracked_scans"].get<std::size_t>(), tracked);
+  EXPECT_GE(tracked, 5u);
+  EXPECT_NEAR(timing["max_ms"].get<double>(), slowest_ms, 0.06);
+  EXPECT_LE(timing["median_ms"].get<double>(), timing["p90_ms"].get<double>());
+  EXPECT_LE(timing["p90_ms"].get<double>(), timing["max_ms"].get<double>());
 }
 
 TEST(Localize3dCli, DamagedAndForeignMapsAreRefusedNamingTheFile) {

@@ -14,6 +14,7 @@
 
 #include "cairn/io/point_cloud.hpp"
 #include "cairn/lidar3d/localization.hpp"
+#include "cairn/lidar3d/localization_outputs.hpp"
 #include "cairn/lidar3d/map_file.hpp"
 #include "cairn/lidar3d/saved_map.hpp"
 #include "cairn/lidar3d/slam.hpp"
@@ -88,6 +89,36 @@ PoseError error_of(const EvenOdd& d, std::size_t k, const core::SE3& T_map_senso
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+// Tracking times over hand-made results: only scans localised and not relocalised count; the
+// median of an even count is the mean of the middle two; the 90th percentile is the nearest rank.
+TEST(Localization3dOutputs, TrackingTimesCountTrackedScansOnly) {
+  std::vector<Localization3dResult> results;
+  const auto add = [&](double ms, bool localised, bool relocalised) {
+    Localization3dResult r;
+    r.total_s = ms / 1e3;
+    r.localised = localised;
+    r.relocalised = relocalised;
+    results.push_back(r);
+  };
+  EXPECT_EQ(tracking_times(results).scans, 0u);
+  EXPECT_EQ(tracking_times(results).max_ms, 0.0);
+  for (const double ms : {5.0, 1.0, 3.0, 2.0, 4.0}) add(ms, true, false);
+  add(100.0, true, true);   // a relocalisation
+  add(50.0, false, false);  // searching
+  TrackingTimes t = tracking_times(results);
+  EXPECT_EQ(t.scans, 5u);
+  EXPECT_NEAR(t.median_ms, 3.0, 1e-12);
+  EXPECT_NEAR(t.p90_ms, 5.0, 1e-12);  // rank ceil(0.9 * 5) = 5
+  EXPECT_NEAR(t.max_ms, 5.0, 1e-12);
+  for (const double ms : {6.0, 7.0, 8.0, 9.0, 10.0}) add(ms, true, false);
+  t = tracking_times(results);
+  EXPECT_EQ(t.scans, 10u);
+  EXPECT_NEAR(t.median_ms, 5.5, 1e-12);
+  EXPECT_NEAR(t.p90_ms, 9.0, 1e-12);  // rank 9 of 10
+  EXPECT_NEAR(t.max_ms, 10.0, 1e-12);
+  EXPECT_EQ(to_json(t)["tracked_scans"].get<std::size_t>(), 10u);
 }
 
 TEST(Localization3dKitti, TheOddKeyFramesAreLocalisedInTheMapOfTheEvenOnes) {

@@ -81,9 +81,14 @@ std::vector<lidar3d::Localization3dResult> feed_scans(lidar3d::Localizer3d& loca
   return results;
 }
 
-void print_summary(const lidar3d::Localizer3dSummary& s, double total_s, bool stopped, const Localize3dFlags& flags) {
+void print_summary(const lidar3d::Localizer3dSummary& s, const lidar3d::TrackingTimes& tracking, double total_s, bool stopped,
+                   const Localize3dFlags& flags) {
   std::printf("%zu scans in %.1f s (%.1f s localising, slowest scan %.3f s); map: %zu keyframes, %zu points (built in %.2f s)\n",
               s.scans, total_s, s.total_s, s.max_scan_s, s.map_keyframes, s.map_points, s.setup_s);
+  if (tracking.scans > 0) {
+    std::printf("tracked scans: %zu, %.1f ms median, %.1f ms 90th percentile, %.1f ms slowest (the global check included)\n",
+                tracking.scans, tracking.median_ms, tracking.p90_ms, tracking.max_ms);
+  }
   if (s.first_localised_scan) {
     std::printf("localised at scan %zu; %zu of %zu scans localised (%zu ok, %zu degraded), %zu lost\n", *s.first_localised_scan,
                 s.scans_localised, s.scans, s.scans_ok, s.scans_degraded, s.scans_lost);
@@ -131,9 +136,11 @@ int localize3d_command(const Localize3dFlags& flags) {
   report["input"] = {{"scans", flags.scans}, {"map", flags.map}, {"times", flags.times}, {"scans_read", results.size()}};
   report["interrupted"] = stopped;
   report["wall_time_s"] = total_s;
+  const lidar3d::TrackingTimes tracking = lidar3d::tracking_times(results);
+  report["tracking_time"] = lidar3d::to_json(tracking);
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   out.commit();
-  if (!flags.quiet) print_summary(localizer.summary(), total_s, stopped, flags);
+  if (!flags.quiet) print_summary(localizer.summary(), tracking, total_s, stopped, flags);
   return stopped ? interrupted_exit_status() : 0;
 }
 

@@ -1,5 +1,7 @@
 #include "cairn/lidar3d/localization_outputs.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <numbers>
 #include <ostream>
 
@@ -132,6 +134,26 @@ nlohmann::json relocalisation_json(const Relocalisation3d& r) {
 }
 
 }  // namespace
+
+TrackingTimes tracking_times(const std::vector<Localization3dResult>& results) {
+  std::vector<double> ms;
+  for (const Localization3dResult& r : results) {
+    if (r.localised && !r.relocalised) ms.push_back(1e3 * r.total_s);
+  }
+  TrackingTimes t;
+  if (ms.empty()) return t;
+  std::sort(ms.begin(), ms.end());
+  const std::size_t n = ms.size();
+  t.scans = n;
+  t.median_ms = n % 2 == 1 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
+  t.p90_ms = ms[static_cast<std::size_t>(std::ceil(0.9 * static_cast<double>(n))) - 1];
+  t.max_ms = ms.back();
+  return t;
+}
+
+nlohmann::json to_json(const TrackingTimes& times) {
+  return {{"tracked_scans", times.scans}, {"median_ms", times.median_ms}, {"p90_ms", times.p90_ms}, {"max_ms", times.max_ms}};
+}
 
 nlohmann::json localization_report_json(const Localizer3d& localizer) {
   const Localizer3dSummary& s = localizer.summary();

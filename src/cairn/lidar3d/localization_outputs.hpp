@@ -26,6 +26,16 @@ void write_localization_csv(const std::vector<Localization3dResult>& results, co
 void write_localization_png(const SavedMap3D& map, const std::vector<Localization3dResult>& results,
                             const std::string& path, int max_side_px);
 
+/// Milliseconds per tracked scan (localised and not relocalised: the whole add_scan call,
+/// Localization3dResult::total_s): how many, median, 90th percentile (nearest rank) and slowest;
+/// all zero without one.
+struct TrackingTimes {
+  std::size_t scans = 0;
+  double median_ms = 0.0, p90_ms = 0.0, max_ms = 0.0;
+};
+TrackingTimes tracking_times(const std::vector<Localization3dResult>& results);
+nlohmann::json to_json(const TrackingTimes& times);
+
 /// report.json's body: the map, the options, the summary, the relocalisations and every attempt.
 nlohmann::json localization_report_json(const Localizer3d& localizer);
 
