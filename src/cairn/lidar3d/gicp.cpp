@@ -347,7 +347,11 @@ GicpResult register_gicp(const GicpCloud& target, const GicpCloud& source, const
       continue;
     }
     const Vector6 delta = system.H.ldlt().solve(-system.g);
-    if (!delta.allFinite()) break;
+    if (!delta.allFinite()) {
+      if (stride == 1) break;
+      stride = 1;  // singular over the sparse points: all of them decide
+      continue;
+    }
     history.push(result.T_target_source);
     const core::SE3 T_next = result.T_target_source * core::SE3::exp(delta);
     if (stride > 1) {

@@ -62,10 +62,12 @@ struct GicpOptions {
   /// `sparse_stride`-th source point only, until a step falls below `sparse_tolerance_factor`
   /// times both tolerances (or closes a cycle); the iterations then go on with every point until
   /// they converge as above, so the result and its correspondences, fitness and Hessian are those
-  /// of all points. Iterations of both kinds count towards max_iterations. Most of an iteration's
-  /// time is the nearest-neighbour search of each source point, and the first iterations from a
-  /// guess off by decimetres need only a good direction (Koide's small_gicp and fast_gicp register
-  /// coarse-to-fine over voxel sizes instead: the same idea over resolutions).
+  /// of all points. Iterations of both kinds count towards max_iterations; too few
+  /// correspondences or a singular system among the sparse points switch to all points at once.
+  /// Most of an iteration's time is the nearest-neighbour search of each source point, and the
+  /// first iterations from a guess off by decimetres need only a good direction: the idea of a
+  /// coarse-to-fine pyramid, here over the source's points alone (the target and its covariances
+  /// stay as they are).
   int sparse_stride = 1;
   double sparse_tolerance_factor = 10.0;
 
