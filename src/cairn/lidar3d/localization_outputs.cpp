@@ -1,7 +1,6 @@
 #include "cairn/lidar3d/localization_outputs.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <numbers>
 #include <ostream>
 
@@ -146,7 +145,7 @@ TrackingTimes tracking_times(const std::vector<Localization3dResult>& results) {
   const std::size_t n = ms.size();
   t.scans = n;
   t.median_ms = n % 2 == 1 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
-  t.p90_ms = ms[static_cast<std::size_t>(std::ceil(0.9 * static_cast<double>(n))) - 1];
+  t.p90_ms = ms[(9 * n + 9) / 10 - 1];  // nearest rank ceil(0.9 n), in integers
   t.max_ms = ms.back();
   return t;
 }
