@@ -143,8 +143,8 @@ void print_summary(const slam2d::Slam2dSummary& summary, std::size_t used, doubl
               scans_per_second, summary.keyframes, summary.submaps);
   std::printf("loop closures: %zu searches, %zu candidates, %zu accepted, %zu rejected by the back end (GNC)\n",
               summary.loop_searches, summary.candidates.size(), summary.loops_accepted, summary.loops_rejected_by_gnc);
-  std::printf("health: %zu ok, %zu degraded, %zu lost scans; %zu relocalisations\n", summary.scans_ok,
-              summary.scans_degraded, summary.scans_lost, summary.relocalisations);
+  std::printf("health: %zu ok, %zu degraded (%zu of them new structure only), %zu lost scans; %zu relocalisations\n",
+              summary.scans_ok, summary.scans_degraded, summary.scans_new_space, summary.scans_lost, summary.relocalisations);
   std::printf("time: match %.1f s, local map %.1f s, submaps %.1f s, loop search %.1f s, optimisation %.1f s\n",
               summary.times.local_match_s, summary.times.local_map_s, summary.times.submap_s,
               summary.times.loop_search_s, summary.times.optimize_s);

@@ -65,6 +65,8 @@ io::Parameters parameters(Slam2dOptions& o) {
       {"health", "degraded_min_degeneracy", &o.degraded_min_degeneracy, "smallest normal-spread eigenvalue below: degraded"},
       {"health", "min_matching_points", &o.min_matching_points, "scans with fewer returns are not matched (degraded, odometry only)"},
       {"health", "lost_inlier_fraction", &o.lost_inlier_fraction, "a match below this failed (pose from odometry)"},
+      {"health", "new_space_max_rays_through", &o.new_space_max_rays_through,
+       "a failed match whose rays cross the local map at most this often sees new structure: degraded, not towards lost (< 0: off)"},
       {"health", "lost_after_scans", &o.lost_after_scans, "consecutive failed matches before lost"},
       {"segments", "link_translation_sigma_m", &o.segment_link_translation_sigma_m, "weak odometry edge joining a new map segment (and spanning failed matches)"},
       {"segments", "link_rotation_sigma_rad", &o.segment_link_rotation_sigma_rad, "weak odometry edge, rotation"},

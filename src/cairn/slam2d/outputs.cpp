@@ -297,6 +297,7 @@ nlohmann::json report_json(const Slam2d& slam, const Slam2dOptions& options) {
                        {"scans_degraded", s.scans_degraded},
                        {"scans_lost", s.scans_lost},
                        {"relocalisations", s.relocalisations},
+                       {"scans_new_space", s.scans_new_space},
                        {"merge_searches", s.merge_searches},
                        {"global_searches", s.global_searches},
                        {"searches_skipped_by_budget", s.searches_skipped_by_budget},

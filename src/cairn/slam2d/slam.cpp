@@ -112,6 +112,9 @@ struct ScanWork {
   bool restarted = false;  ///< the accepted match came from an ICP restart away from the prediction
   std::string relocalised_reason;  ///< set when the scan was relocalised in the recent map
   bool too_few_returns = false;
+  /// A failed match that contradicts nothing the local map holds (judge_failed_match).
+  bool new_space = false;
+  double rays_through_map = 0.0;  ///< of the failed match at the prediction (rays_through_map)
   Health next = Health::kOk;
   std::string reason;
   bool start_segment = false;  ///< this scan (re)seeds the current segment's map
@@ -243,6 +246,7 @@ bool Slam2dOptions::is_valid(std::string* error) const {
         degraded_min_inlier_fraction <= 1.0 && lost_inlier_fraction >= 0.0 && lost_inlier_fraction <= 1.0))
     problems << "inlier fractions (loop_closure.min_inlier_fraction, health.*_inlier_fraction) must be in [0, 1]; ";
   if (!(loop_max_rms_m > 0.0)) problems << "loop_closure.max_rms_m must be > 0; ";
+  if (!(new_space_max_rays_through <= 1.0)) problems << "health.new_space_max_rays_through must be <= 1 (negative: off); ";
   const std::string text = problems.str();
   if (error != nullptr) *error = text;
   return text.empty();
@@ -251,6 +255,34 @@ bool Slam2dOptions::is_valid(std::string* error) const {
 namespace {
 // Whether a match's scan term (Hessian in (x, y, theta), 1/sigma^2 units) holds the position to
 // within `sigma_m` in every direction: the largest eigenvalue of the position block of its inverse.
+/// The share of a scan's rays, cast from `T_map_laser`, that pass within `radius_m` of a point of
+/// `map` more than `end_margin_m` before their end: returns (`points.hits`) and no-returns
+/// (`points.misses`, free rays of the filter's missing_ray_length_m). A ray through a mapped point
+/// says the scan, placed there, sees through what the map holds (Slam2dOptions::
+/// new_space_max_rays_through); a ray shorter than the margin says nothing and is not counted.
+/// The rays are sampled every `radius_m` (radius_m <= the map's cell size).
+double rays_through_map(const PointMap& map, const ScanPoints& points, const core::SE2& T_map_laser, double radius_m,
+                        double end_margin_m) {
+  std::size_t rays = 0, through = 0;
+  const Eigen::Vector2d origin = T_map_laser.translation();
+  const auto cast = [&](const Eigen::Vector2d& end_laser) {
+    const Eigen::Vector2d end = T_map_laser * end_laser;
+    const double length = (end - origin).norm();
+    if (!(length > end_margin_m)) return;
+    ++rays;
+    const Eigen::Vector2d direction = (end - origin) / length;
+    for (double s = radius_m; s < length - end_margin_m; s += radius_m) {
+      if (map.nearest(origin + s * direction, radius_m) != nullptr) {
+        ++through;
+        return;
+      }
+    }
+  };
+  for (const Eigen::Vector2d& p : points.hits) cast(p);
+  for (const Eigen::Vector2d& p : points.misses) cast(p);
+  return rays == 0 ? 0.0 : static_cast<double>(through) / static_cast<double>(rays);
+}
+
 bool pins_position(const Eigen::Matrix3d& hessian, double sigma_m) {
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(hessian);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(hessian.determinant() > 0.0)) return false;
@@ -1298,10 +1330,24 @@ struct Slam2d::Impl {
     }
   }
 
+  /// A failed match whose rays, cast from the odometry prediction, cross none of the local map
+  /// (Slam2dOptions::new_space_max_rays_through) sees only structure the map does not hold yet:
+  /// in the sparse open stretch of issue 41 (outdoor-stretch with 10 features), 10-20 returns of
+  /// a post or bench just come into range. A kidnapped robot's scan, cast from where the robot
+  /// was, crosses the walls mapped around it. Points within 2 inlier distances of a ray count as
+  /// on it; the last max_correspondence_m of a return's ray may be the same surface, misplaced by
+  /// the odometry's error, and is not checked.
+  void judge_failed_match(ScanWork& w) const {
+    if (w.matched || !have_previous || local_map.empty() || !enough_points(w) || options.new_space_max_rays_through < 0.0) return;
+    w.rays_through_map = rays_through_map(local_map, w.points, w.T_local_laser, 2.0 * options.icp.inlier_distance_m,
+                                          options.icp.max_correspondence_m);
+    w.new_space = w.rays_through_map <= options.new_space_max_rays_through;
+  }
+
   /// Notes where a stretch of failed matches begins; when matching resumes after one, the
   /// stretch is re-placed (replace_failed_stretch).
   void track_failed_stretch(const ScanWork& w) {
-    if (have_previous && !w.matched && enough_points(w)) {
+    if (have_previous && !w.matched && !w.new_space && enough_points(w)) {
       if (!failed_since_scan) {
         failed_since_scan = w.index;
         failed_since_keyframe = keyframes.size();
@@ -1315,7 +1361,7 @@ struct Slam2d::Impl {
   /// is no evidence of being lost: the pose follows odometry and the state says degraded.
   void assess_health(ScanWork& w) {
     w.too_few_returns = have_previous && static_cast<int>(w.points.matching.size()) < options.min_matching_points;
-    if (w.too_few_returns) {
+    if (w.too_few_returns || w.new_space) {
       // leave the failed-match counter as it is
     } else if (!w.matched) {
       ++bad_matches_in_a_row;
@@ -1327,6 +1373,11 @@ struct Slam2d::Impl {
     if (w.too_few_returns) {
       w.next = Health::kDegraded;
       w.reason = "too few returns to match (" + std::to_string(w.points.matching.size()) + "); following odometry";
+    } else if (w.new_space) {
+      w.next = Health::kDegraded;
+      w.reason = "the scan sees structure the local map does not hold (inlier fraction " + std::to_string(w.record.inlier_fraction) +
+                 ") and contradicts none of it (" + std::to_string(w.rays_through_map) +
+                 " of its rays pass through mapped points); following odometry";
     } else if (!w.matched || w.record.inlier_fraction < options.degraded_min_inlier_fraction) {
       w.next = Health::kDegraded;
       w.reason = "few scan points agree with the local map (inlier fraction " + std::to_string(w.record.inlier_fraction) + ")";
@@ -1347,7 +1398,7 @@ struct Slam2d::Impl {
   /// row match its map well: a seed that does not match its successors (a burst of garbage, a
   /// scan of people crowding the sensor) is dropped from the map and the next scan seeds again.
   void supervise_segment(ScanWork& w, Slam2dSummary& summary) {
-    const bool judged = have_previous && !w.too_few_returns;
+    const bool judged = have_previous && !w.too_few_returns && !w.new_space;
     const std::string segment_name = "map segment " + std::to_string(segment);
     if (probation > 0 && judged) {
       judge_probation(w, segment_name, summary);
@@ -1434,7 +1485,8 @@ struct Slam2d::Impl {
     set_health(w.next, w.index, w.scan.time, w.reason, summary);
     w.record.health = w.next;
     w.record.segment = segment;
-    if (!w.matched && !w.too_few_returns && have_previous) lost_since_keyframe = true;
+    if (!w.matched && !w.too_few_returns && !w.new_space && have_previous) lost_since_keyframe = true;
+    if (w.new_space) ++summary.scans_new_space;
     if (w.next == Health::kOk) ++summary.scans_ok;
     if (w.next == Health::kDegraded) ++summary.scans_degraded;
     if (w.next == Health::kLost) ++summary.scans_lost;
@@ -1493,7 +1545,7 @@ struct Slam2d::Impl {
     // but not the points: half the scan disagreeing with the map after a jump is what a kidnapping
     // into a look-alike room looks like.
     const bool doubtful = w.restarted && w.record.inlier_fraction < options.degraded_min_inlier_fraction;
-    const bool placed = (w.matched && !doubtful) || w.too_few_returns || w.start_segment;
+    const bool placed = (w.matched && !doubtful) || w.too_few_returns || w.new_space || w.start_segment;
     if (placed) {
       kf.hits = std::move(w.points.hits);
       kf.misses = std::move(w.points.misses);
@@ -1630,6 +1682,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
   const auto match_start = Clock::now();
   m.predict_and_match(w);
   m.relocalise_after_failure(w, summary_);
+  m.judge_failed_match(w);
   m.track_failed_stretch(w);
   summary_.times.local_match_s += seconds_since(match_start);
   // 2. Health: of the match, then of the map segment.

@@ -149,6 +149,14 @@ struct Slam2dOptions {
   int min_matching_points = 10;        ///< fewer returns: no match, degraded, odometry only
   int lost_after_scans = 5;            ///< consecutive matches below lost_inlier_fraction
   double lost_inlier_fraction = 0.25;
+  /// A failed match (below lost_inlier_fraction) where at most this share of the scan's rays,
+  /// cast from the odometry prediction (returns, and no-returns up to the filter's
+  /// missing_ray_length_m), pass through a point of the local map sees structure the local map
+  /// does not hold and contradicts nothing it does: newly visible posts in open space, not a
+  /// kidnapping (whose rays cross mapped walls). Such a scan is `degraded`, placed by odometry,
+  /// its points enter the map, and it does not count towards lost_after_scans. Negative: every
+  /// failed match counts (the behaviour before issue 41).
+  double new_space_max_rays_through = 0.05;
 
   /// Map segments and merging (see the file comment).
   double segment_link_translation_sigma_m = 10.0;  ///< the weak edge joining a new segment
@@ -310,6 +318,8 @@ struct Slam2dSummary {
   std::size_t loops_rejected_by_gnc = 0;
   std::size_t scans_ok = 0, scans_degraded = 0, scans_lost = 0;
   std::size_t relocalisations = 0;
+  /// Failed matches that saw only new structure (Slam2dOptions::new_space_max_rays_through).
+  std::size_t scans_new_space = 0;
   std::size_t merge_searches = 0;
   std::size_t global_searches = 0;
   std::size_t searches_skipped_by_budget = 0;
