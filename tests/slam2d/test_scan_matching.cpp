@@ -189,6 +189,8 @@ TEST(Icp, CorridorIsDegenerateAndFollowsThePrior) {
   const core::SE2 prior(1.3, 0.2, 0.0);  // 0.3 m ahead along the axis, 0.1 m across
   const IcpResult result = match_icp(map, corridor_scan(truth), prior, &prior);
   EXPECT_LT(result.degeneracy, 0.01);
+  // The direction it names is the corridor's axis, x in the map frame (either sign).
+  EXPECT_NEAR(std::abs(result.degenerate_direction.x()), 1.0, 1e-6);
   EXPECT_TRUE(result.remapped);
   EXPECT_NEAR(result.T_map_sensor.x(), prior.x(), 1e-6);  // unobservable: the prior's value
   EXPECT_NEAR(result.T_map_sensor.y(), truth.y(), 0.005);  // observable: corrected

@@ -160,6 +160,7 @@ void final_statistics(const PointMap& map, const std::vector<Eigen::Vector2d>& p
   if (result.correspondences > 0) {
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(normals / result.correspondences);
     result.degeneracy = eigen.eigenvalues()(0);
+    result.degenerate_direction = eigen.eigenvectors().col(0);
   }
 }
 }  // namespace

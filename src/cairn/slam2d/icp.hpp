@@ -54,6 +54,9 @@ struct IcpResult {
   double inlier_fraction = 0.0;  ///< inliers / points
   double rms_m = 0.0;        ///< RMS point-to-line distance over inliers
   double degeneracy = 0.0;   ///< see file comment
+  /// The unit direction (map frame) of that smallest eigenvalue: the translation the normals
+  /// constrain least (a corridor's axis when `degeneracy` is near 0). Zero without correspondences.
+  Eigen::Vector2d degenerate_direction = Eigen::Vector2d::Zero();
   int iterations = 0;
   bool converged = false;
   bool remapped = false;     ///< a degenerate direction was taken from the prior

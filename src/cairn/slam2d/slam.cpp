@@ -115,6 +115,7 @@ struct ScanWork {
   /// A failed match that contradicts nothing the local map holds (judge_failed_match).
   bool new_space = false;
   double rays_through_map = 0.0;  ///< of the failed match at the prediction (rays_through_map)
+  Eigen::Vector2d degenerate_direction = Eigen::Vector2d::Zero();  ///< of the match (IcpResult), local frame
   Health next = Health::kOk;
   std::string reason;
   bool start_segment = false;  ///< this scan (re)seeds the current segment's map
@@ -281,6 +282,22 @@ double rays_through_map(const PointMap& map, const ScanPoints& points, const cor
   for (const Eigen::Vector2d& p : points.hits) cast(p);
   for (const Eigen::Vector2d& p : points.misses) cast(p);
   return rays == 0 ? 0.0 : static_cast<double>(through) / static_cast<double>(rays);
+}
+
+/// The translation `direction_local` (IcpResult::degenerate_direction) in words, relative to the
+/// laser's forward axis at `T_local_laser`: "translation along the laser's forward axis" within
+/// 15 degrees of it, "... sideways axis" within 15 degrees of that, else the angle from forward
+/// (0-180 degrees, counterclockwise; a direction and its opposite are the same axis).
+std::string name_direction(const Eigen::Vector2d& direction_local, const core::SE2& T_local_laser) {
+  if (!(direction_local.squaredNorm() > 0.0)) return "one translation direction";
+  const Eigen::Vector2d d = T_local_laser.so2().inverse() * direction_local;
+  double degrees = std::atan2(d.y(), d.x()) * 180.0 / std::numbers::pi;
+  if (degrees < 0.0) degrees += 180.0;
+  if (degrees >= 180.0) degrees -= 180.0;
+  if (degrees <= 15.0 || degrees >= 165.0) return "translation along the laser's forward axis";
+  if (std::abs(degrees - 90.0) <= 15.0) return "translation along the laser's sideways axis";
+  return "translation along the axis " + std::to_string(static_cast<int>(std::lround(degrees))) +
+         " degrees counterclockwise from the laser's forward axis";
 }
 
 bool pins_position(const Eigen::Matrix3d& hessian, double sigma_m) {
@@ -1274,6 +1291,7 @@ struct Slam2d::Impl {
     if (icp.inlier_fraction < options.degraded_min_inlier_fraction) restart_icp(w, icp);
     w.record.inlier_fraction = icp.inlier_fraction;
     w.record.degeneracy = icp.degeneracy;
+    w.degenerate_direction = icp.degenerate_direction;
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(icp.hessian);
     if (ldlt.info() == Eigen::Success && ldlt.isPositive() && icp.hessian.determinant() > 0.0)
       w.record.covariance = icp.hessian.inverse();
@@ -1383,8 +1401,8 @@ struct Slam2d::Impl {
       w.reason = "few scan points agree with the local map (inlier fraction " + std::to_string(w.record.inlier_fraction) + ")";
     } else if (w.record.degeneracy < options.degraded_min_degeneracy) {
       w.next = Health::kDegraded;
-      w.reason = "degenerate geometry (degeneracy " + std::to_string(w.record.degeneracy) +
-                 "); odometry carries the unconstrained direction";
+      w.reason = "degenerate geometry (degeneracy " + std::to_string(w.record.degeneracy) + "): the scan barely constrains " +
+                 name_direction(w.degenerate_direction, w.T_local_laser) + "; odometry carries it";
     }
     if (w.next == Health::kOk && health == Health::kLost) w.reason = "matching recovered in segment " + std::to_string(segment);
     if (!w.relocalised_reason.empty()) {
