@@ -48,6 +48,7 @@ io::Parameters parameters(Slam2dOptions& o) {
       {"loop_closure", "min_inlier_fraction", &o.loop_min_inlier_fraction, "verification: ICP inliers against the submap"},
       {"loop_closure", "max_rms_m", &o.loop_max_rms_m, "verification: ICP residual RMS"},
       {"loop_closure", "min_degeneracy", &o.loop_min_degeneracy, "verification: smallest normal-spread eigenvalue of the match"},
+      {"loop_closure", "min_inliers", &o.loop_min_inliers, "verification: scan points within inlier distance of the submap"},
       {"loop_closure", "ambiguity_window_m", &o.loop_ambiguity_window_m, "verification: the ambiguity search spans at least this half-width"},
       {"loop_closure", "ambiguity_max_window_m", &o.loop_ambiguity_max_window_m, "verification: ... and spans the estimate's possible drift up to this half-width"},
       {"loop_closure", "ambiguity_distance_m", &o.loop_ambiguity_distance_m, "verification: another match farther than this ..."},

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include "cairn/core/so2.hpp"
 #include "cairn/slam2d/icp.hpp"
@@ -31,6 +32,9 @@ bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map
   const double moved = (icp.T_map_sensor.translation() - best.T_map_sensor.translation()).norm();
   if (icp.inlier_fraction < options.loop_min_inlier_fraction) {
     candidate.reason = "ICP inlier fraction below minimum";
+  } else if (icp.inliers < options.loop_min_inliers) {
+    candidate.reason = "too few points to verify (" + std::to_string(icp.inliers) + " inliers, " +
+                       std::to_string(options.loop_min_inliers) + " needed)";
   } else if (icp.rms_m > options.loop_max_rms_m) {
     candidate.reason = "ICP residual above maximum";
   } else if (moved > 2.0 * options.grid.resolution_m + 0.05) {

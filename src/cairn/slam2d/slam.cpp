@@ -247,6 +247,7 @@ bool Slam2dOptions::is_valid(std::string* error) const {
         degraded_min_inlier_fraction <= 1.0 && lost_inlier_fraction >= 0.0 && lost_inlier_fraction <= 1.0))
     problems << "inlier fractions (loop_closure.min_inlier_fraction, health.*_inlier_fraction) must be in [0, 1]; ";
   if (!(loop_max_rms_m > 0.0)) problems << "loop_closure.max_rms_m must be > 0; ";
+  if (loop_min_inliers < 0) problems << "loop_closure.min_inliers must be >= 0; ";
   if (!(new_space_max_rays_through <= 1.0)) problems << "health.new_space_max_rays_through must be <= 1 (negative: off); ";
   const std::string text = problems.str();
   if (error != nullptr) *error = text;

@@ -120,6 +120,11 @@ struct Slam2dOptions {
   double loop_min_inlier_fraction = 0.8;  ///< ICP verification against the submap points
   double loop_max_rms_m = 0.03;
   double loop_min_degeneracy = 0.1;    ///< verification: the match constrains every direction
+  /// Verification: at least this many of the scan's points within inlier distance of the map. A
+  /// match of a few posts (10-20 returns) has no redundancy against a submap the drift of a
+  /// sparse stretch distorted: on issue 41's sparse open stretch such closures were up to 0.5 m
+  /// off at inlier fraction 1.0 (docs/slam2d.md, Known limits).
+  int loop_min_inliers = 30;
   /// The ambiguity search spans at least this half-width, whatever the match window (repeated
   /// structure such as identical doors lies farther away than a small match window reaches).
   double loop_ambiguity_window_m = 3.0;
