@@ -197,5 +197,19 @@ TEST(Icp, CorridorIsDegenerateAndFollowsThePrior) {
   EXPECT_NEAR(result.T_map_sensor.angle(), truth.angle(), 0.002);
 }
 
+// The degenerate direction in words, relative to the laser (by hand: a laser turned 90 degrees
+// left sees the map's x axis as its sideways axis and the map's y axis as its forward one).
+TEST(Icp, NamesADirectionRelativeToTheLaser) {
+  const core::SE2 facing_y(0.0, 0.0, M_PI / 2);
+  EXPECT_EQ(name_direction(Eigen::Vector2d(1.0, 0.0), facing_y), "translation along the laser's sideways axis");
+  EXPECT_EQ(name_direction(Eigen::Vector2d(0.0, -1.0), facing_y), "translation along the laser's forward axis");
+  const core::SE2 facing_x(5.0, -2.0, 0.0);
+  EXPECT_EQ(name_direction(Eigen::Vector2d(std::sqrt(0.5), std::sqrt(0.5)), facing_x),
+            "translation along the axis 45 degrees counterclockwise from the laser's forward axis");
+  EXPECT_EQ(name_direction(Eigen::Vector2d(std::sqrt(0.5), -std::sqrt(0.5)), facing_x),
+            "translation along the axis 135 degrees counterclockwise from the laser's forward axis");
+  EXPECT_EQ(name_direction(Eigen::Vector2d::Zero(), facing_x), "one translation direction");
+}
+
 }  // namespace
 }  // namespace cairn::slam2d

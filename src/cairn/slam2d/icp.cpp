@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <optional>
 
 #include "cairn/core/assert.hpp"
@@ -191,6 +192,17 @@ IcpResult match_icp(const PointMap& map, const std::vector<Eigen::Vector2d>& poi
   result.T_map_sensor = core::SE2(pose.x, pose.y, pose.theta);
   final_statistics(map, points_sensor, pose, inv_sigma2, options, result);
   return result;
+}
+
+std::string name_direction(const Eigen::Vector2d& direction_map, const core::SE2& T_map_sensor) {
+  if (!(direction_map.squaredNorm() > 0.0)) return "one translation direction";
+  const Eigen::Vector2d d = T_map_sensor.so2().inverse() * direction_map;
+  double degrees = std::atan2(d.y(), d.x()) * 180.0 / std::numbers::pi;
+  if (degrees < 0.0) degrees += 180.0;
+  if (degrees >= 180.0) degrees -= 180.0;
+  if (degrees <= 15.0 || degrees >= 165.0) return "translation along the laser's forward axis";
+  if (std::abs(degrees - 90.0) <= 15.0) return "translation along the laser's sideways axis";
+  return "translation along the axis " + std::to_string(std::lround(degrees)) + " degrees counterclockwise from the laser's forward axis";
 }
 
 }  // namespace cairn::slam2d

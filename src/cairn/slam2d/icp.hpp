@@ -20,6 +20,7 @@
 /// corridor (translation along it unobservable), up to 0.5 for normals spread evenly.
 
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "cairn/core/se2.hpp"
@@ -66,5 +67,11 @@ struct IcpResult {
 /// prior term pulls towards; pass nullptr for none.
 IcpResult match_icp(const PointMap& map, const std::vector<Eigen::Vector2d>& points_sensor,
                     const core::SE2& initial, const core::SE2* prior, const IcpOptions& options = {});
+
+/// A translation direction in the map frame (IcpResult::degenerate_direction) in words, relative to
+/// the sensor's forward axis at `T_map_sensor`: "translation along the laser's forward axis" within
+/// 15 degrees of it, "... sideways axis" within 15 degrees of that, else the axis's angle from
+/// forward (0-180 degrees, counterclockwise; a direction and its opposite are one axis).
+std::string name_direction(const Eigen::Vector2d& direction_map, const core::SE2& T_map_sensor);
 
 }  // namespace cairn::slam2d

@@ -909,8 +909,8 @@ struct Localizer2d::Impl {
                        " % now); degraded until a scan verifies the pose";
     } else if (icp.degeneracy < matching.degraded_min_degeneracy) {
       verdict.next = Health::kDegraded;
-      verdict.reason = "degenerate geometry (degeneracy " + fixed(icp.degeneracy, 4) +
-                       "); odometry carries the unconstrained direction";
+      verdict.reason = "degenerate geometry (degeneracy " + fixed(icp.degeneracy, 4) + "): the scan barely constrains " +
+                       name_direction(icp.degenerate_direction, icp.T_map_sensor) + "; odometry carries it";
     } else {
       verdict.next = Health::kOk;
       verdict.reason = "matching the map";

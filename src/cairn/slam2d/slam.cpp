@@ -285,22 +285,6 @@ double rays_through_map(const PointMap& map, const ScanPoints& points, const cor
   return rays == 0 ? 0.0 : static_cast<double>(through) / static_cast<double>(rays);
 }
 
-/// The translation `direction_local` (IcpResult::degenerate_direction) in words, relative to the
-/// laser's forward axis at `T_local_laser`: "translation along the laser's forward axis" within
-/// 15 degrees of it, "... sideways axis" within 15 degrees of that, else the angle from forward
-/// (0-180 degrees, counterclockwise; a direction and its opposite are the same axis).
-std::string name_direction(const Eigen::Vector2d& direction_local, const core::SE2& T_local_laser) {
-  if (!(direction_local.squaredNorm() > 0.0)) return "one translation direction";
-  const Eigen::Vector2d d = T_local_laser.so2().inverse() * direction_local;
-  double degrees = std::atan2(d.y(), d.x()) * 180.0 / std::numbers::pi;
-  if (degrees < 0.0) degrees += 180.0;
-  if (degrees >= 180.0) degrees -= 180.0;
-  if (degrees <= 15.0 || degrees >= 165.0) return "translation along the laser's forward axis";
-  if (std::abs(degrees - 90.0) <= 15.0) return "translation along the laser's sideways axis";
-  return "translation along the axis " + std::to_string(static_cast<int>(std::lround(degrees))) +
-         " degrees counterclockwise from the laser's forward axis";
-}
-
 bool pins_position(const Eigen::Matrix3d& hessian, double sigma_m) {
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(hessian);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(hessian.determinant() > 0.0)) return false;
