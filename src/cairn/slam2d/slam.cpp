@@ -255,14 +255,13 @@ bool Slam2dOptions::is_valid(std::string* error) const {
 }
 
 namespace {
-// Whether a match's scan term (Hessian in (x, y, theta), 1/sigma^2 units) holds the position to
-// within `sigma_m` in every direction: the largest eigenvalue of the position block of its inverse.
 /// The share of a scan's rays, cast from `T_map_laser`, that pass within `radius_m` of a point of
 /// `map` more than `end_margin_m` before their end: returns (`points.hits`) and no-returns
 /// (`points.misses`, free rays of the filter's missing_ray_length_m). A ray through a mapped point
 /// says the scan, placed there, sees through what the map holds (Slam2dOptions::
 /// new_space_max_rays_through); a ray shorter than the margin says nothing and is not counted.
-/// The rays are sampled every `radius_m` (radius_m <= the map's cell size).
+/// The rays are sampled every `radius_m` (> 0, <= the map's cell size), at most 4,096 times each
+/// (a ray longer than that many steps is checked over its first part only).
 double rays_through_map(const PointMap& map, const ScanPoints& points, const core::SE2& T_map_laser, double radius_m,
                         double end_margin_m) {
   std::size_t rays = 0, through = 0;
@@ -270,11 +269,12 @@ double rays_through_map(const PointMap& map, const ScanPoints& points, const cor
   const auto cast = [&](const Eigen::Vector2d& end_laser) {
     const Eigen::Vector2d end = T_map_laser * end_laser;
     const double length = (end - origin).norm();
-    if (!(length > end_margin_m)) return;
+    if (!(length > end_margin_m) || !std::isfinite(length)) return;
     ++rays;
     const Eigen::Vector2d direction = (end - origin) / length;
-    for (double s = radius_m; s < length - end_margin_m; s += radius_m) {
-      if (map.nearest(origin + s * direction, radius_m) != nullptr) {
+    const double steps = std::min(std::floor((length - end_margin_m) / radius_m), 4096.0);
+    for (int k = 1; k <= static_cast<int>(steps); ++k) {
+      if (map.nearest(origin + k * radius_m * direction, radius_m) != nullptr) {
         ++through;
         return;
       }
@@ -285,6 +285,8 @@ double rays_through_map(const PointMap& map, const ScanPoints& points, const cor
   return rays == 0 ? 0.0 : static_cast<double>(through) / static_cast<double>(rays);
 }
 
+// Whether a match's scan term (Hessian in (x, y, theta), 1/sigma^2 units) holds the position to
+// within `sigma_m` in every direction: the largest eigenvalue of the position block of its inverse.
 bool pins_position(const Eigen::Matrix3d& hessian, double sigma_m) {
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(hessian);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(hessian.determinant() > 0.0)) return false;
@@ -1337,13 +1339,13 @@ struct Slam2d::Impl {
   /// (Slam2dOptions::new_space_max_rays_through) sees only structure the map does not hold yet:
   /// in the sparse open stretch of issue 41 (outdoor-stretch with 10 features), 10-20 returns of
   /// a post or bench just come into range. A kidnapped robot's scan, cast from where the robot
-  /// was, crosses the walls mapped around it. Points within 2 inlier distances of a ray count as
-  /// on it; the last max_correspondence_m of a return's ray may be the same surface, misplaced by
+  /// was, crosses the walls mapped around it. Points within 2 inlier distances of a ray (at least
+  /// 2 cm, at most the point map's cell) count as on it; the last max_correspondence_m of a return's ray may be the same surface, misplaced by
   /// the odometry's error, and is not checked.
   void judge_failed_match(ScanWork& w) const {
     if (w.matched || !have_previous || local_map.empty() || !enough_points(w) || options.new_space_max_rays_through < 0.0) return;
-    w.rays_through_map = rays_through_map(local_map, w.points, w.T_local_laser, 2.0 * options.icp.inlier_distance_m,
-                                          options.icp.max_correspondence_m);
+    const double radius_m = std::clamp(2.0 * options.icp.inlier_distance_m, 0.02, options.map_points.cell_size_m);
+    w.rays_through_map = rays_through_map(local_map, w.points, w.T_local_laser, radius_m, options.icp.max_correspondence_m);
     w.new_space = w.rays_through_map <= options.new_space_max_rays_through;
   }
 
