@@ -94,7 +94,6 @@ void render_png(const std::string& path, const World& world, const std::vector<V
     cairo_arc(cr, c.x(), c.y(), std::max(disc.radius_m * scale, 2.0), 0, 2 * std::numbers::pi);
     cairo_fill(cr);
   }
-  cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_set_line_width(cr, std::max(2.0, 0.1 * scale));
   cairo_set_line_cap(cr, CAIRO_LINE_CAP_SQUARE);
   for (const auto& wall : world.walls) {

@@ -118,6 +118,10 @@ struct ScanWork {
   Eigen::Vector2d degenerate_direction = Eigen::Vector2d::Zero();  ///< of the match (IcpResult), local frame
   Health next = Health::kOk;
   std::string reason;
+  /// Neither matched nor failed: too few returns to match, or only new structure. The pose follows
+  /// the odometry, the points enter the map, and the scan neither counts towards nor judges being
+  /// lost. (too_few_returns is set by assess_health.)
+  bool odometry_only() const { return too_few_returns || new_space; }
   bool start_segment = false;  ///< this scan (re)seeds the current segment's map
   SegmentInfo* segment_info = nullptr;  ///< the current segment's (after the health stages)
   bool new_keyframe = false;
@@ -1366,7 +1370,7 @@ struct Slam2d::Impl {
   /// is no evidence of being lost: the pose follows odometry and the state says degraded.
   void assess_health(ScanWork& w) {
     w.too_few_returns = have_previous && static_cast<int>(w.points.matching.size()) < options.min_matching_points;
-    if (w.too_few_returns || w.new_space) {
+    if (w.odometry_only()) {
       // leave the failed-match counter as it is
     } else if (!w.matched) {
       ++bad_matches_in_a_row;
@@ -1403,7 +1407,7 @@ struct Slam2d::Impl {
   /// row match its map well: a seed that does not match its successors (a burst of garbage, a
   /// scan of people crowding the sensor) is dropped from the map and the next scan seeds again.
   void supervise_segment(ScanWork& w, Slam2dSummary& summary) {
-    const bool judged = have_previous && !w.too_few_returns && !w.new_space;
+    const bool judged = have_previous && !w.odometry_only();
     const std::string segment_name = "map segment " + std::to_string(segment);
     if (probation > 0 && judged) {
       judge_probation(w, segment_name, summary);
@@ -1490,7 +1494,7 @@ struct Slam2d::Impl {
     set_health(w.next, w.index, w.scan.time, w.reason, summary);
     w.record.health = w.next;
     w.record.segment = segment;
-    if (!w.matched && !w.too_few_returns && !w.new_space && have_previous) lost_since_keyframe = true;
+    if (!w.matched && !w.odometry_only() && have_previous) lost_since_keyframe = true;
     if (w.new_space) ++summary.scans_new_space;
     if (w.next == Health::kOk) ++summary.scans_ok;
     if (w.next == Health::kDegraded) ++summary.scans_degraded;
@@ -1550,7 +1554,7 @@ struct Slam2d::Impl {
     // but not the points: half the scan disagreeing with the map after a jump is what a kidnapping
     // into a look-alike room looks like.
     const bool doubtful = w.restarted && w.record.inlier_fraction < options.degraded_min_inlier_fraction;
-    const bool placed = (w.matched && !doubtful) || w.too_few_returns || w.new_space || w.start_segment;
+    const bool placed = (w.matched && !doubtful) || w.odometry_only() || w.start_segment;
     if (placed) {
       kf.hits = std::move(w.points.hits);
       kf.misses = std::move(w.points.misses);
