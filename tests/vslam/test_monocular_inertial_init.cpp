@@ -15,6 +15,7 @@
 #include "cairn/inertial/inertial_initialization.hpp"
 #include "cairn/sim/imu.hpp"
 #include "cairn/vslam/visual_slam.hpp"
+#include "inertial_flight.hpp"
 #include "synthetic_world.hpp"
 
 namespace cairn::vslam {
@@ -24,40 +25,12 @@ using test::StereoCamera;
 using test::SyntheticWorld;
 using Vector3 = Eigen::Vector3d;
 
-constexpr double kPi = 3.14159265358979323846;
-
-// The render world has y down (synthetic_world.hpp); the IMU world has z up, x along the corridor
-// (+z of the render world), y to its left (-x). R_render_imu's columns are the IMU world's axes.
-const Eigen::Matrix3d kR_render_imu = (Eigen::Matrix3d() << 0, -1, 0, 0, 0, -1, 1, 0, 0).finished();
-// The camera on the body (x forward, z up): its z is the body's x, its x the body's -y, its y the
-// body's -z; 5 cm ahead of the IMU.
-const core::SE3 kT_body_camera(core::SO3::from_matrix((Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished()), Vector3(0.05, 0.0, 0.0));
-
-// The camera in the render world at time t: down the corridor at about 1 m/s, swaying sideways
-// and up and down, yawing and pitching a few degrees (all smooth, so the IMU sees it exactly).
-core::SE3 camera_in_render_world(double t) {
-  const Vector3 p(0.25 * std::sin(1.3 * t), 0.08 * std::sin(2.1 * t), 0.2 + 0.9 * t + 0.1 * std::sin(0.9 * t));
-  const double yaw = 10.0 * kPi / 180.0 * std::sin(1.1 * t), pitch = 4.0 * kPi / 180.0 * std::sin(1.7 * t);
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(yaw, Vector3::UnitY()) * Eigen::AngleAxisd(pitch, Vector3::UnitX())).toRotationMatrix();
-  return core::SE3(core::SO3::from_matrix(R), p);
-}
-
-core::SE3 body_in_imu_world(double t) {
-  const core::SE3 T_imu_render(core::SO3::from_matrix(kR_render_imu.transpose()), Vector3::Zero());
-  return T_imu_render * camera_in_render_world(t) * kT_body_camera.inverse();
-}
-
-// The body's kinematics by central differences of the closed form (h = 1e-4 s: errors ~1e-7 in
-// velocity and ~1e-5 in acceleration, far below the IMU's noise).
+constexpr double kPi = test::kFlightPi;
+using test::camera_in_render_world;
+const Eigen::Matrix3d kR_render_imu = test::R_render_imu();
+const core::SE3 kT_body_camera = test::T_body_camera();
 sim::BodyKinematics kinematics(double t) {
-  constexpr double h = 1e-4;
-  const core::SE3 T = body_in_imu_world(t), before = body_in_imu_world(t - h), after = body_in_imu_world(t + h);
-  sim::BodyKinematics k;
-  k.T_world_body = T;
-  k.v_world_mps = (after.translation() - before.translation()) / (2.0 * h);
-  k.a_world_mps2 = (after.translation() - 2.0 * T.translation() + before.translation()) / (h * h);
-  k.omega_body_rad_s = (before.so3().inverse() * after.so3()).log() / (2.0 * h);
-  return k;
+  return test::kinematics_of([](double s) { return camera_in_render_world(s); }, t);
 }
 
 TEST(MonocularInertialInitialisation, RecoversTheMetricScaleOnTheSyntheticCorridor) {

@@ -24,6 +24,7 @@
 #include "cairn/backend/optimizer.hpp"
 #include "cairn/backend/problem.hpp"
 #include "cairn/core/timer.hpp"
+#include "cairn/inertial/imu_types.hpp"
 #include "cairn/io/pose_graph.hpp"
 #include "cairn/backend/reprojection_factors.hpp"
 #include "cairn/vision/image_alignment.hpp"
@@ -213,6 +214,15 @@ struct VisualSlam::Impl {
   }
   // Per frame: reference keyframe and the pose relative to it, for the final trajectory.
   std::vector<std::pair<int, core::SE3>> relative;
+  // Visual-inertial (inertial_tracking.cpp; VisualInertialOptions).
+  std::vector<inertial::ImuSample> imu_samples;  // time order; those no estimate needs any more dropped
+  bool imu_initialised = false;
+  Eigen::Vector3d gravity_world = Eigen::Vector3d::Zero();  // in the visual world
+  inertial::ImuBias imu_bias;
+  bool have_imu_state = false;
+  inertial::NavState imu_state;  // the body at the last frame (tracked or carried)
+  core::Timestamp imu_state_time;
+  core::Timestamp last_tracked_time;  // for max_carried_s
   // A keyframe's pose; a culled one's through its chain of parents (ORB-SLAM2's trajectory
   // writer walks mpParent with mTcp the same way).
   core::SE3 keyframe_pose(int kf) const {
@@ -521,6 +531,8 @@ struct VisualSlam::Impl {
     double jump_m = 0.0;
     bool relocalising = false;      // after being lost, or a jump
     bool unverified_start = false;  // neither the prediction nor the reference keyframe explained the frame
+    bool have_imu_prediction = false;  // the IMU predicted the body's state at this frame
+    inertial::NavState imu_prediction;
   };
   // The reference-keyframe fallback's candidates and the frame's words.
   struct FallbackCandidates {
@@ -544,6 +556,12 @@ struct VisualSlam::Impl {
   void verify_relocalisation(TrackingFrame& w);
   void handle_lost_frame(TrackingFrame& w);
   void start_stereo_segment(TrackingFrame& w);
+  // Visual-inertial stages (inertial_tracking.cpp).
+  void predict_with_imu(TrackingFrame& w);
+  bool carry_with_imu(TrackingFrame& w);
+  void advance_inertial_state(const TrackingFrame& w);
+  void estimate_inertial(core::Timestamp now);
+  core::SE3 camera_pose(const inertial::NavState& body) const;
   void accept_tracked_frame(TrackingFrame& w);
   void map_keyframe(TrackingFrame& w);
   FrameResult record_frame(TrackingFrame& w);

@@ -619,6 +619,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
     if (!start_first_map(w)) return std::move(w.result);
     return record_frame(w);
   }
+  predict_with_imu(w);
   track_motion_model(w);
   align_small_images(w);
   if (w.prediction_failed) track_reference_fallback(w);
@@ -626,10 +627,11 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
   refine_with_local_map(w);
   verify_relocalisation(w);
   if (w.inliers < options.lost_below_inliers) {
-    handle_lost_frame(w);
+    if (!carry_with_imu(w)) handle_lost_frame(w);
   } else {
     accept_tracked_frame(w);
   }
+  advance_inertial_state(w);
   return record_frame(w);
 }
 
@@ -680,18 +682,22 @@ int VisualSlam::Impl::search_around_last(FrameData& frame, double motion_radius_
   return n;
 }
 
-// Stage 1: the previous frame's points at the constant-velocity prediction, then the motion-only
-// BA when enough match; sets whether the prediction failed (the fallbacks' trigger).
+// Stage 1: the previous frame's points at the constant-velocity prediction (with an IMU, at the
+// IMU's: predict_with_imu), then the motion-only BA when enough match; sets whether the
+// prediction failed (the fallbacks' trigger).
 void VisualSlam::Impl::track_motion_model(TrackingFrame& w) {
   FrameData& f = w.f;
-  f.T_world_camera = have_velocity && !lost ? last.T_world_camera * velocity : last.T_world_camera;
+  const bool predicted = w.have_imu_prediction || (have_velocity && !lost);
+  f.T_world_camera = w.have_imu_prediction ? camera_pose(w.imu_prediction)
+                     : have_velocity && !lost ? last.T_world_camera * velocity
+                                              : last.T_world_camera;
   w.matches = 0;
   w.was_lost = lost;
   // ORB-SLAM2 TrackWithMotionModel: th 7 for stereo, 15 for RGB-D (cairn: 7, see the option).
   w.motion_radius_px = kind == io::SequenceKind::kStereo ? options.motion_search_radius_px
                        : kind == io::SequenceKind::kRgbd ? options.motion_search_radius_rgbd_px
                                                          : options.motion_search_radius_mono_px;
-  if (have_last && have_velocity && !lost) w.matches = search_around_last(f, w.motion_radius_px);
+  if (have_last && predicted) w.matches = search_around_last(f, w.motion_radius_px);
   w.inliers = 0;
   if (w.matches >= options.min_motion_matches) {
     w.inliers = optimize_pose(f);

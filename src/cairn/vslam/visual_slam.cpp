@@ -13,6 +13,7 @@ bool VisualSlamOptions::is_valid(std::string* why) const {
   auto add = [&](const std::string& p) { problems.add(p); };
   if (std::string p; !orb.is_valid(&p)) add(p);
   if (std::string p; !stereo.is_valid(&p)) add(p);
+  if (std::string p; !inertial.is_valid(&p)) add(p);
   if (!(close_depth_baselines > 0.0)) add("close_depth_baselines must be > 0");
   if (min_new_points < 1) add("min_new_points must be >= 1");
   if (!(motion_search_radius_px > 0.0) || !(local_search_radius_px > 0.0)) add("search radii must be > 0");
@@ -44,6 +45,9 @@ VisualSlam::VisualSlam(const io::CameraCalibration& camera, io::SequenceKind kin
   if (std::string p; !options.is_valid(&p)) throw std::invalid_argument("visual SLAM options: " + p);
   if (std::string p; !camera.is_valid(&p)) throw std::invalid_argument("camera calibration: " + p);
   if (kind == io::SequenceKind::kStereo && !(camera.baseline_m > 0.0)) throw std::invalid_argument("stereo needs a positive baseline");
+  if (options.inertial.enabled && kind == io::SequenceKind::kMonocular) {
+    throw std::invalid_argument("monocular-inertial tracking is not in this version: options.inertial needs stereo or RGB-D");
+  }
   if (kind == io::SequenceKind::kRgbd && (!(camera.depth_units_per_m > 0.0) || !(camera.virtual_baseline_m > 0.0))) {
     throw std::invalid_argument("RGB-D needs depth_units_per_m and virtual_baseline_m > 0");
   }

@@ -32,12 +32,41 @@
 #include "cairn/core/health.hpp"
 #include "cairn/core/se3.hpp"
 #include "cairn/core/time.hpp"
+#include "cairn/inertial/imu_types.hpp"
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/vision/features.hpp"
 #include "cairn/vision/vocabulary.hpp"
 #include "cairn/vslam/saved_map.hpp"
 
 namespace cairn::vslam {
+
+/// Stereo-inertial and RGB-D-inertial tracking (issue 40, its first part; ORB-SLAM3, Campos et
+/// al., T-RO 2021, Sec. V and VII; docs/vslam.md "With an IMU"). On when `enabled` and the
+/// caller feeds VisualSlam::add_imu; metric cameras only (monocular-inertial is not in this
+/// version). Once the keyframes span `initialisation_window_s`, the inertial-only MAP estimate
+/// of Campos et al. (ICRA 2020; inertial/inertial_initialization.hpp, the scale held at 1) gives
+/// gravity's direction in the visual world, the keyframes' velocities and the biases, and is run
+/// again over the last `refinement_window_s` at every keyframe. From then on the IMU,
+/// preintegrated from the last frame's state (Forster et al., T-RO 2017), predicts each frame's
+/// pose in place of the constant-velocity model, and a frame the images do not track (blank,
+/// blurred, texture-less) takes that prediction: `degraded`, not lost, for up to `max_carried_s`.
+struct VisualInertialOptions {
+  bool enabled = false;
+  /// The camera (left, or the RGB-D camera) in the IMU's frame: EuRoC's cam0 sensor.yaml T_BS.
+  core::SE3 T_body_camera;
+  inertial::ImuNoise noise;  ///< EuRoC's ADIS16448 by default
+  double gravity_mps2 = inertial::kStandardGravity;
+  /// Keyframes over at least this long before the first initialisation (ORB-SLAM3: 2 s); >= 1.
+  double initialisation_window_s = 2.0;
+  /// Every keyframe re-estimates gravity, velocities and biases over the keyframes of its last
+  /// this-many seconds (ORB-SLAM3 refines at 5 s and 15 s, then keeps the estimates in its
+  /// visual-inertial local BA, which cairn does not have yet); >= initialisation_window_s.
+  double refinement_window_s = 3.0;
+  /// A frame the images do not track takes the IMU's prediction for at most this long after the
+  /// last tracked frame (ORB-SLAM3's RECENTLY_LOST lasts 5 s); then it is lost. >= 0.
+  double max_carried_s = 1.5;
+  bool is_valid(std::string* why) const;
+};
 
 struct VisualSlamOptions {
   vision::OrbOptions orb;  ///< ORB-SLAM2: 2000 features for KITTI, 1000 for TUM (cairn vslam sets this)
@@ -148,6 +177,7 @@ struct VisualSlamOptions {
   /// A new segment's first this-many keyframes each try to merge with the 8 keyframes tracked
   /// last before it (verified as a loop; no vocabulary needed). 0 = only place recognition merges.
   int merge_recent_keyframes_of_new_map = 10;
+  VisualInertialOptions inertial;
   /// True when usable; otherwise false with every problem, "; "-separated, in *why (core/problems.hpp).
   bool is_valid(std::string* why) const;
 };
@@ -183,6 +213,10 @@ struct FrameResult {
   bool relocalisation_refused = false;
   bool loop_closed = false;  ///< this frame's keyframe closed a loop
   bool new_map = false;      ///< this frame started a new map segment after being lost
+  /// With an IMU (VisualInertialOptions): the first stage searched around the IMU's prediction,
+  /// and the frame, untracked by the images, took that prediction (health degraded, tracked false).
+  bool imu_predicted = false;
+  bool carried_by_imu = false;
   int segment = 0;           ///< the map segment the frame was tracked in (at that time)
   double sigma_position_m = 0.0;  ///< sqrt of the largest eigenvalue of the position covariance
   FrameTimes times;
@@ -231,6 +265,12 @@ struct VisualSlamSummary {
   /// keyframe made, so the map holds keyframes - keyframes_culled.
   std::size_t keyframes_culled = 0;
   double loop_s = 0.0, global_ba_s = 0.0;
+  /// With an IMU: frames carried by it alone; inertial estimates made (the first one is the
+  /// initialisation) and refused (the last reason kept); when the first succeeded.
+  std::size_t frames_carried_by_imu = 0, inertial_estimates = 0, inertial_estimates_refused = 0;
+  std::string inertial_refusal;
+  double inertial_initialised_at_s = -1.0;  ///< the frame time of the first estimate; -1: never
+  double inertial_s = 0.0;                  ///< time in the inertial estimates
   std::vector<LoopRecord> loops;  ///< every candidate that reached verification, and why
 };
 
@@ -258,6 +298,16 @@ class VisualSlam {
   /// the initial scene's median depth is 1. No loop closure (needs Sim(3)) and no new map
   /// segments (need a new initialisation) in this version.
   FrameResult add_monocular(core::Timestamp time, const cv::Mat& gray);
+  /// One IMU reading (options.inertial.enabled): readings come in time order, each before the
+  /// frames it spans (a frame at t needs a reading at or after t to be predicted). Throws
+  /// std::invalid_argument for a reading out of order or not finite, std::logic_error when the
+  /// IMU is not enabled.
+  void add_imu(const inertial::ImuSample& sample);
+  /// The inertial estimate (after the first initialisation): gravity in the visual world, m/s^2,
+  /// and the biases; nothing before it.
+  bool inertial_initialised() const;
+  Eigen::Vector3d gravity_world() const;
+  inertial::ImuBias imu_bias() const;
 
   /// Every frame's pose, through its reference keyframe at the keyframe's current (bundle-
   /// adjusted) pose, as ORB-SLAM2 writes its trajectory.
