@@ -37,9 +37,16 @@ struct FlightRun {
   VisualSlamSummary summary;
 };
 
-bool blank(double t) { return t >= kBlankFrom - 1e-9 && t < kBlankTo - 1e-9; }
+// What goes wrong on the flight: a second of black images, or a fast turn (a yaw of turn_deg
+// over turn_s seconds and back, inertial_flight.hpp).
+struct Trouble {
+  bool blank = false;
+  double turn_at_s = -1.0, turn_deg = 0.0, turn_s = 1.0;
+  core::SE3 camera(double t) const { return test::camera_in_render_world(t, turn_at_s, turn_deg, turn_s); }
+  bool black(double t) const { return blank && t >= kBlankFrom - 1e-9 && t < kBlankTo - 1e-9; }
+};
 
-FlightRun fly(bool with_imu) {
+FlightRun fly(bool with_imu, const Trouble& trouble) {
   SyntheticWorld world;
   world.add_corridor_z(Vector3(-1.0, -1.0, -1.0), Vector3(1.0, 1.3, 22.0), 101);
   const StereoCamera camera;
@@ -51,7 +58,7 @@ FlightRun fly(bool with_imu) {
   options.inertial.T_body_camera = test::T_body_camera();
   options.inertial.noise = imu.noise;
   const sim::SimulatedImu simulated = sim::simulate_imu(
-      [](double t) { return test::kinematics_of([](double s) { return test::camera_in_render_world(s); }, t); }, 0.0, kDuration + 0.2, imu);
+      [&](double t) { return test::kinematics_of([&](double s) { return trouble.camera(s); }, t); }, 0.0, kDuration + 0.2, imu);
   VisualSlam slam(camera.calibration(), io::SequenceKind::kStereo, options);
   FlightRun run;
   std::size_t next_sample = 0;
@@ -68,10 +75,10 @@ FlightRun fly(bool with_imu) {
       if (sample.stamp.seconds() >= t) break;
     }
     cv::Mat left, right;
-    if (blank(t)) {
+    if (trouble.black(t)) {
       left = right = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
     } else {
-      std::tie(left, right) = world.render_stereo(test::camera_in_render_world(t), camera);
+      std::tie(left, right) = world.render_stereo(trouble.camera(t), camera);
     }
     const FrameResult r = slam.add_stereo(core::Timestamp::from_seconds(t), left, right);
     run.lost += r.health == TrackingHealth::kLost ? 1 : 0;
@@ -84,7 +91,7 @@ FlightRun fly(bool with_imu) {
   Eigen::MatrixXd estimated(3, frames), truth(3, frames);
   for (int k = 0; k < frames; ++k) {
     estimated.col(k) = trajectory[static_cast<std::size_t>(k)].translation();
-    truth.col(k) = test::camera_in_render_world(times[static_cast<std::size_t>(k)]).translation();
+    truth.col(k) = trouble.camera(times[static_cast<std::size_t>(k)]).translation();
     if (k > 0) run.distance_m += (truth.col(k) - truth.col(k - 1)).norm();
   }
   const eval::UmeyamaResult fit = eval::umeyama(estimated, truth, false);
@@ -103,12 +110,12 @@ FlightRun fly(bool with_imu) {
     run.gravity_error_deg = std::atan2(g.cross(gravity_truth).norm(), g.dot(gravity_truth)) * 180.0 / test::kFlightPi;
   }
   run.summary = slam.summary();
-  std::printf("%s: %zu frames, %zu lost, %zu degraded, %zu carried by the IMU; first frame after the blank %s; ATE %.4f m over %.2f m "
-              "(%.2f %%), error at the blank's last frame %.3f m; inertial estimates %zu (refused %zu%s%s), first at %.2f s, gravity %.3f "
+  std::printf("%s%s: %zu frames, %zu lost, %zu degraded, %zu carried by the IMU; frame at %.1f s %s; ATE %.4f m over %.2f m "
+              "(%.2f %%), error at %.2f s %.3f m; inertial estimates %zu (refused %zu%s%s), first at %.2f s, gravity %.3f "
               "deg off, %.1f ms in them\n",
-              with_imu ? "stereo-inertial" : "stereo only", run.frames, run.lost, run.degraded, run.carried,
+              with_imu ? "stereo-inertial" : "stereo only", trouble.blank ? ", blank second" : ", fast turn", run.frames, run.lost, run.degraded, run.carried, kBlankTo,
               run.tracked_after_blank ? "tracked" : "not tracked", run.ate_rmse_m, run.distance_m, 100.0 * run.ate_rmse_m / run.distance_m,
-              run.blank_end_error_m, run.summary.inertial_estimates, run.summary.inertial_estimates_refused,
+              kBlankTo - 1.0 / kFrameRate, run.blank_end_error_m, run.summary.inertial_estimates, run.summary.inertial_estimates_refused,
               run.summary.inertial_refusal.empty() ? "" : ": ", run.summary.inertial_refusal.c_str(), run.summary.inertial_initialised_at_s,
               run.gravity_error_deg, 1e3 * run.summary.inertial_s);
   return run;
@@ -117,9 +124,11 @@ FlightRun fly(bool with_imu) {
 TEST(StereoInertial, CarriesASecondOfBlankFramesThatVisualOnlyTrackingLoses) {
   const int blank_frames = static_cast<int>(std::lround((kBlankTo - kBlankFrom) * kFrameRate));
   // The control: without the IMU the blank frames are lost.
-  const FlightRun visual = fly(false);
+  Trouble lights_off;
+  lights_off.blank = true;
+  const FlightRun visual = fly(false, lights_off);
   EXPECT_GE(visual.lost, static_cast<std::size_t>(blank_frames));
-  const FlightRun inertial = fly(true);
+  const FlightRun inertial = fly(true, lights_off);
   ASSERT_TRUE(inertial.initialised) << inertial.summary.inertial_refusal;
   EXPECT_LT(inertial.summary.inertial_initialised_at_s, kBlankFrom);  // initialised before the lights go off
   EXPECT_EQ(inertial.carried, static_cast<std::size_t>(blank_frames));
@@ -131,5 +140,24 @@ TEST(StereoInertial, CarriesASecondOfBlankFramesThatVisualOnlyTrackingLoses) {
   EXPECT_LT(inertial.gravity_error_deg, 1.0);
 }
 
+// A yaw of 150 degrees in 0.4 s and back (peak 750 deg/s, 37.5 degrees between frames at the
+// peak; the renderer draws no motion blur): visual-only tracking loses frames at the turn, the
+// IMU carries them and the turned view is mapped at its pose (map_carried_view).
+TEST(StereoInertial, CarriesAFastTurnThatVisualOnlyTrackingLoses) {
+  Trouble turn;
+  turn.turn_at_s = 3.0;
+  turn.turn_deg = 150.0;
+  turn.turn_s = 0.4;
+  const FlightRun visual = fly(false, turn);
+  EXPECT_GE(visual.lost, 1u);
+  const FlightRun inertial = fly(true, turn);
+  ASSERT_TRUE(inertial.initialised) << inertial.summary.inertial_refusal;
+  EXPECT_EQ(inertial.lost, 0u);
+  EXPECT_GE(inertial.carried, 1u);
+  EXPECT_LT(inertial.ate_rmse_m, 0.01 * inertial.distance_m);
+  EXPECT_LT(inertial.ate_rmse_m, visual.ate_rmse_m);
+}
+
 }  // namespace
 }  // namespace cairn::vslam
+

@@ -559,6 +559,7 @@ struct VisualSlam::Impl {
   // Visual-inertial stages (inertial_tracking.cpp).
   void predict_with_imu(TrackingFrame& w);
   bool carry_with_imu(TrackingFrame& w);
+  void map_carried_view(TrackingFrame& w);
   void advance_inertial_state(const TrackingFrame& w);
   void estimate_inertial(core::Timestamp now);
   core::SE3 camera_pose(const inertial::NavState& body) const;

@@ -1052,11 +1052,17 @@ FrameResult VisualSlam::Impl::record_frame(TrackingFrame& w) {
     relative.emplace_back(reference_keyframe, ref.frame.T_world_camera.inverse() * last.T_world_camera);
     result.T_world_camera = last.T_world_camera;
   } else {
-    // Keep the last tracked frame and its points for the next attempt; report the guess.
+    // Keep the last tracked frame and its points for the next attempt; report the guess. A
+    // keyframe the IMU carried (map_carried_view) is the next frame's `last` instead: its points
+    // are the ones in view.
     const KeyFrame& ref = keyframes[static_cast<std::size_t>(std::max(reference_keyframe, 0))];
     relative.emplace_back(ref.id, ref.frame.T_world_camera.inverse() * f.T_world_camera);
     result.T_world_camera = f.T_world_camera;
-    if (have_last) {
+    if (result.carried_by_imu && result.keyframe) {
+      last = std::move(f);
+      have_last = true;
+      have_velocity = false;
+    } else if (have_last) {
       last.T_world_camera = f.T_world_camera;
       have_velocity = false;
     }
