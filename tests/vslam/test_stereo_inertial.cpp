@@ -30,7 +30,7 @@ constexpr double kDuration = 6.0;
 constexpr double kBlankFrom = 3.0, kBlankTo = 4.0;  // [from, to): black images
 
 struct FlightRun {
-  std::size_t lost = 0, degraded = 0, carried = 0, frames = 0;
+  std::size_t lost = 0, degraded = 0, carried = 0, frames = 0, contradicted = 0;
   bool tracked_after_blank = false;  // the first frame after the blank
   double ate_rmse_m = 0.0, blank_end_error_m = 0.0, distance_m = 0.0, gravity_error_deg = -1.0;
   bool initialised = false;
@@ -46,7 +46,9 @@ struct Trouble {
   bool black(double t) const { return blank && t >= kBlankFrom - 1e-9 && t < kBlankTo - 1e-9; }
 };
 
-FlightRun fly(bool with_imu, const Trouble& trouble) {
+// The IMU's readings follow `imu_trouble`'s path when given (an IMU that contradicts the images).
+FlightRun fly(bool with_imu, const Trouble& trouble, const Trouble* imu_trouble = nullptr) {
+  const Trouble& imu_path = imu_trouble ? *imu_trouble : trouble;
   SyntheticWorld world;
   world.add_corridor_z(Vector3(-1.0, -1.0, -1.0), Vector3(1.0, 1.3, 22.0), 101);
   const StereoCamera camera;
@@ -58,7 +60,7 @@ FlightRun fly(bool with_imu, const Trouble& trouble) {
   options.inertial.T_body_camera = test::T_body_camera();
   options.inertial.noise = imu.noise;
   const sim::SimulatedImu simulated = sim::simulate_imu(
-      [&](double t) { return test::kinematics_of([&](double s) { return trouble.camera(s); }, t); }, 0.0, kDuration + 0.2, imu);
+      [&](double t) { return test::kinematics_of([&](double s) { return imu_path.camera(s); }, t); }, 0.0, kDuration + 0.2, imu);
   VisualSlam slam(camera.calibration(), io::SequenceKind::kStereo, options);
   FlightRun run;
   std::size_t next_sample = 0;
@@ -84,6 +86,11 @@ FlightRun fly(bool with_imu, const Trouble& trouble) {
     run.lost += r.health == TrackingHealth::kLost ? 1 : 0;
     run.degraded += r.health == TrackingHealth::kDegraded ? 1 : 0;
     run.carried += r.carried_by_imu ? 1 : 0;
+    const bool contradicted = r.note.find("the IMU's prediction and the images disagree") != std::string::npos;
+    run.contradicted += contradicted ? 1 : 0;
+    if (contradicted) {
+      EXPECT_NE(r.health, TrackingHealth::kOk) << "frame " << k;
+    }
     if (std::abs(t - kBlankTo) < 1e-9) run.tracked_after_blank = r.tracked;
   }
   run.frames = static_cast<std::size_t>(frames);
@@ -110,10 +117,10 @@ FlightRun fly(bool with_imu, const Trouble& trouble) {
     run.gravity_error_deg = std::atan2(g.cross(gravity_truth).norm(), g.dot(gravity_truth)) * 180.0 / test::kFlightPi;
   }
   run.summary = slam.summary();
-  std::printf("%s%s: %zu frames, %zu lost, %zu degraded, %zu carried by the IMU; frame at %.1f s %s; ATE %.4f m over %.2f m "
+  std::printf("%s%s: %zu frames, %zu lost, %zu degraded, %zu carried by the IMU, %zu contradicting it; frame at %.1f s %s; ATE %.4f m over %.2f m "
               "(%.2f %%), error at %.2f s %.3f m; inertial estimates %zu (refused %zu%s%s), first at %.2f s, gravity %.3f "
               "deg off, %.1f ms in them\n",
-              with_imu ? "stereo-inertial" : "stereo only", trouble.blank ? ", blank second" : ", fast turn", run.frames, run.lost, run.degraded, run.carried, kBlankTo,
+              with_imu ? "stereo-inertial" : "stereo only", trouble.blank ? ", blank second" : trouble.turn_at_s >= 0.0 ? ", fast turn" : imu_trouble ? ", straight images, turning IMU" : "", run.frames, run.lost, run.degraded, run.carried, run.contradicted, kBlankTo,
               run.tracked_after_blank ? "tracked" : "not tracked", run.ate_rmse_m, run.distance_m, 100.0 * run.ate_rmse_m / run.distance_m,
               kBlankTo - 1.0 / kFrameRate, run.blank_end_error_m, run.summary.inertial_estimates, run.summary.inertial_estimates_refused,
               run.summary.inertial_refusal.empty() ? "" : ": ", run.summary.inertial_refusal.c_str(), run.summary.inertial_initialised_at_s,
@@ -138,6 +145,8 @@ TEST(StereoInertial, CarriesASecondOfBlankFramesThatVisualOnlyTrackingLoses) {
   EXPECT_LT(inertial.ate_rmse_m, 0.01 * inertial.distance_m);
   EXPECT_LT(inertial.ate_rmse_m, visual.ate_rmse_m);
   EXPECT_LT(inertial.gravity_error_deg, 1.0);
+  EXPECT_EQ(inertial.contradicted, 0u);
+  EXPECT_EQ(inertial.summary.frames_contradicting_imu, 0u);
 }
 
 // A yaw of 150 degrees in 0.4 s and back (peak 750 deg/s, 37.5 degrees between frames at the
@@ -161,3 +170,23 @@ TEST(StereoInertial, CarriesAFastTurnThatVisualOnlyTrackingLoses) {
 }  // namespace
 }  // namespace cairn::vslam
 
+
+namespace cairn::vslam {
+namespace {
+
+// The health rule: the images fly straight on while the IMU reads the fast turn of the test
+// above (a wrong IMU, or images of something else). The frames where the two disagree are
+// degraded, each saying so; in the runs above, where they agree, no frame is.
+TEST(StereoInertial, FramesTheImuContradictsAreDegraded) {
+  Trouble straight, turn;
+  turn.turn_at_s = 3.0;
+  turn.turn_deg = 150.0;
+  turn.turn_s = 0.4;
+  const FlightRun run = fly(true, straight, &turn);
+  ASSERT_TRUE(run.initialised) << run.summary.inertial_refusal;
+  EXPECT_GE(run.contradicted, 1u);
+  EXPECT_EQ(run.summary.frames_contradicting_imu, run.contradicted);
+}
+
+}  // namespace
+}  // namespace cairn::vslam

@@ -33,6 +33,8 @@ bool VisualInertialOptions::is_valid(std::string* why) const {
   }
   if (!(max_carried_s >= 0.0 && std::isfinite(max_carried_s))) problems.add("inertial.max_carried_s must be finite and >= 0");
   if (!T_body_camera.matrix().allFinite()) problems.add("inertial.T_body_camera must be finite");
+  problems.require_positive(disagreement_m, "inertial.disagreement_m");
+  problems.require_positive(disagreement_deg, "inertial.disagreement_deg");
   return problems.report(why);
 }
 
@@ -121,14 +123,16 @@ void VisualSlam::Impl::map_carried_view(TrackingFrame& w) {
   w.result.note += "; its view mapped as a keyframe at that pose";
 }
 
-// After the frame: the body's state at it. A tracked frame keeps its visual pose and the IMU's
+// After the frame: the body's state at it. A tracked frame is first checked against the IMU's
+// prediction (check_against_imu), then keeps its visual pose and the IMU's
 // velocity; a keyframe re-estimates gravity, velocities and biases (estimate_inertial) and takes
 // its velocity from there; a carried frame keeps the prediction; a lost one leaves no state (the
 // next keyframe's estimate gives one again).
-void VisualSlam::Impl::advance_inertial_state(const TrackingFrame& w) {
+void VisualSlam::Impl::advance_inertial_state(TrackingFrame& w) {
   if (!options.inertial.enabled) return;
-  const FrameResult& result = w.result;
+  FrameResult& result = w.result;
   if (result.tracked) {
+    check_against_imu(w);
     last_tracked_time = w.f.time;
     if (w.have_imu_prediction) {
       imu_state.T_world_body = w.f.T_world_camera * options.inertial.T_body_camera.inverse();
@@ -146,6 +150,21 @@ void VisualSlam::Impl::advance_inertial_state(const TrackingFrame& w) {
   } else {
     have_imu_state = false;
   }
+}
+
+// Issue 40's health rule: a tracked frame whose visual pose the IMU's prediction contradicts
+// (farther than disagreement_m / disagreement_deg) is degraded, with both distances in its note.
+void VisualSlam::Impl::check_against_imu(TrackingFrame& w) {
+  if (!w.have_imu_prediction) return;
+  const core::SE3 predicted = camera_pose(w.imu_prediction);
+  const double distance_m = (predicted.translation() - w.f.T_world_camera.translation()).norm();
+  const double angle_deg = (predicted.so3().inverse() * w.f.T_world_camera.so3()).log().norm() * 180.0 / 3.14159265358979323846;
+  if (distance_m <= options.inertial.disagreement_m && angle_deg <= options.inertial.disagreement_deg) return;
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, "the IMU's prediction and the images disagree by %.3f m and %.2f deg", distance_m, angle_deg);
+  if (w.result.health == TrackingHealth::kOk) w.result.health = TrackingHealth::kDegraded;
+  w.result.note = w.result.note.empty() ? std::string(buffer) : w.result.note + "; " + buffer;
+  ++summary->frames_contradicting_imu;
 }
 
 // The inertial-only MAP estimate (Campos et al., ICRA 2020; inertial_initialization.hpp) over

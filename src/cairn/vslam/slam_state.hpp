@@ -560,7 +560,8 @@ struct VisualSlam::Impl {
   void predict_with_imu(TrackingFrame& w);
   bool carry_with_imu(TrackingFrame& w);
   void map_carried_view(TrackingFrame& w);
-  void advance_inertial_state(const TrackingFrame& w);
+  void advance_inertial_state(TrackingFrame& w);
+  void check_against_imu(TrackingFrame& w);
   void estimate_inertial(core::Timestamp now);
   core::SE3 camera_pose(const inertial::NavState& body) const;
   void accept_tracked_frame(TrackingFrame& w);

@@ -65,6 +65,11 @@ struct VisualInertialOptions {
   /// A frame the images do not track takes the IMU's prediction for at most this long after the
   /// last tracked frame (ORB-SLAM3's RECENTLY_LOST lasts 5 s); then it is lost. >= 0.
   double max_carried_s = 1.5;
+  /// A tracked frame whose visual pose is farther than this from the IMU's prediction is
+  /// `degraded` (the images or the IMU are wrong: a look-alike, a moving scene, a bad reading);
+  /// the distances are the prediction's, so they must cover its error over one frame. > 0.
+  double disagreement_m = 0.1;
+  double disagreement_deg = 3.0;
   bool is_valid(std::string* why) const;
 };
 
@@ -268,6 +273,7 @@ struct VisualSlamSummary {
   /// With an IMU: frames carried by it alone; inertial estimates made (the first one is the
   /// initialisation) and refused (the last reason kept); when the first succeeded.
   std::size_t frames_carried_by_imu = 0, inertial_estimates = 0, inertial_estimates_refused = 0;
+  std::size_t frames_contradicting_imu = 0;  ///< tracked frames the IMU's prediction contradicts (degraded)
   std::string inertial_refusal;
   double inertial_initialised_at_s = -1.0;  ///< the frame time of the first estimate; -1: never
   double inertial_s = 0.0;                  ///< time in the inertial estimates
