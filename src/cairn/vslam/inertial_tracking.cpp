@@ -5,9 +5,9 @@
 // in place of the constant-velocity model (ORB-SLAM3 Tracking::PredictStateIMU), and carries the
 // frames the images do not track (ORB-SLAM3's RECENTLY_LOST state); gravity, the velocities and the
 // biases come from the inertial-only MAP estimate of Campos et al. (ICRA 2020) over the recent
-// keyframes, made at every keyframe. What ORB-SLAM3 has and this does not yet: the IMU factor in
-// the motion-only and local bundle adjustments (the visual poses are taken as they are), and
-// monocular-inertial tracking (docs/vslam.md, "With an IMU").
+// keyframes, made at every keyframe (with one camera it also gives the map's scale, then watches
+// it). What ORB-SLAM3 has and this does not yet: the IMU factor in the motion-only and local
+// bundle adjustments (the visual poses are taken as they are; docs/vslam.md, "With an IMU").
 // The state and the declarations: slam_state.hpp.
 
 #include <cmath>
@@ -35,6 +35,7 @@ bool VisualInertialOptions::is_valid(std::string* why) const {
   if (!T_body_camera.matrix().allFinite()) problems.add("inertial.T_body_camera must be finite");
   problems.require_positive(disagreement_m, "inertial.disagreement_m");
   problems.require_positive(disagreement_deg, "inertial.disagreement_deg");
+  if (!(max_scale_drift > 0.0 && max_scale_drift < 1.0)) problems.add("inertial.max_scale_drift must be in (0, 1)");
   return problems.report(why);
 }
 
@@ -142,7 +143,15 @@ void VisualSlam::Impl::advance_inertial_state(TrackingFrame& w) {
     } else {
       have_imu_state = false;
     }
-    if (result.keyframe && !localization_only) estimate_inertial(w.f.time);
+    if (result.keyframe && !localization_only) estimate_inertial(w);
+    if (scale_drifted && kind == io::SequenceKind::kMonocular) {
+      char buffer[160];
+      std::snprintf(buffer, sizeof buffer, "the IMU puts the map's scale at %.3f of itself (max_scale_drift %.2f): monocular scale drift",
+                    summary->monocular_scale_estimate, options.inertial.max_scale_drift);
+      if (result.health == TrackingHealth::kOk) result.health = TrackingHealth::kDegraded;
+      result.note = result.note.empty() ? std::string(buffer) : result.note + "; " + buffer;
+      ++summary->frames_scale_drifted;
+    }
   } else if (result.carried_by_imu) {
     imu_state.T_world_body = w.f.T_world_camera * options.inertial.T_body_camera.inverse();
     imu_state.v_world_mps = w.imu_prediction.v_world_mps;
@@ -169,18 +178,31 @@ void VisualSlam::Impl::check_against_imu(TrackingFrame& w) {
 
 // The inertial-only MAP estimate (Campos et al., ICRA 2020; inertial_initialization.hpp) over
 // the good keyframes of the current segment within the last window (initialisation_window_s
-// before the first success, refinement_window_s after), the scale held at 1 (stereo and depth
-// are metric). Needs the keyframes to span three quarters of the initialisation window; a refusal is counted with
-// its reason and changes nothing. On success the newest keyframe (the frame just tracked) gives
-// the state: its visual pose, its estimated velocity.
-void VisualSlam::Impl::estimate_inertial(core::Timestamp now) {
+// before the first success, refinement_window_s after). Stereo and depth are metric: the scale is
+// held at 1. One camera: the first estimate's scale rescales the segment to metres
+// (rescale_segment; ORB-SLAM3 scales its map after the inertial initialisation), and every later
+// one estimates the scale again to watch it: more than max_scale_drift off 1, the map's unit has
+// drifted (or collapsed), the frames are degraded (advance_inertial_state) and the IMU stops
+// predicting until an estimate agrees again. Needs the keyframes to span three quarters of the
+// initialisation window; a refusal is counted with its reason and changes nothing. On success
+// the newest keyframe (the frame just tracked) gives the state: its pose, its estimated velocity.
+void VisualSlam::Impl::estimate_inertial(TrackingFrame& w) {
   const VisualInertialOptions& o = options.inertial;
+  const bool monocular = kind == io::SequenceKind::kMonocular;
+  const int current = find(segment);
+  // A monocular segment has its own unit: a new one (or a merge that renamed it) starts again.
+  if (monocular && current != inertial_segment) {
+    imu_initialised = false;
+    have_imu_state = false;
+    scale_drifted = false;
+  }
+  inertial_segment = current;
+  const double now_s = w.f.time.seconds();
   const double window_s = imu_initialised ? o.refinement_window_s : o.initialisation_window_s;
   std::vector<core::Timestamp> stamps;
   std::vector<core::SE3> poses;
-  const int current = find(segment);
   for (const KeyFrame& kf : keyframes) {
-    if (kf.bad || find(kf.segment) != current || now.seconds() - kf.frame.time.seconds() > window_s + 1e-9) continue;
+    if (kf.bad || find(kf.segment) != current || now_s - kf.frame.time.seconds() > window_s + 1e-9) continue;
     if (!stamps.empty() && !(stamps.back() < kf.frame.time)) continue;
     stamps.push_back(kf.frame.time);
     poses.push_back(kf.frame.T_world_camera);
@@ -189,25 +211,73 @@ void VisualSlam::Impl::estimate_inertial(core::Timestamp now) {
   if (stamps.size() < 3 || stamps.back().seconds() - stamps.front().seconds() < 0.75 * o.initialisation_window_s) return;
   const auto start = Clock::now();
   inertial::InertialInitializationOptions io;
-  io.estimate_scale = false;
+  io.estimate_scale = monocular;
   io.gravity_mps2 = o.gravity_mps2;
   const inertial::InertialInitialization init =
       inertial::initialize_inertial(stamps, poses, o.T_body_camera.inverse(), imu_samples, o.noise, io);
   summary->inertial_s += seconds_since(start);
-  if (!init.ok || !init.gravity_world.allFinite() || init.v_world_mps.empty()) {
+  if (!init.ok || !init.gravity_world.allFinite() || init.v_world_mps.empty() || !(init.scale > 0.0)) {
     ++summary->inertial_estimates_refused;
     summary->inertial_refusal = init.ok ? "the estimate is not finite" : init.why;
     return;
   }
   ++summary->inertial_estimates;
-  if (!imu_initialised) summary->inertial_initialised_at_s = now.seconds();
+  if (monocular && !imu_initialised) {
+    rescale_segment(current, init.scale);
+    summary->monocular_initial_scale = init.scale;
+    w.f.T_world_camera = keyframes.back().frame.T_world_camera;  // the frame is the newest keyframe
+  } else if (monocular) {
+    summary->monocular_scale_estimate = init.scale;
+    scale_drifted = std::abs(init.scale - 1.0) > o.max_scale_drift;
+    if (scale_drifted) {
+      have_imu_state = false;
+      return;
+    }
+  }
+  if (!imu_initialised) summary->inertial_initialised_at_s = now_s;
   imu_initialised = true;
   gravity_world = init.gravity_world;
   imu_bias = init.bias;
-  imu_state.T_world_body = poses.back() * o.T_body_camera.inverse();
+  imu_state.T_world_body = w.f.T_world_camera * o.T_body_camera.inverse();
   imu_state.v_world_mps = init.v_world_mps.back();
-  imu_state_time = stamps.back();
+  imu_state_time = w.f.time;
   have_imu_state = true;
+}
+
+// Multiplies segment `seg`'s distances by `scale` about its first keyframe's camera centre:
+// keyframe positions, culled keyframes' offsets from their parents, points, the frames' offsets
+// from their reference keyframes, and, when it is the current segment, the last frame and the
+// constant-velocity step (as a Sim(3) correction moves them, loop_closing.cpp).
+void VisualSlam::Impl::rescale_segment(int seg, double scale) {
+  std::vector<char> in(keyframes.size(), 0);
+  int first = -1;
+  for (const KeyFrame& kf : keyframes) {
+    if (find(kf.segment) != seg) continue;
+    in[static_cast<std::size_t>(kf.id)] = 1;
+    if (first < 0) first = kf.id;
+  }
+  if (first < 0) return;
+  const Eigen::Vector3d a = keyframe_pose(first).translation();
+  const auto moved = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d { return a + scale * (p - a); };
+  const auto scaled = [&](const core::SE3& T) { return core::SE3(T.so3(), scale * T.translation()); };
+  for (KeyFrame& kf : keyframes) {
+    if (!in[static_cast<std::size_t>(kf.id)]) continue;
+    kf.frame.T_world_camera = core::SE3(kf.frame.T_world_camera.so3(), moved(kf.frame.T_world_camera.translation()));
+    kf.T_parent_keyframe = scaled(kf.T_parent_keyframe);
+  }
+  for (MapPoint& mp : points) {
+    if (mp.bad || !in[static_cast<std::size_t>(mp.reference_keyframe)]) continue;
+    mp.p_world = moved(mp.p_world);
+    update_normal_and_depth(mp);
+  }
+  for (auto& [r, T_r_frame] : relative) {
+    if (r >= 0 && in[static_cast<std::size_t>(r)]) T_r_frame = scaled(T_r_frame);
+  }
+  if (find(segment) == seg) {
+    last.T_world_camera = core::SE3(last.T_world_camera.so3(), moved(last.T_world_camera.translation()));
+    T_world_last_tracked = core::SE3(T_world_last_tracked.so3(), moved(T_world_last_tracked.translation()));
+    velocity = scaled(velocity);
+  }
 }
 
 }  // namespace cairn::vslam

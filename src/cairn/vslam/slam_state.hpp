@@ -223,6 +223,8 @@ struct VisualSlam::Impl {
   inertial::NavState imu_state;  // the body at the last frame (tracked or carried)
   core::Timestamp imu_state_time;
   core::Timestamp last_tracked_time;  // for max_carried_s
+  int inertial_segment = -1;   // the segment the estimates are for (a new one starts them again)
+  bool scale_drifted = false;  // monocular: the last estimate's scale was more than max_scale_drift off
   // A keyframe's pose; a culled one's through its chain of parents (ORB-SLAM2's trajectory
   // writer walks mpParent with mTcp the same way).
   core::SE3 keyframe_pose(int kf) const {
@@ -562,7 +564,8 @@ struct VisualSlam::Impl {
   void map_carried_view(TrackingFrame& w);
   void advance_inertial_state(TrackingFrame& w);
   void check_against_imu(TrackingFrame& w);
-  void estimate_inertial(core::Timestamp now);
+  void estimate_inertial(TrackingFrame& w);
+  void rescale_segment(int seg, double scale);
   core::SE3 camera_pose(const inertial::NavState& body) const;
   void accept_tracked_frame(TrackingFrame& w);
   void map_keyframe(TrackingFrame& w);

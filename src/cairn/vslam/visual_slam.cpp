@@ -45,9 +45,6 @@ VisualSlam::VisualSlam(const io::CameraCalibration& camera, io::SequenceKind kin
   if (std::string p; !options.is_valid(&p)) throw std::invalid_argument("visual SLAM options: " + p);
   if (std::string p; !camera.is_valid(&p)) throw std::invalid_argument("camera calibration: " + p);
   if (kind == io::SequenceKind::kStereo && !(camera.baseline_m > 0.0)) throw std::invalid_argument("stereo needs a positive baseline");
-  if (options.inertial.enabled && kind == io::SequenceKind::kMonocular) {
-    throw std::invalid_argument("monocular-inertial tracking is not in this version: options.inertial needs stereo or RGB-D");
-  }
   if (kind == io::SequenceKind::kRgbd && (!(camera.depth_units_per_m > 0.0) || !(camera.virtual_baseline_m > 0.0))) {
     throw std::invalid_argument("RGB-D needs depth_units_per_m and virtual_baseline_m > 0");
   }

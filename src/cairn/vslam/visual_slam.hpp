@@ -42,11 +42,11 @@ namespace cairn::vslam {
 
 /// Stereo-inertial and RGB-D-inertial tracking (issue 40, its first part; ORB-SLAM3, Campos et
 /// al., T-RO 2021, Sec. V and VII; docs/vslam.md "With an IMU"). On when `enabled` and the
-/// caller feeds VisualSlam::add_imu; metric cameras only (monocular-inertial is not in this
-/// version). Once the keyframes span `initialisation_window_s`, the inertial-only MAP estimate
-/// of Campos et al. (ICRA 2020; inertial/inertial_initialization.hpp, the scale held at 1) gives
-/// gravity's direction in the visual world, the keyframes' velocities and the biases, and is run
-/// again over the last `refinement_window_s` at every keyframe. From then on the IMU,
+/// caller feeds VisualSlam::add_imu. Once the keyframes span `initialisation_window_s`, the
+/// inertial-only MAP estimate of Campos et al. (ICRA 2020; inertial/inertial_initialization.hpp)
+/// gives gravity's direction in the visual world, the keyframes' velocities and the biases (and,
+/// with one camera, the scale: the map segment is then rescaled to metres), and is run again
+/// over the last `refinement_window_s` at every keyframe (with one camera watching the scale). From then on the IMU,
 /// preintegrated from the last frame's state (Forster et al., T-RO 2017), predicts each frame's
 /// pose in place of the constant-velocity model, and a frame the images do not track (blank,
 /// blurred, texture-less) takes that prediction: `degraded`, not lost, for up to `max_carried_s`.
@@ -70,6 +70,11 @@ struct VisualInertialOptions {
   /// the distances are the prediction's, so they must cover its error over one frame. > 0.
   double disagreement_m = 0.1;
   double disagreement_deg = 3.0;
+  /// Monocular: every estimate after the first also estimates the map's scale; when it is more
+  /// than this fraction off 1 (the map's unit is no longer the metre the first estimate made
+  /// it: the scale has drifted or collapsed), the frames are `degraded` and the IMU stops
+  /// predicting until an estimate agrees again. In (0, 1).
+  double max_scale_drift = 0.1;
   bool is_valid(std::string* why) const;
 };
 
@@ -274,6 +279,11 @@ struct VisualSlamSummary {
   /// initialisation) and refused (the last reason kept); when the first succeeded.
   std::size_t frames_carried_by_imu = 0, inertial_estimates = 0, inertial_estimates_refused = 0;
   std::size_t frames_contradicting_imu = 0;  ///< tracked frames the IMU's prediction contradicts (degraded)
+  /// Monocular with an IMU: the scale the first estimate gave the map (metres per unit of the
+  /// two-view initialisation), the last estimate's scale of the map since (1 when it holds), and
+  /// the frames degraded because it was more than max_scale_drift off.
+  double monocular_initial_scale = 0.0, monocular_scale_estimate = 1.0;
+  std::size_t frames_scale_drifted = 0;
   std::string inertial_refusal;
   double inertial_initialised_at_s = -1.0;  ///< the frame time of the first estimate; -1: never
   double inertial_s = 0.0;                  ///< time in the inertial estimates
@@ -301,7 +311,8 @@ class VisualSlam {
   FrameResult add_rgbd(core::Timestamp time, const cv::Mat& gray, const cv::Mat& depth);
   /// One grey image (monocular): the first frames initialise the map from two views (ORB-SLAM2's
   /// homography / essential-matrix selection); the scale is not observable and is set so that
-  /// the initial scene's median depth is 1. No loop closure (needs Sim(3)) and no new map
+  /// the initial scene's median depth is 1 (with an IMU, the inertial estimate rescales it to
+  /// metres). No loop closure (needs Sim(3)) and no new map
   /// segments (need a new initialisation) in this version.
   FrameResult add_monocular(core::Timestamp time, const cv::Mat& gray);
   /// One IMU reading (options.inertial.enabled): readings come in time order, each before the
