@@ -23,7 +23,9 @@
 #include "cairn/io/trajectory.hpp"
 #include "cairn/vision/features.hpp"
 #include "cairn/vision/vocabulary.hpp"
+#include "cairn/sim/imu.hpp"
 #include "cairn/vslam/visual_slam.hpp"
+#include "inertial_flight.hpp"
 #include "synthetic_world.hpp"
 
 namespace cairn::vslam {
@@ -838,41 +840,49 @@ SyntheticWorld monocular_loop_world() {
 // along a leg at `start` heading `yaw0_rad`; the camera looks along the direction of travel plus
 // `yaw_offset_rad`. Poses every step_m of arc length from 0 to `length_m` (past one circuit it
 // goes round again).
-std::vector<core::SE3> rounded_loop(const Eigen::Vector3d& start, double yaw0_rad, double leg_x_m, double leg_z_m, double corner_m,
-                                    double step_m, double length_m, double yaw_offset_rad = 0.0) {
+// The camera on a rounded rectangle at arc length s (the route rounded_loop samples): legs of
+// leg_x_m and leg_z_m joined by right turns of radius corner_m, from `start` heading yaw0_rad,
+// started half way along a leg, looking yaw_offset_rad off the direction of travel.
+core::SE3 rounded_loop_pose(const Eigen::Vector3d& start, double yaw0_rad, double leg_x_m, double leg_z_m, double corner_m, double s,
+                            double yaw_offset_rad = 0.0) {
   struct Piece {
     double length;
     bool arc;
   };
   const double quarter = 0.5 * kPi * corner_m;
-  const std::vector<Piece> pieces{{0.5 * leg_x_m, false}, {quarter, true}, {leg_z_m, false}, {quarter, true},
-                                  {leg_x_m, false},       {quarter, true}, {leg_z_m, false}, {quarter, true},
-                                  {0.5 * leg_x_m, false}};
+  const Piece pieces[] = {{0.5 * leg_x_m, false}, {quarter, true}, {leg_z_m, false}, {quarter, true}, {leg_x_m, false},
+                          {quarter, true},        {leg_z_m, false}, {quarter, true}, {0.5 * leg_x_m, false}};
   double circuit = 0.0;
   for (const Piece& piece : pieces) circuit += piece.length;
-  auto pose_at = [&](double s) {
-    s = std::fmod(s, circuit);
-    Eigen::Vector3d p = start;
-    double yaw = yaw0_rad;
-    for (const Piece& piece : pieces) {
-      const double l = std::min(s, piece.length);
-      const Eigen::Vector3d forward(std::sin(yaw), 0.0, std::cos(yaw)), right(std::cos(yaw), 0.0, -std::sin(yaw));
-      if (!piece.arc) {
-        p += l * forward;
-      } else {
-        const Eigen::Vector3d c = p + corner_m * right;
-        const double turned = l / corner_m;
-        p = c - corner_m * Eigen::Vector3d(std::cos(yaw + turned), 0.0, -std::sin(yaw + turned));
-        yaw += turned;
-      }
-      s -= l;
-      if (s <= 0.0) break;
+  s = std::fmod(s, circuit);
+  Eigen::Vector3d p = start;
+  double yaw = yaw0_rad;
+  for (const Piece& piece : pieces) {
+    const double l = std::min(s, piece.length);
+    const Eigen::Vector3d forward(std::sin(yaw), 0.0, std::cos(yaw)), right(std::cos(yaw), 0.0, -std::sin(yaw));
+    if (!piece.arc) {
+      p += l * forward;
+    } else {
+      const Eigen::Vector3d c = p + corner_m * right;
+      const double turned = l / corner_m;
+      p = c - corner_m * Eigen::Vector3d(std::cos(yaw + turned), 0.0, -std::sin(yaw + turned));
+      yaw += turned;
     }
-    return test::camera_pose(p, yaw + yaw_offset_rad);
-  };
+    s -= l;
+    if (s <= 0.0) break;
+  }
+  return test::camera_pose(p, yaw + yaw_offset_rad);
+}
+
+// rounded_loop_pose every step_m (rounded to fit length_m) from 0 to length_m.
+std::vector<core::SE3> rounded_loop(const Eigen::Vector3d& start, double yaw0_rad, double leg_x_m, double leg_z_m, double corner_m,
+                                    double step_m, double length_m, double yaw_offset_rad = 0.0) {
   const int steps = std::max(1, static_cast<int>(std::lround(length_m / step_m)));
   std::vector<core::SE3> poses;
-  for (int k = 0; k <= steps; ++k) poses.push_back(pose_at(static_cast<double>(k) / static_cast<double>(steps) * length_m));
+  for (int k = 0; k <= steps; ++k) {
+    poses.push_back(rounded_loop_pose(start, yaw0_rad, leg_x_m, leg_z_m, corner_m, static_cast<double>(k) / static_cast<double>(steps) * length_m,
+                                      yaw_offset_rad));
+  }
   return poses;
 }
 
@@ -1150,6 +1160,93 @@ TEST(VisualSlamSynthetic, MonocularScaleHoldsThroughFastTurns) {
   EXPECT_GT(on.scale_drift, 0.8);
   EXPECT_LT(on.scale_drift, 1.25);
   EXPECT_LT(on.ate, 0.3);
+}
+
+// Issue 40: a monocular scale collapse flagged by the IMU. The route of the test above (45 degrees
+// left, loops off) flown at 1.5 m/s with the simulator's IMU (ADIS16448, seed 7) on the camera's
+// body (inertial_flight.hpp's mounting): without the turn rule the scale collapses (above); the
+// inertial estimate at each keyframe, which also estimates the scale, must then flag frames
+// `degraded`, and the run with the rule, whose scale holds, must flag none.
+TEST(VisualSlamSynthetic, MonocularScaleCollapseIsFlaggedByTheImu) {
+  const SyntheticWorld world = monocular_loop_world();
+  double circuit_m = 0.0, extra = 0.0;
+  const std::vector<core::SE3> truth = monocular_loop_route(-45.0 * kDeg, circuit_m, extra);
+  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner, speed_mps = 1.5;  // monocular_loop_route's
+  const double duration_s = (circuit_m + extra) / speed_mps;
+  const double frame_s = duration_s / static_cast<double>(truth.size() - 1);
+  const auto camera_at = [&](double t) {
+    return rounded_loop_pose(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, speed_mps * t, -45.0 * kDeg);
+  };
+  ASSERT_LT((camera_at(frame_s * 10.0).translation() - truth[10].translation()).norm(), 1e-9);
+  sim::ImuSimulationOptions imu = *sim::imu_preset("adis16448");
+  imu.seed = 7;
+  const sim::SimulatedImu simulated =
+      sim::simulate_imu([&](double t) { return test::kinematics_of(camera_at, t); }, 0.0, duration_s + 0.2, imu);
+  const StereoCamera camera;
+  std::vector<cv::Mat> images;
+  for (const core::SE3& pose : truth) images.push_back(world.render(pose, camera));
+  struct Outcome {
+    double scale_drift, ate;  // the map's scale over the last quarter relative to the first
+    std::size_t flagged, first_flagged;
+    VisualSlamSummary summary;
+  };
+  auto run = [&](double turn_fov) {
+    VisualSlamOptions options;
+    options.loop_closure = false;
+    options.monocular_keyframe_turn_fov = turn_fov;
+    options.inertial.enabled = true;
+    options.inertial.T_body_camera = test::T_body_camera();
+    options.inertial.noise = imu.noise;
+    VisualSlam slam(camera.calibration(), io::SequenceKind::kMonocular, options);
+    std::size_t init = truth.size(), first_flagged = truth.size(), next = 0;
+    for (std::size_t k = 0; k < truth.size(); ++k) {
+      const double t = frame_s * static_cast<double>(k);
+      while (next < simulated.samples.size()) {
+        slam.add_imu(simulated.samples[next]);
+        if (simulated.samples[next++].stamp.seconds() >= t) break;
+      }
+      const FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(t), images[k]);
+      if (r.tracked && init == truth.size()) init = k;
+      if (first_flagged == truth.size() && r.note.find("monocular scale drift") != std::string::npos) first_flagged = k;
+    }
+    EXPECT_LT(init, 15u) << "no monocular initialisation";
+    const std::vector<core::SE3> final_poses = slam.trajectory();
+    const auto [ate, ate_max] = ate_sim3(truth, final_poses, init, truth.size() - 1);
+    // Metres per map unit over the first and the last quarter of the final trajectory (the first
+    // inertial estimate rescales the map during the run, so the online poses change unit there).
+    auto unit = [&](std::size_t from, std::size_t to) {
+      Eigen::Matrix3Xd a(3, static_cast<Eigen::Index>(to - from)), b(3, static_cast<Eigen::Index>(to - from));
+      for (std::size_t k = from; k < to; ++k) {
+        a.col(static_cast<Eigen::Index>(k - from)) = final_poses[k].translation();
+        b.col(static_cast<Eigen::Index>(k - from)) = truth[k].translation();
+      }
+      return Eigen::umeyama(a, b, true).block<3, 1>(0, 0).norm();
+    };
+    const std::size_t quarter = (truth.size() - init) / 4;
+    const double first_unit = unit(init, init + quarter), last_unit = unit(truth.size() - quarter, truth.size());
+    std::printf("  turn rule %s: metres per map unit %.3f over the first quarter, %.3f over the last; Sim(3) ATE %.3f m (max %.3f m)\n",
+                turn_fov > 0.0 ? "on" : "off", first_unit, last_unit, ate, ate_max);
+    return Outcome{first_unit / last_unit, ate, slam.summary().frames_scale_drifted, first_flagged, slam.summary()};
+  };
+  const Outcome off = run(0.0), on = run(0.2);
+  for (const auto& [name, o] : {std::pair<const char*, const Outcome&>{"off", off}, {"on", on}}) {
+    std::printf("monocular-inertial, 45 degrees left, turn rule %s: the map's scale at the end %.3f of the start's; IMU: initial scale %.3f, "
+                "%zu estimates (%zu refused, %zu unexcited), last judged scale %.3f, %zu frames flagged for scale drift (first at frame %zu)\n",
+                name, o.scale_drift, o.summary.monocular_initial_scale, o.summary.inertial_estimates, o.summary.inertial_estimates_refused,
+                o.summary.scale_estimates_unexcited, o.summary.monocular_scale_estimate, o.flagged, o.first_flagged);
+  }
+  // The flag follows the truth: frames flagged when the scale drifted by more than a quarter
+  // (max_scale_drift), none when it held within 10 %.
+  for (const Outcome* o : {&off, &on}) {
+    if (std::abs(o->scale_drift - 1.0) > 0.25) {
+      EXPECT_GE(o->flagged, 1u);
+    }
+    if (std::abs(o->scale_drift - 1.0) < 0.1) {
+      EXPECT_EQ(o->flagged, 0u);
+    }
+  }
+  EXPECT_LT(off.scale_drift, 0.75);  // the scenario: the scale does collapse without the rule
+  EXPECT_NEAR(on.scale_drift, 1.0, 0.1);  // and holds with it
 }
 
 // A monocular run of `truth` with the lens covered (uniform grey images) where `covered` says so;

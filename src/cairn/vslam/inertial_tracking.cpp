@@ -36,6 +36,9 @@ bool VisualInertialOptions::is_valid(std::string* why) const {
   problems.require_positive(disagreement_m, "inertial.disagreement_m");
   problems.require_positive(disagreement_deg, "inertial.disagreement_deg");
   if (!(max_scale_drift > 0.0 && max_scale_drift < 1.0)) problems.add("inertial.max_scale_drift must be in (0, 1)");
+  if (!(min_scale_excitation_mps2 >= 0.0 && std::isfinite(min_scale_excitation_mps2))) {
+    problems.add("inertial.min_scale_excitation_mps2 must be finite and >= 0");
+  }
   return problems.report(why);
 }
 
@@ -209,9 +212,25 @@ void VisualSlam::Impl::estimate_inertial(TrackingFrame& w) {
   }
   // Keyframes come every few frames: three quarters of the initialisation window is "spans it".
   if (stamps.size() < 3 || stamps.back().seconds() - stamps.front().seconds() < 0.75 * o.initialisation_window_s) return;
+  // The IMU sees the scale only through acceleration ([C] Sec. V: no excitation, no scale): the
+  // keyframes' accelerations by second differences of their positions (metres once initialised),
+  // RMS over the window. Below min_scale_excitation_mps2 a refinement holds the scale at 1 and
+  // does not judge it (on a straight leg at constant speed the scale estimate is noise).
+  double excitation2 = 0.0;
+  for (std::size_t k = 1; k + 1 < stamps.size(); ++k) {
+    const double dt0 = stamps[k].seconds() - stamps[k - 1].seconds(), dt1 = stamps[k + 1].seconds() - stamps[k].seconds();
+    const Eigen::Vector3d v0 = (poses[k].translation() - poses[k - 1].translation()) / dt0;
+    const Eigen::Vector3d v1 = (poses[k + 1].translation() - poses[k].translation()) / dt1;
+    excitation2 += (2.0 * (v1 - v0) / (dt0 + dt1)).squaredNorm() / static_cast<double>(stamps.size() - 2);
+  }
+  const bool judge_scale = monocular && (!imu_initialised || std::sqrt(excitation2) >= o.min_scale_excitation_mps2);
+  if (monocular && imu_initialised && !judge_scale) {
+    ++summary->scale_estimates_unexcited;
+    if (scale_drifted) return;  // the last judgement stands until an excited window says otherwise
+  }
   const auto start = Clock::now();
   inertial::InertialInitializationOptions io;
-  io.estimate_scale = monocular;
+  io.estimate_scale = judge_scale;
   io.gravity_mps2 = o.gravity_mps2;
   const inertial::InertialInitialization init =
       inertial::initialize_inertial(stamps, poses, o.T_body_camera.inverse(), imu_samples, o.noise, io);
@@ -226,7 +245,7 @@ void VisualSlam::Impl::estimate_inertial(TrackingFrame& w) {
     rescale_segment(current, init.scale);
     summary->monocular_initial_scale = init.scale;
     w.f.T_world_camera = keyframes.back().frame.T_world_camera;  // the frame is the newest keyframe
-  } else if (monocular) {
+  } else if (judge_scale) {
     summary->monocular_scale_estimate = init.scale;
     scale_drifted = std::abs(init.scale - 1.0) > o.max_scale_drift;
     if (scale_drifted) {

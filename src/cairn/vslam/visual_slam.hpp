@@ -74,7 +74,10 @@ struct VisualInertialOptions {
   /// than this fraction off 1 (the map's unit is no longer the metre the first estimate made
   /// it: the scale has drifted or collapsed), the frames are `degraded` and the IMU stops
   /// predicting until an estimate agrees again. In (0, 1).
-  double max_scale_drift = 0.1;
+  double max_scale_drift = 0.25;
+  /// ... judged only over windows whose keyframes accelerate by at least this much (RMS, m/s^2):
+  /// the IMU sees the scale through acceleration alone. >= 0.
+  double min_scale_excitation_mps2 = 0.3;
   bool is_valid(std::string* why) const;
 };
 
@@ -284,6 +287,7 @@ struct VisualSlamSummary {
   /// the frames degraded because it was more than max_scale_drift off.
   double monocular_initial_scale = 0.0, monocular_scale_estimate = 1.0;
   std::size_t frames_scale_drifted = 0;
+  std::size_t scale_estimates_unexcited = 0;  ///< refinements that held the scale (too little acceleration to judge it)
   std::string inertial_refusal;
   double inertial_initialised_at_s = -1.0;  ///< the frame time of the first estimate; -1: never
   double inertial_s = 0.0;                  ///< time in the inertial estimates
