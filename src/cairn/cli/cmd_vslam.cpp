@@ -34,6 +34,7 @@
 #include "cairn/vslam/evaluation.hpp"
 #include "cairn/vslam/foxglove_output.hpp"
 #include "cairn/vslam/image_input.hpp"
+#include "cairn/vslam/inertial_input.hpp"
 #include "cairn/vslam/map_file.hpp"
 #include "cairn/vslam/outputs.hpp"
 #include "cairn/vslam/visual_slam.hpp"
@@ -79,9 +80,47 @@ void print_input(const io::ImageSequence& seq, io::SequenceKind kind, std::size_
   for (const std::string& note : seq.notes) std::fprintf(stderr, "cairn vslam: %s\n", note.c_str());
 }
 
-/// Feeds frames 0 .. n-1 to `slam` until the last or a signal, printing health changes and progress.
+/// --imu and its companions: refused when they make no sense, then read (nothing without --imu
+/// or --imu-topic).
+std::optional<vslam::VisualInertialInput> read_imu(const VslamFlags& flags, const VslamInput& input,
+                                                   const std::optional<vision::StereoRectifier>& rectifier) {
+  const bool offset_given = flags.command != nullptr && flags.command->count("--imu-time-offset") > 0;
+  if (!flags.uses_imu()) {
+    for (const auto& [given, name] : {std::pair{!flags.imu_calibration.empty(), "--imu-calibration"},
+                                      std::pair{!flags.camera_extrinsic.empty(), "--camera-extrinsic"},
+                                      std::pair{offset_given, "--imu-time-offset"}}) {
+      if (given) throw UsageError(std::string(name) + " goes with --imu PATH or --imu-topic TOPIC, and neither was given");
+    }
+    return std::nullopt;
+  }
+  if (!flags.imu.empty() && !flags.imu_topic.empty()) {
+    throw UsageError("--imu and --imu-topic: give one (--imu-topic reads sensor_msgs/Imu from the images' bag, --imu a file, folder or bag)");
+  }
+  if (!flags.imu_topic.empty() && !input.bag) throw UsageError("--imu-topic reads sensor_msgs/Imu from the images' bag, but FOLDER is not a bag: give --imu PATH");
+  if (!flags.localize_in.empty()) throw UsageError("--imu with --localize-in: localising in a saved map does not use an IMU in this version");
+  vslam::VisualInertialInputRequest request;
+  request.imu.imu = flags.imu;
+  if (!flags.imu_topic.empty()) request.imu.bag = flags.folder;
+  request.imu.topic = flags.imu_topic;
+  request.imu.calibration = flags.imu_calibration;
+  request.imu.time_offset_s = flags.imu_time_offset_s;
+  request.camera_extrinsic = flags.camera_extrinsic;
+  vslam::VisualInertialInput imu = vslam::read_visual_inertial_input(request, input.sequence(), rectifier ? &*rectifier : nullptr);
+  if (imu.imu.samples.empty()) throw std::runtime_error("--imu " + imu.imu.source + ": no IMU reading");
+  if (!flags.quiet) {
+    std::fprintf(stderr, "cairn vslam: IMU %s: %zu readings over %.1f s; noise from %s; camera extrinsic: %s\n", imu.imu.source.c_str(),
+                 imu.imu.samples.size(), imu.imu.samples.back().stamp.seconds() - imu.imu.samples.front().stamp.seconds(),
+                 imu.imu.calibration_file.empty() ? "EuRoC's ADIS16448 (defaults)" : imu.imu.calibration_file.c_str(),
+                 imu.camera_extrinsic.c_str());
+    for (const std::string& note : imu.imu.notes) std::fprintf(stderr, "cairn vslam: %s\n", note.c_str());
+  }
+  return imu;
+}
+
+/// Feeds frames 0 .. n-1 to `slam` until the last or a signal (with an IMU, its readings up to
+/// each frame first), printing health changes and progress.
 vslam::RunRecord run_frames(vslam::VisualSlam& slam, vslam::FrameSource& reader, const io::ImageSequence& seq, std::size_t n,
-                            std::size_t feature_frame, const VslamFlags& flags) {
+                            std::size_t feature_frame, const VslamFlags& flags, const vslam::VisualInertialInput* imu) {
   vslam::RunRecord run;
   run.features.frame = feature_frame;
   const bool tty = !flags.quiet && !flags.progress && isatty(fileno(stderr));
@@ -89,9 +128,11 @@ vslam::RunRecord run_frames(vslam::VisualSlam& slam, vslam::FrameSource& reader,
   vslam::TrackingHealth last_health = vslam::TrackingHealth::kOk;
   std::string last_note;
   int messages = 0;
+  std::size_t next_imu = 0;
   for (std::size_t k = 0; k < n && !interrupted(); ++k) {
     const vslam::FrameImages images = reader.read(k);
     run.read_s.push_back(images.read_s);
+    if (imu != nullptr) next_imu = vslam::feed_imu_until(slam, imu->imu.samples, next_imu, seq.frames[k].time);
     vslam::FrameResult r = vslam::add_frame(slam, seq.frames[k].time, images);
     if (k == feature_frame) {
       run.features.image = images.gray;
@@ -145,6 +186,13 @@ void print_summary(const vslam::VisualSlamSummary& s, const vslam::RunRecord& ru
                 e->end_point_drift_m, e->path_length_m,
                 e->rpe_translation.outcome.ok() ? e->rpe_translation.statistics.rmse : kNone,
                 e->rpe_rotation.outcome.ok() ? e->rpe_rotation.statistics.rmse : kNone);
+  }
+  if (s.inertial_estimates + s.inertial_estimates_refused > 0 || s.frames_carried_by_imu > 0) {
+    std::printf("IMU: %zu inertial estimates (%zu refused%s%s), initialised at %.2f s; %zu frames carried by it, %zu contradicting it, "
+                "%zu flagged for monocular scale drift\n",
+                s.inertial_estimates, s.inertial_estimates_refused, s.inertial_refusal.empty() ? "" : ", the last: ",
+                s.inertial_refusal.c_str(), s.inertial_initialised_at_s, s.frames_carried_by_imu, s.frames_contradicting_imu,
+                s.frames_scale_drifted);
   }
   std::printf("wrote %s\n", flags.out.c_str());
 }
@@ -206,7 +254,8 @@ int vslam_command(const VslamFlags& flags) {
   if (flags.max_frames > 0) n = std::min<std::size_t>(n, static_cast<std::size_t>(flags.max_frames));
   const vslam::GroundTruth ground_truth = resolve_ground_truth(seq, flags, rectifier);
   check_calibration(input, flags);
-  const vslam::VisualSlamOptions options = make_options(flags, seq);
+  const std::optional<vslam::VisualInertialInput> imu = read_imu(flags, input, rectifier);
+  const vslam::VisualSlamOptions options = imu ? vslam::with_imu(make_options(flags, seq), *imu) : make_options(flags, seq);
   if (flags.out.empty()) throw std::invalid_argument("--out DIR is required");
   if (!flags.quiet) print_input(seq, kind, n, flags);
 
@@ -231,7 +280,7 @@ int vslam_command(const VslamFlags& flags) {
   } else {
     reader = std::make_unique<vslam::FrameReader>(seq, kind, rectifier ? &*rectifier : nullptr);
   }
-  const vslam::RunRecord run = run_frames(slam, *reader, seq, n, feature_frame, flags);
+  const vslam::RunRecord run = run_frames(slam, *reader, seq, n, feature_frame, flags, imu ? &*imu : nullptr);
   const vslam::RunInput run_input{seq, kind, calibration_source(input, flags), flags.vocabulary,
                                   input.bag ? input.bag->topics : std::vector<std::pair<std::string, std::string>>{}, flags.localize_in,
                                   static_cast<std::size_t>(flags.first_frame)};

@@ -49,6 +49,18 @@ void add_vslam_flags(CLI::App& command, VslamFlags& flags) {
   cmd->add_option("--right-camera-info-topic", flags.right_camera_info_topic, "Bag input: the right camera's CameraInfo (default: camera_info beside the right topic)");
   cmd->add_option("--depth-scale", flags.depth_scale, "Bag input: depth units per metre (default REP 118's: 1000 for 16UC1 millimetres, 1 for 32FC1 metres; TUM RGB-D's values: 5000)")
       ->check(checks::positive());
+  flags.command = cmd;
+  cmd->add_option("--imu", flags.imu,
+                  "Visual-inertial tracking with this IMU: an EuRoC imu0 (or mav0) folder or imu0/data.csv, a plain IMU CSV "
+                  "(docs/formats.md), or a bag with one sensor_msgs/Imu topic (docs/vslam.md, \"With an IMU\")");
+  cmd->add_option("--imu-topic", flags.imu_topic, "Visual-inertial tracking with this sensor_msgs/Imu topic of the images' bag (instead of --imu)");
+  cmd->add_option("--imu-calibration", flags.imu_calibration,
+                  "The IMU's noise (EuRoC/Kalibr sensor.yaml; default: sensor.yaml beside the IMU's data, else EuRoC's ADIS16448)");
+  cmd->add_option("--camera-extrinsic", flags.camera_extrinsic,
+                  "A sensor.yaml whose T_BS is the camera (the left one, before rectification) in the body frame (default: "
+                  "EuRoC's cam0/sensor.yaml, else identity)");
+  cmd->add_option("--imu-time-offset", flags.imu_time_offset_s, "Seconds added to every IMU stamp to put it on the images' clock")
+      ->capture_default_str();
 }
 
 }  // namespace cairn::cli

@@ -39,6 +39,15 @@ struct VslamFlags {
   std::string camera_info_topic;
   std::string right_camera_info_topic;
   double depth_scale = 0.0;
+  // Visual-inertial (vslam/inertial_input.hpp): the IMU as a file or folder, or a topic of the
+  // images' bag; its noise, the camera's extrinsic and the IMU's clock offset.
+  std::string imu;
+  std::string imu_topic;
+  std::string imu_calibration;
+  std::string camera_extrinsic;
+  double imu_time_offset_s = 0.0;
+  CLI::App* command = nullptr;  // to tell a given --imu-time-offset from its default
+  bool uses_imu() const { return !imu.empty() || !imu_topic.empty(); }
 };
 
 /// Registers every flag of `cairn vslam` on `command`, storing into `flags`. FOLDER (a dataset

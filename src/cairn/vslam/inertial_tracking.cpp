@@ -168,15 +168,25 @@ void VisualSlam::Impl::advance_inertial_state(TrackingFrame& w) {
 // (farther than disagreement_m / disagreement_deg) is degraded, with both distances in its note.
 void VisualSlam::Impl::check_against_imu(TrackingFrame& w) {
   if (!w.have_imu_prediction) return;
-  const core::SE3 predicted = camera_pose(w.imu_prediction);
-  const double distance_m = (predicted.translation() - w.f.T_world_camera.translation()).norm();
-  const double angle_deg = (predicted.so3().inverse() * w.f.T_world_camera.so3()).log().norm() * 180.0 / 3.14159265358979323846;
-  if (distance_m <= options.inertial.disagreement_m && angle_deg <= options.inertial.disagreement_deg) return;
+  double distance_m = 0.0, angle_deg = 0.0;
+  if (agrees_with_imu(w, &distance_m, &angle_deg)) return;
   char buffer[160];
   std::snprintf(buffer, sizeof buffer, "the IMU's prediction and the images disagree by %.3f m and %.2f deg", distance_m, angle_deg);
   if (w.result.health == TrackingHealth::kOk) w.result.health = TrackingHealth::kDegraded;
   w.result.note = w.result.note.empty() ? std::string(buffer) : w.result.note + "; " + buffer;
   ++summary->frames_contradicting_imu;
+}
+
+// Whether the frame's pose lies within disagreement_m / disagreement_deg of the IMU's prediction
+// (false without one); the distances when asked.
+bool VisualSlam::Impl::agrees_with_imu(const TrackingFrame& w, double* distance_m, double* angle_deg) const {
+  if (!w.have_imu_prediction) return false;
+  const core::SE3 predicted = camera_pose(w.imu_prediction);
+  const double d = (predicted.translation() - w.f.T_world_camera.translation()).norm();
+  const double a = (predicted.so3().inverse() * w.f.T_world_camera.so3()).log().norm() * 180.0 / 3.14159265358979323846;
+  if (distance_m) *distance_m = d;
+  if (angle_deg) *angle_deg = a;
+  return d <= options.inertial.disagreement_m && a <= options.inertial.disagreement_deg;
 }
 
 // The inertial-only MAP estimate (Campos et al., ICRA 2020; inertial_initialization.hpp) over

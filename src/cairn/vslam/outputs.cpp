@@ -161,6 +161,38 @@ nlohmann::json summary_json(const VisualSlamSummary& s, std::size_t map_points, 
           {"interrupted", interrupted}};
 }
 
+/// With an IMU (VisualInertialOptions): the inertial estimates and what the IMU did to the frames.
+nlohmann::json inertial_json(const VisualSlam& slam) {
+  const VisualSlamSummary& s = slam.summary();
+  const VisualInertialOptions& o = slam.options().inertial;
+  nlohmann::json j = {{"T_imu_camera", {{"translation", {o.T_body_camera.translation().x(), o.T_body_camera.translation().y(),
+                                                          o.T_body_camera.translation().z()}},
+                                         {"quaternion_xyzw", {o.T_body_camera.so3().unit_quaternion().x(), o.T_body_camera.so3().unit_quaternion().y(),
+                                                              o.T_body_camera.so3().unit_quaternion().z(), o.T_body_camera.so3().unit_quaternion().w()}}}},
+                      {"initialised", slam.inertial_initialised()},
+                      {"initialised_at_s", s.inertial_initialised_at_s >= 0.0 ? nlohmann::json(s.inertial_initialised_at_s) : nlohmann::json(nullptr)},
+                      {"estimates", s.inertial_estimates},
+                      {"estimates_refused", s.inertial_estimates_refused},
+                      {"last_refusal", s.inertial_refusal},
+                      {"estimates_s", s.inertial_s},
+                      {"frames_carried", s.frames_carried_by_imu},
+                      {"frames_contradicting_imu", s.frames_contradicting_imu}};
+  if (slam.inertial_initialised()) {
+    const Eigen::Vector3d g = slam.gravity_world();
+    const inertial::ImuBias b = slam.imu_bias();
+    j["gravity_world_mps2"] = {g.x(), g.y(), g.z()};
+    j["gyro_bias_rad_s"] = {b.gyro_rad_s.x(), b.gyro_rad_s.y(), b.gyro_rad_s.z()};
+    j["accel_bias_mps2"] = {b.accel_mps2.x(), b.accel_mps2.y(), b.accel_mps2.z()};
+  }
+  if (s.monocular_initial_scale > 0.0) {
+    j["monocular"] = {{"initial_scale", s.monocular_initial_scale},
+                      {"last_judged_scale", s.monocular_scale_estimate},
+                      {"frames_scale_drifted", s.frames_scale_drifted},
+                      {"estimates_unexcited", s.scale_estimates_unexcited}};
+  }
+  return j;
+}
+
 nlohmann::json timing_json(const RunRecord& record, const VisualSlamSummary& s) {
   const FrameTimeSeries times = frame_times(record.frames);
   return {{"total_s", record.total_s},
@@ -298,6 +330,7 @@ WrittenOutputs write_outputs(const io::OutputDirectory& out, const VisualSlam& s
   report["evaluation"] = written.evaluation ? evaluation_json(*written.evaluation) : nlohmann::json(nullptr);
   report["place_recognition"] = place_recognition_json(input, slam.options(), s);
   if (slam.localization_only()) report["localization"] = localization_json(input, slam, results);
+  report["inertial"] = slam.options().inertial.enabled ? inertial_json(slam) : nlohmann::json(nullptr);
   report["not_implemented"] = {"local mapping in its own thread"};
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   return written;

@@ -564,6 +564,7 @@ struct VisualSlam::Impl {
   void map_carried_view(TrackingFrame& w);
   void advance_inertial_state(TrackingFrame& w);
   void check_against_imu(TrackingFrame& w);
+  bool agrees_with_imu(const TrackingFrame& w, double* distance_m = nullptr, double* angle_deg = nullptr) const;
   void estimate_inertial(TrackingFrame& w);
   void rescale_segment(int seg, double scale);
   core::SE3 camera_pose(const inertial::NavState& body) const;

@@ -917,10 +917,17 @@ void VisualSlam::Impl::verify_relocalisation(TrackingFrame& w) {
     result.relocalisation_refused = true;
     inliers = 0;
   }
+  // With an IMU, a pose its prediction agrees with needs no more evidence: the prediction is a
+  // local prior from the last tracked frame (after a blank stretch the first images often give
+  // the first stage fewer than 30 inliers).
   if (w.unverified_start && inliers >= options.lost_below_inliers && inliers < options.relocalisation_min_inliers) {
-    result.note = "neither the prediction nor the reference keyframe explained the frame, and the local map gave " +
-                  std::to_string(inliers) + " inliers (< " + std::to_string(options.relocalisation_min_inliers) + "): lost";
-    inliers = 0;
+    if (agrees_with_imu(w)) {
+      result.note = "the first stage gave few inliers; the local map's " + std::to_string(inliers) + " agree with the IMU's prediction";
+    } else {
+      result.note = "neither the prediction nor the reference keyframe explained the frame, and the local map gave " +
+                    std::to_string(inliers) + " inliers (< " + std::to_string(options.relocalisation_min_inliers) + "): lost";
+      inliers = 0;
+    }
   }
   if (w.jumped) {
     char buffer[96];
