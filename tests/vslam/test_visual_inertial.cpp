@@ -232,3 +232,31 @@ TEST(MonocularInertial, IsMetricAndCarriesASecondOfBlankFrames) {
 
 }  // namespace
 }  // namespace cairn::vslam
+
+namespace cairn::vslam {
+namespace {
+
+// One camera, a yaw of 170 degrees in 0.3 s and back (peak 1,133 deg/s): monocular tracking
+// loses frames at the turn; with the IMU none is lost after the initialisation and the map stays
+// metric. The windowed scale estimates made during the turn are off (0.92 the last one) and a
+// few frames are flagged for scale drift although the map's scale holds: printed, not asserted
+// (docs/vslam.md).
+TEST(MonocularInertial, CarriesAFastTurnThatVisualOnlyTrackingLoses) {
+  Trouble turn;
+  turn.monocular = true;
+  turn.turn_at_s = 3.0;
+  turn.turn_deg = 170.0;
+  turn.turn_s = 0.3;
+  const FlightRun visual = fly(false, turn);
+  const FlightRun inertial = fly(true, turn);
+  // The frames before the two-view initialisation are lost in both runs.
+  const std::size_t before_init = static_cast<std::size_t>(inertial.first_tracked);
+  EXPECT_GT(visual.lost, static_cast<std::size_t>(visual.first_tracked));
+  ASSERT_TRUE(inertial.initialised) << inertial.summary.inertial_refusal;
+  EXPECT_EQ(inertial.lost, before_init);
+  EXPECT_NEAR(inertial.sim3_scale, 1.0, 0.02);
+  EXPECT_LT(inertial.ate_rmse_m, 0.01 * inertial.distance_m);
+}
+
+}  // namespace
+}  // namespace cairn::vslam
