@@ -210,6 +210,13 @@ void VisualSlam::Impl::estimate_inertial(TrackingFrame& w) {
     scale_drifted = false;
   }
   inertial_segment = current;
+  // The first monocular estimate rescales the map: the keyframe's bundle adjustment (running in
+  // the background) is taken first, so it does not overwrite the rescaled map with its unit.
+  if (monocular && !imu_initialised && mapping_job.running) {
+    join_local_mapping(&w.result);
+    w.f.T_world_camera = keyframes.back().frame.T_world_camera;
+    w.f.map_point = keyframes.back().frame.map_point;
+  }
   const double now_s = w.f.time.seconds();
   const double window_s = imu_initialised ? o.refinement_window_s : o.initialisation_window_s;
   std::vector<core::Timestamp> stamps;

@@ -464,6 +464,57 @@ std::vector<std::pair<int, int>> VisualSlam::Impl::covisible(int kf, int min_sha
 }
 
 // ORB-SLAM2 Optimizer::LocalBundleAdjustment: the newest keyframe and its covisible ones.
+// The local bundle adjustment of the newest keyframe started in the background (the keyframes
+// chosen as local_bundle_adjustment chooses them). Nothing that adds or removes keyframes, points
+// or observations runs before join_local_mapping: the job reads the map as it was at the start.
+void VisualSlam::Impl::start_local_mapping() {
+  LocalMappingJob& job = mapping_job;
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  std::vector<std::pair<int, int>> ranked = covisible(current, options.min_covisible_points);
+  if (ranked.size() > static_cast<std::size_t>(options.max_local_ba_keyframes)) ranked.resize(static_cast<std::size_t>(options.max_local_ba_keyframes));
+  job.local = {current};
+  for (const auto& [n, kf] : ranked) job.local.insert(kf);
+  job.ba = BundleAdjustmentState{};
+  job.keyframe = current;
+  job.frame_index = keyframes.back().frame.index;
+  job.running = true;
+  job.group.run([this] {
+    const auto start = Clock::now();
+    mapping_job.solved = solve_bundle_adjustment(mapping_job.local, 5, 10, mapping_job.ba);
+    mapping_job.seconds = seconds_since(start);
+  });
+}
+
+// Waits for the job, applies its bundle adjustment, then keyframe culling and loop closing
+// (finish_keyframe; loops and merges are reported on `result`, the frame being tracked). The
+// last frame, when it is the job's keyframe, takes the keyframe's adjusted pose and points, as
+// ORB-SLAM2's UpdateLastFrame re-anchors the last frame on its reference keyframe.
+void VisualSlam::Impl::join_local_mapping(FrameResult* result) {
+  LocalMappingJob& job = mapping_job;
+  if (!job.running) return;
+  job.group.wait();
+  job.running = false;
+  if (job.solved) apply_bundle_adjustment(job.local, job.ba);
+  ++summary->local_bas;
+  summary->local_ba_s += job.seconds;
+  FrameResult unused;
+  finish_keyframe(result != nullptr ? *result : unused);
+  const KeyFrame& kf = keyframes[static_cast<std::size_t>(job.keyframe)];
+  if (have_last && !kf.bad && last.index == job.frame_index) {
+    last.T_world_camera = kf.frame.T_world_camera;
+    last.map_point = kf.frame.map_point;
+    T_world_last_tracked = last.T_world_camera;
+  }
+  job.ba = BundleAdjustmentState{};
+}
+
+// After a keyframe's bundle adjustment: keyframe culling, then loop closing or a merge.
+void VisualSlam::Impl::finish_keyframe(FrameResult& result) {
+  if (options.keyframe_culling && kind != io::SequenceKind::kMonocular) cull_keyframes();
+  detect_and_close_loop(result);
+  if (!result.loop_closed) merge_with_recent(result);
+}
+
 void VisualSlam::Impl::local_bundle_adjustment() {
   const auto start = Clock::now();
   const int current = static_cast<int>(keyframes.size()) - 1;
@@ -481,8 +532,12 @@ void VisualSlam::Impl::local_bundle_adjustment() {
 // Huber, chi^2 outliers removed, `second` more without the kernel, outlier observations erased.
 void VisualSlam::Impl::bundle_adjustment(const std::set<int>& local, int first, int second_iterations) {
   BundleAdjustmentState ba;
+  if (solve_bundle_adjustment(local, first, second_iterations, ba)) apply_bundle_adjustment(local, ba);
+}
+
+bool VisualSlam::Impl::solve_bundle_adjustment(const std::set<int>& local, int first, int second_iterations, BundleAdjustmentState& ba) const {
   collect_bundle_adjustment_scope(local, ba);
-  if (local.size() < 2 && ba.fixed.empty()) return;
+  if (local.size() < 2 && ba.fixed.empty()) return false;
   backend::LeastSquaresProblem problem;
   add_bundle_adjustment_variables(local, ba, problem);
   ba.is_outlier.assign(ba.edges.size(), 0);
@@ -495,7 +550,7 @@ void VisualSlam::Impl::bundle_adjustment(const std::set<int>& local, int first, 
   classify_bundle_adjustment_edges(ba);
   bundle_adjustment_second_pass(ba, lso, second_iterations);
   classify_bundle_adjustment_edges(ba);
-  apply_bundle_adjustment(local, ba);
+  return true;
 }
 
 // The bundle adjustment's scope: every good point the keyframes `local` see, and the other

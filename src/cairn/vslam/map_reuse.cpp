@@ -258,6 +258,7 @@ std::string vocabulary_mismatch(const SavedVisualMap& map, const vision::Vocabul
 }
 
 SavedVisualMap VisualSlam::saved_map(std::string configuration_json, std::string source) const {
+  impl_->join_local_mapping(nullptr);
   SavedVisualMap map = impl_->export_main_segment();
   if (map.keyframes.empty()) throw std::logic_error("VisualSlam::saved_map: no keyframe yet: nothing to save");
   map.configuration_json = std::move(configuration_json);

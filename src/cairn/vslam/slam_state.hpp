@@ -8,6 +8,7 @@
 /// two-view initialisation). Not installed; include only from those files.
 
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_group.h>
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -238,6 +239,11 @@ struct VisualSlam::Impl {
     return keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera * T_parent_kf;
   }
 
+  ~Impl() {
+    if (mapping_job.running) mapping_job.group.wait();
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
   Impl(const io::CameraCalibration& c, io::SequenceKind k, const VisualSlamOptions& o)
       : camera(c), kind(k), options(o), orb(o.orb), orb_initialisation(doubled(o.orb)) {
     const double baseline = kind == io::SequenceKind::kStereo ? camera.baseline_m : camera.virtual_baseline_m;
@@ -422,6 +428,29 @@ struct VisualSlam::Impl {
   void classify_bundle_adjustment_edges(BundleAdjustmentState& ba) const;
   void bundle_adjustment_second_pass(BundleAdjustmentState& ba, backend::LeastSquaresOptions& lso, int second_iterations) const;
   void apply_bundle_adjustment(const std::set<int>& local, BundleAdjustmentState& ba);
+  // Everything of bundle_adjustment but applying it: reads the map, writes only `ba`. False when
+  // there is nothing to adjust.
+  bool solve_bundle_adjustment(const std::set<int>& local, int first, int second_iterations, BundleAdjustmentState& ba) const;
+
+  // Local mapping's own thread (VisualSlamOptions::local_mapping_thread; ORB-SLAM3's LocalMapping
+  // runs beside Tracking): a keyframe's local bundle adjustment is solved in the background on
+  // copies of the poses and points while the caller reads and extracts the next frame; it is
+  // joined, applied and followed by keyframe culling and loop closing before the next frame is
+  // tracked, or when the map is read, so the results never depend on timing (local_mapping.cpp).
+  struct LocalMappingJob {
+    bool running = false;
+    tbb::task_group group;
+    std::set<int> local;
+    BundleAdjustmentState ba;
+    bool solved = false;
+    double seconds = 0.0;
+    std::size_t frame_index = 0;  // the keyframe's frame (`last` while the job runs)
+    int keyframe = -1;
+  };
+  LocalMappingJob mapping_job;
+  void start_local_mapping();
+  void join_local_mapping(FrameResult* result);
+  void finish_keyframe(FrameResult& result);
 
   // --- Place recognition: loop closure (ORB-SLAM2 LoopClosing) (loop_closing.cpp) ---
   // Replaces point `old_id` by `new_id` everywhere (ORB-SLAM2 MapPoint::Replace): its

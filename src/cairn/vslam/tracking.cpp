@@ -619,6 +619,11 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
     if (!start_first_map(w)) return std::move(w.result);
     return record_frame(w);
   }
+  // The last keyframe's local mapping (its own thread) is taken now, before this frame is tracked;
+  // its time is mapping time of this frame.
+  join_local_mapping(&w.result);
+  const double joined_s = seconds_since(w.tracking_start);
+  w.tracking_start = Clock::now();
   predict_with_imu(w);
   track_motion_model(w);
   align_small_images(w);
@@ -632,6 +637,7 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
     accept_tracked_frame(w);
   }
   advance_inertial_state(w);
+  w.times.mapping_s += joined_s;
   return record_frame(w);
 }
 
@@ -1022,13 +1028,18 @@ void VisualSlam::Impl::map_keyframe(TrackingFrame& w) {
     triangulate_new_points(static_cast<int>(keyframes.size()) - 1, options.triangulation_keyframes);
   }
   if (options.fuse_points) search_in_neighbours(static_cast<int>(keyframes.size()) - 1);
-  if (options.local_ba) local_bundle_adjustment();
-  if (options.keyframe_culling && kind != io::SequenceKind::kMonocular) cull_keyframes();
-  detect_and_close_loop(result);
-  if (!result.loop_closed) merge_with_recent(result);
+  if (options.local_ba && options.local_mapping_thread) {
+    // The rest (bundle adjustment, culling, loop closing) in the background until the next
+    // frame is tracked (join_local_mapping).
+    start_local_mapping();
+  } else {
+    if (options.local_ba) local_bundle_adjustment();
+    finish_keyframe(result);
+  }
   // The frame is the keyframe: it takes the pose the bundle adjustment and any loop
   // correction gave the keyframe (its trajectory entry is relative to it), and its points
-  // as fusion, culling and loop fusion left them.
+  // as fusion, culling and loop fusion left them (with the mapping thread, as they are now:
+  // the adjusted ones reach `last` at the join).
   f.T_world_camera = keyframes.back().frame.T_world_camera;
   f.map_point = keyframes.back().frame.map_point;
   w.times.mapping_s = seconds_since(mapping_start);

@@ -134,6 +134,7 @@ FrameResult VisualSlam::add_monocular(core::Timestamp time, const cv::Mat& gray)
 }
 
 std::vector<core::SE3> VisualSlam::trajectory() const {
+  impl_->join_local_mapping(nullptr);  // a keyframe's local mapping still running
   std::vector<core::SE3> out;
   out.reserve(impl_->relative.size());
   for (const auto& [kf, T_kf_frame] : impl_->relative) {
@@ -143,15 +144,25 @@ std::vector<core::SE3> VisualSlam::trajectory() const {
 }
 
 std::vector<int> VisualSlam::frame_segments() const {
+  impl_->join_local_mapping(nullptr);  // a keyframe's local mapping still running
   std::vector<int> out;
   out.reserve(impl_->relative.size());
   for (const auto& [kf, T] : impl_->relative) out.push_back(kf < 0 ? -1 : impl_->segment_of(kf));
   return out;
 }
 
-int VisualSlam::main_segment() const { return impl_->keyframes.empty() ? 0 : impl_->segment_of(0); }
+int VisualSlam::main_segment() const {
+  impl_->join_local_mapping(nullptr);
+  return impl_->keyframes.empty() ? 0 : impl_->segment_of(0);
+}
+
+const VisualSlamSummary& VisualSlam::summary() const {
+  impl_->join_local_mapping(nullptr);
+  return summary_;
+}
 
 std::vector<core::SE3> VisualSlam::keyframe_poses() const {
+  impl_->join_local_mapping(nullptr);  // a keyframe's local mapping still running
   std::vector<core::SE3> out;
   for (const auto& kf : impl_->keyframes) {
     if (!kf.bad) out.push_back(kf.frame.T_world_camera);
@@ -160,6 +171,7 @@ std::vector<core::SE3> VisualSlam::keyframe_poses() const {
 }
 
 std::vector<std::size_t> VisualSlam::keyframe_frames() const {
+  impl_->join_local_mapping(nullptr);  // a keyframe's local mapping still running
   std::vector<std::size_t> out;
   for (const auto& kf : impl_->keyframes) {
     if (!kf.bad) out.push_back(kf.frame.index);
@@ -168,6 +180,7 @@ std::vector<std::size_t> VisualSlam::keyframe_frames() const {
 }
 
 std::vector<core::Timestamp> VisualSlam::keyframe_times() const {
+  impl_->join_local_mapping(nullptr);  // a keyframe's local mapping still running
   std::vector<core::Timestamp> out;
   for (const auto& kf : impl_->keyframes) {
     if (!kf.bad) out.push_back(kf.frame.time);
@@ -176,6 +189,7 @@ std::vector<core::Timestamp> VisualSlam::keyframe_times() const {
 }
 
 std::vector<Eigen::Vector3d> VisualSlam::map_points() const {
+  impl_->join_local_mapping(nullptr);  // a keyframe's local mapping still running
   std::vector<Eigen::Vector3d> out;
   for (const auto& mp : impl_->points) {
     if (!mp.bad) out.push_back(mp.p_world);

@@ -122,6 +122,11 @@ struct VisualSlamOptions {
   double chi2_mono = 5.991;              ///< 2 DOF, 95 %
   double chi2_stereo = 7.815;            ///< 3 DOF, 95 %
   bool local_ba = true;
+  /// Local mapping in its own thread (ORB-SLAM3's LocalMapping beside Tracking): a keyframe's
+  /// local bundle adjustment runs in the background while the next frame is read and its ORB
+  /// extracted, and is joined (then keyframe culling and loop closing) before that frame is
+  /// tracked; deterministic. Off: all of it within the keyframe's frame, as before.
+  bool local_mapping_thread = true;
   /// New points triangulated between a new keyframe and this many of its most covisible ones
   /// (ORB-SLAM2 CreateNewMapPoints: 10 for stereo/RGB-D); 0 = only stereo/depth creates points.
   /// Off by default, measured (2026-11-25, docs/vslam.md): with 10, KITTI's per-frame rotation
@@ -349,7 +354,8 @@ class VisualSlam {
   SavedVisualMap saved_map(std::string configuration_json = {}, std::string source = {}) const;
   /// True when made from a saved map (the map is then never changed).
   bool localization_only() const;
-  const VisualSlamSummary& summary() const { return summary_; }
+  /// The run's counts (a keyframe's local mapping still running is taken first).
+  const VisualSlamSummary& summary() const;
   const VisualSlamOptions& options() const { return options_; }
 
   struct Impl;
