@@ -42,7 +42,7 @@ io::Parameters parameters(VisualSlamOptions& o) {
       {"keyframes", "min_new_points", &o.min_new_points, "a new keyframe creates at least this many points (nearest first)"},
       {"local_mapping", "local_ba", &o.local_ba, "local bundle adjustment (false: visual odometry only, as --no-local-ba)"},
       {"local_mapping", "own_thread", &o.local_mapping_thread,
-       "a keyframe's local bundle adjustment, culling and loop closing run beside the next frame's image reading and ORB, joined before it is tracked (false: within the keyframe's frame)"},
+       "a keyframe's local bundle adjustment, culling and loop closing run beside the next frame's image reading and ORB, joined before it is tracked (false: within the keyframe's frame); stereo and RGB-D only"},
       {"local_mapping", "max_local_ba_keyframes", &o.max_local_ba_keyframes, "covisible keyframes optimised (most shared points first)"},
       {"local_mapping", "min_covisible_points", &o.min_covisible_points, "keyframes sharing fewer points are not covisible"},
       {"local_mapping", "triangulation_keyframes", &o.triangulation_keyframes, "new points triangulated with this many most covisible keyframes (0 = only stereo/depth creates points)"},

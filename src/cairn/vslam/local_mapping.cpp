@@ -390,7 +390,8 @@ void VisualSlam::Impl::search_in_neighbours(int current) {
 // redundant > keyframe_culling_redundancy (ORB-SLAM2: 0.9) x counted. Kept: keyframe 0 (the
 // gauge), the first keyframe of a segment (the segment's origin and its weak link to the one
 // before), keyframes of other segments (judged by nothing this segment sees, as cull_points'
-// points) and the candidates of pending loop consistency checks (ORB-SLAM2's SetNotErase). Local mapping is synchronous here, so no relocalisation or loop
+// points) and the candidates of pending loop consistency checks (ORB-SLAM2's SetNotErase). Culling runs on the tracking thread (at the join of the mapping
+// thread's bundle adjustment, or within the keyframe's frame), so no relocalisation or loop
 // verification is under way while this runs.
 void VisualSlam::Impl::cull_keyframes() {
   const int current = static_cast<int>(keyframes.size()) - 1;
@@ -478,6 +479,7 @@ void VisualSlam::Impl::start_local_mapping() {
   job.keyframe = current;
   job.frame_index = keyframes.back().frame.index;
   job.running = true;
+  summary->local_mapping_thread = true;
   job.group.run([this] {
     const auto start = Clock::now();
     mapping_job.solved = solve_bundle_adjustment(mapping_job.local, 5, 10, mapping_job.ba);

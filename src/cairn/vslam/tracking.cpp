@@ -1028,7 +1028,7 @@ void VisualSlam::Impl::map_keyframe(TrackingFrame& w) {
     triangulate_new_points(static_cast<int>(keyframes.size()) - 1, options.triangulation_keyframes);
   }
   if (options.fuse_points) search_in_neighbours(static_cast<int>(keyframes.size()) - 1);
-  if (options.local_ba && options.local_mapping_thread) {
+  if (options.local_ba && options.local_mapping_thread && kind != io::SequenceKind::kMonocular) {
     // The rest (bundle adjustment, culling, loop closing) in the background until the next
     // frame is tracked (join_local_mapping).
     start_local_mapping();
