@@ -16,6 +16,8 @@ io::Parameters parameters(Slam2dOptions& o) {
       {"front_end", "keyframe_angle_rad", &o.keyframe_angle_rad, "rotation since the last keyframe that makes a new one"},
       {"front_end", "local_map_keyframes", &o.local_map_keyframes, "keyframes whose points form the local map"},
       {"front_end", "submap_keyframes", &o.submap_keyframes, "keyframes per submap (a new submap starts every half of this)"},
+      {"front_end", "submap_install_delay_keyframes", &o.submap_install_delay_keyframes,
+       "a full submap is built in the background and searchable this many keyframes later (1: at the next keyframe)"},
       {"front_end", "map_cell_size_m", &o.map_points.cell_size_m, "hash cell of the point maps (>= icp.max_correspondence_m)"},
       {"front_end", "normal_radius_m", &o.map_points.normal_radius_m, "neighbourhood radius for point normals"},
       {"icp", "max_iterations", &o.icp.max_iterations, "Gauss-Newton iterations at most"},
@@ -34,6 +36,7 @@ io::Parameters parameters(Slam2dOptions& o) {
       {"loop_closure", "search_every_n_keyframes", &o.loop_search_every_n_keyframes, "search loops from every n-th keyframe"},
       {"loop_closure", "max_distance_m", &o.loop_max_distance_m, "submaps farther than this from the keyframe are not searched"},
       {"loop_closure", "max_submaps_per_search", &o.loop_max_submaps_per_search, "the nearest finished submaps searched per keyframe"},
+
       {"loop_closure", "max_linear_window_m", &o.loop_search.linear_search_window_m, "largest half-width of the translation search"},
       {"loop_closure", "max_angular_window_rad", &o.loop_search.angular_search_window_rad, "largest half-width of the angle search"},
       {"loop_closure", "window_base_m", &o.loop_window_base_m, "translation window at zero path length"},

@@ -46,6 +46,7 @@ struct Submap {
   int anchor = 0;               ///< first keyframe
   std::vector<int> keyframes;
   bool finished = false;
+  bool building = false;        ///< full, its build queued or running (installed at BuildJob::install_at)
   std::unique_ptr<PrecomputationGridStack> stack;
   std::unique_ptr<PointMap> points;  ///< in the anchor's frame
   Eigen::Vector2d centre_anchor = Eigen::Vector2d::Zero();
@@ -203,6 +204,7 @@ bool Slam2dOptions::is_valid(std::string* error) const {
     problems << "edge sigmas must be > 0; ";
   if (optimize_every_n_keyframes < 1) problems << "optimize_every_n_keyframes must be >= 1; ";
   if (loop_max_submaps_per_search < 1) problems << "loop_max_submaps_per_search must be >= 1; ";
+  if (submap_install_delay_keyframes < 1) problems << "submap_install_delay_keyframes must be >= 1; ";
   if (min_matching_points < 3) problems << "min_matching_points must be >= 3; ";
   if (lost_after_scans < 1) problems << "lost_after_scans must be >= 1; ";
   if (!(segment_link_translation_sigma_m > 0.0 && segment_link_rotation_sigma_rad > 0.0)) problems << "segment link sigmas must be > 0; ";
@@ -401,13 +403,62 @@ struct Slam2d::Impl {
     bool running = false;
     std::size_t scan = 0;
     core::Timestamp time;
-    std::vector<SubmapSource> sources;
-    std::vector<BuiltSubmap> built;
     std::vector<SearchTask> searches;
     std::vector<std::optional<LoopCandidate>> found;
-    double submap_s = 0.0, search_s = 0.0, global_s = 0.0;
+    double search_s = 0.0, global_s = 0.0;
   };
   BackgroundJob job;
+  // Submap builds, apart from the searches: queued when a keyframe fills a submap and installed
+  // (searchable) submap_install_delay_keyframes keyframes later, so a build (10-15 ms on MIT
+  // CSAIL) runs beside the front end of the keyframes in between instead of holding the next one
+  // at its join. Installed at a fixed keyframe (or when a segment closes, or at finish()):
+  // deterministic.
+  struct BuildJob {
+    tbb::task_group group;
+    bool running = false;
+    int install_at = 0;
+    std::vector<SubmapSource> sources;
+    std::vector<BuiltSubmap> built;
+    double cpu_s = 0.0;
+  };
+  BuildJob builds;
+
+  void start_builds(int install_at) {
+    builds.running = true;
+    builds.install_at = install_at;
+    builds.built.clear();
+    builds.built.resize(builds.sources.size());
+    builds.group.run([this] {
+      std::vector<double> seconds(builds.sources.size(), 0.0);
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(0, builds.sources.size(), 1),
+          [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t t = range.begin(); t != range.end(); ++t) {
+              const auto one = Clock::now();
+              builds.built[t] = build_submap(builds.sources[t]);
+              seconds[t] = seconds_since(one);
+            }
+          },
+          tbb::simple_partitioner());
+      builds.cpu_s = 0.0;
+      for (const double t : seconds) builds.cpu_s += t;
+    });
+  }
+
+  // Waits for the queued builds and installs them in order.
+  void join_builds(Slam2dSummary& summary) {
+    if (!builds.running) return;
+    builds.group.wait();
+    builds.running = false;
+    summary.times.submap_s += builds.cpu_s;
+    for (std::size_t i = 0; i < builds.sources.size(); ++i) {
+      Submap& submap = submaps[static_cast<std::size_t>(builds.sources[i].submap)];
+      submap.building = false;
+      install_submap(submap, std::move(builds.built[i]));
+    }
+    builds.sources.clear();
+    builds.built.clear();
+  }
 
   SubmapSource submap_source(const Submap& submap, int index) const {
     SubmapSource source;
@@ -517,47 +568,27 @@ struct Slam2d::Impl {
 
   void start_job() {
     job.running = true;
-    job.built.clear();
-    job.built.resize(job.sources.size());
     job.found.assign(job.searches.size(), std::nullopt);
     job.group.run([this] {
-      // Submap builds and searches are independent (a submap this keyframe finishes is not
-      // searched by it), so all of them are one parallel loop, the builds first (the longest
-      // tasks): on MIT CSAIL a submap build (~15 ms before 2026-11-25) used to run alone on one
-      // core while the searches waited behind it. Each task writes its own slot: deterministic.
-      // The job's wall time is split between the submap and search stages in proportion to
-      // their tasks' summed durations (so the stage times still add up to the wall time).
+      // The searches are independent of each other: one parallel loop, each task writing its own
+      // slot (deterministic). The job's wall time is the search stage's.
       const auto job_start = Clock::now();
-      const std::size_t builds = job.sources.size();
-      std::vector<double> seconds(builds + job.searches.size(), 0.0);
+      std::vector<double> seconds(job.searches.size(), 0.0);
       tbb::parallel_for(
           tbb::blocked_range<std::size_t>(0, seconds.size(), 1),
           [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t t = range.begin(); t != range.end(); ++t) {
               const auto one = Clock::now();
-              if (t < builds) {
-                job.built[t] = build_submap(job.sources[t]);
-              } else {
-                job.found[t - builds] = run_search(job.searches[t - builds]);
-              }
+              job.found[t] = run_search(job.searches[t]);
               seconds[t] = seconds_since(one);
             }
           },
           tbb::simple_partitioner());
-      const double wall_s = seconds_since(job_start);
-      double submap_cpu_s = 0.0, search_cpu_s = 0.0;
+      job.search_s = seconds_since(job_start);
       job.global_s = 0.0;
       for (std::size_t t = 0; t < seconds.size(); ++t) {
-        if (t < builds) {
-          submap_cpu_s += seconds[t];
-        } else {
-          search_cpu_s += seconds[t];
-          if (job.searches[t - builds].header.global) job.global_s += seconds[t];
-        }
+        if (job.searches[t].header.global) job.global_s += seconds[t];
       }
-      const double cpu_s = submap_cpu_s + search_cpu_s;
-      job.submap_s = cpu_s > 0.0 ? wall_s * submap_cpu_s / cpu_s : 0.0;
-      job.search_s = cpu_s > 0.0 ? wall_s * search_cpu_s / cpu_s : 0.0;
     });
   }
 
@@ -568,11 +599,8 @@ struct Slam2d::Impl {
     job.group.wait();
     job.running = false;
     const auto start = Clock::now();
-    summary.times.submap_s += job.submap_s;
     summary.times.loop_search_s += job.search_s;
     summary.times.global_search_s += job.global_s;
-    for (std::size_t i = 0; i < job.sources.size(); ++i)
-      install_submap(submaps[static_cast<std::size_t>(job.sources[i].submap)], std::move(job.built[i]));
     for (std::size_t i = 0; i < job.found.size(); ++i) {
       if (!job.found[i]) continue;
       summary.candidates.push_back(*job.found[i]);
@@ -609,15 +637,14 @@ struct Slam2d::Impl {
       add_loop(c, summary);
     }
     count_misses(summary);
-    job.sources.clear();
     job.searches.clear();
     job.found.clear();
-    job.built.clear();
     summary.times.loop_search_s += seconds_since(start);
   }
 
   ~Impl() {
     if (job.running) job.group.wait();
+    if (builds.running) builds.group.wait();
   }
 
   // Tracking relocalisation: searches the scan in the map of the last keyframes that carry points
@@ -1468,6 +1495,7 @@ struct Slam2d::Impl {
   /// starts a new one from this scan.
   void start_new_segment(ScanWork& w, Slam2dSummary& summary) {
     const int k = static_cast<int>(keyframes.size());
+    join_builds(summary);
     join_job(summary);
     for (auto& submap : submaps)
       if (!submap.finished) finish_submap(submap);
@@ -1614,14 +1642,24 @@ struct Slam2d::Impl {
       submaps.push_back(std::move(submap));
       ++summary.submaps;
     }
-    // The previous keyframe's background job: its submaps become searchable, its loop closures
-    // and merges are taken now, before this keyframe plans its own.
+    // Submaps whose install is due become searchable; then the previous keyframe's searches:
+    // their loop closures and merges are taken now, before this keyframe plans its own.
+    if (builds.running && k >= builds.install_at) join_builds(summary);
     join_job(summary);
+    std::vector<SubmapSource> full;
     for (int s = 0; s < static_cast<int>(submaps.size()); ++s) {
       Submap& submap = submaps[static_cast<std::size_t>(s)];
-      if (submap.finished || k < submap.anchor) continue;
+      if (submap.finished || submap.building || k < submap.anchor) continue;
       submap.keyframes.push_back(k);
-      if (static_cast<int>(submap.keyframes.size()) >= options.submap_keyframes) job.sources.push_back(submap_source(submap, s));
+      if (static_cast<int>(submap.keyframes.size()) >= options.submap_keyframes) {
+        full.push_back(submap_source(submap, s));
+        submap.building = true;
+      }
+    }
+    if (!full.empty()) {
+      join_builds(summary);  // one batch at a time (a submap fills every submap_keyframes / 2 keyframes)
+      builds.sources = std::move(full);
+      start_builds(k + options.submap_install_delay_keyframes);
     }
   }
 
@@ -1709,6 +1747,7 @@ ScanResult Slam2d::add_scan(const io::LaserScan& scan) {
 
 void Slam2d::finish() {
   const auto start = Clock::now();
+  impl_->join_builds(summary_);
   impl_->join_job(summary_);
   impl_->optimize(impl_->options.final_gnc, summary_);
   if (impl_->options.final_gnc) impl_->optimize(false, summary_);

@@ -63,9 +63,11 @@
 ///    other groups exist, one search over a whole submap of another group (every heading, points
 ///    within `global_search_max_range_m`) every `global_search_every_n_keyframes` keyframes,
 ///    round-robin over them. What the budget skipped is counted.
-///  - Threads: the submaps a keyframe finishes and its searches run as one background job while
-///    the front end goes on; it is joined, and its results taken in a fixed order, when the next
-///    keyframe is made (or at finish()), so the results never depend on timing.
+///  - Threads: a keyframe's searches run as one background job while the front end goes on; it
+///    is joined, and its results taken in a fixed order, when the next keyframe is made (or at
+///    finish()). The submaps a keyframe fills are built in another background job and installed
+///    `submap_install_delay_keyframes` keyframes later (or when a segment closes, or at
+///    finish()). Both join at fixed keyframes, so the results never depend on timing.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -106,6 +108,9 @@ struct Slam2dOptions {
   int loop_search_every_n_keyframes = 2;
   double loop_max_distance_m = 15.0;   ///< keyframe to submap centre, current estimate
   int loop_max_submaps_per_search = 4; ///< the nearest finished submaps searched per keyframe
+  /// A full submap is built in the background and becomes searchable this many keyframes later
+  /// (1: at the next keyframe, as before 2026-11-30); >= 1. Measured: docs/benchmarks.md.
+  int submap_install_delay_keyframes = 10;
   /// Search window = base + drift_per_metre * d, clamped to loop_search's windows, where d is
   /// the path length between submap and keyframe or since the last accepted loop closure,
   /// whichever is shorter (the drift the estimate may have).
