@@ -403,8 +403,8 @@ void bind_lidar_slam(py::module_& m) {
                finite_or_throw(imu_time_offset, "imu_time_offset");
                // A topic names a sensor_msgs/Imu topic of the bag `imu` (InertialInputRequest's bag + topic).
                const bool topic = !imu_topic.empty();
-               request = lidar3d::InertialInputRequest{topic ? "" : *imu, topic ? *imu : "", imu_topic, imu_calibration,
-                                                       lidar_extrinsic, imu_time_offset};
+               request = lidar3d::InertialInputRequest{{topic ? "" : *imu, topic ? *imu : "", imu_topic, imu_calibration, imu_time_offset},
+                                                       lidar_extrinsic};
                remap_forced = lidar3d::prepare_for_inertial(options.slam);  // as slam3d_options does with --imu
              } else if (!imu_topic.empty() || !imu_calibration.empty() || !lidar_extrinsic.empty() || imu_time_offset != 0.0) {
                throw_value_error("imu_topic, imu_calibration, lidar_extrinsic and imu_time_offset go with imu=PATH");

@@ -75,12 +75,12 @@ std::optional<lidar3d::InertialInputRequest> imu_request(const Slam3dFlags& flag
     throw UsageError("--imu-topic reads sensor_msgs/Imu from the scans' bag, but SCANS are not a bag: give --imu PATH");
   }
   lidar3d::InertialInputRequest request;
-  request.imu = flags.imu;
-  if (!flags.imu_topic.empty()) request.bag = flags.scans.front();
-  request.topic = flags.imu_topic;
-  request.calibration = flags.imu_calibration;
+  request.imu.imu = flags.imu;
+  if (!flags.imu_topic.empty()) request.imu.bag = flags.scans.front();
+  request.imu.topic = flags.imu_topic;
+  request.imu.calibration = flags.imu_calibration;
+  request.imu.time_offset_s = flags.imu_time_offset_s;
   request.lidar_extrinsic = flags.lidar_extrinsic;
-  request.time_offset_s = flags.imu_time_offset_s;
   return request;
 }
 

@@ -34,13 +34,7 @@ void read_lidar_extrinsic(const InertialInputRequest& request, const fs::path& f
 }  // namespace
 
 InertialInput read_inertial_input(const InertialInputRequest& request) {
-  inertial::ImuSourceRequest imu;
-  imu.imu = request.imu;
-  imu.bag = request.bag;
-  imu.topic = request.topic;
-  imu.calibration = request.calibration;
-  imu.time_offset_s = request.time_offset_s;
-  inertial::ImuSource source = inertial::read_imu_source(imu);
+  inertial::ImuSource source = inertial::read_imu_source(request.imu);
   InertialInput input;
   input.source = std::move(source.source);
   input.calibration_file = std::move(source.calibration_file);

@@ -17,6 +17,7 @@
 
 #include "cairn/core/se3.hpp"
 #include "cairn/inertial/imu_input.hpp"
+#include "cairn/inertial/imu_source.hpp"
 #include "cairn/inertial/imu_types.hpp"
 #include "cairn/lidar3d/inertial_fusion.hpp"
 #include "cairn/lidar3d/slam.hpp"
@@ -25,22 +26,12 @@ namespace cairn::lidar3d {
 
 /// Where the IMU is and what is known about it (the flags of `cairn slam3d`).
 struct InertialInputRequest {
-  /// --imu: an EuRoC imu0 (or mav0) folder or imu0/data.csv, a plain IMU CSV, or a bag (its only
-  /// sensor_msgs/Imu topic). Empty when the IMU is `topic` of `bag`.
-  std::filesystem::path imu;
-  /// The scans' bag and --imu-topic, used when `imu` is empty.
-  std::filesystem::path bag;
-  std::string topic;
-  /// --imu-calibration: a sensor.yaml with the noise densities and random walks (and T_BS). Empty:
-  /// sensor.yaml beside the IMU's data (its folder, or imu0/ in a mav0 folder) when there is one,
-  /// else EuRoC's ADIS16448 values (inertial::ImuNoise's defaults).
-  std::filesystem::path calibration;
+  /// --imu or the scans' bag with --imu-topic, --imu-calibration, --imu-time-offset
+  /// (inertial/imu_source.hpp).
+  inertial::ImuSourceRequest imu;
   /// --lidar-extrinsic: a sensor.yaml whose T_BS is the LiDAR in the body frame. Empty:
   /// lidar0/sensor.yaml beside the IMU's folder (in its parent) when there is one, else the identity.
   std::filesystem::path lidar_extrinsic;
-  /// --imu-time-offset: added to every IMU stamp to put it on the scans' clock, s (finite,
-  /// |offset| <= 9.2e9).
-  double time_offset_s = 0.0;
 };
 
 /// The IMU as read, with what was assumed.
