@@ -17,7 +17,7 @@ io::Parameters parameters(Slam2dOptions& o) {
       {"front_end", "local_map_keyframes", &o.local_map_keyframes, "keyframes whose points form the local map"},
       {"front_end", "submap_keyframes", &o.submap_keyframes, "keyframes per submap (a new submap starts every half of this)"},
       {"front_end", "submap_install_delay_keyframes", &o.submap_install_delay_keyframes,
-       "a full submap is built in the background and searchable this many keyframes later (1: at the next keyframe)"},
+       "a full submap is built in the background and searchable this many keyframes later (more: faster, but fewer loops and wider drift windows; 10 let false loops through in simulation)"},
       {"front_end", "map_cell_size_m", &o.map_points.cell_size_m, "hash cell of the point maps (>= icp.max_correspondence_m)"},
       {"front_end", "normal_radius_m", &o.map_points.normal_radius_m, "neighbourhood radius for point normals"},
       {"icp", "max_iterations", &o.icp.max_iterations, "Gauss-Newton iterations at most"},

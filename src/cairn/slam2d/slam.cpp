@@ -409,10 +409,11 @@ struct Slam2d::Impl {
   };
   BackgroundJob job;
   // Submap builds, apart from the searches: queued when a keyframe fills a submap and installed
-  // (searchable) submap_install_delay_keyframes keyframes later, so a build (10-15 ms on MIT
-  // CSAIL) runs beside the front end of the keyframes in between instead of holding the next one
-  // at its join. Installed at a fixed keyframe (or when a segment closes, or at finish()):
-  // deterministic.
+  // (searchable) submap_install_delay_keyframes keyframes later (default 1: at the next keyframe,
+  // as when builds and searches were one job). A longer delay lets a build (10-15 ms on MIT CSAIL)
+  // run beside the front end of the keyframes in between instead of holding the next one at its
+  // join, but let false loops through in simulation (slam.hpp). Installed at a fixed keyframe (or
+  // when a segment closes, or at finish()): deterministic.
   struct BuildJob {
     tbb::task_group group;
     bool running = false;
