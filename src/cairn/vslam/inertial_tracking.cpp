@@ -112,7 +112,7 @@ bool VisualSlam::Impl::carry_with_imu(TrackingFrame& w) {
 // faster than the last frame's points could follow): it becomes a keyframe at the IMU's pose, so
 // the next frames have points to track (record_frame makes it `last`). cairn's: ORB-SLAM3 maps
 // nothing while RECENTLY_LOST and starts a new map when that lasts 5 s. Measured in
-// tests/vslam/test_stereo_inertial.cpp (a 150 degree turn in 0.4 s: without it the view's frames
+// tests/vslam/test_visual_inertial.cpp (a 150 degree turn in 0.4 s: without it the view's frames
 // were carried until max_carried_s ran out).
 void VisualSlam::Impl::map_carried_view(TrackingFrame& w) {
   if (localization_only || w.result.stereo_points < options.min_new_points) return;

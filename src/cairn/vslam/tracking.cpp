@@ -621,7 +621,12 @@ FrameResult VisualSlam::Impl::track(core::Timestamp time, vision::Features& left
   }
   // The last keyframe's local mapping (its own thread) is taken now, before this frame is tracked;
   // its time is mapping time of this frame.
+  const std::size_t corrections = summary->loops_accepted + summary->maps_merged;
   join_local_mapping(&w.result);
+  // A loop or merge closed at the join moved the map under the IMU's state: the next keyframe's
+  // inertial estimate gives it again (within the frame, advance_inertial_state takes the
+  // corrected keyframe's pose).
+  if (summary->loops_accepted + summary->maps_merged != corrections) have_imu_state = false;
   const double joined_s = seconds_since(w.tracking_start);
   w.tracking_start = Clock::now();
   predict_with_imu(w);
