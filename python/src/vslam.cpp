@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "cairn/inertial/euroc_files.hpp"
 #include "cairn/io/calibration_yaml.hpp"
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/vision/features.hpp"
@@ -125,7 +126,23 @@ nlohmann::json vslam_summary_json(const vslam::VisualSlamSummary& s) {
           {"relocalisations", s.relocalisations}, {"loop_queries", s.loop_queries}, {"loops_accepted", s.loops_accepted},
           {"revisits_verified", s.revisits_verified}, {"maps_started", s.maps_started}, {"maps_merged", s.maps_merged},
           {"global_bas", s.global_bas}, {"local_ba_s", s.local_ba_s}, {"loop_s", s.loop_s},
-          {"global_ba_s", s.global_ba_s}, {"loops", loops}};
+          {"global_ba_s", s.global_ba_s}, {"loops", loops},
+          {"frames_carried_by_imu", s.frames_carried_by_imu}, {"frames_contradicting_imu", s.frames_contradicting_imu},
+          {"inertial_estimates", s.inertial_estimates}, {"inertial_estimates_refused", s.inertial_estimates_refused},
+          {"inertial_refusal", s.inertial_refusal}, {"frames_scale_drifted", s.frames_scale_drifted}};
+}
+
+/// VisualSlamOptions with the IMU on (cairn vslam --imu's options, vslam/inertial_input.hpp):
+/// the camera in the IMU's frame and the noise of a sensor.yaml (default: EuRoC's ADIS16448).
+void enable_imu(vslam::VisualSlamOptions& options, const py::object& T_imu_camera, const py::object& imu_calibration) {
+  options.inertial.enabled = true;
+  if (!T_imu_camera.is_none()) {
+    const Matrix4 T = matrix4_from_array(T_imu_camera.cast<DoubleArray>(), "T_imu_camera");
+    if (!T.allFinite()) throw_value_error("T_imu_camera: expected finite values");
+    options.inertial.T_body_camera = core::SE3::from_matrix(T);
+  }
+  if (!imu_calibration.is_none()) options.inertial.noise = inertial::read_euroc_imu_calibration(fspath(imu_calibration)).noise;
+  if (std::string problems; !options.is_valid(&problems)) throw_value_error("invalid configuration: " + problems);
 }
 
 /// VisualSlam fed as `cairn vslam` feeds it (cmd_vslam.cpp, vslam/image_input.hpp add_frame).
@@ -186,6 +203,48 @@ class VisualSession {
   int main_segment() { return locked(mutex_, [&] { return slam_.main_segment(); }); }
   py::array_t<double> map_points() { return points_to_array(locked(mutex_, [&] { return slam_.map_points(); })); }
   py::object summary() { return json_to_python(locked(mutex_, [&] { return vslam_summary_json(slam_.summary()); })); }
+
+  /// IMU readings: one (time, 3, 3) or many (N, N x 3, N x 3), IMU frame, rad/s and m/s^2.
+  void add_imu(const DoubleArray& time, const DoubleArray& gyro, const DoubleArray& accel) {
+    if (!options_.inertial.enabled) throw_value_error("add_imu: this VisualSlam was made without imu=True");
+    const bool one = time.ndim() == 0;
+    const py::ssize_t n = one ? 1 : (time.ndim() == 1 ? time.shape(0) : -1);
+    auto rows_ok = [&](const DoubleArray& a) {
+      return one ? (a.ndim() == 1 && a.shape(0) == 3) : (a.ndim() == 2 && a.shape(0) == n && a.shape(1) == 3);
+    };
+    if (n < 0 || !rows_ok(gyro) || !rows_ok(accel)) {
+      throw_value_error("add_imu: expected time (float or N), gyro and accel (3 or N x 3)");
+    }
+    std::vector<inertial::ImuSample> samples(static_cast<std::size_t>(n));
+    const double* t = time.data();
+    const double* g = gyro.data();
+    const double* a = accel.data();
+    for (py::ssize_t k = 0; k < n; ++k) {
+      inertial::ImuSample& sample = samples[static_cast<std::size_t>(k)];
+      sample.stamp = timestamp_of(t[k], "time");
+      sample.gyro_rad_s = Eigen::Vector3d(g[3 * k], g[3 * k + 1], g[3 * k + 2]);
+      sample.accel_mps2 = Eigen::Vector3d(a[3 * k], a[3 * k + 1], a[3 * k + 2]);
+    }
+    locked(mutex_, [&] {
+      for (const inertial::ImuSample& sample : samples) slam_.add_imu(sample);
+      return 0;
+    });
+  }
+
+  /// The inertial estimate: whether it exists, gravity in the map's frame and the biases.
+  py::object inertial_state() {
+    return json_to_python(locked(mutex_, [&] {
+      nlohmann::json j = {{"enabled", options_.inertial.enabled}, {"initialised", slam_.inertial_initialised()}};
+      if (slam_.inertial_initialised()) {
+        const Eigen::Vector3d g = slam_.gravity_world();
+        const inertial::ImuBias b = slam_.imu_bias();
+        j["gravity_world"] = {g.x(), g.y(), g.z()};
+        j["gyro_bias"] = {b.gyro_rad_s.x(), b.gyro_rad_s.y(), b.gyro_rad_s.z()};
+        j["accel_bias"] = {b.accel_mps2.x(), b.accel_mps2.y(), b.accel_mps2.z()};
+      }
+      return j;
+    }));
+  }
   py::object config() const { return json_to_python(vslam::configuration().json(options_)); }
   const io::CameraCalibration& calibration() const { return camera_; }
   std::string kind() const { return std::string(io::to_string(kind_)); }
@@ -352,16 +411,26 @@ void bind_visual_slam(py::module_& m) {
   py::class_<VisualSession>(m, "VisualSlam",
                             "Stereo, RGB-D or monocular visual SLAM after ORB-SLAM2 (vslam::VisualSlam), one frame at a time.")
       .def(py::init([](const io::CameraCalibration& calibration, const std::string& kind, const py::object& config,
-                       const py::object& set, const std::string& dataset, const py::object& vocabulary) {
+                       const py::object& set, const std::string& dataset, const py::object& vocabulary, bool imu,
+                       const py::object& T_imu_camera, const py::object& imu_calibration) {
              const io::SequenceKind k = sequence_kind(kind);
-             return std::make_unique<VisualSession>(calibration, k, vslam_configuration(dataset, k, config, set, vocabulary));
+             vslam::VisualSlamOptions options = vslam_configuration(dataset, k, config, set, vocabulary);
+             if (imu) {
+               enable_imu(options, T_imu_camera, imu_calibration);
+             } else if (!T_imu_camera.is_none() || !imu_calibration.is_none()) {
+               throw_value_error("T_imu_camera and imu_calibration go with imu=True");
+             }
+             return std::make_unique<VisualSession>(calibration, k, std::move(options));
            }),
            py::arg("calibration"), py::arg("kind") = "stereo", py::arg("config") = py::none(), py::arg("set") = py::none(),
-           py::kw_only(), py::arg("dataset") = "folder", py::arg("vocabulary") = py::none(),
+           py::kw_only(), py::arg("dataset") = "folder", py::arg("vocabulary") = py::none(), py::arg("imu") = false,
+           py::arg("T_imu_camera") = py::none(), py::arg("imu_calibration") = py::none(),
            "calibration: a cairn.CameraCalibration (rectified stereo needs baseline_m; RGB-D depth_units_per_m and "
            "virtual_baseline_m); kind 'stereo', 'rgbd' or 'monocular'; the options as `cairn vslam` makes them from the "
            "dataset's layout ('kitti': 2000 features, others 1000), --config and --set; vocabulary: a bag-of-words file "
-           "(loop closure, relocalisation).")
+           "(loop closure, relocalisation). imu=True: visual-inertial tracking as `cairn vslam --imu` (feed add_imu "
+           "before each frame), T_imu_camera the camera's pose in the IMU's frame (4 x 4), imu_calibration a "
+           "Kalibr/EuRoC sensor.yaml with the noise (default: EuRoC's ADIS16448).")
       .def_static("localize_in",
                   [](const py::object& map_path, const py::object& config, const py::object& set, const std::string& dataset,
                      const py::object& vocabulary) {
@@ -392,6 +461,12 @@ void bind_visual_slam(py::module_& m) {
       .def_property_readonly("main_segment", &VisualSession::main_segment)
       .def("map_points", &VisualSession::map_points, "The good map points in the world frame (M x 3 float64).")
       .def_property_readonly("summary", &VisualSession::summary, "Frame and keyframe counts, loops and their decisions, as a dict.")
+      .def("add_imu", &VisualSession::add_imu, py::arg("time"), py::arg("gyro"), py::arg("accel"),
+           "IMU readings in the IMU's frame: one (time s, gyro (3) rad/s, accel (3) m/s^2) or many (N, N x 3, N x 3), "
+           "in time order, each before the frames it spans (a frame at t needs a reading at or after t).")
+      .def_property_readonly("inertial", &VisualSession::inertial_state,
+                             "With imu=True: {'enabled', 'initialised'} and, once initialised, gravity_world (m/s^2, the map's "
+                             "frame), gyro_bias (rad/s) and accel_bias (m/s^2).")
       .def("config", &VisualSession::config, "The options in effect, {section: {key: value}}.")
       .def_property_readonly("calibration", &VisualSession::calibration)
       .def_property_readonly("kind", &VisualSession::kind);

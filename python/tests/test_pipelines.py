@@ -319,6 +319,34 @@ def test_slam2d_refuses_bad_scans_and_takes_backward_time():
     assert slam.trajectory().shape == (2, 3)
 
 
+def test_visual_slam_takes_imu_readings_and_refuses_bad_ones(data):
+    # The API only: visual-inertial tracking itself is measured in C++ on rendered images with the
+    # simulator's IMU (tests/vslam/test_visual_inertial.cpp); no real images with an IMU are here.
+    camera = cairn.CameraCalibration(718.856, 718.856, 607.1928, 185.2157, baseline_m=0.5372)
+    T_imu_camera = np.eye(4)
+    T_imu_camera[:3, 3] = [0.05, 0.0, 0.0]
+    calibration = data / "inertial" / "euroc_v1_01" / "mav0" / "imu0" / "sensor.yaml"
+    slam = cairn.VisualSlam(camera, "stereo", imu=True, T_imu_camera=T_imu_camera, imu_calibration=calibration)
+    assert slam.inertial == {"enabled": True, "initialised": False}
+    slam.add_imu(0.0, [0.0, 0.0, 0.01], [0.0, 0.0, 9.81])
+    times = np.arange(1, 11) * 0.005
+    slam.add_imu(times, np.zeros((10, 3)), np.tile([0.0, 0.0, 9.81], (10, 1)))
+    with pytest.raises(ValueError, match="not after the previous"):
+        slam.add_imu(0.01, [0.0, 0.0, 0.0], [0.0, 0.0, 9.81])
+    with pytest.raises(ValueError, match="not finite"):
+        slam.add_imu(1.0, [np.nan, 0.0, 0.0], [0.0, 0.0, 9.81])
+    with pytest.raises(ValueError, match="expected time"):
+        slam.add_imu(times, np.zeros((9, 3)), np.zeros((10, 3)))
+    with pytest.raises(ValueError, match="T_imu_camera"):
+        cairn.VisualSlam(camera, "stereo", imu=True, T_imu_camera=np.eye(3))
+    with pytest.raises(ValueError, match="go with imu=True"):
+        cairn.VisualSlam(camera, "stereo", T_imu_camera=np.eye(4))
+    with pytest.raises(ValueError, match="without imu=True"):
+        cairn.VisualSlam(camera, "stereo").add_imu(0.0, [0.0, 0.0, 0.0], [0.0, 0.0, 9.81])
+    assert cairn.VisualSlam(camera, "stereo").inertial == {"enabled": False, "initialised": False}
+    assert slam.summary["frames_carried_by_imu"] == 0
+
+
 def test_visual_slam_refuses_wrong_images():
     camera = cairn.CameraCalibration(718.856, 718.856, 607.1928, 185.2157, baseline_m=0.5372)
     slam = cairn.VisualSlam(camera, "stereo")
