@@ -1,5 +1,5 @@
 // Visual SLAM time per frame on the real sequences: ORB, stereo matching / depth lookup, tracking
-// and mapping (synchronous) per frame, medians and 90th percentiles over 3 repetitions, images
+// and mapping per frame, medians and 90th percentiles over 3 repetitions, images
 // decoded before the clock starts; each sequence with local mapping in its own thread (the
 // default) and within the keyframe's frame (local_mapping_thread off), interleaved. Usage:
 //   bench_vslam_tracking [DATA_ROOT]   (default $CAIRN_DATA_ROOT or ../shared/data)
@@ -8,7 +8,6 @@
 // wall clock per frame, which also covers what the thread did between frames.
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "cairn/core/timer.hpp"
 #include "cairn/io/image_sequence.hpp"
 #include "cairn/vision/features.hpp"
 #include "cairn/vision/vocabulary.hpp"
@@ -79,25 +79,25 @@ int main(int argc, char** argv) {
     for (int threaded = 1; threaded >= 0; --threaded) {
       vslam::VisualSlamOptions kitti_options;
       kitti_options.local_mapping_thread = threaded == 1;
-      const auto kitti_start = std::chrono::steady_clock::now();
+      const auto kitti_start = core::Clock::now();
       {
         vslam::VisualSlam slam(kitti.calibration, kitti.kind, kitti_options);
         for (std::size_t k = 0; k < pairs.size(); ++k) add(stages[0][threaded], slam.add_stereo(kitti.frames[k].time, pairs[k].first, pairs[k].second));
         slam.summary();  // the last keyframe's mapping
       }
-      wall_s[0][threaded] += std::chrono::duration<double>(std::chrono::steady_clock::now() - kitti_start).count();
+      wall_s[0][threaded] += core::seconds_since(kitti_start);
       vslam::VisualSlamOptions options;
       options.orb.features = 1000;
       options.close_depth_baselines = 40.0;
       options.vocabulary = vocabulary;
       options.local_mapping_thread = threaded == 1;
-      const auto tum_start = std::chrono::steady_clock::now();
+      const auto tum_start = core::Clock::now();
       {
         vslam::VisualSlam slam(camera, io::SequenceKind::kRgbd, options);
         for (std::size_t k = 0; k < rgbd.size(); ++k) add(stages[1][threaded], slam.add_rgbd(tum.frames[k].time, rgbd[k].first, rgbd[k].second));
         slam.summary();
       }
-      wall_s[1][threaded] += std::chrono::duration<double>(std::chrono::steady_clock::now() - tum_start).count();
+      wall_s[1][threaded] += core::seconds_since(tum_start);
     }
   }
   for (int threaded = 1; threaded >= 0; --threaded) {

@@ -57,6 +57,12 @@ void read_calibration(const ImuSourceRequest& request, ImuSource& input) {
 
 }  // namespace
 
+std::filesystem::path sibling_sensor_yaml(const ImuSource& imu, const std::string& sensor) {
+  if (imu.folder.empty()) return {};
+  const fs::path beside = imu.folder.parent_path() / sensor / "sensor.yaml";
+  return is_file(beside) ? beside : fs::path();
+}
+
 ImuSource read_imu_source(const ImuSourceRequest& request) {
   ImuInputOptions shift;
   shift.time_offset_s = request.time_offset_s;

@@ -49,6 +49,10 @@ struct ImuSource {
   std::vector<std::string> notes;
 };
 
+/// `<sensor>/sensor.yaml` beside the IMU's folder (EuRoC's mav0 layout: lidar0/, cam0/ beside
+/// imu0/) when that file exists; empty otherwise (or for a bag's topic).
+std::filesystem::path sibling_sensor_yaml(const ImuSource& imu, const std::string& sensor);
+
 /// Reads the IMU of `request`. Throws io::ParseError (file and line, or bag, topic and message)
 /// for bad data or calibration files, std::invalid_argument for a bad time offset or a request
 /// naming no IMU.

@@ -8,20 +8,10 @@
 namespace cairn::lidar3d {
 namespace {
 
-namespace fs = std::filesystem;
-
-bool is_file(const fs::path& path) {
-  std::error_code error;
-  return fs::is_regular_file(path, error);
-}
-
 // --lidar-extrinsic, else lidar0/sensor.yaml beside the IMU's folder, else the identity.
-void read_lidar_extrinsic(const InertialInputRequest& request, const fs::path& folder, InertialInput& input) {
-  fs::path file = request.lidar_extrinsic;
-  if (file.empty() && !folder.empty()) {
-    const fs::path beside = folder.parent_path() / "lidar0" / "sensor.yaml";
-    if (is_file(beside)) file = beside;
-  }
+void read_lidar_extrinsic(const InertialInputRequest& request, const inertial::ImuSource& imu, InertialInput& input) {
+  std::filesystem::path file = request.lidar_extrinsic;
+  if (file.empty()) file = inertial::sibling_sensor_yaml(imu, "lidar0");
   if (file.empty()) {
     input.notes.push_back("no LiDAR extrinsic (--lidar-extrinsic, or lidar0/sensor.yaml beside the IMU's folder): the "
                           "LiDAR taken to be at the IMU (identity)");
@@ -44,7 +34,7 @@ InertialInput read_inertial_input(const InertialInputRequest& request) {
   input.T_body_imu = source.T_body_imu;
   input.time_offset_s = source.time_offset_s;
   input.notes = std::move(source.notes);
-  read_lidar_extrinsic(request, source.folder, input);
+  read_lidar_extrinsic(request, source, input);
   return input;
 }
 

@@ -414,6 +414,24 @@ struct Slam2d::Impl {
   // run beside the front end of the keyframes in between instead of holding the next one at its
   // join, but let false loops through in simulation (slam.hpp). Installed at a fixed keyframe (or
   // when a segment closes, or at finish()): deterministic.
+  // task(0) .. task(n - 1) in parallel, one task per TBB chunk (a submap build or a search is
+  // long), each writing its own slot: deterministic. Returns every task's duration.
+  template <typename Task>
+  static std::vector<double> timed_parallel_for(std::size_t n, const Task& task) {
+    std::vector<double> seconds(n, 0.0);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, n, 1),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          for (std::size_t t = range.begin(); t != range.end(); ++t) {
+            const auto one = Clock::now();
+            task(t);
+            seconds[t] = seconds_since(one);
+          }
+        },
+        tbb::simple_partitioner());
+    return seconds;
+  }
+
   struct BuildJob {
     tbb::task_group group;
     bool running = false;
@@ -430,17 +448,8 @@ struct Slam2d::Impl {
     builds.built.clear();
     builds.built.resize(builds.sources.size());
     builds.group.run([this] {
-      std::vector<double> seconds(builds.sources.size(), 0.0);
-      tbb::parallel_for(
-          tbb::blocked_range<std::size_t>(0, builds.sources.size(), 1),
-          [&](const tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t t = range.begin(); t != range.end(); ++t) {
-              const auto one = Clock::now();
-              builds.built[t] = build_submap(builds.sources[t]);
-              seconds[t] = seconds_since(one);
-            }
-          },
-          tbb::simple_partitioner());
+      const std::vector<double> seconds =
+          timed_parallel_for(builds.sources.size(), [this](std::size_t t) { builds.built[t] = build_submap(builds.sources[t]); });
       builds.cpu_s = 0.0;
       for (const double t : seconds) builds.cpu_s += t;
     });
@@ -574,17 +583,8 @@ struct Slam2d::Impl {
       // The searches are independent of each other: one parallel loop, each task writing its own
       // slot (deterministic). The job's wall time is the search stage's.
       const auto job_start = Clock::now();
-      std::vector<double> seconds(job.searches.size(), 0.0);
-      tbb::parallel_for(
-          tbb::blocked_range<std::size_t>(0, seconds.size(), 1),
-          [&](const tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t t = range.begin(); t != range.end(); ++t) {
-              const auto one = Clock::now();
-              job.found[t] = run_search(job.searches[t]);
-              seconds[t] = seconds_since(one);
-            }
-          },
-          tbb::simple_partitioner());
+      const std::vector<double> seconds =
+          timed_parallel_for(job.searches.size(), [this](std::size_t t) { job.found[t] = run_search(job.searches[t]); });
       job.search_s = seconds_since(job_start);
       job.global_s = 0.0;
       for (std::size_t t = 0; t < seconds.size(); ++t) {

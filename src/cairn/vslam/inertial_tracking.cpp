@@ -10,6 +10,7 @@
 // bundle adjustments (the visual poses are taken as they are; docs/vslam.md, "With an IMU").
 // The state and the declarations: slam_state.hpp.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -54,12 +55,13 @@ void VisualSlam::add_imu(const inertial::ImuSample& sample) {
   }
   samples.push_back(sample);
   // Keep what an estimate (its window) and a carried stretch can still ask for, with a second
-  // to spare; drop the rest in chunks (amortised O(1) per reading).
+  // to spare; drop the rest in chunks of at least 4,096 (the readings are sorted: a binary search).
   const VisualInertialOptions& o = options_.inertial;
   const double keep_s = o.refinement_window_s + o.max_carried_s + 1.0;
-  std::size_t old = 0;
-  while (old < samples.size() && (sample.stamp.seconds() - samples[old].stamp.seconds()) > keep_s) ++old;
-  if (old >= 4096) samples.erase(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(old));
+  const auto first_kept = std::partition_point(samples.begin(), samples.end(), [&](const inertial::ImuSample& s) {
+    return sample.stamp.seconds() - s.stamp.seconds() > keep_s;
+  });
+  if (first_kept - samples.begin() >= 4096) samples.erase(samples.begin(), first_kept);
 }
 
 bool VisualSlam::inertial_initialised() const { return impl_->imu_initialised; }

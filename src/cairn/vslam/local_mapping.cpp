@@ -464,17 +464,24 @@ std::vector<std::pair<int, int>> VisualSlam::Impl::covisible(int kf, int min_sha
   return ranked;
 }
 
-// ORB-SLAM2 Optimizer::LocalBundleAdjustment: the newest keyframe and its covisible ones.
-// The local bundle adjustment of the newest keyframe started in the background (the keyframes
-// chosen as local_bundle_adjustment chooses them). Nothing that adds or removes keyframes, points
-// or observations runs before join_local_mapping: the job reads the map as it was at the start.
-void VisualSlam::Impl::start_local_mapping() {
-  LocalMappingJob& job = mapping_job;
+// ORB-SLAM2 Optimizer::LocalBundleAdjustment's keyframes: the newest one and its covisible ones,
+// the most shared points first, at most max_local_ba_keyframes of them.
+std::set<int> VisualSlam::Impl::local_ba_keyframes() const {
   const int current = static_cast<int>(keyframes.size()) - 1;
   std::vector<std::pair<int, int>> ranked = covisible(current, options.min_covisible_points);
   if (ranked.size() > static_cast<std::size_t>(options.max_local_ba_keyframes)) ranked.resize(static_cast<std::size_t>(options.max_local_ba_keyframes));
-  job.local = {current};
-  for (const auto& [n, kf] : ranked) job.local.insert(kf);
+  std::set<int> local{current};
+  for (const auto& [n, kf] : ranked) local.insert(kf);
+  return local;
+}
+
+// The local bundle adjustment of the newest keyframe started in the background. Nothing that
+// adds or removes keyframes, points or observations runs before join_local_mapping: the job reads
+// the map as it was at the start.
+void VisualSlam::Impl::start_local_mapping() {
+  LocalMappingJob& job = mapping_job;
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  job.local = local_ba_keyframes();
   job.ba = BundleAdjustmentState{};
   job.keyframe = current;
   job.frame_index = keyframes.back().frame.index;
@@ -517,14 +524,10 @@ void VisualSlam::Impl::finish_keyframe(FrameResult& result) {
   if (!result.loop_closed) merge_with_recent(result);
 }
 
+// ORB-SLAM2 Optimizer::LocalBundleAdjustment, within the keyframe's frame.
 void VisualSlam::Impl::local_bundle_adjustment() {
   const auto start = Clock::now();
-  const int current = static_cast<int>(keyframes.size()) - 1;
-  std::vector<std::pair<int, int>> ranked = covisible(current, options.min_covisible_points);
-  if (ranked.size() > static_cast<std::size_t>(options.max_local_ba_keyframes)) ranked.resize(static_cast<std::size_t>(options.max_local_ba_keyframes));
-  std::set<int> local{current};
-  for (const auto& [n, kf] : ranked) local.insert(kf);
-  bundle_adjustment(local, 5, 10);
+  bundle_adjustment(local_ba_keyframes(), 5, 10);
   ++summary->local_bas;
   summary->local_ba_s += seconds_since(start);
 }

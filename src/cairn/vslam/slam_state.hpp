@@ -448,6 +448,7 @@ struct VisualSlam::Impl {
     int keyframe = -1;
   };
   LocalMappingJob mapping_job;
+  std::set<int> local_ba_keyframes() const;
   void start_local_mapping();
   void join_local_mapping(FrameResult* result);
   void finish_keyframe(FrameResult& result);
