@@ -12,6 +12,7 @@
 #include "cairn/slam2d/branch_and_bound.hpp"
 #include "cairn/slam2d/correlative_scan_matcher.hpp"
 #include "cairn/slam2d/icp.hpp"
+#include "cairn/slam2d/place_search.hpp"
 
 namespace cairn::slam2d {
 namespace {
@@ -68,6 +69,81 @@ TEST(ProbabilityGrid, HitsBecomeOccupiedAndRaysFree) {
   EXPECT_LT(grid.probability(Eigen::Vector2d(3.0, 3.0)), 0.5);  // free space on the ray
   EXPECT_FALSE(grid.known(Eigen::Vector2d(-5.0, -5.0)));
   EXPECT_DOUBLE_EQ(grid.probability(Eigen::Vector2d(-5.0, -5.0)), 0.5);
+}
+
+// slam2d grows a submap's grid keyframe by keyframe (ProbabilityGrid::reserve around each) where
+// it once reserved the whole submap at once: the cells, their extent and the precomputation
+// grids must not depend on how the memory grew (only the same updates in the same order).
+TEST(ProbabilityGrid, CellsDoNotDependOnHowTheGridGrew) {
+  std::vector<core::SE2> poses;
+  for (int k = 0; k < 12; ++k) poses.emplace_back(1.0 + 0.5 * k, 1.5 + 0.25 * std::sin(k), 0.3 * k);
+  // Ranges cut to 3 m, so the rays of later poses leave the first poses' extent.
+  std::vector<std::vector<Eigen::Vector2d>> scans;
+  for (const core::SE2& T : poses) {
+    std::vector<Eigen::Vector2d> points;
+    for (const Eigen::Vector2d& p : room_scan(T)) points.push_back(p.norm() > 3.0 ? Eigen::Vector2d(3.0 * p.normalized()) : p);
+    scans.push_back(points);
+  }
+  ProbabilityGrid at_once, per_scan, doubling;
+  Eigen::Vector2d lower = Eigen::Vector2d::Constant(1e9), upper = Eigen::Vector2d::Constant(-1e9);
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    for (const auto& p : scans[k]) {
+      lower = lower.cwiseMin(poses[k] * p);
+      upper = upper.cwiseMax(poses[k] * p);
+    }
+  }
+  at_once.reserve(lower, upper);
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const std::vector<bool> hits(scans[k].size(), true);
+    Eigen::Vector2d scan_lower = poses[k].translation(), scan_upper = poses[k].translation();
+    for (const auto& p : scans[k]) {
+      scan_lower = scan_lower.cwiseMin(poses[k] * p);
+      scan_upper = scan_upper.cwiseMax(poses[k] * p);
+    }
+    per_scan.reserve(scan_lower - Eigen::Vector2d::Constant(0.5), scan_upper + Eigen::Vector2d::Constant(0.5));
+    at_once.insert(poses[k], scans[k], hits);
+    per_scan.insert(poses[k], scans[k], hits);
+    doubling.insert(poses[k], scans[k], hits);
+  }
+  // The layouts do differ.
+  for (const ProbabilityGrid* other : {&per_scan, &doubling}) {
+    ASSERT_TRUE(other->offset_i() != at_once.offset_i() || other->offset_j() != at_once.offset_j() ||
+                other->width() != at_once.width() || other->height() != at_once.height());
+  }
+  const ProbabilityGrid* grids[] = {&at_once, &per_scan, &doubling};
+  Eigen::Vector2d extent_lower[3], extent_upper[3];
+  for (int g = 0; g < 3; ++g) ASSERT_TRUE(observed_extent(*grids[g], extent_lower[g], extent_upper[g]));
+  for (int g = 1; g < 3; ++g) {
+    EXPECT_EQ(extent_lower[g], extent_lower[0]) << "grid " << g;  // bit for bit
+    EXPECT_EQ(extent_upper[g], extent_upper[0]) << "grid " << g;
+  }
+  const double r = at_once.resolution();
+  int known = 0;
+  for (double y = extent_lower[0].y() + 0.5 * r; y < extent_upper[0].y(); y += r) {
+    for (double x = extent_lower[0].x() + 0.5 * r; x < extent_upper[0].x(); x += r) {
+      const Eigen::Vector2d p(x, y);
+      known += at_once.known(p) ? 1 : 0;
+      for (int g = 1; g < 3; ++g) {
+        ASSERT_EQ(grids[g]->known(p), at_once.known(p)) << "grid " << g << " at " << p.transpose();
+        ASSERT_EQ(grids[g]->probability(p), at_once.probability(p)) << "grid " << g << " at " << p.transpose();
+      }
+    }
+  }
+  EXPECT_GT(known, 1000);
+  // The precomputation grids, on the heap and on the page arena, byte for byte.
+  core::PageArena arena;
+  const PrecomputationGridStack reference(at_once, BranchAndBoundOptions{});
+  const PrecomputationGridStack grown(per_scan, BranchAndBoundOptions{}, &arena);
+  ASSERT_EQ(grown.depth(), reference.depth());
+  EXPECT_EQ(grown.memory_bytes(), reference.memory_bytes());
+  for (int h = 0; h < reference.depth(); ++h) {
+    const PrecomputationGridStack::LevelView a = reference.level(h), b = grown.level(h);
+    ASSERT_EQ(a.offset_i, b.offset_i);
+    ASSERT_EQ(a.offset_j, b.offset_j);
+    ASSERT_EQ(a.width, b.width);
+    ASSERT_EQ(a.height, b.height);
+    EXPECT_TRUE(std::equal(a.values, a.values + a.width * a.height, b.values)) << "level " << h;
+  }
 }
 
 TEST(CorrelativeScanMatcher, RecoversADisplacedPose) {

@@ -18,16 +18,16 @@ std::uint8_t quantise_up(double p) {
 }
 
 /// Level 0's values over the observed box [i0, i0 + width) x [j0, j0 + height) of `grid` (row
-/// by row into `values`, already sized and filled with the outside value): probability * 255
+/// by row into `values`, already filled with the outside value): probability * 255
 /// rounded up, `unknown` where the grid is unknown.
 void fill_level_zero(const ProbabilityGrid& grid, bool observed, int i0, int j0, int known_width, int known_height,
-                     std::uint8_t unknown, std::vector<std::uint8_t>& values) {
+                     std::uint8_t unknown, std::uint8_t* values) {
   float last_log_odds = 0.0f;
   std::uint8_t last_value = quantise_up(ProbabilityGrid::probability_of_log_odds(0.0f));
   for (int j = 0; observed && j < known_height; ++j) {
     const float* log_odds = grid.log_odds_row(j + j0) + i0;
     const std::uint8_t* known = grid.known_row(j + j0) + i0;
-    std::uint8_t* row = values.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(known_width);
+    std::uint8_t* row = values + static_cast<std::size_t>(j) * static_cast<std::size_t>(known_width);
     for (int i = 0; i < known_width; ++i) {
       if (known[i] == 0) {
         row[i] = unknown;
@@ -43,15 +43,16 @@ void fill_level_zero(const ProbabilityGrid& grid, bool observed, int i0, int j0,
 }
 
 /// One level from the previous one (`previous`, previous_width x previous_height), squares of
-/// side 2 half: `horizontal` and `padded` are scratch, `values` (width x height) is the result.
-void max_of_four(const std::vector<std::uint8_t>& previous, int previous_width, int previous_height, int half,
+/// side 2 half: `horizontal` and `padded` are scratch, `values` (width x height, filled with
+/// `outside`) is the result.
+void max_of_four(const std::uint8_t* previous, int previous_width, int previous_height, int half,
                  std::size_t width, int height, std::uint8_t outside, std::vector<std::uint8_t>& horizontal,
-                 std::vector<std::uint8_t>& padded, std::vector<std::uint8_t>& values) {
+                 std::vector<std::uint8_t>& padded, std::uint8_t* values) {
   // horizontal(i, j) = max(previous(i - half, j), previous(i, j)), rows j of the previous level.
   horizontal.assign(width * static_cast<std::size_t>(previous_height), outside);
   padded.assign(width + static_cast<std::size_t>(half), outside);
   for (int j = 0; j < previous_height; ++j) {
-    const std::uint8_t* source = previous.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(previous_width);
+    const std::uint8_t* source = previous + static_cast<std::size_t>(j) * static_cast<std::size_t>(previous_width);
     std::copy(source, source + previous_width, padded.begin() + half);
     std::uint8_t* out = horizontal.data() + static_cast<std::size_t>(j) * width;
     const std::uint8_t* a = padded.data();
@@ -59,9 +60,8 @@ void max_of_four(const std::vector<std::uint8_t>& previous, int previous_width, 
     for (std::size_t i = 0; i < width; ++i) out[i] = std::max(a[i], b[i]);
   }
   // level(i, j) = max(horizontal(i, j - half), horizontal(i, j)); rows outside: unknown.
-  values.assign(width * static_cast<std::size_t>(height), outside);
   for (int j = 0; j < height; ++j) {
-    std::uint8_t* out = values.data() + static_cast<std::size_t>(j) * width;
+    std::uint8_t* out = values + static_cast<std::size_t>(j) * width;
     const bool low = j - half >= 0 && j - half < previous_height;
     const bool high = j < previous_height;
     const std::uint8_t* a = low ? horizontal.data() + static_cast<std::size_t>(j - half) * width : nullptr;
@@ -77,7 +77,8 @@ void max_of_four(const std::vector<std::uint8_t>& previous, int previous_width, 
 
 }  // namespace
 
-PrecomputationGridStack::PrecomputationGridStack(const ProbabilityGrid& grid, const BranchAndBoundOptions& options)
+PrecomputationGridStack::PrecomputationGridStack(const ProbabilityGrid& grid, const BranchAndBoundOptions& options,
+                                                 core::PageArena* arena)
     : resolution_(grid.resolution()) {
   CAIRN_ASSERT(options.depth >= 1 && options.depth <= 12, "branch-and-bound depth must be in [1, 12]");
   CAIRN_ASSERT(options.angular_step_range_quantile > 0.0 && options.angular_step_range_quantile <= 1.0,
@@ -90,19 +91,33 @@ PrecomputationGridStack::PrecomputationGridStack(const ProbabilityGrid& grid, co
   const int known_width = i1 - i0 + 1, known_height = j1 - j0 + 1;
   const long base_i = grid.offset_i() + i0;
   const long base_j = grid.offset_j() + j0;
+  // Every level's place in one block: level h covers the observed box grown by 2^h - 1 cells
+  // towards lower indices (its squares start there).
+  std::size_t total = 0;
+  for (int h = 0; h < options.depth; ++h) {
+    const int w = 1 << h;
+    Level level;
+    level.offset_i = base_i - (w - 1);
+    level.offset_j = base_j - (w - 1);
+    level.width = known_width + w - 1;
+    level.height = known_height + w - 1;
+    level.start = total;
+    total += static_cast<std::size_t>(level.width) * static_cast<std::size_t>(level.height);
+    levels_.push_back(level);
+  }
+  if (arena != nullptr) {
+    storage_ = arena->allocate(total);
+  } else {
+    storage_.chunk = std::shared_ptr<std::uint8_t[]>(new std::uint8_t[total]);
+    storage_.data = storage_.chunk.get();
+    storage_.size = total;
+  }
+  std::fill(storage_.data, storage_.data + total, outside_);
   // Level 0: the observed box, probability * 255 rounded up. Submaps store few distinct
   // log-odds values, so the probability of each is computed once per run of equal values (the
   // same arithmetic as ProbabilityGrid::cell_probability, hence the same bytes).
-  {
-    Level level;
-    level.offset_i = base_i;
-    level.offset_j = base_j;
-    level.width = known_width;
-    level.height = known_height;
-    level.values.assign(static_cast<std::size_t>(level.width) * static_cast<std::size_t>(level.height), outside_);
-    fill_level_zero(grid, observed, i0, j0, known_width, known_height, quantise_up(options.unknown_probability), level.values);
-    levels_.push_back(std::move(level));
-  }
+  fill_level_zero(grid, observed, i0, j0, known_width, known_height, quantise_up(options.unknown_probability),
+                  storage_.data + levels_[0].start);
   // Level h from level h - 1: a square of side w = 2^h is four squares of side w / 2, so
   //   L_h(i, j) = max(L_{h-1}(i - w/2, j - w/2), L_{h-1}(i, j - w/2), L_{h-1}(i - w/2, j), L_{h-1}(i, j))
   // in each level's own indices (level h starts w/2 cells before level h - 1; outside a level:
@@ -112,24 +127,18 @@ PrecomputationGridStack::PrecomputationGridStack(const ProbabilityGrid& grid, co
   // CPU time, the largest part of a submap's build.
   std::vector<std::uint8_t> padded, horizontal;
   for (int h = 1; h < options.depth; ++h) {
-    const int w = 1 << h;
-    const int half = w / 2;
-    const Level& previous = levels_.back();
-    Level level;
-    level.offset_i = base_i - (w - 1);
-    level.offset_j = base_j - (w - 1);
-    level.width = known_width + w - 1;
-    level.height = known_height + w - 1;
+    const int half = 1 << (h - 1);
+    const Level& previous = levels_[static_cast<std::size_t>(h - 1)];
+    const Level& level = levels_[static_cast<std::size_t>(h)];
     CAIRN_ASSERT(level.width == previous.width + half && level.height == previous.height + half, "levels grow by half a square");
-    max_of_four(previous.values, previous.width, previous.height, half, static_cast<std::size_t>(level.width), level.height,
-                outside_, horizontal, padded, level.values);
-    levels_.push_back(std::move(level));
+    max_of_four(storage_.data + previous.start, previous.width, previous.height, half, static_cast<std::size_t>(level.width),
+                level.height, outside_, horizontal, padded, storage_.data + level.start);
   }
 }
 
 std::size_t PrecomputationGridStack::memory_bytes() const {
   std::size_t bytes = 0;
-  for (const auto& level : levels_) bytes += level.values.size();
+  for (const auto& level : levels_) bytes += static_cast<std::size_t>(level.width) * static_cast<std::size_t>(level.height);
   return bytes;
 }
 

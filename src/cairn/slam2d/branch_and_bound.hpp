@@ -21,6 +21,7 @@
 #include <optional>
 #include <vector>
 
+#include "cairn/core/page_arena.hpp"
 #include "cairn/core/se2.hpp"
 #include "cairn/slam2d/probability_grid.hpp"
 
@@ -41,7 +42,9 @@ struct BranchAndBoundOptions {
 /// The precomputation grids of one map (built once per finished submap).
 class PrecomputationGridStack {
  public:
-  PrecomputationGridStack(const ProbabilityGrid& grid, const BranchAndBoundOptions& options);
+  /// With `arena`, the levels live in its huge-page chunks (core::PageArena: for stacks kept for
+  /// a whole run); without, on the heap.
+  PrecomputationGridStack(const ProbabilityGrid& grid, const BranchAndBoundOptions& options, core::PageArena* arena = nullptr);
 
   int depth() const { return static_cast<int>(levels_.size()); }
   double resolution() const { return resolution_; }
@@ -54,7 +57,7 @@ class PrecomputationGridStack {
     const long li = i - level.offset_i;
     const long lj = j - level.offset_j;
     if (li < 0 || lj < 0 || li >= level.width || lj >= level.height) return outside_;
-    return level.values[static_cast<std::size_t>(lj * level.width + li)];
+    return storage_.data[level.start + static_cast<std::size_t>(lj * level.width + li)];
   }
   std::size_t memory_bytes() const;
 
@@ -69,7 +72,7 @@ class PrecomputationGridStack {
   };
   LevelView level(int height) const {
     const Level& l = levels_[static_cast<std::size_t>(height)];
-    return {l.values.data(), l.offset_i, l.offset_j, l.width, l.height, outside_};
+    return {storage_.data + l.start, l.offset_i, l.offset_j, l.width, l.height, outside_};
   }
 
  private:
@@ -78,11 +81,13 @@ class PrecomputationGridStack {
     long offset_j = 0;
     int width = 0;
     int height = 0;
-    std::vector<std::uint8_t> values;  ///< probability * 255, rounded up (keeps the bound)
+    std::size_t start = 0;  ///< of its width x height values in storage_, row by row
   };
   double resolution_ = 0.05;
   std::uint8_t outside_ = 0;
   std::vector<Level> levels_;
+  /// Every level's values, probability * 255 rounded up (keeps the bound), in one block.
+  core::PageArena::Block storage_;
 };
 
 struct BranchAndBoundResult {

@@ -144,6 +144,7 @@ std::string_view to_string(LocalizationState state) {
 }
 
 struct Localizer2d::Impl {
+  core::PageArena stack_memory;  ///< the submaps' precomputation grids, on huge pages
   struct Submap {
     core::SE2 T_world_submap;
     std::unique_ptr<PrecomputationGridStack> stack;
@@ -1051,9 +1052,9 @@ Localizer2d::Localizer2d(SavedMap2D map, const Localizer2dOptions& options) {
     }
     if (first >= end) submap.path_lower_submap = submap.path_upper_submap = Eigen::Vector2d::Zero();  // the anchor
     submap.centre_world = saved.T_world_submap * (0.5 * (submap.path_lower_submap + submap.path_upper_submap));
-    submap.stack = std::make_unique<PrecomputationGridStack>(saved.grid, m.matching.loop_search);
+    submap.stack = std::make_unique<PrecomputationGridStack>(saved.grid, m.matching.loop_search, &m.stack_memory);
     submap.coarse_stack = std::make_unique<PrecomputationGridStack>(max_pooled(saved.grid, options.coarse_cell_factor),
-                                                                    m.coarse_options.search);
+                                                                    m.coarse_options.search, &m.stack_memory);
     submap.points = std::make_unique<PointMap>(m.matching.map_points);
     submap.points->build(saved.points_submap);
     for (const auto& p : saved.points_submap) all_points.push_back(saved.T_world_submap * p);

@@ -63,9 +63,13 @@ bool search_and_verify(const PrecomputationGridStack& stack, const PointMap& map
 bool observed_extent(const ProbabilityGrid& grid, Eigen::Vector2d& lower, Eigen::Vector2d& upper) {
   int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
   if (!grid.known_bounds(i0, j0, i1, j1)) return false;
+  // In global cell indices, so the extent does not depend on where the grid's memory starts
+  // (a grid grown keyframe by keyframe and one reserved at once give the same bytes): the
+  // corner of the first observed cell, then the observed size.
   const double r = grid.resolution();
-  lower = grid.origin() + Eigen::Vector2d(i0, j0) * r;
-  upper = grid.origin() + Eigen::Vector2d(i1 + 1, j1 + 1) * r;
+  const Eigen::Vector2d corner = Eigen::Vector2d(static_cast<double>(grid.offset_i() + i0), static_cast<double>(grid.offset_j() + j0)) * r;
+  lower = corner;
+  upper = corner + Eigen::Vector2d(i1 - i0 + 1, j1 - j0 + 1) * r;
   return true;
 }
 

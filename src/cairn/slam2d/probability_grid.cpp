@@ -69,6 +69,10 @@ void ProbabilityGrid::grow_to_contain(const Eigen::Vector2d& p) {
   while (pj < low_j) low_j -= (high_j - low_j);
   while (pi >= high_i) high_i += (high_i - low_i);
   while (pj >= high_j) high_j += (high_j - low_j);
+  resize_to(low_i, low_j, high_i, high_j);
+}
+
+void ProbabilityGrid::resize_to(long low_i, long low_j, long high_i, long high_j) {
   const int new_width = static_cast<int>(high_i - low_i);
   const int new_height = static_cast<int>(high_j - low_j);
   const int di = static_cast<int>(offset_i_ - low_i);
@@ -76,12 +80,12 @@ void ProbabilityGrid::grow_to_contain(const Eigen::Vector2d& p) {
   std::vector<float> grown(static_cast<std::size_t>(new_width) * static_cast<std::size_t>(new_height), 0.0f);
   std::vector<std::uint8_t> grown_known(grown.size(), 0);
   for (int jj = 0; jj < height_; ++jj) {
-    for (int ii = 0; ii < width_; ++ii) {
-      const std::size_t from = static_cast<std::size_t>(jj * width_ + ii);
-      const std::size_t to = static_cast<std::size_t>((jj + dj) * new_width + (ii + di));
-      grown[to] = log_odds_[from];
-      grown_known[to] = known_[from];
-    }
+    const std::size_t from = static_cast<std::size_t>(jj) * static_cast<std::size_t>(width_);
+    const std::size_t to = static_cast<std::size_t>(jj + dj) * static_cast<std::size_t>(new_width) + static_cast<std::size_t>(di);
+    std::copy(log_odds_.begin() + static_cast<std::ptrdiff_t>(from), log_odds_.begin() + static_cast<std::ptrdiff_t>(from + static_cast<std::size_t>(width_)),
+              grown.begin() + static_cast<std::ptrdiff_t>(to));
+    std::copy(known_.begin() + static_cast<std::ptrdiff_t>(from), known_.begin() + static_cast<std::ptrdiff_t>(from + static_cast<std::size_t>(width_)),
+              grown_known.begin() + static_cast<std::ptrdiff_t>(to));
   }
   offset_i_ = low_i;
   offset_j_ = low_j;
@@ -142,16 +146,24 @@ double ProbabilityGrid::probability_of_log_odds(float l) { return probability_of
 
 void ProbabilityGrid::reserve(const Eigen::Vector2d& lower, const Eigen::Vector2d& upper) {
   if (!(lower.array() <= upper.array()).all()) return;
-  if (width_ > 0) {
-    grow_to_contain(lower);
-    grow_to_contain(upper);
-    return;
-  }
   const double r = options_.resolution_m;
   const double i0 = std::floor(lower.x() / r), j0 = std::floor(lower.y() / r);
   const double i1 = std::floor(upper.x() / r), j1 = std::floor(upper.y() / r);
   if (!(std::abs(i0) < 1e8 && std::abs(j0) < 1e8)) throw_too_far(lower);
   if (!(std::abs(i1) < 1e8 && std::abs(j1) < 1e8)) throw_too_far(upper);
+  if (width_ > 0) {
+    // In one copy, on the sides the box crosses only, by at least a quarter of the grid's
+    // side there (so a grid that grows keyframe by keyframe, as slam2d's submaps do, is copied
+    // a few times, not at every keyframe), not by doubling (up to four times the area needed).
+    long low_i = offset_i_, low_j = offset_j_, high_i = offset_i_ + width_, high_j = offset_j_ + height_;
+    if (i0 < static_cast<double>(low_i)) low_i = std::min(static_cast<long>(i0), low_i - width_ / 4);
+    if (j0 < static_cast<double>(low_j)) low_j = std::min(static_cast<long>(j0), low_j - height_ / 4);
+    if (i1 >= static_cast<double>(high_i)) high_i = std::max(static_cast<long>(i1) + 1, high_i + width_ / 4);
+    if (j1 >= static_cast<double>(high_j)) high_j = std::max(static_cast<long>(j1) + 1, high_j + height_ / 4);
+    if (low_i != offset_i_ || low_j != offset_j_ || high_i != offset_i_ + width_ || high_j != offset_j_ + height_)
+      resize_to(low_i, low_j, high_i, high_j);
+    return;
+  }
   offset_i_ = static_cast<long>(i0);
   offset_j_ = static_cast<long>(j0);
   width_ = static_cast<int>(i1 - i0) + 1;

@@ -29,7 +29,8 @@ class ProbabilityGrid {
   /// Makes the grid contain the box [lower, upper] (map frame) at once, so that inserting rays
   /// within it never regrows the grid (each doubling copies the whole grid: measured 5 % of
   /// `cairn slam2d`'s CPU time on MIT CSAIL with perf, 2026-11-25). An empty grid is allocated to
-  /// the box's cells exactly; a non-empty one grows as insert() would. Cell values never depend on
+  /// the box's cells exactly; a non-empty one grows, in one copy, on the sides the box crosses (by at
+  /// least a quarter of its side there). Cell values never depend on
   /// the extent (cells are indexed globally), only width(), height(), origin() do.
   void reserve(const Eigen::Vector2d& lower, const Eigen::Vector2d& upper);
 
@@ -88,6 +89,8 @@ class ProbabilityGrid {
   /// Throws std::out_of_range: a point more than 1e8 cells from the origin.
   [[noreturn]] void throw_too_far(const Eigen::Vector2d& point_map) const;
   void grow_to_contain(const Eigen::Vector2d& point_map);
+  /// Re-lays the cells over global columns [low_i, high_i) x rows [low_j, high_j) (a superset).
+  void resize_to(long low_i, long low_j, long high_i, long high_j);
   bool cell_of(const Eigen::Vector2d& point_map, int& i, int& j) const;
   void update(int i, int j, double log_odds_change);
 

@@ -1,6 +1,7 @@
 #include "cairn/slam2d/slam.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <deque>
@@ -20,6 +21,7 @@
 #include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
@@ -47,6 +49,12 @@ struct Submap {
   std::vector<int> keyframes;
   bool finished = false;
   bool building = false;        ///< full, its build queued or running (installed at BuildJob::install_at)
+  /// While active: the grid of its first `grid_keyframes` keyframes' rays, filled in the
+  /// background as keyframes come (Slam2d::Impl::start_ray_insertions; complete once they are
+  /// waited for), so a build only adds the last keyframes. Null after the front end moved or
+  /// emptied keyframes: the build then starts over from the keyframes.
+  std::unique_ptr<ProbabilityGrid> grid;
+  int grid_keyframes = 0;
   std::unique_ptr<PrecomputationGridStack> stack;
   std::unique_ptr<PointMap> points;  ///< in the anchor's frame
   Eigen::Vector2d centre_anchor = Eigen::Vector2d::Zero();
@@ -176,6 +184,10 @@ void insert_rays(ProbabilityGrid& grid, const std::vector<core::SE2>& T_grid_las
     grid.insert(T_grid_laser[i], all, hit);
   }
 }
+
+// Room reserved around a keyframe's rays in a growing submap grid, so the next keyframes seldom
+// grow it (the layout only; the cells' values do not depend on it).
+constexpr double kGrowingGridMarginM = 4.0;
 
 Eigen::Matrix3d information(double sigma_t, double sigma_r) {
   Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
@@ -373,6 +385,9 @@ struct Slam2d::Impl {
     int submap = 0;
     std::vector<core::SE2> T_anchor_laser;
     std::vector<std::vector<Eigen::Vector2d>> hits, misses;
+    std::unique_ptr<ProbabilityGrid> grid;  ///< the rays of the first grid_keyframes keyframes, or null
+    int grid_keyframes = 0;
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();  ///< mean keyframe position (anchor frame)
   };
   struct BuiltSubmap {
     std::unique_ptr<PrecomputationGridStack> stack;
@@ -410,10 +425,10 @@ struct Slam2d::Impl {
   BackgroundJob job;
   // Submap builds, apart from the searches: queued when a keyframe fills a submap and installed
   // (searchable) submap_install_delay_keyframes keyframes later (default 1: at the next keyframe,
-  // as when builds and searches were one job). A longer delay lets a build (10-15 ms on MIT CSAIL)
-  // run beside the front end of the keyframes in between instead of holding the next one at its
-  // join, but let false loops through in simulation (slam.hpp). Installed at a fixed keyframe (or
-  // when a segment closes, or at finish()): deterministic.
+  // as when builds and searches were one job). A longer delay lets a build run beside the front
+  // end of the keyframes in between instead of holding the next one at its join, but let false
+  // loops through in simulation (slam.hpp). Installed at a fixed keyframe (or when a segment
+  // closes, or at finish()): deterministic.
   // task(0) .. task(n - 1) in parallel, one task per TBB chunk (a submap build or a search is
   // long), each writing its own slot: deterministic. Returns every task's duration.
   template <typename Task>
@@ -441,6 +456,9 @@ struct Slam2d::Impl {
     double cpu_s = 0.0;
   };
   BuildJob builds;
+  // The finished submaps' precomputation grids, kept for the whole run and read at random by
+  // every search: on huge pages (core::PageArena).
+  mutable core::PageArena stack_memory;  // thread-safe; build_submap is const
 
   void start_builds(int install_at) {
     builds.running = true;
@@ -470,42 +488,128 @@ struct Slam2d::Impl {
     builds.built.clear();
   }
 
-  SubmapSource submap_source(const Submap& submap, int index) const {
+  // The keyframes' rays go into the growing grid of every active submap in the background (one
+  // task per submap, each its own grid, keyframes in order) while the front end matches the
+  // next scans. Cartographer likewise inserts every range data into its active submaps as it
+  // comes (Hess et al. 2016, sec. III-B). Nobody waits for them at every keyframe: keyframes
+  // that arrive while insertions run are handed over at the next keyframe that finds them
+  // done, and a build (or a change to the keyframes) waits for what is in flight, then inserts
+  // what was not handed over itself.
+  // They run in an arena of their own at low priority: the other core takes the searches and
+  // builds first, and a thread waiting for those never picks up an insertion instead.
+  struct RayInsertions {
+    tbb::task_arena arena{1, 0, tbb::task_arena::priority::low};
+    tbb::task_group group;
+    std::atomic<int> in_flight{0};
+    bool started = false;
+  };
+  RayInsertions ray_insertions;
+
+  void wait_for_ray_insertions() {
+    if (!ray_insertions.started) return;
+    ray_insertions.arena.execute([this] { ray_insertions.group.wait(); });
+    ray_insertions.started = false;
+  }
+
+  // Hands the keyframes the active submaps' grids do not hold yet to background insertions,
+  // unless insertions are still running. A submap's grid is made with the submap and stays null
+  // once dropped.
+  void start_ray_insertions() {
+    if (ray_insertions.in_flight.load(std::memory_order_acquire) > 0) return;
+    wait_for_ray_insertions();  // all done: returns at once
+    for (Submap& submap : submaps) {
+      if (submap.finished || submap.building || submap.keyframes.empty()) continue;
+      if (!submap.grid || submap.grid_keyframes == static_cast<int>(submap.keyframes.size())) continue;
+      auto batch = std::make_shared<SubmapSource>();
+      const core::SE2 T_anchor_local = keyframes[static_cast<std::size_t>(submap.anchor)].T_local_laser.inverse();
+      for (std::size_t i = static_cast<std::size_t>(submap.grid_keyframes); i < submap.keyframes.size(); ++i) {
+        const Keyframe& kf = keyframes[static_cast<std::size_t>(submap.keyframes[i])];
+        batch->T_anchor_laser.push_back(T_anchor_local * kf.T_local_laser);
+        batch->hits.push_back(kf.hits);
+        batch->misses.push_back(kf.misses);
+      }
+      submap.grid_keyframes = static_cast<int>(submap.keyframes.size());
+      ProbabilityGrid* grid = submap.grid.get();
+      ray_insertions.started = true;
+      ray_insertions.in_flight.fetch_add(1, std::memory_order_relaxed);
+      ray_insertions.arena.execute([&] {
+        ray_insertions.group.run([grid, batch, this] {
+          for (std::size_t i = 0; i < batch->T_anchor_laser.size(); ++i)
+            insert_rays(*grid, {batch->T_anchor_laser[i]}, {&batch->hits[i]}, {&batch->misses[i]}, kGrowingGridMarginM);
+          ray_insertions.in_flight.fetch_sub(1, std::memory_order_release);
+        });
+      });
+    }
+  }
+
+  // After the front end moved keyframes or dropped their points: the active submaps' grids no
+  // longer hold what their keyframes say; their builds start over from the keyframes.
+  void drop_growing_grids() {
+    wait_for_ray_insertions();
+    for (Submap& submap : submaps) {
+      submap.grid.reset();
+      submap.grid_keyframes = 0;
+    }
+  }
+
+  // Takes the submap's growing grid (the ray insertions must be idle: wait_for_ray_insertions).
+  SubmapSource submap_source(Submap& submap, int index) const {
     SubmapSource source;
     source.submap = index;
+    source.grid = std::move(submap.grid);
+    source.grid_keyframes = source.grid ? submap.grid_keyframes : 0;
+    submap.grid_keyframes = 0;
     const core::SE2 T_anchor_local = keyframes[static_cast<std::size_t>(submap.anchor)].T_local_laser.inverse();
     for (const int k : submap.keyframes) {
       const Keyframe& kf = keyframes[static_cast<std::size_t>(k)];
       source.T_anchor_laser.push_back(T_anchor_local * kf.T_local_laser);
       source.hits.push_back(kf.hits);
       source.misses.push_back(kf.misses);
+      source.centre += source.T_anchor_laser.back().translation();
     }
+    source.centre /= static_cast<double>(std::max<std::size_t>(1, source.T_anchor_laser.size()));
     return source;
   }
 
-  BuiltSubmap build_submap(const SubmapSource& source) const {
+  BuiltSubmap build_submap(SubmapSource& source) const {
     BuiltSubmap built;
-    ProbabilityGrid grid(options.grid);
-    std::vector<const std::vector<Eigen::Vector2d>*> hits, misses;
-    for (std::size_t i = 0; i < source.T_anchor_laser.size(); ++i) {
-      hits.push_back(&source.hits[i]);
-      misses.push_back(&source.misses[i]);
-    }
-    insert_rays(grid, source.T_anchor_laser, hits, misses, 0.0);
+    built.centre = source.centre;
     std::vector<Eigen::Vector2d> points;
     for (std::size_t i = 0; i < source.T_anchor_laser.size(); ++i) {
       const core::SE2& T_anchor_laser = source.T_anchor_laser[i];
       for (const auto& p : source.hits[i]) points.push_back(T_anchor_laser * p);
-      built.centre += T_anchor_laser.translation();
     }
-    built.centre /= static_cast<double>(std::max<std::size_t>(1, source.T_anchor_laser.size()));
-    if (points.empty() || !observed_extent(grid, built.lower, built.upper)) {
+    if (points.empty()) {
       built.empty = true;
       return built;
     }
-    built.stack = std::make_unique<PrecomputationGridStack>(grid, options.loop_search);
-    built.points = std::make_unique<PointMap>(options.map_points);
-    built.points->build(voxel_filter(points, options.filter.voxel_size_m));
+    // The grid and its precomputation stack beside the point map: the front end waits for a
+    // build at the next keyframe (update_submaps), and a waiting thread takes one of the two.
+    bool observed = false;
+    tbb::parallel_invoke(
+        [&] {
+          // The rays in keyframe order on the growing grid, or on a new one: the same updates in
+          // the same order, so the same cells (the layout differs; nothing below depends on it).
+          ProbabilityGrid grid = source.grid ? std::move(*source.grid) : ProbabilityGrid(options.grid);
+          const auto first = static_cast<std::size_t>(source.grid_keyframes);
+          std::vector<core::SE2> T_grid_laser(source.T_anchor_laser.begin() + static_cast<std::ptrdiff_t>(first), source.T_anchor_laser.end());
+          std::vector<const std::vector<Eigen::Vector2d>*> hits, misses;
+          for (std::size_t i = first; i < source.T_anchor_laser.size(); ++i) {
+            hits.push_back(&source.hits[i]);
+            misses.push_back(&source.misses[i]);
+          }
+          insert_rays(grid, T_grid_laser, hits, misses, 0.0);
+          observed = observed_extent(grid, built.lower, built.upper);
+          if (observed) built.stack = std::make_unique<PrecomputationGridStack>(grid, options.loop_search, &stack_memory);
+        },
+        [&] {
+          built.points = std::make_unique<PointMap>(options.map_points);
+          built.points->build(voxel_filter(points, options.filter.voxel_size_m));
+        });
+    if (!observed) {
+      built.empty = true;
+      built.points.reset();
+    }
     return built;
   }
 
@@ -522,7 +626,9 @@ struct Slam2d::Impl {
   // Finishes a submap now, on this thread (a segment closing).
   void finish_submap(Submap& submap) {
     const int index = static_cast<int>(&submap - submaps.data());
-    install_submap(submap, build_submap(submap_source(submap, index)));
+    wait_for_ray_insertions();
+    SubmapSource source = submap_source(submap, index);
+    install_submap(submap, build_submap(source));
   }
 
   // The search task of keyframe `k` for one planned search: window and initial pose from the
@@ -644,6 +750,7 @@ struct Slam2d::Impl {
   }
 
   ~Impl() {
+    wait_for_ray_insertions();
     if (job.running) job.group.wait();
     if (builds.running) builds.group.wait();
   }
@@ -744,6 +851,7 @@ struct Slam2d::Impl {
   // good match instead: every front-end pose of the stretch is moved by the correction
   // `C_local` (matched pose times predicted pose inverse) and the keyframe chain is rebuilt.
   void replace_failed_stretch(const core::SE2& C_local) {
+    drop_growing_grids();
     const std::size_t first_scan = *failed_since_scan;
     std::vector<core::SE2> T_local_scans;
     for (std::size_t i = first_scan; i < scans.size(); ++i) {
@@ -1460,6 +1568,7 @@ struct Slam2d::Impl {
       w.next = Health::kLost;
       w.reason = segment_name + " on probation: " + std::to_string(probation) + " more matching scans needed";
     } else {
+      drop_growing_grids();
       for (std::size_t k = static_cast<std::size_t>(local_map_start); k < keyframes.size(); ++k) {
         keyframes[k].hits.clear();
         keyframes[k].misses.clear();
@@ -1498,6 +1607,7 @@ struct Slam2d::Impl {
     const int k = static_cast<int>(keyframes.size());
     join_builds(summary);
     join_job(summary);
+    wait_for_ray_insertions();
     for (auto& submap : submaps)
       if (!submap.finished) finish_submap(submap);
     segment = static_cast<int>(summary.segments.size());
@@ -1569,6 +1679,7 @@ struct Slam2d::Impl {
     update_submaps(k, summary);
     if (loops_since_optimization > 0 && keyframes_since_optimization >= options.optimize_every_n_keyframes) optimize(false, summary);
     start_searches(k, w, summary);
+    start_ray_insertions();  // after the searches, which the other core should take first
   }
 
   /// Makes the scan a keyframe, chained to the previous one by an odometry edge. Returns its index.
@@ -1640,6 +1751,7 @@ struct Slam2d::Impl {
       Submap submap;
       submap.anchor = k;
       submap.segment = segment;
+      submap.grid = std::make_unique<ProbabilityGrid>(options.grid);
       submaps.push_back(std::move(submap));
       ++summary.submaps;
     }
@@ -1653,6 +1765,7 @@ struct Slam2d::Impl {
       if (submap.finished || submap.building || k < submap.anchor) continue;
       submap.keyframes.push_back(k);
       if (static_cast<int>(submap.keyframes.size()) >= options.submap_keyframes) {
+        wait_for_ray_insertions();
         full.push_back(submap_source(submap, s));
         submap.building = true;
       }
