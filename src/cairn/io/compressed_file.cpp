@@ -4,12 +4,15 @@
 #include <lzma.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
+#include <system_error>
 
 #include "cairn/io/input_file.hpp"
 #include "cairn/io/output_file.hpp"
@@ -40,10 +43,21 @@ void check_size(const std::string& path, std::size_t size, std::size_t max_bytes
   }
 }
 
+// Room for the decompressed text, guessed from the file's size (text compresses 4-10 times):
+// without it the string doubles its way up, copying and touching fresh memory at every step.
+// Only what is written is touched, so a generous guess costs address space, not memory.
+void reserve_decompressed(std::string& out, const std::string& path, std::size_t max_bytes) {
+  std::error_code error;
+  const auto compressed = std::filesystem::file_size(path, error);
+  if (error) return;
+  out.reserve(static_cast<std::size_t>(std::min<std::uintmax_t>(max_bytes, compressed * 16)));
+}
+
 std::string gunzip(const std::string& path, std::size_t max_bytes) {
   gzFile file = gzopen(path.c_str(), "rb");
   if (file == nullptr) throw ParseError(path, 0, std::string("cannot open gzip file: ") + std::strerror(errno));
   std::string out;
+  reserve_decompressed(out, path, max_bytes);
   char buffer[1 << 16];
   while (true) {
     const int n = gzread(file, buffer, sizeof buffer);
@@ -67,6 +81,7 @@ std::string bunzip2(const std::string& path, std::size_t max_bytes) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw ParseError(path, 0, std::string("cannot open bzip2 file: ") + std::strerror(errno));
   std::string out;
+  reserve_decompressed(out, path, max_bytes);
   char buffer[1 << 16];
   // Concatenated bzip2 streams (as pbzip2 writes) are read one after the other.
   std::string unused;
@@ -112,6 +127,7 @@ std::string unxz(const std::string& path, std::size_t max_bytes) {
   }
   std::unique_ptr<lzma_stream, void (*)(lzma_stream*)> guard(&stream, &lzma_end);
   std::string out;
+  reserve_decompressed(out, path, max_bytes);
   std::uint8_t input[1 << 16];
   std::uint8_t buffer[1 << 16];
   lzma_action action = LZMA_RUN;

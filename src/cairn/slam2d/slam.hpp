@@ -67,7 +67,10 @@
 ///    is joined, and its results taken in a fixed order, when the next keyframe is made (or at
 ///    finish()). The submaps a keyframe fills are built in another background job and installed
 ///    `submap_install_delay_keyframes` keyframes later (or when a segment closes, or at
-///    finish()). Both join at fixed keyframes, so the results never depend on timing.
+///    finish()). Both join at fixed keyframes, so the results never depend on timing. Each
+///    keyframe's rays go into its active submaps' grids in the background as it comes (a
+///    low-priority arena, waited for only by a build or a change to the keyframes), so a build
+///    adds the last keyframes and computes the precomputation grids (on huge pages).
 
 #include <Eigen/Core>
 #include <cstdint>
