@@ -133,10 +133,10 @@ TEST(VslamCli, PrintConfigListsEveryKeyAndRoundTrips) {
   for (std::string line; std::getline(lines, line);) {
     if (line.rfind("  ", 0) == 0 && line.find(": ") != std::string::npos && line.find("  # ") != std::string::npos) ++keys;
   }
-  EXPECT_EQ(keys, 57u) << printed.out;  // VisualSlamOptions with its OrbOptions and StereoOptions, but the vocabulary
+  EXPECT_EQ(keys, 65u) << printed.out;  // VisualSlamOptions with its OrbOptions, StereoOptions and VisualInertialOptions' rules, but the vocabulary
   for (const char* key : {"orb:\n  features: 2000  #", "  scale_factor: 1.2  #", "stereo:\n  max_descriptor_distance: 75  #",
                           "tracking:\n", "health:\n", "keyframes:\n  close_depth_baselines: 35  #", "local_mapping:\n  local_ba: true  #",
-                          "loop_closure:\n  enabled: true  #", "maps:\n"}) {
+                          "loop_closure:\n  enabled: true  #", "inertial:\n  initialisation_window_s: 2  #", "maps:\n"}) {
     EXPECT_NE(printed.out.find(key), std::string::npos) << key;
   }
   const fs::path config = scratch() / "vslam_config.yaml";
@@ -165,11 +165,12 @@ TEST(VslamCli, BadSettingsAreRefusedNamingTheKey) {
     EXPECT_EQ(r.out, "") << set;
   }
   // Well-typed values the pipeline cannot use: its validation, every problem at once.
-  Result r = run("vslam --print-config --set orb.levels=0 --set stereo.search_half_range=-1");
+  Result r = run("vslam --print-config --set orb.levels=0 --set stereo.search_half_range=-1 --set inertial.max_scale_drift=2");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("invalid configuration: "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("levels must be in [1, 16]"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("stereo.search_half_range must be in [1, 50]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("inertial.max_scale_drift must be in (0, 1)"), std::string::npos) << r.err;
   // A file: its line (a bad input file, exit status 1 as every other).
   const fs::path config = scratch() / "bad_vslam_config.yaml";
   std::ofstream(config) << "orb:\n  features: 1500\n  bogus: 1\n";

@@ -126,6 +126,18 @@ TEST(VslamImuCli, EurocFolderWithItsImuCarriesTheBlankSecond) {
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(b["inertial"]["T_imu_camera"]["translation"][static_cast<std::size_t>(i)].get<double>(), T.translation()[i], 1e-6);
   EXPECT_NE(with.err.find("camera extrinsic: the dataset's left camera"), std::string::npos) << with.err;
   EXPECT_NE(with.out.find("frames carried by it"), std::string::npos) << with.out;
+  // The inertial options are configuration keys: carried for at most half a second, the IMU
+  // carries 9 or 10 of the blank second's 20 frames (20 Hz; the tenth sits at 0.5 s, within
+  // rounding), and the rest are lost.
+  const fs::path half = scratch() / "inertial_half_second";
+  const CliResult shorter = run("vslam " + quoted(mav0.parent_path()) + " --imu " + quoted(mav0) +
+                                " --set inertial.max_carried_s=0.5 --out " + quoted(half) + " --overwrite");
+  ASSERT_EQ(shorter.status, 0) << shorter.err;
+  const nlohmann::json c = report(half);
+  const int carried = c["inertial"]["frames_carried"].get<int>();
+  EXPECT_GE(carried, 9);
+  EXPECT_LE(carried, 10);
+  EXPECT_GE(c["summary"]["lost"].get<int>(), blank - carried);
 }
 
 TEST(VslamImuCli, RefusesImuFlagsThatMakeNoSenseAndBrokenImuFiles) {
