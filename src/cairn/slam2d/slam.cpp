@@ -6,6 +6,7 @@
 #include <cmath>
 #include <deque>
 #include <map>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -494,11 +495,17 @@ struct Slam2d::Impl {
   // what was not handed over itself.
   // They run in an arena of their own at low priority: the other core takes the searches and
   // builds first, and a thread waiting for those never picks up an insertion instead.
+  // An insertion that throws (a point beyond the grid's reach) marks its grid failed instead:
+  // the grid is dropped when the insertions are waited for, and the submap's build inserts
+  // every keyframe itself, where the error surfaces as it did before (and no wait, not even in
+  // the destructor, throws).
   struct RayInsertions {
     tbb::task_arena arena{1, 0, tbb::task_arena::priority::low};
     tbb::task_group group;
     std::atomic<int> in_flight{0};
     bool started = false;
+    std::mutex failed_mutex;
+    std::vector<const ProbabilityGrid*> failed;
   };
   RayInsertions ray_insertions;
 
@@ -506,6 +513,14 @@ struct Slam2d::Impl {
     if (!ray_insertions.started) return;
     ray_insertions.arena.execute([this] { ray_insertions.group.wait(); });
     ray_insertions.started = false;
+    for (const ProbabilityGrid* grid : ray_insertions.failed) {
+      for (Submap& submap : submaps) {
+        if (submap.grid.get() != grid) continue;
+        submap.grid.reset();
+        submap.grid_keyframes = 0;
+      }
+    }
+    ray_insertions.failed.clear();
   }
 
   // Hands the keyframes the active submaps' grids do not hold yet to background insertions,
@@ -535,8 +550,13 @@ struct Slam2d::Impl {
       const double first_margin_m = grid->width() == 0 ? options.submap_keyframes * options.keyframe_distance_m : 0.0;
       ray_insertions.arena.execute([&] {
         ray_insertions.group.run([grid, batch, first_margin_m, this] {
-          for (std::size_t i = 0; i < batch->T_anchor_laser.size(); ++i)
-            insert_rays(*grid, {batch->T_anchor_laser[i]}, {&batch->hits[i]}, {&batch->misses[i]}, i == 0 ? first_margin_m : 0.0);
+          try {
+            for (std::size_t i = 0; i < batch->T_anchor_laser.size(); ++i)
+              insert_rays(*grid, {batch->T_anchor_laser[i]}, {&batch->hits[i]}, {&batch->misses[i]}, i == 0 ? first_margin_m : 0.0);
+          } catch (...) {
+            const std::lock_guard<std::mutex> lock(ray_insertions.failed_mutex);
+            ray_insertions.failed.push_back(grid);
+          }
           ray_insertions.in_flight.fetch_sub(1, std::memory_order_release);
         });
       });
