@@ -29,9 +29,9 @@ class ProbabilityGrid {
   /// Makes the grid contain the box [lower, upper] (map frame) at once, so that inserting rays
   /// within it never regrows the grid (each doubling copies the whole grid: measured 5 % of
   /// `cairn slam2d`'s CPU time on MIT CSAIL with perf, 2026-11-25). An empty grid is allocated to
-  /// the box's cells exactly; a non-empty one grows, in one copy, on the sides the box crosses (by at
-  /// least a quarter of its side there). Cell values never depend on
-  /// the extent (cells are indexed globally), only width(), height(), origin() do.
+  /// the box's cells exactly; a non-empty one grows, in one copy, on the sides the box crosses
+  /// (by at least a quarter of its side there). Cell values never depend on the extent (cells
+  /// are indexed globally), only width(), height(), origin() do.
   void reserve(const Eigen::Vector2d& lower, const Eigen::Vector2d& upper);
 
   /// Inserts a scan taken at `T_map_sensor`: `points_sensor` are the hit points in the sensor

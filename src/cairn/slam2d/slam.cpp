@@ -186,7 +186,6 @@ void insert_rays(ProbabilityGrid& grid, const std::vector<core::SE2>& T_grid_las
   }
 }
 
-
 Eigen::Matrix3d information(double sigma_t, double sigma_r) {
   Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
   info(0, 0) = info(1, 1) = 1.0 / (sigma_t * sigma_t);
