@@ -209,14 +209,15 @@ TEST(VslamCli, ReportOptionsAreTheConfigurationInEffect) {
   // Every section of `cairn vslam --print-config`, and nothing else.
   std::vector<std::string> sections;
   for (const auto& [name, keys] : options.items()) sections.push_back(name);
-  EXPECT_EQ(sections, (std::vector<std::string>{"health", "keyframes", "local_mapping", "loop_closure", "maps", "orb",
-                                                "stereo", "tracking"}))
+  EXPECT_EQ(sections, (std::vector<std::string>{"health", "inertial", "keyframes", "local_mapping", "loop_closure", "maps",
+                                                "orb", "stereo", "tracking"}))
       << options.dump();
   EXPECT_EQ(options["loop_closure"]["drift_floor_m"], 0.75);
   EXPECT_EQ(options["local_mapping"]["keyframe_culling"], false);
   EXPECT_EQ(options["orb"]["features"], 1800);  // --features wins over --set
   EXPECT_EQ(options["orb"]["levels"], 8);
   EXPECT_EQ(options["keyframes"]["close_depth_baselines"], 35.0);  // KITTI stereo
+  EXPECT_EQ(options["inertial"]["max_carried_s"], 1.5);  // the rules' defaults, though this run has no IMU
   EXPECT_EQ(report["input"]["frames_processed"], 3);
 }
 
