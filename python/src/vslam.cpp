@@ -238,9 +238,10 @@ class VisualSession {
       if (slam_.inertial_initialised()) {
         const Eigen::Vector3d g = slam_.gravity_world();
         const inertial::ImuBias b = slam_.imu_bias();
-        j["gravity_world"] = {g.x(), g.y(), g.z()};
-        j["gyro_bias"] = {b.gyro_rad_s.x(), b.gyro_rad_s.y(), b.gyro_rad_s.z()};
-        j["accel_bias"] = {b.accel_mps2.x(), b.accel_mps2.y(), b.accel_mps2.z()};
+        // The names of report.json's "inertial" section (vslam/outputs.cpp), units in the names.
+        j["gravity_world_mps2"] = {g.x(), g.y(), g.z()};
+        j["gyro_bias_rad_s"] = {b.gyro_rad_s.x(), b.gyro_rad_s.y(), b.gyro_rad_s.z()};
+        j["accel_bias_mps2"] = {b.accel_mps2.x(), b.accel_mps2.y(), b.accel_mps2.z()};
       }
       return j;
     }));
@@ -465,8 +466,8 @@ void bind_visual_slam(py::module_& m) {
            "IMU readings in the IMU's frame: one (time s, gyro (3) rad/s, accel (3) m/s^2) or many (N, N x 3, N x 3), "
            "in time order, each before the frames it spans (a frame at t needs a reading at or after t).")
       .def_property_readonly("inertial", &VisualSession::inertial_state,
-                             "With imu=True: {'enabled', 'initialised'} and, once initialised, gravity_world (m/s^2, the map's "
-                             "frame), gyro_bias (rad/s) and accel_bias (m/s^2).")
+                             "With imu=True: {'enabled', 'initialised'} and, once initialised, gravity_world_mps2 (the map's "
+                             "frame), gyro_bias_rad_s and accel_bias_mps2, named as in report.json's 'inertial'.")
       .def("config", &VisualSession::config, "The options in effect, {section: {key: value}}.")
       .def_property_readonly("calibration", &VisualSession::calibration)
       .def_property_readonly("kind", &VisualSession::kind);
