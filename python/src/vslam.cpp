@@ -24,6 +24,7 @@
 #include "cairn/vision/vocabulary.hpp"
 #include "cairn/vslam/config.hpp"
 #include "cairn/vslam/map_file.hpp"
+#include "cairn/vslam/outputs.hpp"
 #include "cairn/vslam/visual_slam.hpp"
 #include "pipeline_support.hpp"
 
@@ -235,14 +236,7 @@ class VisualSession {
   py::object inertial_state() {
     return json_to_python(locked(mutex_, [&] {
       nlohmann::json j = {{"enabled", options_.inertial.enabled}, {"initialised", slam_.inertial_initialised()}};
-      if (slam_.inertial_initialised()) {
-        const Eigen::Vector3d g = slam_.gravity_world();
-        const inertial::ImuBias b = slam_.imu_bias();
-        // The names of report.json's "inertial" section (vslam/outputs.cpp), units in the names.
-        j["gravity_world_mps2"] = {g.x(), g.y(), g.z()};
-        j["gyro_bias_rad_s"] = {b.gyro_rad_s.x(), b.gyro_rad_s.y(), b.gyro_rad_s.z()};
-        j["accel_bias_mps2"] = {b.accel_mps2.x(), b.accel_mps2.y(), b.accel_mps2.z()};
-      }
+      j.update(vslam::inertial_estimate_json(slam_));  // report.json's fields and names
       return j;
     }));
   }

@@ -36,7 +36,6 @@ io::Parameters parameters(Slam2dOptions& o) {
       {"loop_closure", "search_every_n_keyframes", &o.loop_search_every_n_keyframes, "search loops from every n-th keyframe"},
       {"loop_closure", "max_distance_m", &o.loop_max_distance_m, "submaps farther than this from the keyframe are not searched"},
       {"loop_closure", "max_submaps_per_search", &o.loop_max_submaps_per_search, "the nearest finished submaps searched per keyframe"},
-
       {"loop_closure", "max_linear_window_m", &o.loop_search.linear_search_window_m, "largest half-width of the translation search"},
       {"loop_closure", "max_angular_window_rad", &o.loop_search.angular_search_window_rad, "largest half-width of the angle search"},
       {"loop_closure", "window_base_m", &o.loop_window_base_m, "translation window at zero path length"},

@@ -420,12 +420,6 @@ struct Slam2d::Impl {
     double search_s = 0.0, global_s = 0.0;
   };
   BackgroundJob job;
-  // Submap builds, apart from the searches: queued when a keyframe fills a submap and installed
-  // (searchable) submap_install_delay_keyframes keyframes later (default 1: at the next keyframe,
-  // as when builds and searches were one job). A longer delay lets a build run beside the front
-  // end of the keyframes in between instead of holding the next one at its join, but let false
-  // loops through in simulation (slam.hpp). Installed at a fixed keyframe (or when a segment
-  // closes, or at finish()): deterministic.
   // task(0) .. task(n - 1) in parallel, one task per TBB chunk (a submap build or a search is
   // long), each writing its own slot: deterministic. Returns every task's duration.
   template <typename Task>
@@ -444,6 +438,12 @@ struct Slam2d::Impl {
     return seconds;
   }
 
+  // Submap builds, apart from the searches: queued when a keyframe fills a submap and installed
+  // (searchable) submap_install_delay_keyframes keyframes later (default 1: at the next keyframe,
+  // as when builds and searches were one job). A longer delay lets a build run beside the front
+  // end of the keyframes in between instead of holding the next one at its join, but let false
+  // loops through in simulation (slam.hpp). Installed at a fixed keyframe (or when a segment
+  // closes, or at finish()): deterministic.
   struct BuildJob {
     tbb::task_group group;
     bool running = false;
@@ -532,13 +532,7 @@ struct Slam2d::Impl {
       if (submap.finished || submap.building || submap.keyframes.empty()) continue;
       if (!submap.grid || submap.grid_keyframes == static_cast<int>(submap.keyframes.size())) continue;
       auto batch = std::make_shared<SubmapSource>();
-      const core::SE2 T_anchor_local = keyframes[static_cast<std::size_t>(submap.anchor)].T_local_laser.inverse();
-      for (std::size_t i = static_cast<std::size_t>(submap.grid_keyframes); i < submap.keyframes.size(); ++i) {
-        const Keyframe& kf = keyframes[static_cast<std::size_t>(submap.keyframes[i])];
-        batch->T_anchor_laser.push_back(T_anchor_local * kf.T_local_laser);
-        batch->hits.push_back(kf.hits);
-        batch->misses.push_back(kf.misses);
-      }
+      copy_keyframes(submap, static_cast<std::size_t>(submap.grid_keyframes), *batch);
       submap.grid_keyframes = static_cast<int>(submap.keyframes.size());
       ProbabilityGrid* grid = submap.grid.get();
       ray_insertions.started = true;
@@ -572,6 +566,17 @@ struct Slam2d::Impl {
     }
   }
 
+  // The submap's keyframes from `first` on, copied into `source` in its anchor's frame.
+  void copy_keyframes(const Submap& submap, std::size_t first, SubmapSource& source) const {
+    const core::SE2 T_anchor_local = keyframes[static_cast<std::size_t>(submap.anchor)].T_local_laser.inverse();
+    for (std::size_t i = first; i < submap.keyframes.size(); ++i) {
+      const Keyframe& kf = keyframes[static_cast<std::size_t>(submap.keyframes[i])];
+      source.T_anchor_laser.push_back(T_anchor_local * kf.T_local_laser);
+      source.hits.push_back(kf.hits);
+      source.misses.push_back(kf.misses);
+    }
+  }
+
   // Takes the submap's growing grid (the ray insertions must be idle: wait_for_ray_insertions).
   SubmapSource submap_source(Submap& submap, int index) const {
     SubmapSource source;
@@ -579,14 +584,8 @@ struct Slam2d::Impl {
     source.grid = std::move(submap.grid);
     source.grid_keyframes = source.grid ? submap.grid_keyframes : 0;
     submap.grid_keyframes = 0;
-    const core::SE2 T_anchor_local = keyframes[static_cast<std::size_t>(submap.anchor)].T_local_laser.inverse();
-    for (const int k : submap.keyframes) {
-      const Keyframe& kf = keyframes[static_cast<std::size_t>(k)];
-      source.T_anchor_laser.push_back(T_anchor_local * kf.T_local_laser);
-      source.hits.push_back(kf.hits);
-      source.misses.push_back(kf.misses);
-      source.centre += source.T_anchor_laser.back().translation();
-    }
+    copy_keyframes(submap, 0, source);
+    for (const core::SE2& T_anchor_laser : source.T_anchor_laser) source.centre += T_anchor_laser.translation();
     source.centre /= static_cast<double>(std::max<std::size_t>(1, source.T_anchor_laser.size()));
     return source;
   }

@@ -177,13 +177,7 @@ nlohmann::json inertial_json(const VisualSlam& slam) {
                       {"estimates_s", s.inertial_s},
                       {"frames_carried", s.frames_carried_by_imu},
                       {"frames_contradicting_imu", s.frames_contradicting_imu}};
-  if (slam.inertial_initialised()) {
-    const Eigen::Vector3d g = slam.gravity_world();
-    const inertial::ImuBias b = slam.imu_bias();
-    j["gravity_world_mps2"] = {g.x(), g.y(), g.z()};
-    j["gyro_bias_rad_s"] = {b.gyro_rad_s.x(), b.gyro_rad_s.y(), b.gyro_rad_s.z()};
-    j["accel_bias_mps2"] = {b.accel_mps2.x(), b.accel_mps2.y(), b.accel_mps2.z()};
-  }
+  j.update(inertial_estimate_json(slam));
   if (s.monocular_initial_scale > 0.0) {
     j["monocular"] = {{"initial_scale", s.monocular_initial_scale},
                       {"last_judged_scale", s.monocular_scale_estimate},
@@ -285,6 +279,17 @@ nlohmann::json localization_json(const RunInput& input, const VisualSlam& slam, 
 }
 
 }  // namespace
+
+nlohmann::json inertial_estimate_json(const VisualSlam& slam) {
+  nlohmann::json j = nlohmann::json::object();
+  if (!slam.inertial_initialised()) return j;
+  const Eigen::Vector3d g = slam.gravity_world();
+  const inertial::ImuBias b = slam.imu_bias();
+  j["gravity_world_mps2"] = {g.x(), g.y(), g.z()};
+  j["gyro_bias_rad_s"] = {b.gyro_rad_s.x(), b.gyro_rad_s.y(), b.gyro_rad_s.z()};
+  j["accel_bias_mps2"] = {b.accel_mps2.x(), b.accel_mps2.y(), b.accel_mps2.z()};
+  return j;
+}
 
 FrameTimeSeries frame_times(const std::vector<FrameResult>& frames) {
   FrameTimeSeries times;

@@ -23,6 +23,7 @@
 /// Poses are at the final keyframe poses (VisualSlam::trajectory).
 
 #include <cstddef>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -76,6 +77,11 @@ struct FrameTimeSeries {
   std::vector<double> tracking_s;  ///< stereo matching (or depth lookup) and tracking
 };
 FrameTimeSeries frame_times(const std::vector<FrameResult>& frames);
+
+/// Gravity in the map's frame and the IMU's biases, once the inertial estimate exists (an empty
+/// object before): gravity_world_mps2, gyro_bias_rad_s, accel_bias_mps2. report.json's "inertial"
+/// section and Python's VisualSlam.inertial both hold these fields.
+nlohmann::json inertial_estimate_json(const VisualSlam& slam);
 
 /// What the command's summary needs of the outputs.
 struct WrittenOutputs {
