@@ -19,6 +19,7 @@
 
 #include "cairn/bag/bag.hpp"
 #include "cairn/cli/commands.hpp"
+#include "cairn/cli/flag_checks.hpp"
 #include "cairn/cli/interrupt.hpp"
 #include "cairn/cli/vslam_flags.hpp"
 #include "cairn/cli/vslam_input.hpp"
@@ -85,14 +86,9 @@ void print_input(const io::ImageSequence& seq, io::SequenceKind kind, std::size_
 std::optional<vslam::VisualInertialInput> read_imu(const VslamFlags& flags, const VslamInput& input,
                                                    const std::optional<vision::StereoRectifier>& rectifier) {
   const bool offset_given = flags.command != nullptr && flags.command->count("--imu-time-offset") > 0;
-  if (!flags.uses_imu()) {
-    for (const auto& [given, name] : {std::pair{!flags.imu_calibration.empty(), "--imu-calibration"},
-                                      std::pair{!flags.camera_extrinsic.empty(), "--camera-extrinsic"},
-                                      std::pair{offset_given, "--imu-time-offset"}}) {
-      if (given) throw UsageError(std::string(name) + " goes with --imu PATH or --imu-topic TOPIC, and neither was given");
-    }
-    return std::nullopt;
-  }
+  checks::refuse_imu_companions_without_imu(flags.uses_imu(), !flags.imu_calibration.empty(), "--camera-extrinsic",
+                                            !flags.camera_extrinsic.empty(), offset_given);
+  if (!flags.uses_imu()) return std::nullopt;
   if (!flags.imu.empty() && !flags.imu_topic.empty()) {
     throw UsageError("--imu and --imu-topic: give one (--imu-topic reads sensor_msgs/Imu from the images' bag, --imu a file, folder or bag)");
   }

@@ -7,7 +7,9 @@
 #include <iostream>
 #include <optional>
 #include <thread>
+#include <utility>
 
+#include "cairn/cli/commands.hpp"
 #include "cairn/io/number_format.hpp"
 
 namespace cairn::cli::checks {
@@ -118,6 +120,16 @@ CLI::Validator threads() {
         return {};
       },
       "a whole number >= 0 (0 = every hardware thread)", "cairn-threads");
+}
+
+void refuse_imu_companions_without_imu(bool uses_imu, bool calibration_given, const char* extrinsic_flag, bool extrinsic_given,
+                                       bool offset_given) {
+  if (uses_imu) return;
+  for (const auto& [given, name] : {std::pair<bool, const char*>{calibration_given, "--imu-calibration"},
+                                    std::pair<bool, const char*>{extrinsic_given, extrinsic_flag},
+                                    std::pair<bool, const char*>{offset_given, "--imu-time-offset"}}) {
+    if (given) throw UsageError(std::string(name) + " goes with --imu PATH or --imu-topic TOPIC, and neither was given");
+  }
 }
 
 }  // namespace cairn::cli::checks

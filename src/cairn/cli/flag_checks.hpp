@@ -48,4 +48,11 @@ std::string format_number(double value);
 /// The number of hardware threads (>= 1).
 int hardware_threads();
 
+/// The IMU's companion flags (slam3d's and vslam's --imu-calibration, the sensor's extrinsic,
+/// --imu-time-offset) mean nothing without --imu PATH or --imu-topic TOPIC: without them, a
+/// UsageError names the first companion given. `extrinsic_flag` is --lidar-extrinsic or
+/// --camera-extrinsic.
+void refuse_imu_companions_without_imu(bool uses_imu, bool calibration_given, const char* extrinsic_flag, bool extrinsic_given,
+                                       bool offset_given);
+
 }  // namespace cairn::cli::checks

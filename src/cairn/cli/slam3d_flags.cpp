@@ -58,14 +58,9 @@ lidar3d::SlamConfiguration slam3d_options(const Slam3dFlags& flags, bool* remap_
 
 std::optional<lidar3d::InertialInputRequest> imu_request(const Slam3dFlags& flags) {
   const bool offset_given = flags.command != nullptr && flags.command->count("--imu-time-offset") > 0;
-  if (!flags.uses_imu()) {
-    for (const auto& [given, name] : {std::pair{!flags.imu_calibration.empty(), "--imu-calibration"},
-                                      std::pair{!flags.lidar_extrinsic.empty(), "--lidar-extrinsic"},
-                                      std::pair{offset_given, "--imu-time-offset"}}) {
-      if (given) throw UsageError(std::string(name) + " goes with --imu PATH or --imu-topic TOPIC, and neither was given");
-    }
-    return std::nullopt;
-  }
+  checks::refuse_imu_companions_without_imu(flags.uses_imu(), !flags.imu_calibration.empty(), "--lidar-extrinsic",
+                                            !flags.lidar_extrinsic.empty(), offset_given);
+  if (!flags.uses_imu()) return std::nullopt;
   const bool scans_in_bag = flags.scans.size() == 1 && bag::is_bag(flags.scans.front());
   if (!flags.imu_topic.empty() && !flags.imu.empty()) {
     throw UsageError("--imu and --imu-topic: give one (--imu-topic reads sensor_msgs/Imu from the scans' bag, --imu a file, "
