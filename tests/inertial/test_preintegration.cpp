@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 
@@ -56,6 +57,46 @@ TEST(Preintegration, ConvergesToClosedFormMotionAtFirstOrder) {
   EXPECT_NEAR(errors[0].rotation_rad / errors[1].rotation_rad, 4.0, 1.0);
   EXPECT_NEAR(errors[0].velocity_mps / errors[1].velocity_mps, 4.0, 1.0);
   EXPECT_NEAR(errors[0].position_m / errors[1].position_m, 4.0, 1.0);
+}
+
+// The zero-order hold's error (hold_error_covariance) on noise-free 200 Hz readings of a fast
+// nutation (0.5 rad at 12 rad/s about y while turning at 360 deg/s about z: angular
+// accelerations of 70 rad/s^2): the prediction's errors over 0.1 s and 0.5 s windows lie within
+// the hold's sigmas, where the white noise's sigmas (the ADIS16448's) are far smaller than them.
+TEST(Preintegration, HoldErrorCovarianceCoversTheHoldsErrorInAFastTurn) {
+  AnalyticTrajectory truth;
+  truth.alpha = 2.0 * M_PI;
+  truth.beta = 0.5;
+  truth.gamma = 12.0;
+  const auto samples = test::sample_imu(truth, 0.0, 3.0, 1.0 / 200.0);
+  int windows = 0, beyond_white = 0;
+  double worst_ratio = 0.0;
+  for (const double window_s : {0.1, 0.5}) {
+    for (double t0 = 0.05; t0 + window_s < 2.9; t0 += 0.13) {
+      const core::Timestamp from = core::Timestamp::from_seconds(t0), to = core::Timestamp::from_seconds(t0 + window_s);
+      PreintegratedImu pim(ImuNoise{}, ImuBias{});
+      ASSERT_TRUE(integrate_interval(samples, from, to, pim));
+      const Matrix9 hold = hold_error_covariance(samples, from, to);
+      const StateError e = error_of(pim.predict(truth.state(t0), ImuBias{}, gravity_z_up()), truth.state(t0 + window_s));
+      const double sigma[3] = {std::sqrt(hold(0, 0)), std::sqrt(hold(3, 3)), std::sqrt(hold(6, 6))};
+      const double error[3] = {e.rotation_rad, e.velocity_mps, e.position_m};
+      for (int b = 0; b < 3; ++b) {
+        ASSERT_GT(sigma[b], 0.0);
+        worst_ratio = std::max(worst_ratio, error[b] / sigma[b]);
+        EXPECT_LT(error[b], sigma[b]) << "window " << window_s << " s from " << t0 << " s, block " << b;
+        const double white = std::sqrt(pim.covariance()(3 * b, 3 * b));
+        if (error[b] > 10.0 * white) ++beyond_white;
+      }
+      ++windows;
+    }
+  }
+  // The white noise alone would call most of these errors impossible (> 10 sigma).
+  EXPECT_GT(beyond_white, 3 * windows / 2);
+  RecordProperty("windows", windows);
+  RecordProperty("errors_beyond_10_white_sigma", beyond_white);
+  RecordProperty("worst_error_over_hold_sigma", std::to_string(worst_ratio));
+  std::printf("hold error: %d windows, worst error / hold sigma %.2f, %d of %d errors beyond 10 white-noise sigma\n", windows, worst_ratio,
+              beyond_white, 3 * windows);
 }
 
 // First-order bias correction [F] (44): the corrected increments match a new integration with the
@@ -225,6 +266,70 @@ TEST(ImuFactor, SolveRecoversStatesFromPerturbedStart) {
     EXPECT_LT(e.position_m, 2e-2) << k;
     EXPECT_LT(e.velocity_mps, 2e-2) << k;
   }
+}
+
+// The IMU factor on a camera's poses (a visual-inertial bundle adjustment's): its residual is the
+// IMU factor's at the body poses T_world_camera T_camera_body, and its Jacobians on the camera poses
+// match central differences; 1,000 random cases with fast rotation (up to 15 rad/s) and random
+// extrinsics.
+TEST(SensorPoseImuFactor, ResidualIsTheBodysAndJacobiansMatchNumeric) {
+  std::mt19937 rng(40);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto random3 = [&](double scale) -> Vector3 { return Vector3(u(rng), u(rng), u(rng)) * scale; };
+  const auto random_pose = [&](double metres) -> core::SE3 { return core::SE3(core::SO3::exp(random3(M_PI)), random3(metres)); };
+  double worst = 0.0;
+  for (int trial = 0; trial < 1000; ++trial) {
+    PreintegratedImu pim(ImuNoise{}, ImuBias{random3(0.05), random3(0.3)});
+    const Vector3 rate = random3(15.0);
+    const int samples = 5 + static_cast<int>(rng() % 60);
+    for (int k = 0; k < samples; ++k) pim.integrate(rate + random3(2.0), random3(20.0), 0.005);
+    const core::SE3 T_body_camera = random_pose(0.3);
+    const ImuFactor body_factor(pim, gravity_z_up());
+    const SensorPoseImuFactor factor(body_factor, T_body_camera);
+    const core::SE3 T_world_camera_i = random_pose(20.0), T_world_camera_j = random_pose(20.0);
+    double pose_i[7], pose_j[7], body_i[7], body_j[7];
+    backend::se3_to_values(T_world_camera_i, pose_i);
+    backend::se3_to_values(T_world_camera_j, pose_j);
+    backend::se3_to_values(T_world_camera_i * T_body_camera.inverse(), body_i);
+    backend::se3_to_values(T_world_camera_j * T_body_camera.inverse(), body_j);
+    Vector3 v_i = random3(5.0), v_j = random3(5.0);
+    BiasValues bias = to_values(pim.bias_linearisation()) + (BiasValues() << random3(0.01), random3(0.1)).finished();
+    double* values[5] = {pose_i, v_i.data(), pose_j, v_j.data(), bias.data()};
+    const double* body_values[5] = {body_i, v_i.data(), body_j, v_j.data(), bias.data()};
+    Vector9 r, r_body;
+    Eigen::Matrix<double, 9, 6, Eigen::RowMajor> J0, J2, J4;
+    Eigen::Matrix<double, 9, 3, Eigen::RowMajor> J1, J3;
+    double* jacobians[5] = {J0.data(), J1.data(), J2.data(), J3.data(), J4.data()};
+    ASSERT_TRUE(factor.evaluate(values, r.data(), jacobians));
+    ASSERT_TRUE(body_factor.evaluate(body_values, r_body.data(), nullptr));
+    ASSERT_LT((r - r_body).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + r_body.cwiseAbs().maxCoeff()));
+    for (const int var : {0, 2}) {
+      for (int col = 0; col < 6; ++col) {
+        const double h = 1e-6;
+        double saved[7], plus[7], minus[7];
+        std::copy(values[var], values[var] + 7, saved);
+        Vector6 delta = Vector6::Zero();
+        delta[col] = h;
+        backend::se3_manifold().plus(saved, delta.data(), plus);
+        delta[col] = -h;
+        backend::se3_manifold().plus(saved, delta.data(), minus);
+        Vector9 r_plus, r_minus;
+        std::copy(plus, plus + 7, values[var]);
+        ASSERT_TRUE(factor.evaluate(values, r_plus.data(), nullptr));
+        std::copy(minus, minus + 7, values[var]);
+        ASSERT_TRUE(factor.evaluate(values, r_minus.data(), nullptr));
+        std::copy(saved, saved + 7, values[var]);
+        const Vector9 numeric = (r_plus - r_minus) / (2.0 * h);
+        const Vector9 analytic = (var == 0 ? J0 : J2).col(col);
+        // As in ImuFactor.JacobiansMatchNumericOnRandomCases: relative to the column, plus rounding.
+        const double scale = 1.0 + numeric.cwiseAbs().maxCoeff() +
+                             4.0 * std::numeric_limits<double>::epsilon() * r.cwiseAbs().maxCoeff() / h / 1e-5;
+        worst = std::max(worst, (numeric - analytic).cwiseAbs().maxCoeff() / scale);
+        ASSERT_LT((numeric - analytic).cwiseAbs().maxCoeff() / scale, 1e-5) << "trial " << trial << " variable " << var << " column " << col;
+      }
+    }
+  }
+  RecordProperty("worst_relative_difference", std::to_string(worst));
 }
 
 // The LiDAR odometry factor (a pose measured through an extrinsic) and the gravity magnitude

@@ -125,7 +125,18 @@ FlightRun fly(bool with_imu, const Trouble& trouble, const Trouble* imu_trouble 
   run.ate_rmse_m = std::sqrt(sum2 / n);
   run.initialised = with_imu && slam.inertial_initialised();
   if (run.initialised) {
-    const Vector3 gravity_truth = fit.R.transpose() * (test::R_render_imu() * Vector3(0.0, 0.0, -inertial::kStandardGravity));
+    // Gravity's true direction in the map: the render world's turned into it by the rotation that
+    // best maps the true camera orientations onto the estimated ones (chordal mean of R_est R_true^T
+    // over the tracked frames). The position fit's rotation is not used: along a nearly straight
+    // path it leaves a roll about the path's axis free by degrees.
+    Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+    for (int k = from; k < frames; ++k) {
+      sum += trajectory[static_cast<std::size_t>(k)].so3().matrix() * trouble.camera(times[static_cast<std::size_t>(k)]).so3().matrix().transpose();
+    }
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d R_map_render = svd.matrixU() * svd.matrixV().transpose();
+    if (R_map_render.determinant() < 0.0) R_map_render = svd.matrixU() * Eigen::Vector3d(1, 1, -1).asDiagonal() * svd.matrixV().transpose();
+    const Vector3 gravity_truth = R_map_render * (test::R_render_imu() * Vector3(0.0, 0.0, -inertial::kStandardGravity));
     const Vector3 g = slam.gravity_world();
     run.gravity_error_deg = std::atan2(g.cross(gravity_truth).norm(), g.dot(gravity_truth)) * 180.0 / test::kFlightPi;
   }

@@ -1,6 +1,7 @@
 #include "cairn/inertial/imu_factors.hpp"
 
 #include <cmath>
+#include <utility>
 
 namespace cairn::inertial {
 namespace {
@@ -57,6 +58,24 @@ ImuFactor ImuFactor::with_gravity_variable(PreintegratedImu preintegrated) {
   ImuFactor factor(std::move(preintegrated), Vector3::Zero());
   factor.gravity_variable_ = true;
   return factor;
+}
+
+SensorPoseImuFactor::SensorPoseImuFactor(ImuFactor factor, const core::SE3& T_body_sensor)
+    : factor_(std::move(factor)), T_sensor_body_(T_body_sensor.inverse()), adjoint_body_sensor_(T_body_sensor.Adj()) {}
+
+bool SensorPoseImuFactor::evaluate(const double* const* values, double* residual, double* const* jacobians) const {
+  double pose_i[7], pose_j[7];
+  backend::se3_to_values(backend::se3_from_values(values[0]) * T_sensor_body_, pose_i);
+  backend::se3_to_values(backend::se3_from_values(values[2]) * T_sensor_body_, pose_j);
+  const double* body_values[5] = {pose_i, values[1], pose_j, values[3], values[4]};
+  if (!factor_.evaluate(body_values, residual, jacobians)) return false;
+  if (jacobians == nullptr) return true;
+  for (const int pose : {0, 2}) {
+    if (jacobians[pose] == nullptr) continue;
+    Eigen::Map<RowMajor9x6> J{jacobians[pose]};
+    J = (J * adjoint_body_sensor_).eval();
+  }
+  return true;
 }
 
 bool GravityMagnitudeFactor::evaluate(const double* const* values, double* residual, double* const* jacobians) const {

@@ -49,6 +49,23 @@ class ImuFactor final : public backend::Factor {
   Matrix9 sqrt_information_;
 };
 
+/// An ImuFactor between two poses of a sensor rigidly mounted on the body (a camera whose poses a
+/// bundle adjustment holds): T_world_body = T_world_sensor T_sensor_body. values: T_world_sensor_i
+/// (7), velocity_i (3), T_world_sensor_j (7), velocity_j (3), bias_i (6); velocities are the body's.
+/// The pose Jacobians are the body's times Adj(T_body_sensor), from
+/// T_world_sensor exp(d) T_sensor_body = T_world_body exp(Adj(T_body_sensor) d).
+class SensorPoseImuFactor final : public backend::Factor {
+ public:
+  SensorPoseImuFactor(ImuFactor factor, const core::SE3& T_body_sensor);
+  int residual_size() const override { return 9; }
+  bool evaluate(const double* const* values, double* residual, double* const* jacobians) const override;
+
+ private:
+  ImuFactor factor_;
+  core::SE3 T_sensor_body_;
+  Matrix6 adjoint_body_sensor_;
+};
+
 /// r = (|g| - g0) / sigma on a gravity variable (euclidean_manifold(3)): keeps the magnitude known
 /// while the direction is estimated (gravity refinement as in VINS-Mono's initialisation, Qin et
 /// al., T-RO 2018, Sec. V-B-3, on the 2-sphere there; here as a soft constraint).

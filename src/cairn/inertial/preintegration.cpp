@@ -98,4 +98,29 @@ bool integrate_interval(const std::vector<ImuSample>& samples, core::Timestamp f
   return true;
 }
 
+Matrix9 hold_error_covariance(const std::vector<ImuSample>& samples, core::Timestamp from, core::Timestamp to) {
+  Matrix9 covariance = Matrix9::Zero();
+  if (!(from < to)) return covariance;
+  const auto after_from = std::upper_bound(samples.begin(), samples.end(), from,
+                                           [](core::Timestamp t, const ImuSample& s) { return t < s.stamp; });
+  if (after_from == samples.begin() || samples.empty() || samples.back().stamp < to) return covariance;
+  double sigma_phi = 0.0, sigma_v = 0.0, sigma_p = 0.0;
+  core::Timestamp t = from;
+  for (auto k = after_from - 1; t < to; ++k) {
+    const auto next = k + 1;
+    const core::Timestamp piece_end = std::min(to, next->stamp);
+    const double tau = static_cast<double>(piece_end.nanoseconds() - t.nanoseconds()) * 1e-9;
+    const double dt = static_cast<double>(next->stamp.nanoseconds() - k->stamp.nanoseconds()) * 1e-9;
+    if (tau > 0.0 && dt > 0.0) {
+      const double missed = 0.5 * tau * tau / dt;
+      sigma_p += sigma_v * tau;
+      sigma_v += missed * (next->accel_mps2 - k->accel_mps2).norm() + k->accel_mps2.norm() * sigma_phi * tau;
+      sigma_phi += missed * (next->gyro_rad_s - k->gyro_rad_s).norm();
+    }
+    t = piece_end;
+  }
+  covariance.diagonal() << Vector3::Constant(sigma_phi * sigma_phi), Vector3::Constant(sigma_v * sigma_v), Vector3::Constant(sigma_p * sigma_p);
+  return covariance;
+}
+
 }  // namespace cairn::inertial

@@ -6,8 +6,9 @@
 // frames the images do not track (ORB-SLAM3's RECENTLY_LOST state); gravity, the velocities and the
 // biases come from the inertial-only MAP estimate of Campos et al. (ICRA 2020) over the recent
 // keyframes, made at every keyframe (with one camera it also gives the map's scale, then watches
-// it). What ORB-SLAM3 has and this does not yet: the IMU factor in the motion-only and local
-// bundle adjustments (the visual poses are taken as they are; docs/vslam.md, "With an IMU").
+// it). The IMU's factors in the local bundle adjustment: local_mapping.cpp
+// (collect_inertial_scope). What ORB-SLAM3 has and this does not yet: the IMU factor in the
+// motion-only bundle adjustment (docs/vslam.md, "With an IMU").
 // The state and the declarations: slam_state.hpp.
 
 #include <algorithm>
@@ -121,12 +122,24 @@ void VisualSlam::Impl::map_carried_view(TrackingFrame& w) {
   const auto mapping_start = Clock::now();
   std::fill(w.f.map_point.begin(), w.f.map_point.end(), -1);
   insert_keyframe(w.f);
+  start_keyframe_imu_state(w);
   detect_and_close_loop(w.result);
   w.f.T_world_camera = keyframes.back().frame.T_world_camera;
   w.f.map_point = keyframes.back().frame.map_point;
   w.times.mapping_s = seconds_since(mapping_start);
   w.result.keyframe = true;
   w.result.note += "; its view mapped as a keyframe at that pose";
+}
+
+// The newest keyframe's velocity and biases, until the inertial estimate or the local BA
+// refines them: the IMU's prediction at its frame and the current biases (ORB-SLAM3 gives a new
+// keyframe the frame's predicted state the same way).
+void VisualSlam::Impl::start_keyframe_imu_state(const TrackingFrame& w) {
+  if (!w.have_imu_prediction) return;
+  KeyFrame& kf = keyframes.back();
+  kf.has_imu_state = true;
+  kf.v_world_mps = w.imu_prediction.v_world_mps;
+  kf.imu_bias = imu_bias;
 }
 
 // After the frame: the body's state at it. A tracked frame is first checked against the IMU's
@@ -223,11 +236,13 @@ void VisualSlam::Impl::estimate_inertial(TrackingFrame& w) {
   const double window_s = imu_initialised ? o.refinement_window_s : o.initialisation_window_s;
   std::vector<core::Timestamp> stamps;
   std::vector<core::SE3> poses;
+  std::vector<int> ids;
   for (const KeyFrame& kf : keyframes) {
     if (kf.bad || find(kf.segment) != current || now_s - kf.frame.time.seconds() > window_s + 1e-9) continue;
     if (!stamps.empty() && !(stamps.back() < kf.frame.time)) continue;
     stamps.push_back(kf.frame.time);
     poses.push_back(kf.frame.T_world_camera);
+    ids.push_back(kf.id);
   }
   // Keyframes come every few frames: three quarters of the initialisation window is "spans it".
   if (stamps.size() < 3 || stamps.back().seconds() - stamps.front().seconds() < 0.75 * o.initialisation_window_s) return;
@@ -276,6 +291,13 @@ void VisualSlam::Impl::estimate_inertial(TrackingFrame& w) {
   imu_initialised = true;
   gravity_world = init.gravity_world;
   imu_bias = init.bias;
+  // The window's keyframes take the estimate's velocities and biases: the local BA's start.
+  for (std::size_t k = 0; k < ids.size() && k < init.v_world_mps.size(); ++k) {
+    KeyFrame& kf = keyframes[static_cast<std::size_t>(ids[k])];
+    kf.has_imu_state = true;
+    kf.v_world_mps = init.v_world_mps[k];
+    kf.imu_bias = init.bias;
+  }
   imu_state.T_world_body = w.f.T_world_camera * o.T_body_camera.inverse();
   imu_state.v_world_mps = init.v_world_mps.back();
   imu_state_time = w.f.time;

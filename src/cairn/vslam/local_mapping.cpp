@@ -1,9 +1,10 @@
-// Local mapping after ORB-SLAM2 (LocalMapping.cc, Optimizer::LocalBundleAdjustment): keyframe decision and insertion, triangulation between keyframes, point culling, covisibility, local and global bundle adjustment on the least-squares engine.
+// Local mapping after ORB-SLAM2 (LocalMapping.cc, Optimizer::LocalBundleAdjustment): keyframe decision and insertion, triangulation between keyframes, point culling, covisibility, local and global bundle adjustment on the least-squares engine; with an IMU, its factors in the local bundle adjustment (ORB-SLAM3 LocalInertialBA).
 // The state and the declarations: slam_state.hpp.
 
 #include "cairn/vslam/slam_state.hpp"
 
 #include "cairn/core/assert.hpp"
+#include "cairn/inertial/imu_factors.hpp"
 
 namespace cairn::vslam {
 
@@ -483,6 +484,7 @@ void VisualSlam::Impl::start_local_mapping() {
   const int current = static_cast<int>(keyframes.size()) - 1;
   job.local = local_ba_keyframes();
   job.ba = BundleAdjustmentState{};
+  collect_inertial_scope(job.local, job.ba);
   job.keyframe = current;
   job.frame_index = keyframes.back().frame.index;
   job.running = true;
@@ -513,6 +515,11 @@ void VisualSlam::Impl::join_local_mapping(FrameResult* result) {
     last.T_world_camera = kf.frame.T_world_camera;
     last.map_point = kf.frame.map_point;
     T_world_last_tracked = last.T_world_camera;
+    // ... and the IMU's state at that frame the keyframe's adjusted pose and velocity.
+    if (have_imu_state && kf.has_imu_state && !job.ba.chain.empty() && imu_state_time == kf.frame.time) {
+      imu_state.T_world_body = kf.frame.T_world_camera * options.inertial.T_body_camera.inverse();
+      imu_state.v_world_mps = kf.v_world_mps;
+    }
   }
   job.ba = BundleAdjustmentState{};
 }
@@ -527,7 +534,10 @@ void VisualSlam::Impl::finish_keyframe(FrameResult& result) {
 // ORB-SLAM2 Optimizer::LocalBundleAdjustment, within the keyframe's frame.
 void VisualSlam::Impl::local_bundle_adjustment() {
   const auto start = Clock::now();
-  bundle_adjustment(local_ba_keyframes(), 5, 10);
+  const std::set<int> local = local_ba_keyframes();
+  BundleAdjustmentState ba;
+  collect_inertial_scope(local, ba);
+  if (solve_bundle_adjustment(local, 5, 10, ba)) apply_bundle_adjustment(local, ba);
   ++summary->local_bas;
   summary->local_ba_s += seconds_since(start);
 }
@@ -547,6 +557,7 @@ bool VisualSlam::Impl::solve_bundle_adjustment(const std::set<int>& local, int f
   add_bundle_adjustment_variables(local, ba, problem);
   ba.is_outlier.assign(ba.edges.size(), 0);
   add_bundle_adjustment_factors(ba, problem, true);
+  add_inertial_factors(ba, problem);
   backend::LeastSquaresOptions lso;
   lso.linear_solver = backend::LinearSolverType::kSparseSchur;
   lso.max_iterations = first;
@@ -644,6 +655,7 @@ void VisualSlam::Impl::bundle_adjustment_second_pass(BundleAdjustmentState& ba, 
     ba.point_var[id] = second.add_variable(ba.point_values[id].data(), backend::euclidean_manifold(3), backend::VariableGroup::kEliminate);
   }
   add_bundle_adjustment_factors(ba, second, false);
+  add_inertial_factors(ba, second);
   lso.max_iterations = std::max(1, second_iterations);
   if (second_iterations > 0) backend::solve(second, lso);
 }
@@ -657,11 +669,84 @@ void VisualSlam::Impl::apply_bundle_adjustment(const std::set<int>& local, Bundl
   for (const int kf : local) {
     if (!anchors_segment(kf)) keyframes[static_cast<std::size_t>(kf)].frame.T_world_camera = backend::se3_from_values(ba.pose_values[kf].data());
   }
+  if (!ba.chain.empty()) {
+    ++summary->inertial_local_bas;
+    summary->inertial_local_ba_factors += ba.links.size();
+  }
+  for (const int kf : ba.chain) {
+    KeyFrame& k = keyframes[static_cast<std::size_t>(kf)];
+    k.v_world_mps = ba.velocity_values[kf];
+    k.imu_bias = inertial::bias_from_values(ba.bias_values[kf].data());
+  }
   for (const int id : ba.local_points) {
     MapPoint& mp = points[static_cast<std::size_t>(id)];
     if (mp.bad) continue;
     mp.p_world = ba.point_values[id];
     update_normal_and_depth(mp);
+  }
+}
+
+// The keyframes the IMU joins in a local BA (ORB-SLAM3 LocalInertialBA's temporal window): from
+// the newest keyframe back through the good keyframes of its segment, while each is in the local
+// window, has a velocity and biases (KeyFrame::has_imu_state) and the IMU readings cover the
+// interval to the next; not past a segment's first keyframe. Nothing without an initialised IMU,
+// with inertial.local_ba off, or while the monocular scale is judged drifted.
+void VisualSlam::Impl::collect_inertial_scope(const std::set<int>& local, BundleAdjustmentState& ba) const {
+  const VisualInertialOptions& o = options.inertial;
+  const int seg = find(segment);
+  if (!o.enabled || !o.local_ba || !imu_initialised || scale_drifted || seg != inertial_segment) return;
+  std::vector<int> chain;
+  std::vector<inertial::PreintegratedImu> links;
+  for (int kf = static_cast<int>(keyframes.size()) - 1; kf >= 0; --kf) {
+    const KeyFrame& k = keyframes[static_cast<std::size_t>(kf)];
+    if (k.bad || find(k.segment) != seg) continue;
+    if (!local.count(kf) || !k.has_imu_state) break;
+    if (!chain.empty()) {
+      const KeyFrame& next = keyframes[static_cast<std::size_t>(chain.back())];
+      inertial::PreintegratedImu preintegrated(o.noise, k.imu_bias);
+      if (!inertial::integrate_interval(imu_samples, k.frame.time, next.frame.time, preintegrated) || !(preintegrated.delta_time_s() > 0.0)) break;
+      preintegrated.add_covariance(inertial::hold_error_covariance(imu_samples, k.frame.time, next.frame.time));
+      links.push_back(std::move(preintegrated));
+    }
+    chain.push_back(kf);
+    if (k.starts_segment) break;
+  }
+  if (chain.size() < 2) return;
+  std::reverse(chain.begin(), chain.end());
+  std::reverse(links.begin(), links.end());
+  for (const int kf : chain) {
+    const KeyFrame& k = keyframes[static_cast<std::size_t>(kf)];
+    ba.velocity_values[kf] = k.v_world_mps;
+    ba.bias_values[kf] = inertial::to_values(k.imu_bias);
+  }
+  ba.chain = std::move(chain);
+  ba.links = std::move(links);
+  ba.gravity_world = gravity_world;
+}
+
+// The chain's velocity and bias variables and, between consecutive keyframes, the IMU factor on
+// their camera poses ([F] (45) through the camera's extrinsic; SensorPoseImuFactor) and the bias
+// random walk ([F] (47)); the oldest keyframe's biases held near their estimate (0.01 rad/s,
+// 0.1 m/s^2: ORB-SLAM3 fixes the keyframe before its window instead, whose state cairn does not
+// keep). The pose variables are the bundle adjustment's (every chain keyframe is local).
+void VisualSlam::Impl::add_inertial_factors(BundleAdjustmentState& ba, backend::LeastSquaresProblem& p) const {
+  if (ba.chain.size() < 2) return;
+  const VisualInertialOptions& o = options.inertial;
+  for (const int kf : ba.chain) {
+    ba.velocity_var[kf] = p.add_variable(ba.velocity_values[kf].data(), backend::euclidean_manifold(3));
+    ba.bias_var[kf] = p.add_variable(ba.bias_values[kf].data(), backend::euclidean_manifold(6));
+  }
+  Eigen::Matrix<double, 6, 1> prior_sigma;
+  prior_sigma << 0.01, 0.01, 0.01, 0.1, 0.1, 0.1;
+  const int oldest = ba.chain.front();
+  p.add_factor(std::make_unique<inertial::VectorPriorFactor<6>>(ba.bias_values[oldest], prior_sigma.cwiseAbs2().asDiagonal().toDenseMatrix()),
+               {ba.bias_var[oldest]});
+  for (std::size_t k = 0; k + 1 < ba.chain.size(); ++k) {
+    const int a = ba.chain[k], b = ba.chain[k + 1];
+    p.add_factor(std::make_unique<inertial::SensorPoseImuFactor>(inertial::ImuFactor(ba.links[k], ba.gravity_world), o.T_body_camera),
+                 {ba.pose_var[a], ba.velocity_var[a], ba.pose_var[b], ba.velocity_var[b], ba.bias_var[a]},
+                 backend::FactorLoss{backend::RobustKernel::kHuber, std::sqrt(16.92)});
+    p.add_factor(std::make_unique<inertial::BiasRandomWalkFactor>(o.noise, ba.links[k].delta_time_s()), {ba.bias_var[a], ba.bias_var[b]});
   }
 }
 

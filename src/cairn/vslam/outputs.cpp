@@ -176,7 +176,9 @@ nlohmann::json inertial_json(const VisualSlam& slam) {
                       {"last_refusal", s.inertial_refusal},
                       {"estimates_s", s.inertial_s},
                       {"frames_carried", s.frames_carried_by_imu},
-                      {"frames_contradicting_imu", s.frames_contradicting_imu}};
+                      {"frames_contradicting_imu", s.frames_contradicting_imu},
+                      {"local_bas_with_imu", s.inertial_local_bas},
+                      {"imu_factors_in_local_bas", s.inertial_local_ba_factors}};
   j.update(inertial_estimate_json(slam));
   if (s.monocular_initial_scale > 0.0) {
     j["monocular"] = {{"initial_scale", s.monocular_initial_scale},

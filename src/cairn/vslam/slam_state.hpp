@@ -26,6 +26,7 @@
 #include "cairn/backend/problem.hpp"
 #include "cairn/core/timer.hpp"
 #include "cairn/inertial/imu_types.hpp"
+#include "cairn/inertial/preintegration.hpp"
 #include "cairn/io/pose_graph.hpp"
 #include "cairn/backend/reprojection_factors.hpp"
 #include "cairn/vision/image_alignment.hpp"
@@ -140,6 +141,12 @@ struct KeyFrame {
   bool bad = false;
   int parent = -1;
   core::SE3 T_parent_keyframe;
+  // With an IMU: the body's velocity (world frame) and the biases at this keyframe, once known
+  // (the IMU's prediction when it is made, then the inertial estimates and the visual-inertial
+  // local BA; ORB-SLAM3 KeyFrame::mVw, mImuBias).
+  bool has_imu_state = false;
+  Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();
+  inertial::ImuBias imu_bias;
 };
 
 
@@ -420,11 +427,26 @@ struct VisualSlam::Impl {
     std::unordered_map<int, int> point_var;
     std::vector<Edge> edges;
     std::vector<char> is_outlier;
+    // Visual-inertial (collect_inertial_scope): the chain of consecutive keyframes the IMU joins,
+    // in time order, the preintegrated readings between each and the next (links[k] from
+    // chain[k] to chain[k + 1]), the keyframes' velocities and biases as the engine's values.
+    std::vector<int> chain;
+    std::vector<inertial::PreintegratedImu> links;
+    std::map<int, Eigen::Vector3d> velocity_values;
+    std::map<int, Eigen::Matrix<double, 6, 1>> bias_values;
+    std::map<int, int> velocity_var, bias_var;
+    Eigen::Vector3d gravity_world = Eigen::Vector3d::Zero();
   };
   // Its stages, in order (local_mapping.cpp).
   void collect_bundle_adjustment_scope(const std::set<int>& local, BundleAdjustmentState& ba) const;
   void add_bundle_adjustment_variables(const std::set<int>& local, BundleAdjustmentState& ba, backend::LeastSquaresProblem& problem) const;
   void add_bundle_adjustment_factors(BundleAdjustmentState& ba, backend::LeastSquaresProblem& p, bool robust) const;
+  // Visual-inertial local BA (ORB-SLAM3 Optimizer::LocalInertialBA, Campos et al. T-RO 2021 Sec.
+  // VI-A): the newest keyframes of the local window that the IMU joins get velocity and bias
+  // variables, an IMU factor and a bias random walk factor to the next (local_mapping.cpp).
+  // Collected on the caller's thread (the IMU readings are not the job's to read).
+  void collect_inertial_scope(const std::set<int>& local, BundleAdjustmentState& ba) const;
+  void add_inertial_factors(BundleAdjustmentState& ba, backend::LeastSquaresProblem& p) const;
   void classify_bundle_adjustment_edges(BundleAdjustmentState& ba) const;
   void bundle_adjustment_second_pass(BundleAdjustmentState& ba, backend::LeastSquaresOptions& lso, int second_iterations) const;
   void apply_bundle_adjustment(const std::set<int>& local, BundleAdjustmentState& ba);
@@ -592,6 +614,7 @@ struct VisualSlam::Impl {
   void predict_with_imu(TrackingFrame& w);
   bool carry_with_imu(TrackingFrame& w);
   void map_carried_view(TrackingFrame& w);
+  void start_keyframe_imu_state(const TrackingFrame& w);
   void advance_inertial_state(TrackingFrame& w);
   void check_against_imu(TrackingFrame& w);
   bool agrees_with_imu(const TrackingFrame& w, double* distance_m = nullptr, double* angle_deg = nullptr) const;

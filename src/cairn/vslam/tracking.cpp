@@ -1026,6 +1026,7 @@ void VisualSlam::Impl::map_keyframe(TrackingFrame& w) {
   FrameResult& result = w.result;
   const auto mapping_start = Clock::now();
   insert_keyframe(f);
+  start_keyframe_imu_state(w);
   cull_points();
   if (kind == io::SequenceKind::kMonocular) {
     triangulate_new_points(static_cast<int>(keyframes.size()) - 1, 20);  // the only source of points (ORB-SLAM2: 20)

@@ -61,7 +61,7 @@ struct VisualInertialOptions {
   double initialisation_window_s = 2.0;
   /// Every keyframe re-estimates gravity, velocities and biases over the keyframes of its last
   /// this-many seconds (ORB-SLAM3 refines at 5 s and 15 s, then keeps the estimates in its
-  /// visual-inertial local BA, which cairn does not have yet); >= initialisation_window_s.
+  /// visual-inertial local BA); >= initialisation_window_s.
   double refinement_window_s = 3.0;
   /// A frame the images do not track takes the IMU's prediction for at most this long after the
   /// last tracked frame (ORB-SLAM3's RECENTLY_LOST lasts 5 s); then it is lost. >= 0.
@@ -79,6 +79,9 @@ struct VisualInertialOptions {
   /// ... judged only over windows whose keyframes accelerate by at least this much (RMS, m/s^2):
   /// the IMU sees the scale through acceleration alone. >= 0.
   double min_scale_excitation_mps2 = 0.3;
+  /// The IMU in the local bundle adjustment (ORB-SLAM3 LocalInertialBA): the newest keyframes of
+  /// the local window get velocities and biases, joined by IMU and bias random walk factors.
+  bool local_ba = true;
   bool is_valid(std::string* why) const;
 };
 
@@ -298,6 +301,9 @@ struct VisualSlamSummary {
   double monocular_initial_scale = 0.0, monocular_scale_estimate = 1.0;
   std::size_t frames_scale_drifted = 0;
   std::size_t scale_estimates_unexcited = 0;  ///< refinements that held the scale (too little acceleration to judge it)
+  /// Local bundle adjustments with IMU factors (VisualInertialOptions::local_ba), and the IMU
+  /// factors in them (one per pair of consecutive keyframes).
+  std::size_t inertial_local_bas = 0, inertial_local_ba_factors = 0;
   std::string inertial_refusal;
   double inertial_initialised_at_s = -1.0;  ///< the frame time of the first estimate; -1: never
   double inertial_s = 0.0;                  ///< time in the inertial estimates
