@@ -1262,6 +1262,103 @@ TEST(VisualSlamSynthetic, MonocularScaleCollapseIsFlaggedByTheImu) {
   EXPECT_EQ(off.summary.inertial_local_bas, 0u);
 }
 
+// Issue 40: a visual-inertial map's loop is corrected in 4 DoF (yaw and position), keeping the
+// gravity direction every keyframe has from the IMU. The monocular loop route looking 60 degrees
+// left (MonocularLoopIsClosedOverSim3) flown at 1.5 m/s with the simulator's IMU, loops on, run
+// with inertial.four_dof_loops on (the default) and off (the Sim(3) correction of a map without
+// an IMU). Each frame's tilt error is the angle between gravity's direction in the camera as the
+// run has it (the final gravity estimate, turned by the frame's rotation) and as the truth has it:
+// no alignment is involved.
+TEST(VisualSlamSynthetic, VisualInertialLoopIsCorrectedInFourDof) {
+  const SyntheticWorld world = monocular_loop_world();
+  double circuit_m = 0.0, extra = 0.0;
+  const std::vector<core::SE3> truth = monocular_loop_route(-60.0 * kDeg, circuit_m, extra);
+  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner, speed_mps = 1.5;  // monocular_loop_route's
+  const double duration_s = (circuit_m + extra) / speed_mps;
+  const double frame_s = duration_s / static_cast<double>(truth.size() - 1);
+  const auto camera_at = [&](double t) {
+    return rounded_loop_pose(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, speed_mps * t, -60.0 * kDeg);
+  };
+  ASSERT_LT((camera_at(frame_s * 10.0).translation() - truth[10].translation()).norm(), 1e-9);
+  sim::ImuSimulationOptions imu = *sim::imu_preset("adis16448");
+  imu.seed = 7;
+  const sim::SimulatedImu simulated =
+      sim::simulate_imu([&](double t) { return test::kinematics_of(camera_at, t); }, 0.0, duration_s + 0.2, imu);
+  const Eigen::Vector3d gravity_render = (test::R_render_imu() * Eigen::Vector3d(0.0, 0.0, -1.0)).normalized();
+  const StereoCamera camera;
+  std::vector<cv::Mat> images;
+  for (const core::SE3& pose : truth) images.push_back(world.render(pose, camera));
+  struct Outcome {
+    double ate_se3 = 0.0, ate_sim3 = 0.0, tilt_median_deg = 0.0, tilt_max_deg = 0.0;
+    std::size_t accepted = 0, first_loop = 0;
+    VisualSlamSummary summary;
+  };
+  auto run = [&](bool four_dof) {
+    VisualSlamOptions options;
+    options.vocabulary = training_vocabulary();
+    options.inertial.enabled = true;
+    options.inertial.T_body_camera = test::T_body_camera();
+    options.inertial.noise = imu.noise;
+    options.inertial.four_dof_loops = four_dof;
+    VisualSlam slam(camera.calibration(), io::SequenceKind::kMonocular, options);
+    Outcome o;
+    o.first_loop = truth.size();
+    std::size_t init = truth.size(), next = 0;
+    for (std::size_t k = 0; k < truth.size(); ++k) {
+      const double t = frame_s * static_cast<double>(k);
+      while (next < simulated.samples.size()) {
+        slam.add_imu(simulated.samples[next]);
+        if (simulated.samples[next++].stamp.seconds() >= t) break;
+      }
+      const FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(t), images[k]);
+      if (r.tracked && init == truth.size()) init = k;
+      if (r.loop_closed && o.first_loop == truth.size()) o.first_loop = k;
+    }
+    EXPECT_LT(init, 15u) << "no monocular initialisation";
+    o.summary = slam.summary();
+    for (const LoopRecord& loop : o.summary.loops) o.accepted += loop.decision == "accepted" ? 1 : 0;
+    const std::vector<core::SE3> poses = slam.trajectory();
+    io::Trajectory reference, estimated;
+    reference.poses.assign(truth.begin() + static_cast<std::ptrdiff_t>(init), truth.end());
+    estimated.poses.assign(poses.begin() + static_cast<std::ptrdiff_t>(init), poses.end());
+    for (const eval::AlignmentMethod method : {eval::AlignmentMethod::kSE3, eval::AlignmentMethod::kSim3}) {
+      eval::ApeOptions ape_options;
+      ape_options.alignment.method = method;
+      const eval::ApeResult ape = eval::evaluate_ape(reference, estimated, ape_options);
+      EXPECT_TRUE(ape.outcome.ok()) << ape.outcome.message;
+      (method == eval::AlignmentMethod::kSE3 ? o.ate_se3 : o.ate_sim3) = ape.statistics.rmse;
+    }
+    const Eigen::Vector3d g = slam.gravity_world().normalized();
+    std::vector<double> tilt;
+    for (std::size_t k = init; k < truth.size(); ++k) {
+      const Eigen::Vector3d seen = poses[k].so3().inverse() * g, true_seen = truth[k].so3().inverse() * gravity_render;
+      tilt.push_back(std::atan2(seen.cross(true_seen).norm(), seen.dot(true_seen)) / kDeg);
+    }
+    if (!tilt.empty()) {
+      std::sort(tilt.begin(), tilt.end());
+      o.tilt_median_deg = tilt[tilt.size() / 2];
+      o.tilt_max_deg = *std::max_element(tilt.begin(), tilt.end());
+    }
+    std::printf("monocular-inertial loop route, 4-DoF loops %s: %zu loops accepted (first at frame %zu), %zu corrected in 4 DoF; SE(3) ATE "
+                "%.3f m, Sim(3) ATE %.3f m; tilt error median %.2f deg, max %.2f deg\n",
+                four_dof ? "on" : "off", o.accepted, o.first_loop, o.summary.loops_corrected_in_4dof, o.ate_se3, o.ate_sim3, o.tilt_median_deg,
+                o.tilt_max_deg);
+    return o;
+  };
+  const Outcome four = run(true), similarity = run(false);
+  EXPECT_GE(four.accepted, 1u);
+  EXPECT_EQ(four.summary.loops_corrected_in_4dof, four.accepted);
+  EXPECT_EQ(similarity.summary.loops_corrected_in_4dof, 0u);
+  EXPECT_GT(four.summary.inertial_local_bas, 0u);
+  // Both close the loop well; neither is asserted better (measured: the 4-DoF correction cannot
+  // take out the few percent of scale drift a Sim(3) one does: docs/vslam.md).
+  for (const Outcome* o : {&four, &similarity}) {
+    EXPECT_LT(o->ate_sim3, 0.1);
+    EXPECT_LT(o->ate_se3, 0.5);
+    EXPECT_LT(o->tilt_max_deg, 3.0);
+  }
+}
+
 // A monocular run of `truth` with the lens covered (uniform grey images) where `covered` says so;
 // frames for which `show` holds are printed. The results keep no keypoints.
 std::vector<FrameResult> run_monocular_covered(VisualSlam& slam, const SyntheticWorld& world, const std::vector<core::SE3>& truth,

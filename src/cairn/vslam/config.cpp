@@ -71,6 +71,7 @@ io::Parameters parameters(VisualSlamOptions& o) {
       {"inertial", "min_scale_excitation_mps2", &o.inertial.min_scale_excitation_mps2, "monocular: scale judged only over windows accelerating by at least this (RMS)"},
       {"inertial", "gravity_mps2", &o.inertial.gravity_mps2, "the magnitude of gravity"},
       {"inertial", "local_ba", &o.inertial.local_ba, "IMU factors between the newest keyframes of the local bundle adjustment (ORB-SLAM3 LocalInertialBA)"},
+      {"inertial", "four_dof_loops", &o.inertial.four_dof_loops, "a loop within the IMU's map is corrected in yaw and position only, keeping gravity's direction (ORB-SLAM3's 4-DoF essential graph)"},
       {"maps", "new_map_after_lost_frames", &o.new_map_after_lost_frames, "lost frames in a row before a new map segment starts (0 = never)"},
       {"maps", "merge_recent_keyframes_of_new_map", &o.merge_recent_keyframes_of_new_map, "a new segment's first keyframes that try to merge with the keyframes tracked last (0 = place recognition only)"},
   };

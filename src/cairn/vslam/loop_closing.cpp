@@ -1,17 +1,18 @@
-// Loop closing after ORB-SLAM2 (LoopClosing.cc) and the merging of map segments after ORB-SLAM3 (Campos et al. 2021): bag-of-words candidates with consistency, SE(3) verification, essential-graph correction, point fusion.
+// Loop closing after ORB-SLAM2 (LoopClosing.cc) and the merging of map segments after ORB-SLAM3 (Campos et al. 2021): bag-of-words candidates with consistency, SE(3) verification, essential-graph correction (in 4 DoF for a visual-inertial map), point fusion.
 // The state and the declarations: slam_state.hpp.
 
 #include "cairn/vslam/slam_state.hpp"
 
 #include <Eigen/Geometry>
 #include <array>
+#include <cstdio>
 #include <limits>
+#include <optional>
 #include <random>
 
+#include "cairn/backend/relative_pose_factor.hpp"
 #include "cairn/backend/sim3_factors.hpp"
-
-#include <cstdio>
-#include <optional>
+#include "cairn/backend/yaw_translation.hpp"
 
 namespace cairn::vslam {
 
@@ -315,12 +316,21 @@ std::string VisualSlam::Impl::loop_rival(int current, int candidate, const LoopR
 // information as ORB-SLAM2's essential graph; keyframe 0 fixed) optimised on the back end;
 // points follow their reference keyframe; the keyframe's loop matches fuse its points into the
 // old ones; then a global bundle adjustment. Monocular: the same over Sim(3) (correct_poses_sim3).
+// With an IMU (corrects_in_four_dof): in 4 DoF, every keyframe keeping its gravity direction
+// (correct_poses_4dof), the scale of a monocular-inertial map held; the IMU's states follow.
 void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData& probe, double scale) {
-  if (kind == io::SequenceKind::kMonocular) {
+  std::vector<core::SE3> old_poses(keyframes.size());
+  for (std::size_t k = 0; k < keyframes.size(); ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
+  const bool similarity = kind == io::SequenceKind::kMonocular && !corrects_in_four_dof(current, candidate);
+  if (corrects_in_four_dof(current, candidate)) {
+    correct_poses_4dof(current, candidate, probe);
+    ++summary->loops_corrected_in_4dof;
+  } else if (similarity) {
     correct_poses_sim3(current, candidate, probe, scale);
   } else {
     correct_poses_se3(current, candidate, probe);
   }
+  move_inertial_states(old_poses, similarity);
   // A merge joins the two segments (the older keeps its id) before the global bundle
   // adjustment, so that the younger one's first keyframe no longer holds a gauge of its own.
   const int a = segment_of(current), b = segment_of(candidate);
@@ -392,6 +402,11 @@ void VisualSlam::Impl::correct_poses_se3(int current, int candidate, const Frame
   solver.threads = 1;
   backend::optimize(problem, solver);
   for (const int k : good) keyframes[static_cast<std::size_t>(k)].frame.T_world_camera = problem.T_world_pose[static_cast<std::size_t>(problem.index_of(k))];
+  follow_keyframe_correction(old_poses);
+}
+
+// Points and the last frame follow their reference keyframe's rigid correction.
+void VisualSlam::Impl::follow_keyframe_correction(const std::vector<core::SE3>& old_poses) {
   for (MapPoint& mp : points) {
     if (mp.bad) continue;
     const auto r = static_cast<std::size_t>(mp.reference_keyframe);
@@ -401,6 +416,84 @@ void VisualSlam::Impl::correct_poses_se3(int current, int candidate, const Frame
     const auto r = static_cast<std::size_t>(reference_keyframe);
     last.T_world_camera = keyframes[r].frame.T_world_camera * (old_poses[r].inverse() * last.T_world_camera);
   }
+}
+
+// A visual-inertial map closing a loop within itself: the IMU initialised for the segment, its
+// monocular scale not judged drifted, both keyframes in that segment, the option on. Roll and
+// pitch are then observable (gravity), and the correction must not change them.
+bool VisualSlam::Impl::corrects_in_four_dof(int current, int candidate) const {
+  return options.inertial.enabled && options.inertial.four_dof_loops && imu_initialised && !scale_drifted &&
+         gravity_world.norm() > 0.0 && segment_of(current) == inertial_segment && segment_of(candidate) == inertial_segment;
+}
+
+// The essential graph of correct_poses_se3 with every keyframe on a yaw-about-gravity and
+// translation manifold (backend/yaw_translation.hpp; ORB-SLAM3 Optimizer::
+// OptimizeEssentialGraph4DoF, VINS-Mono's 4-DoF pose graph, Qin et al. T-RO 2018 Sec. VIII-B):
+// the edges keep their 6-DoF residuals, the keyframes move only in yaw and position, so each
+// keeps its gravity direction; the loop's own roll and pitch stay in its residual. Keyframe 0 is
+// fixed; a monocular-inertial map is metric, so no scale is estimated.
+void VisualSlam::Impl::correct_poses_4dof(int current, int candidate, const FrameData& probe) {
+  const std::size_t n = keyframes.size();
+  std::vector<core::SE3> old_poses(n);
+  for (std::size_t k = 0; k < n; ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
+  std::vector<int> good;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!keyframes[k].bad) good.push_back(static_cast<int>(k));
+  }
+  const backend::YawTranslationManifold manifold(-gravity_world);
+  std::vector<std::array<double, 7>> values(n);
+  std::vector<int> var(n, -1);
+  backend::LeastSquaresProblem problem;
+  for (const int k : good) {
+    backend::se3_to_values(old_poses[static_cast<std::size_t>(k)], values[static_cast<std::size_t>(k)].data());
+    var[static_cast<std::size_t>(k)] = problem.add_variable(values[static_cast<std::size_t>(k)].data(), manifold);
+  }
+  problem.set_constant(var[static_cast<std::size_t>(good.front())]);
+  auto add_edge = [&](int a, int b, const core::SE3& T_a_b, double weight) {
+    backend::PoseEdge<core::SE3> edge;
+    edge.T_i_j = T_a_b;
+    edge.sqrt_information *= std::sqrt(weight);
+    problem.add_factor(std::make_unique<backend::YawTranslationAdapter>(std::make_unique<backend::RelativePoseFactor>(edge),
+                                                                        std::vector<const backend::YawTranslationManifold*>{&manifold, &manifold}),
+                       {var[static_cast<std::size_t>(a)], var[static_cast<std::size_t>(b)]});
+  };
+  for (const auto& [a, b, weight] : essential_graph_edges(good)) {
+    add_edge(a, b, old_poses[static_cast<std::size_t>(a)].inverse() * old_poses[static_cast<std::size_t>(b)], weight);
+  }
+  add_edge(candidate, current, old_poses[static_cast<std::size_t>(candidate)].inverse() * probe.T_world_camera, 1.0);
+  backend::LeastSquaresOptions lso;
+  lso.linear_solver = backend::LinearSolverType::kSparseNormalCholesky;
+  lso.max_iterations = 20;
+  lso.function_tolerance = 1e-9;
+  lso.threads = 1;
+  if (!backend::solve(problem, lso).is_solution_usable()) return;
+  for (const int k : good) keyframes[static_cast<std::size_t>(k)].frame.T_world_camera = backend::se3_from_values(values[static_cast<std::size_t>(k)].data());
+  follow_keyframe_correction(old_poses);
+}
+
+// After a correction the IMU's states follow: each keyframe's velocity turns as the keyframe
+// turned, and the state at the last frame takes that frame's corrected pose, its velocity turned
+// as its reference keyframe turned. A Sim(3) correction changes a monocular map's unit: there
+// the states are dropped (the next inertial estimate gives them again).
+void VisualSlam::Impl::move_inertial_states(const std::vector<core::SE3>& old_poses, bool similarity) {
+  if (!options.inertial.enabled) return;
+  for (std::size_t k = 0; k < old_poses.size(); ++k) {
+    KeyFrame& kf = keyframes[k];
+    if (!kf.has_imu_state) continue;
+    if (similarity) {
+      kf.has_imu_state = false;
+    } else {
+      kf.v_world_mps = (kf.frame.T_world_camera.so3() * old_poses[k].so3().inverse()) * kf.v_world_mps;
+    }
+  }
+  if (!have_imu_state) return;
+  if (similarity || reference_keyframe < 0 || !have_last || !(imu_state_time == last.time)) {
+    have_imu_state = false;
+    return;
+  }
+  const auto r = static_cast<std::size_t>(reference_keyframe);
+  imu_state.T_world_body = last.T_world_camera * options.inertial.T_body_camera.inverse();
+  imu_state.v_world_mps = (keyframes[r].frame.T_world_camera.so3() * old_poses[r].so3().inverse()) * imu_state.v_world_mps;
 }
 
 // What the stages of correct_poses_sim3 share.

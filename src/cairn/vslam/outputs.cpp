@@ -178,7 +178,8 @@ nlohmann::json inertial_json(const VisualSlam& slam) {
                       {"frames_carried", s.frames_carried_by_imu},
                       {"frames_contradicting_imu", s.frames_contradicting_imu},
                       {"local_bas_with_imu", s.inertial_local_bas},
-                      {"imu_factors_in_local_bas", s.inertial_local_ba_factors}};
+                      {"imu_factors_in_local_bas", s.inertial_local_ba_factors},
+                      {"loops_corrected_in_4_dof", s.loops_corrected_in_4dof}};
   j.update(inertial_estimate_json(slam));
   if (s.monocular_initial_scale > 0.0) {
     j["monocular"] = {{"initial_scale", s.monocular_initial_scale},

@@ -506,6 +506,11 @@ struct VisualSlam::Impl {
   void correct_loop(int current, int candidate, const FrameData& probe, double scale = 1.0);
   std::vector<std::tuple<int, int, double>> essential_graph_edges(const std::vector<int>& good) const;
   void correct_poses_se3(int current, int candidate, const FrameData& probe);
+  void follow_keyframe_correction(const std::vector<core::SE3>& old_poses);
+  // With an IMU (loop_closing.cpp): loops of a visual-inertial map corrected in 4 DoF.
+  bool corrects_in_four_dof(int current, int candidate) const;
+  void correct_poses_4dof(int current, int candidate, const FrameData& probe);
+  void move_inertial_states(const std::vector<core::SE3>& old_poses, bool similarity);
   void correct_poses_sim3(int current, int candidate, const FrameData& probe, double scale);
   // Its stages, in order, and what they share (loop_closing.cpp, where Sim3Correction is defined).
   struct Sim3Correction;

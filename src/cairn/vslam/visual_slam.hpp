@@ -82,6 +82,10 @@ struct VisualInertialOptions {
   /// The IMU in the local bundle adjustment (ORB-SLAM3 LocalInertialBA): the newest keyframes of
   /// the local window get velocities and biases, joined by IMU and bias random walk factors.
   bool local_ba = true;
+  /// A loop within the map the IMU initialised is corrected in 4 DoF: yaw about gravity and
+  /// position (ORB-SLAM3 OptimizeEssentialGraph4DoF); roll and pitch, which gravity makes
+  /// observable, are kept. Off: as without an IMU (SE(3), monocular Sim(3)).
+  bool four_dof_loops = true;
   bool is_valid(std::string* why) const;
 };
 
@@ -304,6 +308,7 @@ struct VisualSlamSummary {
   /// Local bundle adjustments with IMU factors (VisualInertialOptions::local_ba), and the IMU
   /// factors in them (one per pair of consecutive keyframes).
   std::size_t inertial_local_bas = 0, inertial_local_ba_factors = 0;
+  std::size_t loops_corrected_in_4dof = 0;  ///< loop corrections in 4 DoF (VisualInertialOptions::four_dof_loops)
   std::string inertial_refusal;
   double inertial_initialised_at_s = -1.0;  ///< the frame time of the first estimate; -1: never
   double inertial_s = 0.0;                  ///< time in the inertial estimates
