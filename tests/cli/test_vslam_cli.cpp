@@ -133,7 +133,7 @@ TEST(VslamCli, PrintConfigListsEveryKeyAndRoundTrips) {
   for (std::string line; std::getline(lines, line);) {
     if (line.rfind("  ", 0) == 0 && line.find(": ") != std::string::npos && line.find("  # ") != std::string::npos) ++keys;
   }
-  EXPECT_EQ(keys, 67u) << printed.out;  // VisualSlamOptions with its OrbOptions, StereoOptions and VisualInertialOptions' rules, but the vocabulary
+  EXPECT_EQ(keys, 71u) << printed.out;  // VisualSlamOptions with its OrbOptions, StereoOptions and VisualInertialOptions' rules, but the vocabulary
   for (const char* key : {"orb:\n  features: 2000  #", "  scale_factor: 1.2  #", "stereo:\n  max_descriptor_distance: 75  #",
                           "tracking:\n", "health:\n", "keyframes:\n  close_depth_baselines: 35  #", "local_mapping:\n  local_ba: true  #",
                           "loop_closure:\n  enabled: true  #", "inertial:\n  initialisation_window_s: 2  #", "maps:\n"}) {

@@ -1167,7 +1167,8 @@ TEST(VisualSlamSynthetic, MonocularScaleHoldsThroughFastTurns) {
 // body (inertial_flight.hpp's mounting): without the turn rule the scale collapses (above); the
 // inertial estimate at each keyframe, which also estimates the scale, must then flag frames
 // `degraded`, and the run with the rule, whose scale holds, must flag none. Those two runs keep
-// the IMU out of the local BA (inertial.local_ba off); with it in, the collapse does not happen.
+// the IMU out of the pose optimisation and the local BA (inertial.pose_optimisation and
+// inertial.local_ba off); with it in, the collapse does not happen.
 TEST(VisualSlamSynthetic, MonocularScaleCollapseIsFlaggedByTheImu) {
   const SyntheticWorld world = monocular_loop_world();
   double circuit_m = 0.0, extra = 0.0;
@@ -1191,12 +1192,13 @@ TEST(VisualSlamSynthetic, MonocularScaleCollapseIsFlaggedByTheImu) {
     std::size_t flagged, first_flagged;
     VisualSlamSummary summary;
   };
-  auto run = [&](double turn_fov, bool inertial_local_ba) {
+  auto run = [&](double turn_fov, bool imu_in_optimisations) {
     VisualSlamOptions options;
     options.loop_closure = false;
     options.monocular_keyframe_turn_fov = turn_fov;
     options.inertial.enabled = true;
-    options.inertial.local_ba = inertial_local_ba;
+    options.inertial.local_ba = imu_in_optimisations;
+    options.inertial.pose_optimisation = imu_in_optimisations;
     options.inertial.T_body_camera = test::T_body_camera();
     options.inertial.noise = imu.noise;
     VisualSlam slam(camera.calibration(), io::SequenceKind::kMonocular, options);
@@ -1226,15 +1228,16 @@ TEST(VisualSlamSynthetic, MonocularScaleCollapseIsFlaggedByTheImu) {
     };
     const std::size_t quarter = (truth.size() - init) / 4;
     const double first_unit = unit(init, init + quarter), last_unit = unit(truth.size() - quarter, truth.size());
-    std::printf("  turn rule %s, IMU in the local BA %s: metres per map unit %.3f over the first quarter, %.3f over the last; Sim(3) ATE %.3f m (max %.3f m)\n",
-                turn_fov > 0.0 ? "on" : "off", inertial_local_ba ? "on" : "off", first_unit, last_unit, ate, ate_max);
+    std::printf("  turn rule %s, IMU in the pose optimisation and the local BA %s: metres per map unit %.3f over the first quarter, %.3f over the last; Sim(3) ATE %.3f m (max %.3f m)\n",
+                turn_fov > 0.0 ? "on" : "off", imu_in_optimisations ? "on" : "off", first_unit, last_unit, ate, ate_max);
     return Outcome{first_unit / last_unit, ate, slam.summary().frames_scale_drifted, first_flagged, slam.summary()};
   };
-  // The IMU only watching (inertial.local_ba off) without and with the turn rule, then with its
-  // factors in the local bundle adjustment (the default) without and with it.
+  // The IMU only watching (inertial.local_ba and inertial.pose_optimisation off) without and with
+  // the turn rule, then with its factors in the pose optimisation and the local bundle adjustment
+  // (the default) without and with it.
   const Outcome off = run(0.0, false), on = run(0.2, false), off_ba = run(0.0, true), on_ba = run(0.2, true);
-  for (const auto& [name, o] : {std::pair<const char*, const Outcome&>{"off", off}, {"on", on}, {"off, IMU in the local BA", off_ba},
-                                {"on, IMU in the local BA", on_ba}}) {
+  for (const auto& [name, o] : {std::pair<const char*, const Outcome&>{"off", off}, {"on", on}, {"off, IMU in the optimisations", off_ba},
+                                {"on, IMU in the optimisations", on_ba}}) {
     std::printf("monocular-inertial, 45 degrees left, turn rule %s: the map's scale at the end %.3f of the start's; IMU: initial scale %.3f, "
                 "%zu estimates (%zu refused, %zu unexcited), last judged scale %.3f, %zu frames flagged for scale drift (first at frame %zu)\n",
                 name, o.scale_drift, o.summary.monocular_initial_scale, o.summary.inertial_estimates, o.summary.inertial_estimates_refused,
@@ -1252,9 +1255,10 @@ TEST(VisualSlamSynthetic, MonocularScaleCollapseIsFlaggedByTheImu) {
   }
   EXPECT_LT(off.scale_drift, 0.75);  // the scenario: the scale does collapse without the rule
   EXPECT_NEAR(on.scale_drift, 1.0, 0.1);  // and holds with it
-  // With the IMU's factors in the local BA (ORB-SLAM3's remedy) the scale holds without the rule
-  // too. Measured, not asserted: without the rule the windowed scale estimates still judge the
-  // turns' windows off and flag frames although the scale holds (docs/vslam.md).
+  // With the IMU's factors in the pose optimisation and the local BA (ORB-SLAM3's remedy) the
+  // scale holds without the rule too. Measured, not asserted: without the rule the windowed scale
+  // estimates still judge the turns' windows off and flag frames although the scale holds
+  // (docs/vslam.md).
   EXPECT_NEAR(off_ba.scale_drift, 1.0, 0.1);
   EXPECT_NEAR(on_ba.scale_drift, 1.0, 0.1);
   EXPECT_EQ(on_ba.flagged, 0u);

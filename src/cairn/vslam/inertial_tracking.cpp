@@ -14,9 +14,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <stdexcept>
 
 #include "cairn/core/problems.hpp"
+#include "cairn/inertial/imu_factors.hpp"
 #include "cairn/inertial/inertial_initialization.hpp"
 #include "cairn/inertial/preintegration.hpp"
 #include "cairn/vslam/slam_state.hpp"
@@ -37,6 +39,9 @@ bool VisualInertialOptions::is_valid(std::string* why) const {
   if (!T_body_camera.matrix().allFinite()) problems.add("inertial.T_body_camera must be finite");
   problems.require_positive(disagreement_m, "inertial.disagreement_m");
   problems.require_positive(disagreement_deg, "inertial.disagreement_deg");
+  problems.require_positive(pose_sigma_m, "inertial.pose_sigma_m");
+  problems.require_positive(pose_sigma_deg, "inertial.pose_sigma_deg");
+  problems.require_positive(velocity_sigma_mps, "inertial.velocity_sigma_mps");
   if (!(max_scale_drift > 0.0 && max_scale_drift < 1.0)) problems.add("inertial.max_scale_drift must be in (0, 1)");
   if (!(min_scale_excitation_mps2 >= 0.0 && std::isfinite(min_scale_excitation_mps2))) {
     problems.add("inertial.min_scale_excitation_mps2 must be finite and >= 0");
@@ -84,6 +89,56 @@ void VisualSlam::Impl::predict_with_imu(TrackingFrame& w) {
   w.imu_prediction = preintegrated.predict(imu_state, imu_bias, gravity_world);
   w.have_imu_prediction = w.imu_prediction.T_world_body.matrix().allFinite() && w.imu_prediction.v_world_mps.allFinite();
   w.result.imu_predicted = w.have_imu_prediction;
+}
+
+// The visual-inertial motion-only BA's terms for this frame (ORB-SLAM3
+// PoseInertialOptimizationLastFrame): the last frame's state and its covariance (from that
+// frame's own pose optimisation, else pose_sigma_m / pose_sigma_deg / velocity_sigma_mps),
+// the readings since, preintegrated at the current biases with the hold's error
+// (inertial::hold_error_covariance). None when the IMU does not predict this frame, its scale
+// is judged drifted, or inertial.pose_optimisation is off.
+std::optional<VisualSlam::Impl::InertialPoseTerms> VisualSlam::Impl::inertial_pose_terms(const TrackingFrame& w) const {
+  const VisualInertialOptions& o = options.inertial;
+  if (!o.enabled || !o.pose_optimisation || !w.have_imu_prediction || scale_drifted || !have_imu_state) return std::nullopt;
+  InertialPoseTerms terms{inertial::PreintegratedImu(o.noise, imu_bias), core::SE3(), Eigen::Vector3d::Zero()};
+  if (!inertial::integrate_interval(imu_samples, imu_state_time, w.f.time, terms.preintegrated) || !(terms.preintegrated.delta_time_s() > 0.0)) {
+    return std::nullopt;
+  }
+  terms.preintegrated.add_covariance(inertial::hold_error_covariance(imu_samples, imu_state_time, w.f.time));
+  terms.T_world_camera_previous = camera_pose(imu_state);
+  terms.v_world_previous = imu_state.v_world_mps;
+  if (have_imu_state_covariance) {
+    terms.pose_covariance_previous = imu_state_pose_covariance;
+    terms.velocity_covariance_previous = imu_state_velocity_covariance;
+  } else {
+    const double p = o.pose_sigma_m * o.pose_sigma_m, r = std::pow(o.pose_sigma_deg * std::numbers::pi / 180.0, 2);
+    terms.pose_covariance_previous.diagonal() << p, p, p, r, r, r;
+    terms.velocity_covariance_previous = Eigen::Matrix3d::Identity() * o.velocity_sigma_mps * o.velocity_sigma_mps;
+  }
+  terms.v_world = w.imu_prediction.v_world_mps;
+  return terms;
+}
+
+// The last frame's pose and velocity as variables held by their prior (a pose prior on the camera
+// and a velocity prior: the cross-covariance is dropped), this frame's velocity, the biases held
+// constant; the IMU factor on the two camera poses (inertial::SensorPoseImuFactor, [F] (45)).
+int VisualSlam::Impl::add_inertial_pose_terms(const InertialPoseTerms& imu, backend::LeastSquaresProblem& problem, int pose_variable,
+                                               double* values) const {
+  backend::se3_to_values(imu.T_world_camera_previous, values);
+  Eigen::Map<Eigen::Vector3d>(values + 7) = imu.v_world_previous;
+  Eigen::Map<Eigen::Vector3d>(values + 10) = imu.v_world;
+  Eigen::Map<inertial::BiasValues>(values + 13) = inertial::to_values(imu_bias);
+  const int previous_pose = problem.add_variable(values, backend::se3_manifold());
+  const int previous_velocity = problem.add_variable(values + 7, backend::euclidean_manifold(3));
+  const int current_velocity = problem.add_variable(values + 10, backend::euclidean_manifold(3));
+  const int bias = problem.add_variable(values + 13, backend::euclidean_manifold(6));
+  problem.set_constant(bias);
+  problem.add_factor(std::make_unique<inertial::PosePriorFactor>(imu.T_world_camera_previous, imu.pose_covariance_previous), {previous_pose});
+  problem.add_factor(std::make_unique<inertial::VectorPriorFactor<3>>(imu.v_world_previous, imu.velocity_covariance_previous), {previous_velocity});
+  problem.add_factor(std::make_unique<inertial::SensorPoseImuFactor>(inertial::ImuFactor(imu.preintegrated, gravity_world), options.inertial.T_body_camera),
+                     {previous_pose, previous_velocity, pose_variable, current_velocity, bias},
+                     backend::FactorLoss{backend::RobustKernel::kHuber, std::sqrt(16.92)});
+  return current_velocity;
 }
 
 // A frame the images did not track: with the IMU's prediction, within max_carried_s of the last
@@ -138,7 +193,7 @@ void VisualSlam::Impl::start_keyframe_imu_state(const TrackingFrame& w) {
   if (!w.have_imu_prediction) return;
   KeyFrame& kf = keyframes.back();
   kf.has_imu_state = true;
-  kf.v_world_mps = w.imu_prediction.v_world_mps;
+  kf.v_world_mps = w.imu_terms && w.imu_terms->solved ? w.imu_terms->v_world : w.imu_prediction.v_world_mps;
   kf.imu_bias = imu_bias;
 }
 
@@ -154,12 +209,20 @@ void VisualSlam::Impl::advance_inertial_state(TrackingFrame& w) {
     check_against_imu(w);
     last_tracked_time = w.f.time;
     if (w.have_imu_prediction) {
+      // The visual-inertial pose optimisation's velocity and covariance when it ran.
+      const bool refined = w.imu_terms && w.imu_terms->solved;
       imu_state.T_world_body = w.f.T_world_camera * options.inertial.T_body_camera.inverse();
-      imu_state.v_world_mps = w.imu_prediction.v_world_mps;
+      imu_state.v_world_mps = refined ? w.imu_terms->v_world : w.imu_prediction.v_world_mps;
       imu_state_time = w.f.time;
       have_imu_state = true;
+      have_imu_state_covariance = refined && w.imu_terms->covariance_ok;
+      if (have_imu_state_covariance) {
+        imu_state_pose_covariance = w.imu_terms->pose_covariance;
+        imu_state_velocity_covariance = w.imu_terms->velocity_covariance;
+      }
     } else {
       have_imu_state = false;
+      have_imu_state_covariance = false;
     }
     if (result.keyframe && !localization_only) estimate_inertial(w);
     if (scale_drifted && kind == io::SequenceKind::kMonocular) {
@@ -174,8 +237,10 @@ void VisualSlam::Impl::advance_inertial_state(TrackingFrame& w) {
     imu_state.T_world_body = w.f.T_world_camera * options.inertial.T_body_camera.inverse();
     imu_state.v_world_mps = w.imu_prediction.v_world_mps;
     imu_state_time = w.f.time;
+    have_imu_state_covariance = false;
   } else {
     have_imu_state = false;
+    have_imu_state_covariance = false;
   }
 }
 
@@ -302,6 +367,7 @@ void VisualSlam::Impl::estimate_inertial(TrackingFrame& w) {
   imu_state.v_world_mps = init.v_world_mps.back();
   imu_state_time = w.f.time;
   have_imu_state = true;
+  have_imu_state_covariance = false;
 }
 
 // Multiplies segment `seg`'s distances by `scale` about its first keyframe's camera centre:

@@ -229,6 +229,11 @@ struct VisualSlam::Impl {
   inertial::ImuBias imu_bias;
   bool have_imu_state = false;
   inertial::NavState imu_state;  // the body at the last frame (tracked or carried)
+  // ... the covariance of its camera pose and velocity, when a visual-inertial pose optimisation
+  // gave it (else inertial_pose_terms assumes VisualInertialOptions' defaults).
+  bool have_imu_state_covariance = false;
+  Eigen::Matrix<double, 6, 6> imu_state_pose_covariance = Eigen::Matrix<double, 6, 6>::Identity();
+  Eigen::Matrix3d imu_state_velocity_covariance = Eigen::Matrix3d::Identity();
   core::Timestamp imu_state_time;
   core::Timestamp last_tracked_time;  // for max_carried_s
   int inertial_segment = -1;   // the segment the estimates are for (a new one starts them again)
@@ -328,8 +333,29 @@ struct VisualSlam::Impl {
   double chi2(const FrameData& f, std::size_t i, const core::SE3& T_cw, const Eigen::Vector3d& p_world) const;
   double chi2_of(const FrameData& f, std::size_t i, const core::SE3& T_cw) const;
   std::unique_ptr<backend::Factor> observation_factor(const FrameData& f, std::size_t i) const;
-  // Returns the inliers; marks outliers in f.outlier; sets f.T_world_camera.
-  int optimize_pose(FrameData& f, double* sigma_position_m = nullptr);
+  // The IMU's part of a visual-inertial motion-only BA (ORB-SLAM3 Optimizer::
+  // PoseInertialOptimizationLastFrame, Campos et al. T-RO 2021 Sec. V): the last frame's state
+  // with its covariance (a prior, as ORB-SLAM3's marginalised one), the readings since, the
+  // biases; out: this frame's velocity and the covariance of its pose and velocity.
+  struct InertialPoseTerms {
+    inertial::PreintegratedImu preintegrated;  // last frame -> this frame, with the hold's error
+    core::SE3 T_world_camera_previous;
+    Eigen::Vector3d v_world_previous = Eigen::Vector3d::Zero();
+    Eigen::Matrix<double, 6, 6> pose_covariance_previous = Eigen::Matrix<double, 6, 6>::Identity();  // camera, (rho, phi) on the right
+    Eigen::Matrix3d velocity_covariance_previous = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d v_world = Eigen::Vector3d::Zero();  // out, and the start
+    Eigen::Matrix<double, 6, 6> pose_covariance = Eigen::Matrix<double, 6, 6>::Identity();  // out
+    Eigen::Matrix3d velocity_covariance = Eigen::Matrix3d::Identity();                      // out
+    bool solved = false, covariance_ok = false;                                              // out
+  };
+  // Returns the inliers; marks outliers in f.outlier; sets f.T_world_camera. With `imu`, the
+  // IMU's factor and the last frame's prior join the reprojections (inertial_tracking.cpp).
+  int optimize_pose(FrameData& f, double* sigma_position_m = nullptr, InertialPoseTerms* imu = nullptr);
+  // The IMU's variables and factors in a motion-only BA whose pose variable is `pose_variable`;
+  // `values` (kInertialPoseValues) holds the last frame's pose and velocity, this frame's velocity
+  // and the biases. Returns the velocity's variable.
+  static constexpr int kInertialPoseValues = 19;
+  int add_inertial_pose_terms(const InertialPoseTerms& imu, backend::LeastSquaresProblem& problem, int pose_variable, double* values) const;
   void drop_outliers(FrameData& f);
 
   // --- Local map (ORB-SLAM2 Tracking::TrackLocalMap) (tracking.cpp) ---
@@ -343,7 +369,7 @@ struct VisualSlam::Impl {
   int search_by_projection(FrameData& f, const std::vector<int>& ids, double th, bool count_visible);
   // update_statistics false: a trial (a rival place of a relocalisation) that leaves the map's
   // found / visible counts and the reference keyframe as they were.
-  int track_local_map(FrameData& f, double* sigma_position_m, int* given, bool update_statistics = true);
+  int track_local_map(FrameData& f, double* sigma_position_m, int* given, bool update_statistics = true, InertialPoseTerms* imu = nullptr);
 
   // --- Relocalisation and its uniqueness (tracking.cpp) ---
   // The first stage against keyframe `kf` (ORB-SLAM2 Relocalization's per-candidate steps):
@@ -592,6 +618,7 @@ struct VisualSlam::Impl {
     bool unverified_start = false;  // neither the prediction nor the reference keyframe explained the frame
     bool have_imu_prediction = false;  // the IMU predicted the body's state at this frame
     inertial::NavState imu_prediction;
+    std::optional<InertialPoseTerms> imu_terms;  // the visual-inertial pose optimisation's, when it ran
   };
   // The reference-keyframe fallback's candidates and the frame's words.
   struct FallbackCandidates {
@@ -617,6 +644,7 @@ struct VisualSlam::Impl {
   void start_stereo_segment(TrackingFrame& w);
   // Visual-inertial stages (inertial_tracking.cpp).
   void predict_with_imu(TrackingFrame& w);
+  std::optional<InertialPoseTerms> inertial_pose_terms(const TrackingFrame& w) const;
   bool carry_with_imu(TrackingFrame& w);
   void map_carried_view(TrackingFrame& w);
   void start_keyframe_imu_state(const TrackingFrame& w);

@@ -342,7 +342,7 @@ std::unique_ptr<backend::Factor> VisualSlam::Impl::observation_factor(const Fram
 }
 
 // Returns the inliers; marks outliers in f.outlier; sets f.T_world_camera.
-int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m) {
+int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m, InertialPoseTerms* imu) {
   std::vector<std::size_t> matched;
   for (std::size_t i = 0; i < f.size(); ++i) {
     f.outlier[i] = 0;
@@ -361,6 +361,8 @@ int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m) {
     double pose[7];
     backend::se3_to_values(initial, pose);  // every round starts from the prediction, as ORB-SLAM2
     const int var = problem.add_variable(pose, backend::se3_manifold());
+    double imu_values[kInertialPoseValues];
+    if (imu) add_inertial_pose_terms(*imu, problem, var, imu_values);
     for (const std::size_t i : matched) {
       if (f.outlier[i]) continue;
       const bool stereo = f.u_right[i] >= 0;
@@ -374,6 +376,10 @@ int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m) {
     if (problem.num_factors() < 3) break;
     const backend::LeastSquaresSummary s = backend::solve(problem, lso);
     if (s.is_solution_usable()) T = backend::se3_from_values(pose);
+    if (imu && s.is_solution_usable()) {
+      imu->solved = true;
+      imu->v_world = Eigen::Map<const Eigen::Vector3d>(imu_values + 10);
+    }
     const core::SE3 T_cw = T.inverse();
     inliers = 0;
     for (const std::size_t i : matched) {
@@ -395,6 +401,19 @@ int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m) {
                       {cv});
       }
       const backend::VariableCovariances c = backend::marginal_covariances(cp, {cv}, 1);
+      if (imu && imu->solved) {
+        // With the IMU's terms added, the pose's and the velocity's: the next frame's prior
+        // (ORB-SLAM3 marginalises the last frame's state the same way).
+        double covariance_values[kInertialPoseValues];
+        const int velocity_variable = add_inertial_pose_terms(*imu, cp, cv, covariance_values);
+        Eigen::Map<Eigen::Vector3d>(covariance_values + 10) = imu->v_world;
+        const backend::VariableCovariances ci = backend::marginal_covariances(cp, {cv, velocity_variable}, 1);
+        if (ci.ok) {
+          imu->pose_covariance = ci.blocks[0];
+          imu->velocity_covariance = ci.blocks[1];
+          imu->covariance_ok = imu->pose_covariance.allFinite() && imu->velocity_covariance.allFinite();
+        }
+      }
       if (c.ok) {
         // Tangent (rho, phi) on the right: the position block in the camera frame; its
         // largest eigenvalue is frame-independent. Pixel noise of 1 px at level 0 assumed.
@@ -471,7 +490,7 @@ int VisualSlam::Impl::search_by_projection(FrameData& f, const std::vector<int>&
   return matches;
 }
 
-int VisualSlam::Impl::track_local_map(FrameData& f, double* sigma_position_m, int* given, bool update_statistics) {
+int VisualSlam::Impl::track_local_map(FrameData& f, double* sigma_position_m, int* given, bool update_statistics, InertialPoseTerms* imu) {
   const int reference_before = reference_keyframe;
   // Keyframes sharing points with the frame, most shared first.
   std::unordered_map<int, int> shared;
@@ -504,7 +523,7 @@ int VisualSlam::Impl::track_local_map(FrameData& f, double* sigma_position_m, in
   int matched = 0;
   for (std::size_t i = 0; i < f.size(); ++i) matched += f.map_point[i] >= 0 ? 1 : 0;
   *given = matched;
-  const int inliers = optimize_pose(f, sigma_position_m);
+  const int inliers = optimize_pose(f, sigma_position_m, imu);
   for (std::size_t i = 0; count && i < f.size(); ++i) {
     if (f.map_point[i] >= 0 && !f.outlier[i]) ++points[static_cast<std::size_t>(f.map_point[i])].found;
   }
@@ -893,11 +912,13 @@ void VisualSlam::Impl::refine_with_local_map(TrackingFrame& w) {
     // matches from a poorly predicted projection): then the first stage's result stands.
     FrameData first_stage = f;
     const int first_inliers = inliers;
-    inliers = track_local_map(f, &result.sigma_position_m, &given);
+    w.imu_terms = inertial_pose_terms(w);
+    inliers = track_local_map(f, &result.sigma_position_m, &given, true, w.imu_terms ? &*w.imu_terms : nullptr);
     if (inliers < first_inliers / 2) {
       f = std::move(first_stage);
       inliers = first_inliers;
       given = first_inliers;
+      w.imu_terms.reset();
       result.note = "local-map matches contradicted the first stage; its pose kept";
     }
   }

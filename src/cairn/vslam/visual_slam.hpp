@@ -86,6 +86,13 @@ struct VisualInertialOptions {
   /// position (ORB-SLAM3 OptimizeEssentialGraph4DoF); roll and pitch, which gravity makes
   /// observable, are kept. Off: as without an IMU (SE(3), monocular Sim(3)).
   bool four_dof_loops = true;
+  /// The IMU in the motion-only BA of a tracked frame (ORB-SLAM3 PoseInertialOptimizationLastFrame):
+  /// the IMU's factor from the last frame's state, whose covariance the last frame's optimisation
+  /// gave, else these sigmas (pose position, rotation; velocity). > 0.
+  bool pose_optimisation = true;
+  double pose_sigma_m = 0.01;
+  double pose_sigma_deg = 0.2;
+  double velocity_sigma_mps = 0.1;
   bool is_valid(std::string* why) const;
 };
 
