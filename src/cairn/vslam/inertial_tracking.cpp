@@ -1,4 +1,4 @@
-// Visual-inertial tracking (issue 40, its first part), after ORB-SLAM3 (Campos, Elvira, Gomez
+// Visual-inertial tracking (issue 40), after ORB-SLAM3 (Campos, Elvira, Gomez
 // Rodriguez, Montiel & Tardos, "ORB-SLAM3: An Accurate Open-Source Library for Visual,
 // Visual-Inertial and Multi-Map SLAM", T-RO 2021, Sec. V-VII): the IMU, preintegrated from the
 // last frame's state (Forster et al., T-RO 2017; inertial/preintegration.hpp), predicts the frame
@@ -6,9 +6,10 @@
 // frames the images do not track (ORB-SLAM3's RECENTLY_LOST state); gravity, the velocities and the
 // biases come from the inertial-only MAP estimate of Campos et al. (ICRA 2020) over the recent
 // keyframes, made at every keyframe (with one camera it also gives the map's scale, then watches
-// it). The IMU's factors in the local bundle adjustment: local_mapping.cpp
-// (collect_inertial_scope). What ORB-SLAM3 has and this does not yet: the IMU factor in the
-// motion-only bundle adjustment (docs/vslam.md, "With an IMU").
+// it); the IMU's factor joins each tracked frame's motion-only BA (inertial_pose_terms; ORB-SLAM3
+// PoseInertialOptimizationLastFrame). The IMU's factors in the local bundle adjustment:
+// local_mapping.cpp (collect_inertial_scope); loops in 4 DoF: loop_closing.cpp (docs/vslam.md,
+// "With an IMU").
 // The state and the declarations: slam_state.hpp.
 
 #include <algorithm>

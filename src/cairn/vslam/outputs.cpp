@@ -340,7 +340,7 @@ WrittenOutputs write_outputs(const io::OutputDirectory& out, const VisualSlam& s
   report["place_recognition"] = place_recognition_json(input, slam.options(), s);
   if (slam.localization_only()) report["localization"] = localization_json(input, slam, results);
   report["inertial"] = slam.options().inertial.enabled ? inertial_json(slam) : nlohmann::json(nullptr);
-  report["not_implemented"] = {"the IMU factor in the bundle adjustments", "loop closure in 4 DoF for visual-inertial maps"};
+  report["not_implemented"] = {"merges of map segments in 4 DoF for visual-inertial maps", "the biases as variables of the pose optimisation"};
   io::write_output(out.staging_path("report.json"), [&](std::ostream& o) { o << io::json_text(report); });
   return written;
 }
