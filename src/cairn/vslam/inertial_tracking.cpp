@@ -97,10 +97,13 @@ void VisualSlam::Impl::predict_with_imu(TrackingFrame& w) {
 // frame's own pose optimisation, else pose_sigma_m / pose_sigma_deg / velocity_sigma_mps),
 // the readings since, preintegrated at the current biases with the hold's error
 // (inertial::hold_error_covariance). None when the IMU does not predict this frame, its scale
-// is judged drifted, or inertial.pose_optimisation is off.
+// is judged drifted, or inertial.pose_optimisation is off; nor for a frame that relocalises or
+// whose pose jumped (ORB-SLAM3 also leaves the IMU out of the frames after a relocalisation):
+// the images' verdict on where the camera is must not be pulled back to the IMU's.
 std::optional<VisualSlam::Impl::InertialPoseTerms> VisualSlam::Impl::inertial_pose_terms(const TrackingFrame& w) const {
   const VisualInertialOptions& o = options.inertial;
   if (!o.enabled || !o.pose_optimisation || !w.have_imu_prediction || scale_drifted || !have_imu_state) return std::nullopt;
+  if (w.relocalising || w.jumped) return std::nullopt;
   InertialPoseTerms terms{inertial::PreintegratedImu(o.noise, imu_bias), core::SE3(), Eigen::Vector3d::Zero()};
   if (!inertial::integrate_interval(imu_samples, imu_state_time, w.f.time, terms.preintegrated) || !(terms.preintegrated.delta_time_s() > 0.0)) {
     return std::nullopt;

@@ -719,6 +719,7 @@ void VisualSlam::Impl::collect_inertial_scope(const std::set<int>& local, Bundle
     ba.velocity_values[kf] = k.v_world_mps;
     ba.bias_values[kf] = inertial::to_values(k.imu_bias);
   }
+  ba.oldest_bias_prior = ba.bias_values[chain.front()];
   ba.chain = std::move(chain);
   ba.links = std::move(links);
   ba.gravity_world = gravity_world;
@@ -739,7 +740,7 @@ void VisualSlam::Impl::add_inertial_factors(BundleAdjustmentState& ba, backend::
   Eigen::Matrix<double, 6, 1> prior_sigma;
   prior_sigma << 0.01, 0.01, 0.01, 0.1, 0.1, 0.1;
   const int oldest = ba.chain.front();
-  p.add_factor(std::make_unique<inertial::VectorPriorFactor<6>>(ba.bias_values[oldest], prior_sigma.cwiseAbs2().asDiagonal().toDenseMatrix()),
+  p.add_factor(std::make_unique<inertial::VectorPriorFactor<6>>(ba.oldest_bias_prior, prior_sigma.cwiseAbs2().asDiagonal().toDenseMatrix()),
                {ba.bias_var[oldest]});
   for (std::size_t k = 0; k + 1 < ba.chain.size(); ++k) {
     const int a = ba.chain[k], b = ba.chain[k + 1];

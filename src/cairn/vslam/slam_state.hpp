@@ -355,6 +355,7 @@ struct VisualSlam::Impl {
   // `values` (kInertialPoseValues) holds the last frame's pose and velocity, this frame's velocity
   // and the biases. Returns the velocity's variable.
   static constexpr int kInertialPoseValues = 19;
+  static constexpr int kInertialPoseFactors = 3;  // the two priors and the IMU factor
   int add_inertial_pose_terms(const InertialPoseTerms& imu, backend::LeastSquaresProblem& problem, int pose_variable, double* values) const;
   void drop_outliers(FrameData& f);
 
@@ -461,6 +462,7 @@ struct VisualSlam::Impl {
     std::map<int, Eigen::Vector3d> velocity_values;
     std::map<int, Eigen::Matrix<double, 6, 1>> bias_values;
     std::map<int, int> velocity_var, bias_var;
+    Eigen::Matrix<double, 6, 1> oldest_bias_prior = Eigen::Matrix<double, 6, 1>::Zero();  // the oldest keyframe's biases as collected
     Eigen::Vector3d gravity_world = Eigen::Vector3d::Zero();
   };
   // Its stages, in order (local_mapping.cpp).

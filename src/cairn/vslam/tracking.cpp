@@ -373,7 +373,7 @@ int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m, Iner
                                                         &points[static_cast<std::size_t>(f.map_point[i])].p_world),
                          {var}, loss);
     }
-    if (problem.num_factors() < 3) break;
+    if (problem.num_factors() - (imu ? kInertialPoseFactors : 0) < 3) break;  // fewer than 3 observations
     const backend::LeastSquaresSummary s = backend::solve(problem, lso);
     if (s.is_solution_usable()) T = backend::se3_from_values(pose);
     if (imu && s.is_solution_usable()) {
