@@ -1162,6 +1162,56 @@ TEST(VisualSlamSynthetic, MonocularScaleHoldsThroughFastTurns) {
   EXPECT_LT(on.ate, 0.3);
 }
 
+// The monocular loop route (monocular_loop_route) looking `yaw_offset_rad` off the travel, flown
+// at 1.5 m/s with the simulator's IMU (ADIS16448, seed 7) on the camera's body (inertial_flight.hpp's
+// mounting): the frames' true poses and period, the IMU's readings, the rendered images.
+// `route_mismatch_m`: the closed-form path the IMU flies against the route's frame 10 (0 when
+// both are the same route).
+struct InertialLoopFlight {
+  std::vector<core::SE3> truth;
+  double frame_s = 0.0;
+  double route_mismatch_m = 0.0;
+  sim::ImuSimulationOptions imu;
+  sim::SimulatedImu simulated;
+  std::vector<cv::Mat> images;
+};
+
+InertialLoopFlight fly_inertial_loop(const SyntheticWorld& world, const StereoCamera& camera, double yaw_offset_rad) {
+  InertialLoopFlight flight;
+  double circuit_m = 0.0, extra = 0.0;
+  flight.truth = monocular_loop_route(yaw_offset_rad, circuit_m, extra);
+  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner, speed_mps = 1.5;  // monocular_loop_route's
+  const double duration_s = (circuit_m + extra) / speed_mps;
+  flight.frame_s = duration_s / static_cast<double>(flight.truth.size() - 1);
+  const auto camera_at = [&](double t) {
+    return rounded_loop_pose(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, speed_mps * t, yaw_offset_rad);
+  };
+  flight.route_mismatch_m = (camera_at(flight.frame_s * 10.0).translation() - flight.truth[10].translation()).norm();
+  flight.imu = *sim::imu_preset("adis16448");
+  flight.imu.seed = 7;
+  flight.simulated = sim::simulate_imu([&](double t) { return test::kinematics_of(camera_at, t); }, 0.0, duration_s + 0.2, flight.imu);
+  for (const core::SE3& pose : flight.truth) flight.images.push_back(world.render(pose, camera));
+  return flight;
+}
+
+// Options with the flight's IMU on (its noise, the camera's mounting).
+VisualSlamOptions with_flight_imu(VisualSlamOptions options, const InertialLoopFlight& flight) {
+  options.inertial.enabled = true;
+  options.inertial.T_body_camera = test::T_body_camera();
+  options.inertial.noise = flight.imu.noise;
+  return options;
+}
+
+// The IMU's readings up to the first at or after frame k's time (the prediction's last interval);
+// `next` is the first reading not given yet.
+void feed_imu_to_frame(VisualSlam& slam, const InertialLoopFlight& flight, std::size_t k, std::size_t& next) {
+  const double t = flight.frame_s * static_cast<double>(k);
+  while (next < flight.simulated.samples.size()) {
+    slam.add_imu(flight.simulated.samples[next]);
+    if (flight.simulated.samples[next++].stamp.seconds() >= t) break;
+  }
+}
+
 // Issue 40: a monocular scale collapse flagged by the IMU. The route of the test above (45 degrees
 // left, loops off) flown at 1.5 m/s with the simulator's IMU (ADIS16448, seed 7) on the camera's
 // body (inertial_flight.hpp's mounting): without the turn rule the scale collapses (above); the
@@ -1171,45 +1221,26 @@ TEST(VisualSlamSynthetic, MonocularScaleHoldsThroughFastTurns) {
 // inertial.local_ba off); with it in, the collapse does not happen.
 TEST(VisualSlamSynthetic, MonocularScaleCollapseIsFlaggedByTheImu) {
   const SyntheticWorld world = monocular_loop_world();
-  double circuit_m = 0.0, extra = 0.0;
-  const std::vector<core::SE3> truth = monocular_loop_route(-45.0 * kDeg, circuit_m, extra);
-  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner, speed_mps = 1.5;  // monocular_loop_route's
-  const double duration_s = (circuit_m + extra) / speed_mps;
-  const double frame_s = duration_s / static_cast<double>(truth.size() - 1);
-  const auto camera_at = [&](double t) {
-    return rounded_loop_pose(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, speed_mps * t, -45.0 * kDeg);
-  };
-  ASSERT_LT((camera_at(frame_s * 10.0).translation() - truth[10].translation()).norm(), 1e-9);
-  sim::ImuSimulationOptions imu = *sim::imu_preset("adis16448");
-  imu.seed = 7;
-  const sim::SimulatedImu simulated =
-      sim::simulate_imu([&](double t) { return test::kinematics_of(camera_at, t); }, 0.0, duration_s + 0.2, imu);
   const StereoCamera camera;
-  std::vector<cv::Mat> images;
-  for (const core::SE3& pose : truth) images.push_back(world.render(pose, camera));
+  const InertialLoopFlight flight = fly_inertial_loop(world, camera, -45.0 * kDeg);
+  ASSERT_LT(flight.route_mismatch_m, 1e-9);
+  const std::vector<core::SE3>& truth = flight.truth;
   struct Outcome {
     double scale_drift, ate;  // the map's scale over the last quarter relative to the first
     std::size_t flagged, first_flagged;
     VisualSlamSummary summary;
   };
   auto run = [&](double turn_fov, bool imu_in_optimisations) {
-    VisualSlamOptions options;
+    VisualSlamOptions options = with_flight_imu({}, flight);
     options.loop_closure = false;
     options.monocular_keyframe_turn_fov = turn_fov;
-    options.inertial.enabled = true;
     options.inertial.local_ba = imu_in_optimisations;
     options.inertial.pose_optimisation = imu_in_optimisations;
-    options.inertial.T_body_camera = test::T_body_camera();
-    options.inertial.noise = imu.noise;
     VisualSlam slam(camera.calibration(), io::SequenceKind::kMonocular, options);
     std::size_t init = truth.size(), first_flagged = truth.size(), next = 0;
     for (std::size_t k = 0; k < truth.size(); ++k) {
-      const double t = frame_s * static_cast<double>(k);
-      while (next < simulated.samples.size()) {
-        slam.add_imu(simulated.samples[next]);
-        if (simulated.samples[next++].stamp.seconds() >= t) break;
-      }
-      const FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(t), images[k]);
+      feed_imu_to_frame(slam, flight, k, next);
+      const FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(flight.frame_s * static_cast<double>(k)), flight.images[k]);
       if (r.tracked && init == truth.size()) init = k;
       if (first_flagged == truth.size() && r.note.find("monocular scale drift") != std::string::npos) first_flagged = k;
     }
@@ -1275,46 +1306,27 @@ TEST(VisualSlamSynthetic, MonocularScaleCollapseIsFlaggedByTheImu) {
 // no alignment is involved.
 TEST(VisualSlamSynthetic, VisualInertialLoopIsCorrectedInFourDof) {
   const SyntheticWorld world = monocular_loop_world();
-  double circuit_m = 0.0, extra = 0.0;
-  const std::vector<core::SE3> truth = monocular_loop_route(-60.0 * kDeg, circuit_m, extra);
-  const double mid = 3.5, corner = 1.5, leg = 2.0 * mid - 2.0 * corner, speed_mps = 1.5;  // monocular_loop_route's
-  const double duration_s = (circuit_m + extra) / speed_mps;
-  const double frame_s = duration_s / static_cast<double>(truth.size() - 1);
-  const auto camera_at = [&](double t) {
-    return rounded_loop_pose(Eigen::Vector3d(0.0, 0.0, -mid), -0.5 * kPi, leg, leg, corner, speed_mps * t, -60.0 * kDeg);
-  };
-  ASSERT_LT((camera_at(frame_s * 10.0).translation() - truth[10].translation()).norm(), 1e-9);
-  sim::ImuSimulationOptions imu = *sim::imu_preset("adis16448");
-  imu.seed = 7;
-  const sim::SimulatedImu simulated =
-      sim::simulate_imu([&](double t) { return test::kinematics_of(camera_at, t); }, 0.0, duration_s + 0.2, imu);
-  const Eigen::Vector3d gravity_render = (test::R_render_imu() * Eigen::Vector3d(0.0, 0.0, -1.0)).normalized();
   const StereoCamera camera;
-  std::vector<cv::Mat> images;
-  for (const core::SE3& pose : truth) images.push_back(world.render(pose, camera));
+  const InertialLoopFlight flight = fly_inertial_loop(world, camera, -60.0 * kDeg);
+  ASSERT_LT(flight.route_mismatch_m, 1e-9);
+  const std::vector<core::SE3>& truth = flight.truth;
+  const Eigen::Vector3d gravity_render = (test::R_render_imu() * Eigen::Vector3d(0.0, 0.0, -1.0)).normalized();
   struct Outcome {
     double ate_se3 = 0.0, ate_sim3 = 0.0, tilt_median_deg = 0.0, tilt_max_deg = 0.0;
     std::size_t accepted = 0, first_loop = 0;
     VisualSlamSummary summary;
   };
   auto run = [&](bool four_dof) {
-    VisualSlamOptions options;
+    VisualSlamOptions options = with_flight_imu({}, flight);
     options.vocabulary = training_vocabulary();
-    options.inertial.enabled = true;
-    options.inertial.T_body_camera = test::T_body_camera();
-    options.inertial.noise = imu.noise;
     options.inertial.four_dof_loops = four_dof;
     VisualSlam slam(camera.calibration(), io::SequenceKind::kMonocular, options);
     Outcome o;
     o.first_loop = truth.size();
     std::size_t init = truth.size(), next = 0;
     for (std::size_t k = 0; k < truth.size(); ++k) {
-      const double t = frame_s * static_cast<double>(k);
-      while (next < simulated.samples.size()) {
-        slam.add_imu(simulated.samples[next]);
-        if (simulated.samples[next++].stamp.seconds() >= t) break;
-      }
-      const FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(t), images[k]);
+      feed_imu_to_frame(slam, flight, k, next);
+      const FrameResult r = slam.add_monocular(core::Timestamp::from_seconds(flight.frame_s * static_cast<double>(k)), flight.images[k]);
       if (r.tracked && init == truth.size()) init = k;
       if (r.loop_closed && o.first_loop == truth.size()) o.first_loop = k;
     }

@@ -321,8 +321,9 @@ std::string VisualSlam::Impl::loop_rival(int current, int candidate, const LoopR
 void VisualSlam::Impl::correct_loop(int current, int candidate, const FrameData& probe, double scale) {
   std::vector<core::SE3> old_poses(keyframes.size());
   for (std::size_t k = 0; k < keyframes.size(); ++k) old_poses[k] = keyframes[k].frame.T_world_camera;
-  const bool similarity = kind == io::SequenceKind::kMonocular && !corrects_in_four_dof(current, candidate);
-  if (corrects_in_four_dof(current, candidate)) {
+  const bool four_dof = corrects_in_four_dof(current, candidate);
+  const bool similarity = kind == io::SequenceKind::kMonocular && !four_dof;
+  if (four_dof) {
     correct_poses_4dof(current, candidate, probe);
     ++summary->loops_corrected_in_4dof;
   } else if (similarity) {

@@ -355,7 +355,6 @@ struct VisualSlam::Impl {
   // `values` (kInertialPoseValues) holds the last frame's pose and velocity, this frame's velocity
   // and the biases. Returns the velocity's variable.
   static constexpr int kInertialPoseValues = 19;
-  static constexpr int kInertialPoseFactors = 3;  // the two priors and the IMU factor
   int add_inertial_pose_terms(const InertialPoseTerms& imu, backend::LeastSquaresProblem& problem, int pose_variable, double* values) const;
   void drop_outliers(FrameData& f);
 

@@ -363,8 +363,10 @@ int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m, Iner
     const int var = problem.add_variable(pose, backend::se3_manifold());
     double imu_values[kInertialPoseValues];
     if (imu) add_inertial_pose_terms(*imu, problem, var, imu_values);
+    int observations = 0;
     for (const std::size_t i : matched) {
       if (f.outlier[i]) continue;
+      ++observations;
       const bool stereo = f.u_right[i] >= 0;
       const double sqrt_info = 1.0 / scales[static_cast<std::size_t>(f.keypoints[i].octave)];
       backend::FactorLoss loss;
@@ -373,7 +375,7 @@ int VisualSlam::Impl::optimize_pose(FrameData& f, double* sigma_position_m, Iner
                                                         &points[static_cast<std::size_t>(f.map_point[i])].p_world),
                          {var}, loss);
     }
-    if (problem.num_factors() - (imu ? kInertialPoseFactors : 0) < 3) break;  // fewer than 3 observations
+    if (observations < 3) break;
     const backend::LeastSquaresSummary s = backend::solve(problem, lso);
     if (s.is_solution_usable()) T = backend::se3_from_values(pose);
     if (imu && s.is_solution_usable()) {
