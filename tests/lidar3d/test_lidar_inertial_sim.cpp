@@ -102,11 +102,9 @@ TEST(LidarInertialSimulation, CarriesTheTunnelWithoutLosingAScan) {
   for (const auto& scan : lio.scans) fused += scan.inertial ? 1 : 0;
   // The last sweep ends after the simulated IMU's last sample, so that scan has no prediction.
   EXPECT_GE(fused, static_cast<int>(lio.scans.size()) - 1);
-  // Issue 38 asks for 1 % of the distance. Measured (seed 1, this test) 0.98 %, against 5.9 %
-  // LiDAR-only; but seeds 2-5 give 6.1, 4.0, 13.2 and 7.9 % (LiDAR-only 14.4, 3.6, 6.9 and 9.6 %), so
-  // neither the 1 % nor "better than LiDAR-only" holds in general and neither is asserted here:
-  // docs/lidar3d.md, "LiDAR-inertial". What holds on every seed is asserted: nothing lost, the axis
-  // named, the IMU carrying it.
+  // Issue 38 asks for 1 % of the distance; one seed says little about that (the accuracy over
+  // several seeds is the next test's). What holds on every seed is asserted here: nothing lost,
+  // the axis named, the IMU carrying it.
   EXPECT_EQ(count_health(lio, Health::kLost), 0);
   // Out of range of both portals the registration still names the axis it cannot see; the IMU carries it.
   const sim::PassageScans& p = *lio.simulation.passage_scans;
@@ -116,6 +114,30 @@ TEST(LidarInertialSimulation, CarriesTheTunnelWithoutLosingAScan) {
     degenerate += lio.scans[k].inertial && lio.scans[k].inertial->degenerate ? 1 : 0;
   }
   EXPECT_GE(degenerate, blind * 9 / 10);
+}
+
+// The tunnel's end-point error over several noise seeds, odometry only (loop closure costs seconds
+// per run in the tunnel's look-alike places and closes nothing here). One seed is a coin toss: the
+// IMU's bias random walk alone moves a seed's end by metres (docs/lidar3d.md, "LiDAR-inertial", the
+// floor per seed). Over seeds 1-4 the IMU must at least halve LiDAR-only's summed error.
+TEST(LidarInertialSimulation, HalvesLidarOnlyEndPointErrorOverFourTunnelSeeds) {
+  const sim::Scenario scenario = *sim::make_scenario("tunnel-3d");
+  LidarSlamOptions options;
+  options.loop_closure = false;
+  double sum_lio = 0.0, sum_lidar = 0.0;
+  for (const std::uint64_t seed : {1, 2, 3, 4}) {
+    const SimRun lio = run_scenario(scenario, seed, true, options);
+    const SimRun lidar = run_scenario(scenario, seed, false, options);
+    const double e_lio = evaluate_trajectory(lio.truth_at_stamps, lio.trajectory).end_point_error_m;
+    const double e_lidar = evaluate_trajectory(lidar.truth_at_stamps, lidar.trajectory).end_point_error_m;
+    const double path = lio.simulation.path_length_m;
+    std::printf("tunnel-3d seed %d: LiDAR-inertial end-point error %.2f m (%.2f %%), LiDAR-only %.2f m (%.2f %%)\n",
+                static_cast<int>(seed), e_lio, 100.0 * e_lio / path, e_lidar, 100.0 * e_lidar / path);
+    EXPECT_EQ(count_health(lio, Health::kLost), 0) << seed;
+    sum_lio += e_lio;
+    sum_lidar += e_lidar;
+  }
+  EXPECT_LT(sum_lio, 0.5 * sum_lidar);
 }
 
 // tunnel-3d starts from a standstill at 1.5 m/s^2 at the IMU's first sample: over the static

@@ -399,15 +399,18 @@ backend::LeastSquaresProblem LidarInertialFusion::Impl::build_problem(const Iner
     }
   }
   if (priors.joint_covariance && (joint_with_gravity || gravity_held)) {
+    // A joint prior that still holds gravity keeps it after gravity is held: with gravity constant
+    // the factor is the state's prior conditioned on the held value. Its marginal (dropping
+    // gravity's rows) would not be: on a straight drive only the accelerometer bias' sum with
+    // gravity's tilt is observed, so the bias' marginal is loose by the tilt's uncertainty, and a
+    // few misread registrations then move the bias far beyond its random walk (the tunnel's
+    // portal, docs/lidar3d.md "LiDAR-inertial").
     std::vector<int> joint_vars = {ids[0][0], ids[0][1], ids[0][2]};
     if (joint_with_gravity) joint_vars.push_back(gravity_id);
-    Eigen::MatrixXd covariance = *priors.joint_covariance;
-    if (joint_with_gravity && gravity_held) covariance = covariance.topLeftCorner(15, 15).eval();
-    if (joint_with_gravity && gravity_held) joint_vars.pop_back();
     const WindowState& mean = priors.joint_mean;
     problem.add_factor(std::make_unique<inertial::StatePriorFactor>(backend::se3_from_values(mean.pose.data()), mean.velocity,
-                                                                    mean.bias, gravity_held ? nullptr : &priors.gravity,
-                                                                    covariance),
+                                                                    mean.bias, joint_with_gravity ? &priors.gravity : nullptr,
+                                                                    *priors.joint_covariance),
                        joint_vars);
   } else {
     problem.add_factor(std::make_unique<inertial::PosePriorFactor>(priors.pose, priors.pose_covariance), {ids[0][0]});

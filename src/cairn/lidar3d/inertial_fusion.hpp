@@ -11,8 +11,10 @@
 ///    carries the motion: LIO-SAM switches to a loose noise model when its scan matching is
 ///    degenerate),
 ///  * priors on the oldest state of a sliding window of `window_states`; when the window slides, the
-///    new oldest state's marginal covariances become its priors (LIO-SAM's reset with
-///    `marginalCovariance`, which drops the correlations between pose, velocity and bias).
+///    oldest state is marginalised and the new oldest state's joint marginal over (pose, velocity,
+///    bias, and gravity while it is estimated) becomes one prior, correlations kept (LIO-SAM's reset
+///    with `marginalCovariance` keeps only the per-variable blocks). Once gravity is held, that
+///    prior is conditioned on the held gravity, not marginalised over it.
 /// The fused state predicts the next sweep: the IMU is integrated from it over the sweep and gives
 /// the odometry its prediction and every point's pose for deskewing (motion_prior.hpp).
 ///
