@@ -23,6 +23,7 @@
 #include "cairn/inertial/imu_csv.hpp"
 #include "cairn/navigation/gnss_inertial_odometry.hpp"
 #include "cairn/navigation/wheel_odometry_reader.hpp"
+#include "cairn/navigation/withheld_gnss.hpp"
 #include "test_data.hpp"
 
 namespace cairn::navigation {
@@ -70,27 +71,6 @@ Recording read_recording() {
           gnss::read_gnss_bag(bag, "/fix")};
 }
 
-/// The wheel odometry's vehicle pose at t (linear in position, the nearer message's rotation).
-core::SE3 odometry_at(const io::Trajectory& odometry, double t_s) {
-  const auto after = std::lower_bound(odometry.stamps.begin(), odometry.stamps.end(), core::Timestamp::from_seconds(t_s));
-  const std::size_t j = std::clamp<std::size_t>(static_cast<std::size_t>(after - odometry.stamps.begin()), 1, odometry.size() - 1);
-  const double t0 = odometry.stamps[j - 1].seconds(), t1 = odometry.stamps[j].seconds();
-  const double w = std::clamp((t_s - t0) / (t1 - t0), 0.0, 1.0);
-  const core::SE3& a = odometry.poses[j - 1];
-  const core::SE3& b = odometry.poses[j];
-  return core::SE3(w < 0.5 ? a.so3() : b.so3(), (1.0 - w) * a.translation() + w * b.translation());
-}
-
-/// A state's vehicle pose at time t_s (the state at or before it, moved along its velocity).
-core::SE3 vehicle_at(const std::vector<NavigationState>& states, double t_s, bool predicted, const core::SE3& T_imu_vehicle) {
-  const auto after = std::upper_bound(states.begin(), states.end(), t_s,
-                                      [](double t, const NavigationState& s) { return t < s.time_s; });
-  const NavigationState& s = *(after == states.begin() ? after : after - 1);
-  const inertial::NavState& n = predicted ? s.predicted : s.state;
-  const core::SE3 T(n.T_world_body.so3(), n.T_world_body.translation() + n.v_world_mps * (t_s - s.time_s));
-  return T * T_imu_vehicle;
-}
-
 TEST(GnssInertialOdometryHusky, FusedErrorAfterSixtySecondsWithoutGpsIsBelowWheelOdometrys) {
   CAIRN_REQUIRE_DATA(kBag);
   const Recording recording = read_recording();
@@ -99,47 +79,25 @@ TEST(GnssInertialOdometryHusky, FusedErrorAfterSixtySecondsWithoutGpsIsBelowWhee
   // Withheld: 150-210 s after the start, where the Husky drives at about 1 m/s throughout, after
   // 150 s of GPS for the biases.
   const double gap_from_s = start_s + 150.0, gap_to_s = start_s + 210.0;
-  std::vector<gnss::GnssFix> kept, withheld;
-  for (const auto& fix : recording.fixes) {
-    const double t = fix.stamp.seconds();
-    (t >= gap_from_s && t < gap_to_s ? withheld : kept).push_back(fix);
-  }
-  ASSERT_GT(withheld.size(), 100u);
+  const WithheldFixes split = withhold_fixes(recording.fixes, gap_from_s, gap_to_s);
+  ASSERT_GT(split.withheld.size(), 100u);
   const GnssInertialOdometryOptions options = husky_options();
   GnssInertialOdometry odometry(options);
-  run_in_time_order(odometry, recording.imu, recording.wheels.speeds, kept);
+  run_in_time_order(odometry, recording.imu, recording.wheels.speeds, split.kept);
   const NavigationSummary summary = odometry.summary();
   ASSERT_TRUE(summary.ok()) << summary.message;
-  const gnss::LocalFrame frame(*summary.enu_origin);
-  const auto& states = odometry.states();
-
-  // Wheel odometry alone, aligned to the fused vehicle pose at the gap's start.
-  const core::SE3 T_enu_vehicle_start = vehicle_at(states, gap_from_s, false, options.T_imu_vehicle);
-  const core::SE3 T_odom_vehicle_start = odometry_at(recording.wheels.poses, gap_from_s);
-  const auto heading = [](const core::SE3& T) { return std::atan2(T.so3().matrix()(1, 0), T.so3().matrix()(0, 0)); };
-  const core::SE3 T_enu_odom(core::SO3::exp(Vector3(0, 0, heading(T_enu_vehicle_start) - heading(T_odom_vehicle_start))), Vector3::Zero());
-  const Vector3 offset = T_enu_vehicle_start.translation() - T_enu_odom.so3() * T_odom_vehicle_start.translation();
-
-  double fused_sq = 0.0, wheel_sq = 0.0;
-  for (const auto& fix : withheld) {
-    const Vector3 p = frame.forward(fix);
-    const double t = fix.stamp.seconds();
-    fused_sq += (vehicle_at(states, t, true, options.T_imu_vehicle).translation() - p).head<2>().squaredNorm();
-    wheel_sq += (T_enu_odom.so3() * odometry_at(recording.wheels.poses, t).translation() + offset - p).head<2>().squaredNorm();
-  }
-  const double fused_rms = std::sqrt(fused_sq / static_cast<double>(withheld.size()));
-  const double wheel_rms = std::sqrt(wheel_sq / static_cast<double>(withheld.size()));
-  const gnss::GnssFix& back = kept[static_cast<std::size_t>(
-      std::lower_bound(kept.begin(), kept.end(), gap_to_s, [](const gnss::GnssFix& f, double t) { return f.stamp.seconds() < t; }) -
-      kept.begin())];
-  const Vector3 p_back = frame.forward(back);
-  const double fused_back = (vehicle_at(states, back.stamp.seconds(), true, options.T_imu_vehicle).translation() - p_back).head<2>().norm();
-  const double wheel_back =
-      (T_enu_odom.so3() * odometry_at(recording.wheels.poses, back.stamp.seconds()).translation() + offset - p_back).head<2>().norm();
+  // The fused prediction and the wheel odometry (aligned to the fused pose at the gap's start)
+  // against the withheld fixes, the receiver's own positions: withheld_gnss.hpp.
+  const WithheldComparison c =
+      compare_with_withheld(odometry.states(), split, gap_from_s, gap_to_s, *summary.enu_origin, options.T_imu_vehicle, recording.wheels.poses);
+  ASSERT_TRUE(c.first_fix_back && c.first_fix_back->wheel_m && c.wheel_rms_m);
+  ASSERT_EQ(c.fixes.size(), split.withheld.size());
+  const double fused_back = c.first_fix_back->fused_m, wheel_back = *c.first_fix_back->wheel_m;
+  const double fused_rms = c.fused_rms_m, wheel_rms = *c.wheel_rms_m;
   std::printf("Husky, GPS withheld %.0f-%.0f s (%zu fixes): at the first fix back (%.1f s) fused %.2f m, wheel odometry %.2f m; "
               "RMS over the gap fused %.2f m, wheel odometry %.2f m; %zu states, %zu outliers of %zu fixes, aligned at %.1f s "
               "(yaw sigma %.2f deg), still start %d, solve %.2f s\n",
-              gap_from_s - start_s, gap_to_s - start_s, withheld.size(), back.stamp.seconds() - start_s, fused_back, wheel_back,
+              gap_from_s - start_s, gap_to_s - start_s, split.withheld.size(), c.first_fix_back->time_s - start_s, fused_back, wheel_back,
               fused_rms, wheel_rms, summary.states, summary.outliers, summary.fixes_received,
               summary.alignment_time_s - start_s, summary.alignment.yaw_sigma_rad * 180.0 / M_PI, summary.still_start, summary.solve_s);
   EXPECT_LT(fused_back, wheel_back);

@@ -34,6 +34,7 @@ Runner register_slam3d(CLI::App& app);
 Runner register_vslam(CLI::App& app);
 Runner register_vocabulary(CLI::App& app);
 Runner register_imu(CLI::App& app);
+Runner register_navigate(CLI::App& app);
 Runner register_register(CLI::App& app);
 
 /// Flags shared by every command that reads a pose graph.

@@ -98,6 +98,7 @@ int main(int argc, char** argv) {
   add(cairn::cli::register_ba, "ba", "Bundle adjustment of a BAL problem (points eliminated by Schur complement)");
   add(CAIRN_SUITE(cairn::cli::register_register), "register", "Register one point cloud onto another (GICP or point-to-plane ICP, from a guess or --global): T_target_source, fitness, degeneracy, covariance");
   add(CAIRN_SUITE(cairn::cli::register_imu), "imu", "Examine an IMU recording: rates, gaps, saturation, static initialisation, Allan deviation, preintegration against ground truth");
+  add(CAIRN_SUITE(cairn::cli::register_navigate), "navigate", "A ground vehicle's trajectory from a bag's IMU, wheel odometry and GNSS (fixed-lag smoother); --withhold-gnss measures dead reckoning");
   add(CAIRN_SUITE(cairn::cli::register_simulate), "simulate", "Simulate a world, a trajectory and sensor logs (CARMEN, TUM, g2o, relations, PNG)");
 
   try {

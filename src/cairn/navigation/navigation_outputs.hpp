@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// What a GNSS-inertial navigation run writes (`navigation_report_json`, `write_navigation_states_csv`):
+/// What a GNSS-inertial navigation run writes (`navigation_report_json`, `write_navigation_states_csv`,
+/// `write_navigation_outputs` for `cairn navigate`):
 /// a JSON report (summary, alignment, dropouts, every fix with its error, Mahalanobis distance and
 /// verdict) and a CSV of the states, so a command only parses flags, runs and prints.
 
@@ -9,7 +10,9 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "cairn/io/output_file.hpp"
 #include "cairn/navigation/gnss_inertial_odometry.hpp"
+#include "cairn/navigation/navigation_run.hpp"
 
 namespace cairn::navigation {
 
@@ -24,5 +27,18 @@ nlohmann::json navigation_report_json(const NavigationSummary& summary, const st
 /// xyz, wheel (0/1), gnss_fixes. Numbers with 17 significant digits for times, 9 otherwise.
 /// Throws io::ParseError when the file cannot be written.
 void write_navigation_states_csv(const std::string& path, const std::vector<NavigationState>& states);
+
+/// The withheld-GNSS comparison: the interval (seconds since `start_s`), the counts, the RMS and the
+/// first fix back for both estimates, and every withheld fix.
+nlohmann::json withheld_json(const WithheldComparison& comparison, double start_s);
+
+/// `cairn navigate`'s outputs into `out`'s staging directory: report.json (navigation_report_json
+/// with "inputs", "options" and, with a withholding, "withheld"), states.csv, trajectory.tum (the
+/// vehicle frame's poses, T_world_vehicle, world = ENU at the first fix once aligned) and
+/// navigation.png (top view; with a withholding, the errors against the withheld fixes). Returns
+/// the names written. Throws io::ParseError when a file cannot be written.
+std::vector<std::string> write_navigation_outputs(io::OutputDirectory& out, const NavigationRun& run,
+                                                  const GnssInertialOdometryOptions& options, const nlohmann::json& inputs,
+                                                  const nlohmann::json& options_json);
 
 }  // namespace cairn::navigation
