@@ -213,6 +213,10 @@ std::vector<Command> commands() {
       {"register", "register", "{in} " + D + "/lidar3d/kitti00_keyframes/key_frames/key_frame_0.pcd.xz --json {out}",
        D + "/lidar3d/kitti00_keyframes/key_frames/key_frame_0.pcd.xz", false, O::kFile,
        "lidar3d/kitti00_keyframes/key_frames/key_frame_0.pcd.xz"},
+      {"navigate", "navigate", "{in} --until 30 --out {out} -q", D + "/bags/robot_localization_test1.bag", false, O::kDirectory,
+       "bags/robot_localization_test1.bag"},
+      {"imu", "imu", "{in} --no-allan --out {out} -q", D + "/inertial/euroc_v1_01/mav0", true, O::kDirectory,
+       "inertial/euroc_v1_01/mav0"},
       {"vocabulary_train", "vocabulary train", "{in} --every 25 --out {out}", D + "/visual/kitti_extract_seq2/image_l", true,
        O::kFile, "visual/kitti_extract_seq2/image_l"},
   };

@@ -27,6 +27,7 @@ struct NavigateFlags {
   std::vector<double> imu_in_vehicle;  ///< x, y, z, yaw, pitch, roll (tf's static_transform_publisher order)
   std::vector<double> antenna_m;       ///< x, y, z in the vehicle frame
   std::vector<double> withhold_s;      ///< from, to: seconds after the IMU's first sample
+  double until_s = 0.0;                ///< 0: the whole recording
   bool print_config = false, overwrite = false, quiet = false, no_gnss = false;
 };
 
@@ -104,8 +105,9 @@ int run_navigate(const NavigateFlags& flags) {
     withholding = navigation::GnssWithholding{flags.withhold_s[0], flags.withhold_s[1]};
   }
   io::OutputDirectory out(flags.out, flags.overwrite);
-  const navigation::NavigationRecording recording =
+  navigation::NavigationRecording recording =
       navigation::read_navigation_bag(flags.bag, flags.imu_topic, flags.wheel_topic, flags.gnss_topic, !flags.no_gnss);
+  if (flags.until_s > 0.0) recording = navigation::first_seconds(recording, flags.until_s);
   const navigation::NavigationRun run = navigation::run_navigation(recording, options, withholding);
   const nlohmann::json inputs = {{"bag", flags.bag},
                                  {"imu_topic", flags.imu_topic},
@@ -121,7 +123,8 @@ int run_navigate(const NavigateFlags& flags) {
                                  {"vehicle_frame", recording.wheels.child_frame_id},
                                  {"imu_in_vehicle_xyz_ypr", flags.imu_in_vehicle},
                                  {"antenna_in_vehicle_m", flags.antenna_m},
-                                 {"withhold_gnss_s", flags.withhold_s}};
+                                 {"withhold_gnss_s", flags.withhold_s},
+                                 {"until_s", flags.until_s}};
   const std::vector<std::string> names =
       navigation::write_navigation_outputs(out, run, options, inputs, navigation::configuration().json(options));
   out.commit();
@@ -161,6 +164,8 @@ Runner register_navigate(CLI::App& app) {
                  "odometry's horizontal error against them")
       ->expected(2)
       ->delimiter(',')
+      ->check(checks::non_negative());
+  app.add_option("--until", flags->until_s, "Use the recording's first S seconds after the IMU's first sample (0 = all)")
       ->check(checks::non_negative());
   app.add_option("--config", flags->config, "YAML configuration (every key optional; --print-config lists them)");
   app.add_option("--set", flags->set, "Override one key: section.key=value (repeatable), after --config");

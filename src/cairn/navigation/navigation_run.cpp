@@ -17,6 +17,30 @@ NavigationRecording read_navigation_bag(const std::string& bag_path, const std::
   return r;
 }
 
+NavigationRecording first_seconds(const NavigationRecording& recording, double seconds) {
+  NavigationRecording r;
+  if (recording.imu.empty()) return r;
+  const core::Timestamp end = core::Timestamp::from_seconds(recording.imu.front().stamp.seconds() + seconds);
+  for (const inertial::ImuSample& s : recording.imu) {
+    if (!(end < s.stamp)) r.imu.push_back(s);
+  }
+  r.wheels.frame_id = recording.wheels.frame_id;
+  r.wheels.child_frame_id = recording.wheels.child_frame_id;
+  for (std::size_t k = 0; k < recording.wheels.speeds.size(); ++k) {
+    if (end < recording.wheels.speeds[k].stamp) break;
+    r.wheels.speeds.push_back(recording.wheels.speeds[k]);
+    if (k < recording.wheels.poses.size()) {
+      r.wheels.poses.stamps.push_back(recording.wheels.poses.stamps[k]);
+      r.wheels.poses.poses.push_back(recording.wheels.poses.poses[k]);
+    }
+  }
+  for (const gnss::GnssFix& f : recording.fixes) {
+    if (!(end < f.stamp)) r.fixes.push_back(f);
+  }
+  r.gnss_report = recording.gnss_report;
+  return r;
+}
+
 NavigationRun run_navigation(const NavigationRecording& recording, const GnssInertialOdometryOptions& options,
                              const std::optional<GnssWithholding>& withholding) {
   if (withholding && !(withholding->to_s > withholding->from_s)) {

@@ -31,6 +31,10 @@ struct NavigationRecording {
 NavigationRecording read_navigation_bag(const std::string& bag_path, const std::string& imu_topic,
                                         const std::string& wheel_topic, const std::string& gnss_topic, bool with_gnss = true);
 
+/// The recording's first `seconds` after the IMU's first sample (every stream cut there; wheel
+/// poses with the speeds). Precondition: seconds > 0.
+NavigationRecording first_seconds(const NavigationRecording& recording, double seconds);
+
 /// GNSS withheld over [from_s, to_s), seconds after the IMU's first sample.
 struct GnssWithholding {
   double from_s = 0.0;
