@@ -126,8 +126,8 @@ viz::Series points(const std::string& label, viz::Rgb color, double width_px) {
   return s;
 }
 
-/// Top view (east, north) of the fused path and the fixes; with a withholding, the prediction and
-/// the aligned wheel odometry over the gap, and their errors against the withheld fixes over time.
+/// Top view (east, north) of the fused path and the fixes; with a withholding, the withheld fixes
+/// and the prediction over the gap, and beside it both estimates' errors against them over time.
 viz::Figure navigation_figure(const NavigationRun& run, const io::Trajectory& vehicle, const GnssInertialOdometryOptions& options) {
   viz::Figure figure;
   const bool fixes = !run.fix_results.empty();
