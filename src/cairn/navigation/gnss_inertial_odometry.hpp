@@ -9,9 +9,10 @@
 ///    the non-holonomic constraint (zero lateral and vertical speed), navigation_factors.hpp,
 ///  * GNSS fixes as gnss::GnssPositionFactor with the Cauchy kernel, on the state nearest the fix
 ///    moved along its velocity to the fix's time (navigation_factors.hpp, ShiftedGnssFactor),
-///  * priors on the oldest state of a sliding window of `window_states`; when it slides, the next
-///    state's joint marginal covariance becomes its prior (as lidar3d/inertial_fusion.cpp, after
-///    LIO-SAM's reset with its marginal covariance).
+///  * priors on the oldest state of a sliding window of `window_states`; when it slides, the
+///    factors touching the oldest state are linearised and its block eliminated, and the next
+///    state's joint 15 x 15 marginal becomes its prior (the Schur complement, as
+///    lidar3d/inertial_fusion.cpp does; docs/navigation.md, "Sliding window").
 ///
 /// Frames: `imu` is the estimated body (the IMU's frame); `vehicle` is the wheel odometry's child
 /// frame (x forward, z up; T_imu_vehicle places it); `world` is gravity-aligned (z up). Until yaw
