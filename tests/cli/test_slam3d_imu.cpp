@@ -93,7 +93,7 @@ TEST(Slam3dImuCli, TunnelWithImuWritesInertialOutputsAndEndsCloserThanLidarOnly)
   std::printf("tunnel-3d, LOAM: end-point error with the IMU %.2f m, LiDAR-only %.2f m, of %.0f m\n", e_imu, e_lidar, path);
   // The command's check: the IMU it was given carries the axis (seed 1: 10.1 m against 13.6 m). The
   // accuracy over seeds is the library's test (LidarInertialSimulation.
-  // HalvesLidarOnlyEndPointErrorOverFourTunnelSeeds); one seed's end moves by metres with the IMU's
+  // CarriesTheTunnelAndHalvesLidarOnlyEndPointErrorOverFourSeeds); one seed's end moves by metres with the IMU's
   // bias random walk alone (docs/lidar3d.md, "LiDAR-inertial"), so no percentage is asserted on it.
   EXPECT_LT(e_imu, e_lidar);
 

@@ -87,40 +87,14 @@ int count_health(const SimRun& r, Health health) {
   return n;
 }
 
-TEST(LidarInertialSimulation, CarriesTheTunnelWithoutLosingAScan) {
-  const sim::Scenario scenario = *sim::make_scenario("tunnel-3d");
-  const SimRun lio = run_scenario(scenario, 1, true);
-  const SimRun lidar = run_scenario(scenario, 1, false);
-  const TrajectoryErrors e_lio = evaluate_trajectory(lio.truth_at_stamps, lio.trajectory);
-  const TrajectoryErrors e_lidar = evaluate_trajectory(lidar.truth_at_stamps, lidar.trajectory);
-  const double path = lio.simulation.path_length_m;
-  std::printf("tunnel-3d seed 1 over %.0f m: LiDAR-inertial end-point error %.2f m (%.2f %%), ATE %.2f m; LiDAR-only "
-              "%.2f m (%.2f %%), ATE %.2f m\n",
-              path, e_lio.end_point_error_m, 100.0 * e_lio.end_point_error_m / path, e_lio.ate_rmse_m.value_or(-1),
-              e_lidar.end_point_error_m, 100.0 * e_lidar.end_point_error_m / path, e_lidar.ate_rmse_m.value_or(-1));
-  int fused = 0;
-  for (const auto& scan : lio.scans) fused += scan.inertial ? 1 : 0;
-  // The last sweep ends after the simulated IMU's last sample, so that scan has no prediction.
-  EXPECT_GE(fused, static_cast<int>(lio.scans.size()) - 1);
-  // Issue 38 asks for 1 % of the distance; one seed says little about that (the accuracy over
-  // several seeds is the next test's). What holds on every seed is asserted here: nothing lost,
-  // the axis named, the IMU carrying it.
-  EXPECT_EQ(count_health(lio, Health::kLost), 0);
-  // Out of range of both portals the registration still names the axis it cannot see; the IMU carries it.
-  const sim::PassageScans& p = *lio.simulation.passage_scans;
-  int degenerate = 0, blind = 0;
-  for (std::size_t k = p.first_blind; k <= p.last_blind; ++k) {
-    ++blind;
-    degenerate += lio.scans[k].inertial && lio.scans[k].inertial->degenerate ? 1 : 0;
-  }
-  EXPECT_GE(degenerate, blind * 9 / 10);
-}
-
-// The tunnel's end-point error over several noise seeds, odometry only (loop closure costs seconds
-// per run in the tunnel's look-alike places and closes nothing here). One seed is a coin toss: the
-// IMU's bias random walk alone moves a seed's end by metres (docs/lidar3d.md, "LiDAR-inertial", the
-// floor per seed). Over seeds 1-4 the IMU must at least halve LiDAR-only's summed error.
-TEST(LidarInertialSimulation, HalvesLidarOnlyEndPointErrorOverFourTunnelSeeds) {
+// The tunnel over four noise seeds, odometry only (loop closure costs seconds per run in the
+// tunnel's look-alike places and closes nothing here). What holds on every seed: every scan whose
+// sweep the IMU covers is fused, none is lost, and out of range of both portals the registration
+// names the axis it cannot see and the IMU carries it. Issue 38 asks for 1 % of the distance; one
+// seed is a coin toss (the IMU's bias random walk alone moves a seed's end by metres:
+// docs/lidar3d.md, "LiDAR-inertial", the floor per seed), so the end-point error is judged over
+// seeds 1-4: the IMU must at least halve LiDAR-only's summed error.
+TEST(LidarInertialSimulation, CarriesTheTunnelAndHalvesLidarOnlyEndPointErrorOverFourSeeds) {
   const sim::Scenario scenario = *sim::make_scenario("tunnel-3d");
   LidarSlamOptions options;
   options.loop_closure = false;
@@ -131,9 +105,20 @@ TEST(LidarInertialSimulation, HalvesLidarOnlyEndPointErrorOverFourTunnelSeeds) {
     const double e_lio = evaluate_trajectory(lio.truth_at_stamps, lio.trajectory).end_point_error_m;
     const double e_lidar = evaluate_trajectory(lidar.truth_at_stamps, lidar.trajectory).end_point_error_m;
     const double path = lio.simulation.path_length_m;
-    std::printf("tunnel-3d seed %d: LiDAR-inertial end-point error %.2f m (%.2f %%), LiDAR-only %.2f m (%.2f %%)\n",
-                static_cast<int>(seed), e_lio, 100.0 * e_lio / path, e_lidar, 100.0 * e_lidar / path);
+    std::printf("tunnel-3d seed %d over %.0f m: LiDAR-inertial end-point error %.2f m (%.2f %%), LiDAR-only %.2f m (%.2f %%)\n",
+                static_cast<int>(seed), path, e_lio, 100.0 * e_lio / path, e_lidar, 100.0 * e_lidar / path);
+    int fused = 0;
+    for (const auto& scan : lio.scans) fused += scan.inertial ? 1 : 0;
+    // The last sweep ends after the simulated IMU's last sample, so that scan has no prediction.
+    EXPECT_GE(fused, static_cast<int>(lio.scans.size()) - 1) << seed;
     EXPECT_EQ(count_health(lio, Health::kLost), 0) << seed;
+    const sim::PassageScans& p = *lio.simulation.passage_scans;
+    int degenerate = 0, blind = 0;
+    for (std::size_t k = p.first_blind; k <= p.last_blind; ++k) {
+      ++blind;
+      degenerate += lio.scans[k].inertial && lio.scans[k].inertial->degenerate ? 1 : 0;
+    }
+    EXPECT_GE(degenerate, blind * 9 / 10) << seed;
     sum_lio += e_lio;
     sum_lidar += e_lidar;
   }

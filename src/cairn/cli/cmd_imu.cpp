@@ -178,7 +178,7 @@ Runner register_imu(CLI::App& app) {
   app.add_option("--static-window", flags->static_window_s, "Static initialisation over the first S seconds")
       ->check(checks::in_range(0.01, 1e4))->capture_default_str();
   app.add_option("--time-offset", flags->time_offset_s, "Seconds added to every IMU stamp")
-      ->check(checks::in_range(-9.2e9, 9.2e9))  // what a nanosecond stamp can hold (inertial::ImuInputOptions)
+      ->check(checks::in_range(-inertial::kMaxAbsTimeOffsetS, inertial::kMaxAbsTimeOffsetS))
       ->capture_default_str();
   app.add_option("--gyro-saturation", flags->gyro_saturation_deg_s, "Gyro range, deg/s (0: guess from repeated extremes)")
       ->check(checks::in_range(0.0, 1e6));

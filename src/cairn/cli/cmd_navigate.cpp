@@ -33,14 +33,7 @@ struct NavigateFlags {
 
 navigation::GnssInertialOdometryOptions navigate_options(const NavigateFlags& flags) {
   navigation::GnssInertialOdometryOptions options;
-  if (!flags.config.empty()) navigation::configuration().load(flags.config, options);
-  for (const std::string& assignment : flags.set) {
-    try {
-      navigation::configuration().set(assignment, options);
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(e.what());
-    }
-  }
+  checks::apply_configuration(navigation::configuration(), flags.config, flags.set, options);
   navigation::sync_gravity(options);
   if (!flags.imu_in_vehicle.empty()) {
     const std::vector<double>& v = flags.imu_in_vehicle;

@@ -16,7 +16,12 @@
 
 #include <CLI/CLI.hpp>
 #include <limits>
+#include <stdexcept>
 #include <string>
+#include <vector>
+
+#include "cairn/cli/commands.hpp"
+#include "cairn/io/parameters.hpp"
 
 namespace cairn::cli::checks {
 
@@ -54,5 +59,20 @@ int hardware_threads();
 /// --camera-extrinsic.
 void refuse_imu_companions_without_imu(bool uses_imu, bool calibration_given, const char* extrinsic_flag, bool extrinsic_given,
                                        bool offset_given);
+
+/// --config FILE (when given) and then every --set section.key=value over `options`. A bad file
+/// throws io::ParseError (its file and line); a bad assignment is a UsageError (exit status 2).
+template <class Options>
+void apply_configuration(const io::Configuration<Options>& configuration, const std::string& config_file,
+                         const std::vector<std::string>& assignments, Options& options) {
+  if (!config_file.empty()) configuration.load(config_file, options);
+  for (const std::string& assignment : assignments) {
+    try {
+      configuration.set(assignment, options);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(e.what());
+    }
+  }
+}
 
 }  // namespace cairn::cli::checks

@@ -30,14 +30,7 @@ void set_word(lidar3d::SlamConfiguration& options, const std::string& key, const
 lidar3d::SlamConfiguration slam3d_options(const Slam3dFlags& flags, bool* remap_forced) {
   lidar3d::SlamConfiguration options;
   options.slam.odometry = lidar3d::preset_options(flags.preset);
-  if (!flags.config.empty()) lidar3d::configuration().load(flags.config, options);
-  for (const std::string& assignment : flags.set) {
-    try {
-      lidar3d::configuration().set(assignment, options);
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(e.what());
-    }
-  }
+  checks::apply_configuration(lidar3d::configuration(), flags.config, flags.set, options);
   lidar3d::LidarSlamOptions& slam = options.slam;
   if (flags.no_loop_closure) slam.loop_closure = false;
   set_word(options, "registration.metric", flags.metric, "--metric must be point-to-plane or point-to-point");

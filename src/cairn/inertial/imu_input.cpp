@@ -13,7 +13,6 @@
 namespace cairn::inertial {
 namespace {
 
-constexpr double kMaxAbsOffsetS = 9.2e9;
 // A run this long of one repeated extreme reading is taken for clipping when no limit is given.
 constexpr std::size_t kMinGuessedRun = 3;
 
@@ -101,7 +100,7 @@ void find_runs(const std::vector<ImuSample>& samples, bool gyro, int axis, doubl
 
 bool ImuInputOptions::is_valid(std::string* why) const {
   core::Problems problems;
-  if (!(std::isfinite(time_offset_s) && std::abs(time_offset_s) <= kMaxAbsOffsetS)) {
+  if (!(std::isfinite(time_offset_s) && std::abs(time_offset_s) <= kMaxAbsTimeOffsetS)) {
     problems.add("time_offset_s must be finite and within +-9.2e9 s");
   }
   if (!T_body_imu.translation().allFinite()) problems.add("T_body_imu must have a finite translation");

@@ -14,6 +14,10 @@
 
 namespace cairn::inertial {
 
+/// Largest |time offset| an IMU input accepts, s: a shifted stamp must stay within the +-9.2e9 s a
+/// stamp can hold (kMaxAbsImuStampNs).
+inline constexpr double kMaxAbsTimeOffsetS = 9.2e9;
+
 struct ImuInputOptions {
   /// Added to every IMU stamp: t_body = t_imu + time_offset_s (s). Finite, |offset| <= 9.2e9 s
   /// (an IMU stamping since boot may need the epoch); applied rounded to the ns.
